@@ -1,0 +1,63 @@
+# mca: the two commands are `make demo` (the main job) and `make test` (every test).
+# Both install their own dependencies first (`make deps`, idempotent).
+
+BUILD     ?= build
+ASAN_BUILD ?= build-asan
+JOBS      ?= $(shell nproc)
+PY        ?= python3
+VENV      := $(CURDIR)/.venv
+SUDO      := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+DEB_PKGS  := $(shell grep -v '^\#' tools/deps/debian-packages.txt)
+STAMP_DEB := .deps-debian.stamp
+STAMP_PY  := $(VENV)/.deps-python.stamp
+
+.PHONY: all deps build test asan-test demo bench format clean
+
+all: build
+
+deps: $(STAMP_DEB) $(STAMP_PY)
+
+# Install only what is missing, so a second `make deps` is quick and offline.
+$(STAMP_DEB): tools/deps/debian-packages.txt
+	@missing=$$(for p in $(DEB_PKGS); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:" $$missing; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+	@touch $@
+
+$(STAMP_PY): tools/deps/requirements.txt
+	@[ -x $(VENV)/bin/python3 ] || $(PY) -m venv $(VENV)
+	$(VENV)/bin/pip install -q --disable-pip-version-check -r tools/deps/requirements.txt
+	@touch $@
+
+$(BUILD)/CMakeCache.txt: $(STAMP_DEB)
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo
+
+build: deps $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
+
+# ASan + UBSan build of everything, all tests except those marked `nosan`
+# (the QEMU guest and wall-clock real-time runs, where the sanitizer runtime changes what is measured).
+asan-test: deps
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DMCA_SANITIZE=ON
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure -j $(JOBS) -LE nosan $(CTEST_ARGS)
+
+demo: build
+	bash tools/demo.sh $(BUILD)
+
+bench: build
+	bash bench/run.sh $(BUILD)
+
+format:
+	find core firmware_iface dds sim_backend daemon tools bench tests \
+	  \( -name '*.c' -o -name '*.h' -o -name '*.cpp' \) -print0 | xargs -0 -r clang-format -i
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -1,0 +1,109 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/chain.h
+ * Serial robot arm model (from URDF, parsed once at start-up) and its kinematics:
+ * forward kinematics of every joint frame, the link segments, the end-effector position and
+ * the 3 x n positional Jacobian of any point on any link (the paper's J_P).
+ *
+ * Geometry convention
+ *  - Points: point[0] is the arm's root (base link origin), point[1..dof] are the joint origins,
+ *    point[dof+1] is the tool tip (end effector). n_points = dof + 2.
+ *  - Link k (k = 0..dof) is the segment point[k] -> point[k+1], a capsule of radius
+ *    chain->link_radius[k]. Link k is moved by joints 0..k-1 (link 0 never moves).
+ *    A link may have zero length (coincident joint origins); it is then a sphere.
+ *  - Everything is expressed in the world frame: world <- chain->base <- root link.
+ *
+ * Context: mca_chain_load_urdf() is start-up only (it allocates inside urdfdom).
+ * mca_fk() and mca_jacobian_point() are real-time safe: no allocation, no I/O, bounded time.
+ */
+#ifndef MCA_CHAIN_H
+#define MCA_CHAIN_H
+
+#include <stddef.h>
+
+#include "mca/limits.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Rigid transform: x_parent = R * x_child + p. R is row-major. */
+typedef struct mca_pose {
+    double R[3][3];
+    double p[3];
+} mca_pose_t;
+
+typedef struct mca_joint_model {
+    char name[64];
+    mca_pose_t origin;  /**< previous joint frame (or root link) -> this joint frame at q = 0 */
+    double axis[3];     /**< unit rotation axis in this joint's frame */
+    double lower;       /**< position limit [rad]; -INFINITY when continuous */
+    double upper;       /**< position limit [rad]; +INFINITY when continuous */
+    double vel_limit;   /**< |qdot| limit [rad/s] */
+    int continuous;     /**< 1 when the joint has no position limits */
+} mca_joint_model_t;
+
+typedef struct mca_chain {
+    char name[64];    /**< URDF robot name */
+    char source[256]; /**< file it was loaded from (for messages) */
+    int dof;          /**< number of revolute joints, 1..MCA_MAX_DOF */
+    mca_joint_model_t joint[MCA_MAX_DOF];
+    mca_pose_t tool;                     /**< last joint frame -> tool tip (fixed joints folded in) */
+    double link_radius[MCA_MAX_LINKS];   /**< capsule radius of link k [m] */
+    mca_pose_t base;                     /**< world <- root link; identity after loading */
+} mca_chain_t;
+
+/** Kinematic state of one arm at one configuration (all world frame). */
+typedef struct mca_kin {
+    int dof;
+    int n_points;                        /**< dof + 2 */
+    double point[MCA_MAX_POINTS][3];     /**< root, joint origins, tool tip */
+    double axis[MCA_MAX_DOF][3];         /**< joint axes (unit) */
+    mca_pose_t frame[MCA_MAX_DOF];       /**< world <- joint frame */
+    double ee[3];                        /**< tool tip = point[dof + 1] */
+} mca_kin_t;
+
+/**
+ * Load a serial chain from a URDF file (start-up only).
+ * The chain runs from the URDF root link to @p tip_link (NULL: the single leaf link).
+ * Revolute and continuous joints become joints; fixed joints are folded into the next origin
+ * or into the tool pose. The capsule radius of each link is the radius of the <cylinder> (or
+ * <sphere>) in the <collision> of the URDF link that the segment belongs to (the child link of
+ * the segment's first joint); 0 when it has none.
+ * @param[out] chain   filled on success, unchanged on error
+ * @param[in]  path    URDF file
+ * @param[in]  tip_link end-effector link name or NULL
+ * @param[out] err     message naming the file and the element at fault (may be NULL)
+ * @retval MCA_OK      loaded
+ * @retval MCA_ENOENT  file missing or tip link not found
+ * @retval MCA_EPARSE  not valid URDF, or a joint lacks limits / has a prismatic or planar type
+ * @retval MCA_ERANGE  more than MCA_MAX_DOF joints
+ */
+int mca_chain_load_urdf(mca_chain_t *chain, const char *path, const char *tip_link, char *err, size_t errlen);
+
+/** Set the world <- root pose of an arm (its base placement). */
+void mca_chain_set_base(mca_chain_t *chain, const double xyz[3], const double rpy[3]);
+
+/** Pose from translation and URDF roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll)). */
+void mca_pose_from_xyz_rpy(mca_pose_t *pose, const double xyz[3], const double rpy[3]);
+
+/**
+ * Forward kinematics of every joint frame, point and the tool tip (real-time safe).
+ * @retval MCA_OK, MCA_EINVAL (NULL or non-finite q)
+ */
+int mca_fk(const mca_chain_t *chain, const double *q, mca_kin_t *kin);
+
+/**
+ * Positional Jacobian of a world point x rigidly attached to link @p link (real-time safe):
+ * column j = axis_j x (x - origin_j) for joints j < link, zero otherwise.
+ * @param[out] J 3 x MCA_MAX_DOF, columns >= dof are zero
+ * @retval MCA_OK, MCA_EINVAL (link out of range)
+ */
+int mca_jacobian_point(const mca_kin_t *kin, int link, const double x[3], double J[3][MCA_MAX_DOF]);
+
+/** End-effector Jacobian: mca_jacobian_point(kin, dof, kin->ee, J). */
+int mca_jacobian_ee(const mca_kin_t *kin, double J[3][MCA_MAX_DOF]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

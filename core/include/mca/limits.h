@@ -1,0 +1,28 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/limits.h
+ * Compile-time maximums. Every array on the 1 kHz path is sized from these, so nothing is
+ * allocated after start-up.
+ */
+#ifndef MCA_LIMITS_H
+#define MCA_LIMITS_H
+
+/** Most revolute joints in one arm (PA10+ has 8). */
+#define MCA_MAX_DOF 8
+/** Kinematic points of one arm: root, each joint origin, tool tip. */
+#define MCA_MAX_POINTS (MCA_MAX_DOF + 2)
+/** Links (line segments between consecutive points) of one arm. */
+#define MCA_MAX_LINKS (MCA_MAX_POINTS - 1)
+/** Most arms one controller drives (the scheme adds collision rows per pair). */
+#define MCA_MAX_ARMS 4
+/** Task-space dimension of the end-effector constraint (position only). */
+#define MCA_TASK_DIM 3
+
+/** QP sizes: phi = all joint velocities, one 3-row equality per arm, and per link of every arm
+ *  one critical point of up to 3 rows (componentwise form) against the other arms. */
+#define MCA_QP_MAX_VARS (MCA_MAX_ARMS * MCA_MAX_DOF)
+#define MCA_QP_MAX_EQ (MCA_MAX_ARMS * MCA_TASK_DIM)
+#define MCA_QP_MAX_INEQ (MCA_MAX_ARMS * MCA_MAX_LINKS * 3)
+/** Primal-dual vector length h = vars + eq + ineq. */
+#define MCA_QP_MAX_H (MCA_QP_MAX_VARS + MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ)
+
+#endif
