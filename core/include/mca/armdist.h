@@ -41,7 +41,7 @@ typedef struct mca_arm_distances {
 /**
  * All link-pair distances between two arms at their current kinematic states.
  * Pairs where either link has zero moving joints on both sides are still included.
- * @param[in] lsdm parameters when method is MCA_DIST_LSDM (NULL: defaults)
+ * MCA_DIST_LSDM uses the default LSDM parameters of segdist.h.
  * @retval MCA_OK, MCA_EINVAL
  */
 int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const mca_chain_t *chain_b,
