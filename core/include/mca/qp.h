@@ -1,0 +1,44 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/qp.h
+ * The standard QP of the paper (25)-(28), fixed-size:
+ *     minimize 1/2 phi^T phi
+ *     subject to G phi = alpha,  U phi <= beta,  lb <= phi <= ub
+ * and its JSON dump (one file per QP) for the independent OSQP check.
+ */
+#ifndef MCA_QP_H
+#define MCA_QP_H
+
+#include "mca/limits.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mca_qp {
+    int n;      /**< variables (2n for two arms) */
+    int n_eq;   /**< equality rows */
+    int n_ineq; /**< inequality rows */
+    double G[MCA_QP_MAX_EQ][MCA_QP_MAX_VARS];
+    double alpha[MCA_QP_MAX_EQ];
+    double U[MCA_QP_MAX_INEQ][MCA_QP_MAX_VARS];
+    double beta[MCA_QP_MAX_INEQ];
+    double lb[MCA_QP_MAX_VARS]; /**< may be -INFINITY */
+    double ub[MCA_QP_MAX_VARS]; /**< may be +INFINITY */
+} mca_qp_t;
+
+/** Zero the QP and set its sizes. @retval MCA_OK, MCA_ERANGE (size above the maximums) */
+int mca_qp_reset(mca_qp_t *qp, int n, int n_eq, int n_ineq);
+
+/**
+ * Write the QP (and, when phi != NULL, the solver's answer with its steps and residual) as JSON:
+ * {"n":..,"n_eq":..,"n_ineq":..,"G":[[..]],"alpha":[..],"U":[[..]],"beta":[..],"lb":[..],"ub":[..],
+ *  "phi":[..],"steps":..,"residual":..,"tag":".."}; infinities are written as null. Non-real-time (file I/O).
+ * @retval MCA_OK, MCA_EIO
+ */
+int mca_qp_dump_json(const mca_qp_t *qp, const double *phi, int steps, double residual, const char *tag,
+                     const char *path);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
