@@ -1,0 +1,112 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/arm.h
+ * Kinova-style cyclic arm interface (modelled on Kortex BaseCyclic: one command in, one feedback out,
+ * every cycle), one C API over several backends (simulated arm in-process, SocketCAN + arm firmware).
+ *
+ * Cycle, as the controller runs it every 1 ms:
+ *     mca_arm_read(arm, &fb);      // newest feedback (non-blocking)
+ *     ... controller tick ...
+ *     mca_arm_write(arm, &cmd);    // this cycle's command (non-blocking)
+ * The arm side runs a watchdog: no valid command within its timeout -> it brakes to zero velocity
+ * within its deceleration limit and enters MCA_ARM_FAULT until a command carries MCA_ACT_CLEAR_FAULT.
+ *
+ * Context: mca_arm_open/close are start-up/shut-down only (they may allocate and block);
+ * mca_arm_read/write are real-time safe for every backend (no allocation, no blocking, no locks).
+ */
+#ifndef MCA_ARM_H
+#define MCA_ARM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mca/limits.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Arm state reported by the arm side. */
+typedef enum mca_arm_state {
+    MCA_ARM_INIT = 0,
+    MCA_ARM_READY = 1,     /**< powered, brakes on, waiting for servo enable */
+    MCA_ARM_SERVOING = 2,  /**< following velocity commands */
+    MCA_ARM_BRAKING = 3,   /**< decelerating to zero (watchdog or requested) */
+    MCA_ARM_FAULT = 4,     /**< stopped; needs MCA_ACT_CLEAR_FAULT */
+} mca_arm_state_t;
+
+/** Per-actuator command flags. */
+enum {
+    MCA_ACT_SERVO_ENABLE = 1u << 0,
+    MCA_ACT_BRAKE_RELEASE = 1u << 1,
+    MCA_ACT_CLEAR_FAULT = 1u << 2,
+};
+
+/** Arm fault codes (feedback.fault_code). */
+enum mca_arm_fault {
+    MCA_ARM_FAULT_NONE = 0,
+    MCA_ARM_FAULT_WATCHDOG = 1,       /**< no valid command within the timeout */
+    MCA_ARM_FAULT_JOINT_LIMIT = 2,    /**< position limit reached */
+    MCA_ARM_FAULT_VELOCITY = 3,       /**< commanded velocity above the limit */
+    MCA_ARM_FAULT_INJECTED = 4,       /**< test fault injection */
+    MCA_ARM_FAULT_BUS = 5,            /**< bus error / bus-off */
+};
+
+typedef struct mca_arm_command {
+    uint32_t frame_id;                  /**< sequence number, +1 per cycle */
+    int n;                              /**< actuators */
+    uint8_t flags[MCA_MAX_DOF];         /**< MCA_ACT_* */
+    double velocity[MCA_MAX_DOF];       /**< joint velocity setpoint [rad/s] */
+    double position_ref[MCA_MAX_DOF];   /**< position reference [rad] (informative) */
+} mca_arm_command_t;
+
+typedef struct mca_arm_feedback {
+    uint32_t frame_id;                  /**< the command frame id this answers */
+    int n;
+    double position[MCA_MAX_DOF];       /**< [rad] */
+    double velocity[MCA_MAX_DOF];       /**< [rad/s] */
+    double torque[MCA_MAX_DOF];         /**< [N m] */
+    uint16_t fault_flags[MCA_MAX_DOF];  /**< per actuator */
+    mca_arm_state_t state;
+    uint16_t fault_code;                /**< enum mca_arm_fault */
+    int64_t stamp_ns;                   /**< receive time, CLOCK_MONOTONIC (kernel time stamp on CAN) */
+} mca_arm_feedback_t;
+
+/** Link statistics a backend keeps (counters only grow). */
+typedef struct mca_arm_stats {
+    uint64_t commands_sent;
+    uint64_t feedback_received;
+    uint64_t rx_bad_length;     /**< frames with a wrong length, ignored */
+    uint64_t rx_bad_counter;    /**< stale or skipped rolling counter, ignored */
+    uint64_t rx_unknown_id;     /**< unexpected CAN ids, ignored */
+    uint64_t bus_errors;        /**< error frames seen */
+    int bus_off;                /**< 1 while the controller is bus-off */
+} mca_arm_stats_t;
+
+typedef struct mca_arm mca_arm_t; /**< opaque handle */
+
+/** Backend contract: a function-pointer table + context (see sim_backend/, firmware_iface/can). */
+typedef struct mca_arm_ops {
+    const char *name;
+    int (*read)(void *ctx, mca_arm_feedback_t *fb);
+    int (*write)(void *ctx, const mca_arm_command_t *cmd);
+    int (*stats)(void *ctx, mca_arm_stats_t *st);
+    void (*close)(void *ctx);
+} mca_arm_ops_t;
+
+/** Wrap a backend (start-up only). @retval MCA_OK, MCA_EINVAL, MCA_ENOMEM */
+int mca_arm_wrap(mca_arm_t **arm, const mca_arm_ops_t *ops, void *ctx);
+
+/** Newest feedback. @retval MCA_OK (new feedback), MCA_EAGAIN (nothing new since the last read;
+ *  fb untouched), MCA_EIO (bus error), MCA_EFAULT (arm reports fault; fb filled) */
+int mca_arm_read(mca_arm_t *arm, mca_arm_feedback_t *fb);
+/** Send one cycle's command. @retval MCA_OK, MCA_EINVAL, MCA_EIO, MCA_EAGAIN (tx queue full) */
+int mca_arm_write(mca_arm_t *arm, const mca_arm_command_t *cmd);
+int mca_arm_stats(mca_arm_t *arm, mca_arm_stats_t *st);
+const char *mca_arm_backend_name(const mca_arm_t *arm);
+/** Close the backend and free the handle (shut-down only). NULL is allowed. */
+void mca_arm_close(mca_arm_t *arm);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
