@@ -103,6 +103,23 @@ int mca_jacobian_point(const mca_kin_t *kin, int link, const double x[3], double
 /** End-effector Jacobian: mca_jacobian_point(kin, dof, kin->ee, J). */
 int mca_jacobian_ee(const mca_kin_t *kin, double J[3][MCA_MAX_DOF]);
 
+/* ---- Small helpers (real-time safe) ---- */
+
+/** pose = identity. */
+void mca_pose_identity(mca_pose_t *pose);
+
+/** out = a * b (out may alias a or b). */
+void mca_pose_mul(mca_pose_t *out, const mca_pose_t *a, const mca_pose_t *b);
+
+/** out = pose applied to point x: R x + p (out may alias x). */
+void mca_pose_apply(double out[3], const mca_pose_t *pose, const double x[3]);
+
+/**
+ * Clamp q (chain->dof entries) into the position limits; continuous joints are left alone.
+ * @return number of joints clamped (>= 0), or MCA_EINVAL (NULL or non-finite q; q unchanged)
+ */
+int mca_chain_clamp_q(const mca_chain_t *chain, double *q);
+
 #ifdef __cplusplus
 }
 #endif
