@@ -27,6 +27,13 @@ typedef struct mca_lsdm_params {
     int max_iter; /**< projection cap */
 } mca_lsdm_params_t;
 
+/** Default LSDM parameters (used by mca_arm_distances with MCA_DIST_LSDM). The paper stops when the
+ *  distance declines by less than 1e-5 m (MCA_LSDM_PAPER_TOL); the default is tighter, see docs/segdist.md
+ *  for what either rule really guarantees (not the 1e-9 m the controller needs: use the closed form). */
+#define MCA_LSDM_DEFAULT_TOL 1e-12
+#define MCA_LSDM_DEFAULT_MAX_ITER 200
+#define MCA_LSDM_PAPER_TOL 1e-5
+
 /** Closed-form segment-segment distance. @retval MCA_OK, MCA_EINVAL (NULL or non-finite input) */
 int mca_segdist_closed(const double a[3], const double b[3], const double c[3], const double d[3],
                        mca_segdist_t *out);
@@ -35,6 +42,26 @@ int mca_segdist_closed(const double a[3], const double b[3], const double c[3], 
  *  still holds the best pair found) */
 int mca_segdist_lsdm(const double a[3], const double b[3], const double c[3], const double d[3],
                      const mca_lsdm_params_t *params, mca_segdist_t *out);
+
+/**
+ * LSDM with a provably right stopping rule: the same alternating projections as mca_segdist_lsdm(), but it
+ * stops only when the duality gap d - lb <= params->tol, where lb = min(n.A, n.B) - max(n.C, n.D) with
+ * n = (P - E) / |P - E| is a lower bound on the true minimum (separating-plane certificate). On MCA_OK the
+ * returned d is within tol of the true minimum (plus rounding). @retval MCA_OK, MCA_EINVAL, MCA_ENOTCONV
+ */
+int mca_segdist_lsdm_certified(const double a[3], const double b[3], const double c[3], const double d[3],
+                               const mca_lsdm_params_t *params, mca_segdist_t *out);
+
+/**
+ * Certificate for any pair P = A + s(B - A), E = C + t(D - C): a lower bound on the minimum distance
+ * (separating-plane bound along P - E; 0 when P == E, and never above the true minimum up to rounding).
+ */
+double mca_segdist_lower_bound(const double a[3], const double b[3], const double c[3], const double d[3],
+                               const double p[3], const double e[3]);
+
+/** Paper's Step 1: closest point H on segment AB to point O (zero-length AB gives A).
+ *  @param[out] h closest point; @param[out] s H = A + s (B - A) (may be NULL). @return |OH| */
+double mca_point_segment_paper(const double o[3], const double a[3], const double b[3], double h[3], double *s);
 
 #ifdef __cplusplus
 }

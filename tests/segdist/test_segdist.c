@@ -1,0 +1,522 @@
+/* SPDX-License-Identifier: MIT */
+/* Segment distances: closed form against hand-derived exact answers (1e-12), against an independent
+ * golden-section implementation on random pairs (1e-9), LSDM against the closed form, and the arm-to-arm
+ * distances against a brute-force loop. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "mca/armdist.h"
+#include "mca/err.h"
+#include "mca/segdist.h"
+
+/* ---- tiny deterministic RNG (xorshift64*) so runs are repeatable ---- */
+static uint64_t rng_state = 0x9e3779b97f4a7c15ULL;
+static double urand(void)
+{
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return (double)((rng_state * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+static void rand_pt(double p[3], double lo, double hi)
+{
+    for (int k = 0; k < 3; k++) {
+        p[k] = lo + (hi - lo) * urand();
+    }
+}
+
+static double dist3(const double a[3], const double b[3])
+{
+    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* ---- independent third implementation: golden section on the convex f(s) = min_t |P(s) - E(t)| ---- */
+static double pt_seg(const double p[3], const double c[3], const double d[3])
+{
+    /* Ternary-free: exact projection with its own arithmetic (long double) */
+    long double v[3], w[3], vv = 0, wv = 0, t, r2 = 0;
+    for (int k = 0; k < 3; k++) {
+        v[k] = (long double)d[k] - c[k];
+        w[k] = (long double)p[k] - c[k];
+        vv += v[k] * v[k];
+        wv += w[k] * v[k];
+    }
+    t = vv > 0 ? wv / vv : 0;
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    for (int k = 0; k < 3; k++) {
+        long double x = w[k] - t * v[k];
+        r2 += x * x;
+    }
+    return (double)sqrtl(r2);
+}
+static double f_of_s(const double a[3], const double b[3], const double c[3], const double d[3], double s)
+{
+    double p[3];
+    for (int k = 0; k < 3; k++) {
+        p[k] = a[k] + s * (b[k] - a[k]);
+    }
+    return pt_seg(p, c, d);
+}
+static double brute_segdist(const double a[3], const double b[3], const double c[3], const double d[3])
+{
+    const double g = (sqrt(5.0) - 1.0) / 2.0;
+    double lo = 0.0, hi = 1.0, x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = f_of_s(a, b, c, d, x1), f2 = f_of_s(a, b, c, d, x2), best;
+    for (int i = 0; i < 200 && hi - lo > 1e-15; i++) {
+        if (f1 <= f2) {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f_of_s(a, b, c, d, x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f_of_s(a, b, c, d, x2);
+        }
+    }
+    best = fmin(f1, f2);
+    best = fmin(best, f_of_s(a, b, c, d, 0.0));
+    best = fmin(best, f_of_s(a, b, c, d, 1.0));
+    /* symmetric pass: also from CD's side (guards the golden section against flat valleys) */
+    best = fmin(best, pt_seg(c, a, b));
+    best = fmin(best, pt_seg(d, a, b));
+    return best;
+}
+
+/* Checks shared by every result: P on AB at s, E on CD at t, d = |P - E|. */
+static void check_consistent(const double a[3], const double b[3], const double c[3], const double d[3],
+                             const mca_segdist_t *r, double tol)
+{
+    assert_true(r->s >= 0.0 && r->s <= 1.0);
+    assert_true(r->t >= 0.0 && r->t <= 1.0);
+    for (int k = 0; k < 3; k++) {
+        assert_true(fabs(r->p[k] - (a[k] + r->s * (b[k] - a[k]))) <= tol);
+        assert_true(fabs(r->e[k] - (c[k] + r->t * (d[k] - c[k]))) <= tol);
+    }
+    assert_true(fabs(r->d - dist3(r->p, r->e)) <= tol);
+}
+
+struct exact_case {
+    const char *name;
+    double a[3], b[3], c[3], d[3];
+    double dist;
+    int has_pts; /* witness points unique? */
+    double p[3], e[3];
+};
+
+static const struct exact_case exact_cases[] = {
+    {"crossing perpendicular at offset 0.3", {-1, 0, 0}, {1, 0, 0}, {0, -1, 0.3}, {0, 1, 0.3}, 0.3, 1, {0, 0, 0},
+     {0, 0, 0.3}},
+    {"parallel overlapping", {0, 0, 0}, {2, 0, 0}, {1, 1, 0}, {3, 1, 0}, 1.0, 0, {0}, {0}},
+    {"anti-parallel overlapping", {0, 0, 0}, {2, 0, 0}, {3, 0, 1}, {1, 0, 1}, 1.0, 0, {0}, {0}},
+    {"parallel disjoint", {0, 0, 0}, {1, 0, 0}, {4, 4, 0}, {6, 4, 0}, 5.0, 1, {1, 0, 0}, {4, 4, 0}},
+    {"collinear disjoint", {0, 0, 0}, {1, 0, 0}, {3, 0, 0}, {5, 0, 0}, 2.0, 1, {1, 0, 0}, {3, 0, 0}},
+    {"collinear overlapping", {0, 0, 0}, {1, 0, 0}, {0.5, 0, 0}, {3, 0, 0}, 0.0, 0, {0}, {0}},
+    {"touching endpoint to interior", {0, 0, 0}, {1, 0, 0}, {1, -1, 0}, {1, 1, 0}, 0.0, 1, {1, 0, 0}, {1, 0, 0}},
+    {"touching endpoint to endpoint", {0, 0, 0}, {1, 0, 0}, {1, 0, 0}, {1, 2, 3}, 0.0, 1, {1, 0, 0}, {1, 0, 0}},
+    {"intersecting X", {0, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}, 0.0, 1, {0.5, 0.5, 0}, {0.5, 0.5, 0}},
+    {"point-point", {1, 2, 3}, {1, 2, 3}, {4, 6, 3}, {4, 6, 3}, 5.0, 1, {1, 2, 3}, {4, 6, 3}},
+    {"point-segment interior", {0, 1, 0}, {0, 1, 0}, {-1, 0, 0}, {1, 0, 0}, 1.0, 1, {0, 1, 0}, {0, 0, 0}},
+    {"segment-point beyond end", {-1, 0, 0}, {0, 0, 0}, {3, 4, 0}, {3, 4, 0}, 5.0, 1, {0, 0, 0}, {3, 4, 0}},
+    {"skew, clamped at both ends", {0, 0, 0}, {1, 0, 0}, {2, 0, 1}, {2, 5, 1}, 1.4142135623730951, 1, {1, 0, 0},
+     {2, 0, 1}},
+    {"near-parallel long, endpoint answer", {0, 0, 0}, {100, 0, 0}, {0, 1, 0}, {100, 1.000000001, 0}, 1.0, 1,
+     {0, 0, 0}, {0, 1, 0}},
+    {"near-parallel long skew crossing", {-50, 0, 0}, {50, 0, 0}, {-50, -5e-6, 0.25}, {50, 5e-6, 0.25}, 0.25, 0,
+     {0}, {0}},
+    {"near-parallel long intersecting", {-50, 0, 0}, {50, 0, 0}, {-50, -5e-6, 0}, {50, 5e-6, 0}, 0.0, 0, {0}, {0}},
+    {"large coordinates crossing", {999.0, -2000.0, 500.0}, {1001.0, -2000.0, 500.0}, {1000.0, -2001.0, 500.125},
+     {1000.0, -1999.0, 500.125}, 0.125, 1, {1000.0, -2000.0, 500.0}, {1000.0, -2000.0, 500.125}},
+    {"large coordinates parallel", {1e4, 1e4, 1e4}, {1e4 + 1, 1e4, 1e4}, {1e4 + 0.5, 1e4 + 0.75, 1e4},
+     {1e4 + 2, 1e4 + 0.75, 1e4}, 0.75, 0, {0}, {0}},
+};
+
+static void test_closed_exact(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < sizeof exact_cases / sizeof exact_cases[0]; i++) {
+        const struct exact_case *ec = &exact_cases[i];
+        mca_segdist_t r, r2;
+        print_message("case: %s\n", ec->name);
+        assert_int_equal(mca_segdist_closed(ec->a, ec->b, ec->c, ec->d, &r), MCA_OK);
+        assert_true(fabs(r.d - ec->dist) <= 1e-12);
+        assert_int_equal(r.iterations, 0);
+        check_consistent(ec->a, ec->b, ec->c, ec->d, &r, 1e-12);
+        if (ec->has_pts) {
+            for (int k = 0; k < 3; k++) {
+                assert_true(fabs(r.p[k] - ec->p[k]) <= 1e-12);
+                assert_true(fabs(r.e[k] - ec->e[k]) <= 1e-12);
+            }
+        }
+        /* Swapping the segments (and each segment's direction) gives the same distance. */
+        assert_int_equal(mca_segdist_closed(ec->d, ec->c, ec->b, ec->a, &r2), MCA_OK);
+        assert_true(fabs(r2.d - ec->dist) <= 1e-12);
+    }
+}
+
+static void test_closed_rejects_bad_input(void **state)
+{
+    (void)state;
+    const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    double bad[3] = {0, NAN, 0}, inf[3] = {INFINITY, 0, 0};
+    mca_segdist_t r;
+    memset(&r, 0x5a, sizeof r);
+    mca_segdist_t before = r;
+    assert_int_equal(mca_segdist_closed(a, b, c, bad, &r), MCA_EINVAL);
+    assert_int_equal(mca_segdist_closed(inf, b, c, c, &r), MCA_EINVAL);
+    assert_int_equal(mca_segdist_closed(NULL, b, c, c, &r), MCA_EINVAL);
+    assert_int_equal(mca_segdist_closed(a, b, c, c, NULL), MCA_EINVAL);
+    assert_int_equal(mca_segdist_lsdm(a, b, c, bad, NULL, &r), MCA_EINVAL);
+    mca_lsdm_params_t p = {-1.0, 10};
+    assert_int_equal(mca_segdist_lsdm(a, b, c, c, &p, &r), MCA_EINVAL);
+    p.tol = 1e-9;
+    p.max_iter = 1;
+    assert_int_equal(mca_segdist_lsdm(a, b, c, c, &p, &r), MCA_EINVAL);
+    assert_memory_equal(&r, &before, sizeof r); /* unchanged on error */
+}
+
+/* Random pair classes. */
+enum pair_class { GENERIC, NEAR_PARALLEL, INTERSECTING, COLLINEAR, DEGENERATE, N_CLASSES };
+
+static void make_pair(enum pair_class cls, double a[3], double b[3], double c[3], double d[3])
+{
+    double u[3], x[3], s, t;
+    rand_pt(a, -1, 1);
+    rand_pt(b, -1, 1);
+    switch (cls) {
+    case GENERIC:
+        rand_pt(c, -1, 1);
+        rand_pt(d, -1, 1);
+        break;
+    case NEAR_PARALLEL: {
+        double off[3], ang = pow(10.0, -1.0 - 8.0 * urand());
+        rand_pt(off, -0.3, 0.3);
+        rand_pt(x, -1, 1);
+        for (int k = 0; k < 3; k++) {
+            u[k] = b[k] - a[k];
+            c[k] = a[k] + off[k] - 0.5 * u[k] * urand();
+            d[k] = c[k] + u[k] * (0.5 + urand()) + ang * x[k];
+        }
+        break;
+    }
+    case INTERSECTING:
+        s = urand();
+        t = urand();
+        rand_pt(x, -1, 1);
+        for (int k = 0; k < 3; k++) {
+            double m = a[k] + s * (b[k] - a[k]); /* common point, exactly on AB up to rounding */
+            c[k] = m - t * x[k];
+            d[k] = m + (1.0 - t) * x[k];
+        }
+        break;
+    case COLLINEAR:
+        s = -1.0 + 3.0 * urand();
+        t = -1.0 + 3.0 * urand();
+        for (int k = 0; k < 3; k++) {
+            c[k] = a[k] + s * (b[k] - a[k]);
+            d[k] = a[k] + t * (b[k] - a[k]);
+        }
+        break;
+    default:
+        /* zero-length on one or both sides */
+        rand_pt(c, -1, 1);
+        if (urand() < 0.5) {
+            memcpy(d, c, sizeof(double) * 3);
+        } else {
+            rand_pt(d, -1, 1);
+        }
+        memcpy(b, a, sizeof(double) * 3);
+        if (urand() < 0.3) {
+            double tmp[3];
+            memcpy(tmp, a, sizeof tmp);
+            memcpy(a, c, sizeof tmp); /* put the degenerate one on CD instead */
+            memcpy(b, d, sizeof tmp);
+            memcpy(c, tmp, sizeof tmp);
+            memcpy(d, tmp, sizeof tmp);
+        }
+        break;
+    }
+}
+
+static void test_closed_vs_brute(void **state)
+{
+    (void)state;
+    double worst[N_CLASSES] = {0};
+    for (int cls = 0; cls < N_CLASSES; cls++) {
+        for (int i = 0; i < 4000; i++) {
+            double a[3], b[3], c[3], d[3], ref;
+            mca_segdist_t r;
+            make_pair((enum pair_class)cls, a, b, c, d);
+            assert_int_equal(mca_segdist_closed(a, b, c, d, &r), MCA_OK);
+            check_consistent(a, b, c, d, &r, 1e-12);
+            ref = brute_segdist(a, b, c, d);
+            /* closed form never worse than the brute force, and within 1e-9 of it */
+            assert_true(r.d <= ref + 1e-12);
+            assert_true(fabs(r.d - ref) <= 1e-9);
+            worst[cls] = fmax(worst[cls], fabs(r.d - ref));
+        }
+    }
+    print_message("closed vs golden-section max |diff| per class: %.3g %.3g %.3g %.3g %.3g\n", worst[0], worst[1],
+                  worst[2], worst[3], worst[4]);
+}
+
+static double angle_between(const double a[3], const double b[3], const double c[3], const double d[3])
+{
+    double u[3], v[3], uu = 0, vv = 0, uv = 0;
+    for (int k = 0; k < 3; k++) {
+        u[k] = b[k] - a[k];
+        v[k] = d[k] - c[k];
+        uu += u[k] * u[k];
+        vv += v[k] * v[k];
+        uv += u[k] * v[k];
+    }
+    return acos(fmin(1.0, fabs(uv) / sqrt(uu * vv)));
+}
+
+/* Non-pathological pairs: both longer than 0.2, at least 20 degrees apart. */
+static void test_lsdm_vs_closed(void **state)
+{
+    (void)state;
+    const mca_lsdm_params_t paper = {1e-10, 10000};
+    const mca_lsdm_params_t cert = {1e-10, 100000};
+    double worst_paper = 0, worst_cert = 0;
+    int n = 0, max_it = 0;
+    while (n < 20000) {
+        double a[3], b[3], c[3], d[3];
+        mca_segdist_t rc, rl, rg;
+        make_pair(GENERIC, a, b, c, d);
+        if (dist3(a, b) < 0.2 || dist3(c, d) < 0.2 || angle_between(a, b, c, d) < 20.0 * M_PI / 180.0) {
+            continue;
+        }
+        n++;
+        assert_int_equal(mca_segdist_closed(a, b, c, d, &rc), MCA_OK);
+        assert_int_equal(mca_segdist_lsdm(a, b, c, d, &paper, &rl), MCA_OK);
+        assert_int_equal(mca_segdist_lsdm_certified(a, b, c, d, &cert, &rg), MCA_OK);
+        check_consistent(a, b, c, d, &rl, 1e-12);
+        check_consistent(a, b, c, d, &rg, 1e-12);
+        /* LSDM pairs are feasible, so never below the true minimum (rounding aside) */
+        assert_true(rl.d >= rc.d - 1e-12);
+        assert_true(rg.d >= rc.d - 1e-12);
+        /* paper rule at >= 20 degrees: contraction <= cos^2(20) per step, so error <= tol * 1 / (1 - 0.883) */
+        assert_true(rl.d - rc.d <= 10.0 * paper.tol);
+        /* certified rule: within its tolerance, by construction */
+        assert_true(rg.d - rc.d <= cert.tol + 1e-12);
+        worst_paper = fmax(worst_paper, rl.d - rc.d);
+        worst_cert = fmax(worst_cert, rg.d - rc.d);
+        max_it = rl.iterations > max_it ? rl.iterations : max_it;
+    }
+    print_message("LSDM (tol 1e-10) vs closed: paper rule worst %.3g, certified worst %.3g, max iterations %d\n",
+                  worst_paper, worst_cert, max_it);
+}
+
+/* The paper's rule on a near-parallel pair stops far from the minimum; the certificate does not lie. */
+static void test_lsdm_near_parallel_early_stop(void **state)
+{
+    (void)state;
+    /* AB along x; CD: y = 0.1, z = 1e-3 x (tilted by 1e-3 rad); the minimum is P = A, E = (0, 0.1, 0),
+     * d = 0.1. From B the iterates creep towards x = 0 by a factor 1/(1 + 1e-6) per cycle. */
+    const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {-1, 0.1, -1e-3}, d[3] = {1, 0.1, 1e-3};
+    const mca_lsdm_params_t paper = {MCA_LSDM_PAPER_TOL, 1000000};
+    mca_segdist_t rc, rl, rg;
+    assert_int_equal(mca_segdist_closed(a, b, c, d, &rc), MCA_OK);
+    assert_true(fabs(rc.d - 0.1) < 1e-12);
+    assert_true(fabs(rc.s) < 1e-12 && fabs(rc.t - 0.5) < 1e-12);
+    assert_int_equal(mca_segdist_lsdm(a, b, c, d, &paper, &rl), MCA_OK);
+    /* stops after 2 projections although it is still ~5e-6 m off: sqrt(0.01 + 1e-6) - 0.1 */
+    print_message("paper rule: d = %.12g after %d iterations (true %.12g)\n", rl.d, rl.iterations, rc.d);
+    assert_int_equal(rl.iterations, 2);
+    assert_true(fabs((rl.d - rc.d) - (sqrt(0.01 + 1e-6 / (1 + 1e-6)) - 0.1)) < 1e-9);
+    /* certified rule with a cap: ENOTCONV (honest) or within tol */
+    const mca_lsdm_params_t cert = {1e-9, 200};
+    int r = mca_segdist_lsdm_certified(a, b, c, d, &cert, &rg);
+    assert_true(r == MCA_ENOTCONV || (r == MCA_OK && rg.d - rc.d <= 1e-9 + 1e-15));
+    if (r == MCA_OK) {
+        assert_true(rg.iterations <= 200);
+    }
+}
+
+static void test_lower_bound_is_a_bound(void **state)
+{
+    (void)state;
+    for (int i = 0; i < 20000; i++) {
+        double a[3], b[3], c[3], d[3], p[3], e[3], s = urand(), t = urand();
+        mca_segdist_t rc;
+        make_pair((enum pair_class)(i % N_CLASSES), a, b, c, d);
+        for (int k = 0; k < 3; k++) {
+            p[k] = a[k] + s * (b[k] - a[k]);
+            e[k] = c[k] + t * (d[k] - c[k]);
+        }
+        assert_int_equal(mca_segdist_closed(a, b, c, d, &rc), MCA_OK);
+        assert_true(mca_segdist_lower_bound(a, b, c, d, p, e) <= rc.d + 1e-12);
+        /* at the optimum the bound is tight */
+        assert_true(rc.d - mca_segdist_lower_bound(a, b, c, d, rc.p, rc.e) <= 1e-9 || rc.d < 1e-9);
+    }
+}
+
+static void test_paper_step1_cases(void **state)
+{
+    (void)state;
+    const double a[3] = {0, 0, 0}, b[3] = {2, 0, 0};
+    double h[3], s;
+    const double o1[3] = {-1, 1, 0}, o2[3] = {0.5, 3, 4}, o3[3] = {5, 4, 0};
+    assert_true(fabs(mca_point_segment_paper(o1, a, b, h, &s) - sqrt(2.0)) < 1e-15); /* case 1: P = A */
+    assert_true(s == 0.0 && h[0] == 0.0);
+    assert_true(fabs(mca_point_segment_paper(o2, a, b, h, &s) - 5.0) < 1e-15); /* case 2: H on AB */
+    assert_true(fabs(s - 0.25) < 1e-15 && fabs(h[0] - 0.5) < 1e-15);
+    assert_true(fabs(mca_point_segment_paper(o3, a, b, h, &s) - 5.0) < 1e-15); /* case 3: P = B */
+    assert_true(s == 1.0 && h[0] == 2.0);
+    assert_true(fabs(mca_point_segment_paper(o3, a, a, h, &s) - sqrt(41.0)) < 1e-15); /* zero length */
+    assert_true(s == 0.0);
+}
+
+/* ---- arm distances against brute force on random two-arm configurations ---- */
+static void random_arm(mca_chain_t *ch, mca_kin_t *k, int dof, double x0)
+{
+    memset(ch, 0, sizeof *ch);
+    memset(k, 0, sizeof *k);
+    ch->dof = dof;
+    k->dof = dof;
+    k->n_points = dof + 2;
+    for (int i = 0; i <= dof; i++) {
+        ch->link_radius[i] = 0.02 + 0.06 * urand();
+    }
+    k->point[0][0] = x0;
+    for (int i = 1; i < k->n_points; i++) {
+        for (int j = 0; j < 3; j++) {
+            k->point[i][j] = k->point[i - 1][j] + (urand() - 0.5) * 0.6;
+        }
+        if (urand() < 0.1) { /* coincident joint origins: zero-length link */
+            memcpy(k->point[i], k->point[i - 1], sizeof k->point[i]);
+        }
+    }
+}
+
+static void test_arm_distances_brute(void **state)
+{
+    (void)state;
+    for (int trial = 0; trial < 300; trial++) {
+        mca_chain_t ca, cb;
+        mca_kin_t ka, kb;
+        mca_arm_distances_t out, out_l;
+        int da = 1 + (int)(urand() * MCA_MAX_DOF), db = 1 + (int)(urand() * MCA_MAX_DOF);
+        random_arm(&ca, &ka, da, 0.0);
+        random_arm(&cb, &kb, db, 0.4);
+        assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, MCA_DIST_CLOSED, &out), MCA_OK);
+        assert_int_equal(out.n_links_a, da + 1);
+        assert_int_equal(out.n_links_b, db + 1);
+        assert_int_equal(out.iterations, 0);
+        double gmin = INFINITY;
+        double bmin[MCA_MAX_LINKS];
+        for (int j = 0; j <= db; j++) {
+            bmin[j] = INFINITY;
+        }
+        for (int i = 0; i <= da; i++) {
+            double amin = INFINITY;
+            for (int j = 0; j <= db; j++) {
+                double ds = brute_segdist(ka.point[i], ka.point[i + 1], kb.point[j], kb.point[j + 1]) -
+                            ca.link_radius[i] - cb.link_radius[j];
+                amin = fmin(amin, ds);
+                bmin[j] = fmin(bmin[j], ds);
+            }
+            gmin = fmin(gmin, amin);
+            const mca_link_pair_t *lp = &out.a_to_b[i];
+            assert_int_equal(lp->link, i);
+            assert_true(fabs(lp->d - amin) <= 1e-9);
+            assert_true(fabs(lp->d - (lp->d_axis - ca.link_radius[i] - cb.link_radius[lp->other_link])) <= 1e-12);
+            /* the critical points are on the named axes and |p - e| = d_axis */
+            assert_true(fabs(dist3(lp->p, lp->e) - lp->d_axis) <= 1e-12);
+            assert_true(pt_seg(lp->p, ka.point[i], ka.point[i + 1]) <= 1e-12);
+            assert_true(pt_seg(lp->e, kb.point[lp->other_link], kb.point[lp->other_link + 1]) <= 1e-12);
+        }
+        for (int j = 0; j <= db; j++) {
+            const mca_link_pair_t *lp = &out.b_to_a[j];
+            assert_int_equal(lp->link, j);
+            assert_true(fabs(lp->d - bmin[j]) <= 1e-9);
+            assert_true(pt_seg(lp->p, kb.point[j], kb.point[j + 1]) <= 1e-12);
+            assert_true(pt_seg(lp->e, ka.point[lp->other_link], ka.point[lp->other_link + 1]) <= 1e-12);
+        }
+        assert_true(fabs(out.min.d - gmin) <= 1e-9);
+        assert_true(pt_seg(out.min.p, ka.point[out.min.link], ka.point[out.min.link + 1]) <= 1e-12);
+        /* LSDM method agrees loosely (it is the paper's iteration, capped) and counts iterations */
+        assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, MCA_DIST_LSDM, &out_l), MCA_OK);
+        assert_true(out_l.iterations >= 2 * (da + 1) * (db + 1));
+        assert_true(out_l.min.d >= out.min.d - 1e-12);
+        assert_true(out_l.min.d - out.min.d <= 1e-3);
+    }
+}
+
+static void test_arm_distances_bad_input(void **state)
+{
+    (void)state;
+    mca_chain_t ca, cb;
+    mca_kin_t ka, kb;
+    mca_arm_distances_t out;
+    random_arm(&ca, &ka, 3, 0.0);
+    random_arm(&cb, &kb, 4, 1.0);
+    assert_int_equal(mca_arm_distances(NULL, &ka, &cb, &kb, MCA_DIST_CLOSED, &out), MCA_EINVAL);
+    assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, (mca_dist_method_t)7, &out), MCA_EINVAL);
+    kb.dof = 3; /* kinematic state of another chain */
+    assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, MCA_DIST_CLOSED, &out), MCA_EINVAL);
+    kb.dof = 4;
+    kb.point[2][1] = NAN;
+    assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, MCA_DIST_CLOSED, &out), MCA_EINVAL);
+}
+
+/* Two parallel vertical arms: the answer is obvious (base gap minus radii). */
+static void test_arm_distances_known(void **state)
+{
+    (void)state;
+    mca_chain_t ca, cb;
+    mca_kin_t ka, kb;
+    mca_arm_distances_t out;
+    memset(&ca, 0, sizeof ca);
+    memset(&ka, 0, sizeof ka);
+    ca.dof = 2;
+    ka.dof = 2;
+    ka.n_points = 4;
+    for (int i = 0; i < 4; i++) {
+        ka.point[i][2] = 0.3 * i;
+        ca.link_radius[i < 3 ? i : 2] = 0.05;
+    }
+    cb = ca;
+    kb = ka;
+    for (int i = 0; i < 4; i++) {
+        kb.point[i][0] = 0.5;
+    }
+    kb.point[3][0] = 0.2; /* B's last link leans towards A: tip at x = 0.2, z = 0.9 */
+    assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, MCA_DIST_CLOSED, &out), MCA_OK);
+    assert_true(fabs(out.min.d - (0.2 - 0.1)) <= 1e-12);
+    assert_int_equal(out.min.link, 2);
+    assert_int_equal(out.min.other_link, 2);
+    assert_true(fabs(out.min.p[2] - 0.9) <= 1e-12 && fabs(out.min.e[0] - 0.2) <= 1e-12);
+    /* link 0 of A: closest on B is link 0 or 1 at x-gap 0.5 */
+    assert_true(fabs(out.a_to_b[0].d - (0.5 - 0.1)) <= 1e-12);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_closed_exact),
+        cmocka_unit_test(test_closed_rejects_bad_input),
+        cmocka_unit_test(test_paper_step1_cases),
+        cmocka_unit_test(test_closed_vs_brute),
+        cmocka_unit_test(test_lsdm_vs_closed),
+        cmocka_unit_test(test_lsdm_near_parallel_early_stop),
+        cmocka_unit_test(test_lower_bound_is_a_bound),
+        cmocka_unit_test(test_arm_distances_known),
+        cmocka_unit_test(test_arm_distances_brute),
+        cmocka_unit_test(test_arm_distances_bad_input),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
