@@ -1,0 +1,172 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/controller.h
+ * One controller tick for N arms: forward kinematics, Jacobians, arm-to-arm distances, the QP of the
+ * MCA scheme (or the MVN / APF baselines), the LVI-PDNN solve and run-time fault detection.
+ * It is THE function the daemon's 1 kHz loop and mca-sim both call.
+ *
+ * Use (start-up, then every tick):
+ *     mca_controller_config_t cfg;
+ *     mca_controller_config_from_scenario(&cfg, &scenario, MCA_SCHEME_MCA, err, sizeof err); // or fill
+ *     mca_controller_t *ctrl = malloc(sizeof *ctrl);      // large (~200 kB): do not put it on a stack
+ *     mca_controller_init(ctrl, &cfg);
+ *     loop: mca_controller_tick(ctrl, t, q, qdot, &info);  // q[a], qdot[a]: arm a's joints
+ *
+ * Task time: the first tick after init/reset anchors the paths (frame "start") at the arms' current
+ * end-effector positions and sets task time 0 = its t. Path time is t - t_start.
+ *
+ * Faults: any of NaN input/output, PDNN not converged beyond fault_residual, contradicting joint bounds,
+ * a distance below d1, a distance predicted to cross d1 within the next tick, or an equality residual
+ * ||G phi - alpha||_inf above eq_tol (the contradiction of Section VI-E: tracking and avoidance cannot
+ * both hold; the PDNN's "fake attractor") make the tick command ZERO velocity for all arms and return
+ * MCA_EFAULT with info->fault / info->fault_text naming the cause. The fault LATCHES: every later tick
+ * commands zero (and reports the same fault) until mca_controller_clear_fault(). The braking profile
+ * itself is the arm's / daemon's job.
+ *
+ * Context: mca_controller_config_from_scenario() and mca_controller_init() are start-up only
+ * (URDF parsing allocates). mca_controller_tick(), _reset() and _clear_fault() are real-time safe:
+ * no allocation, no I/O, no locks; compute time is measured with CLOCK_MONOTONIC.
+ */
+#ifndef MCA_CONTROLLER_H
+#define MCA_CONTROLLER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mca/apf.h"
+#include "mca/armdist.h"
+#include "mca/chain.h"
+#include "mca/limits.h"
+#include "mca/pdnn.h"
+#include "mca/qp.h"
+#include "mca/scenario.h"
+#include "mca/scheme.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mca_scheme_kind {
+    MCA_SCHEME_MCA = 0, /**< QP (25)-(28) with collision rows, solved by the LVI-PDNN */
+    MCA_SCHEME_MVN = 1, /**< QP (25)-(27), no collision rows */
+    MCA_SCHEME_APF = 2, /**< artificial potential field baseline (40)-(46) */
+} mca_scheme_kind_t;
+
+/** Run-time fault codes (info->fault). */
+typedef enum mca_ctrl_fault {
+    MCA_CTRL_FAULT_NONE = 0,
+    MCA_CTRL_FAULT_NAN = 1,           /**< non-finite joint input, QP data or solver output */
+    MCA_CTRL_FAULT_NOT_CONVERGED = 2, /**< PDNN residual above fault_residual at its step cap */
+    MCA_CTRL_FAULT_INFEASIBLE = 3,    /**< joint bounds contradict (arm beyond a limit) */
+    MCA_CTRL_FAULT_DISTANCE = 4,      /**< distance below d1, or predicted below d1 next tick */
+    MCA_CTRL_FAULT_FAKE_ATTRACTOR = 5,/**< equality residual above eq_tol: tracking contradicts avoidance */
+    MCA_CTRL_FAULT_INPUT = 6,         /**< bad call (NULL pointers, solver error) */
+} mca_ctrl_fault_t;
+
+/** Short constant name of a fault code ("fake-attractor", ...). */
+const char *mca_ctrl_fault_name(int fault);
+
+typedef struct mca_controller_config {
+    int n_arms;                          /**< 1..MCA_MAX_ARMS */
+    mca_chain_t chain[MCA_MAX_ARMS];     /**< copied; base placement set */
+    mca_path_t path[MCA_MAX_ARMS];       /**< desired end-effector path of each arm (copied) */
+    mca_scheme_kind_t scheme;
+    mca_scheme_params_t sp;              /**< d1, d2, K, epsilon, collision form, ... */
+    mca_pdnn_params_t pdnn;
+    mca_apf_params_t apf;
+    mca_dist_method_t dist_method;       /**< MCA_DIST_CLOSED (default, exact) or MCA_DIST_LSDM */
+    double dt;                           /**< tick period [s] (prediction of the next distance, APF D terms) */
+    double fault_residual;               /**< PDNN residual that is a fault at the step cap (1e-6) */
+    double eq_tol;                       /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
+    int fault_distance;                  /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
+} mca_controller_config_t;
+
+/** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
+void mca_controller_default_config(mca_controller_config_t *cfg);
+
+/**
+ * Fill a config from a loaded scenario: loads each arm's URDF (start-up only), sets base placements,
+ * copies paths and the scenario's parameters.
+ * @retval MCA_OK, MCA_ENOENT/MCA_EPARSE/MCA_ERANGE from the URDF (err names the file), MCA_EINVAL
+ *         (q0 count differs from the chain's dof)
+ */
+int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
+                                        mca_scheme_kind_t scheme, char *err, size_t errlen);
+
+/** Report of one tick. */
+typedef struct mca_tick_info {
+    double t;                               /**< the tick's t */
+    double task_t;                          /**< t - t_start */
+    int n_arms;
+    /* distances (all pairs of arms; the global minimum) */
+    double min_distance;                    /**< surface distance [m] (+INF with one arm) */
+    int min_arm_a, min_link_a;              /**< critical pair: arm/link with P */
+    int min_arm_b, min_link_b;              /**< arm/link with E */
+    double min_p[3], min_e[3];
+    double link_distance[MCA_MAX_ARMS][MCA_MAX_LINKS]; /**< per link: closest link of any other arm */
+    double brake;                           /**< smallest S(d) over the links (1: free) */
+    int active_rows;                        /**< collision rows with a finite bound */
+    /* solver */
+    int pdnn_steps;
+    double pdnn_residual;
+    int pdnn_converged;
+    double eq_residual;                     /**< ||G phi - alpha||_inf [m/s] */
+    /* tracking */
+    double ee[MCA_MAX_ARMS][3];             /**< actual end effector */
+    double ee_desired[MCA_MAX_ARMS][3];
+    double ee_error[MCA_MAX_ARMS];          /**< |r_d - r| [m] */
+    /* outcome */
+    int fault;                              /**< mca_ctrl_fault_t */
+    char fault_text[160];
+    int64_t compute_ns;                     /**< CLOCK_MONOTONIC time spent in the tick */
+} mca_tick_info_t;
+
+/** Controller state (large: keep it static or on the heap; allocated by the caller at start-up). */
+typedef struct mca_controller {
+    mca_controller_config_t cfg;
+    int started;                            /**< paths anchored */
+    double t_start;
+    int fault;
+    char fault_text[160];
+    mca_kin_t kin[MCA_MAX_ARMS];
+    mca_arm_distances_t dist[MCA_MAX_ARMS][MCA_MAX_ARMS]; /**< [a][b], a < b */
+    mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    mca_scheme_state_t sstate;
+    mca_qp_t qp;
+    mca_pdnn_t pdnn;
+    double phi[MCA_QP_MAX_VARS];
+    double phi_prev[MCA_QP_MAX_VARS];
+    mca_apf_state_t apf[MCA_MAX_ARMS];
+    double min_distance_prev;
+    int has_prev;
+    uint64_t ticks;
+} mca_controller_t;
+
+/** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
+int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg);
+
+/** Restart the task: next tick re-anchors paths, clears warm start, memory and any fault. RT safe. */
+void mca_controller_reset(mca_controller_t *ctrl);
+
+/** Clear a latched fault (keeps the task clock and anchors). RT safe. */
+void mca_controller_clear_fault(mca_controller_t *ctrl);
+
+/**
+ * One tick (real-time safe).
+ * @param t     time [s] (any origin; monotonic)
+ * @param q     q[a]: joint positions of arm a (chain dof values)
+ * @param[out] qdot  qdot[a]: commanded joint velocities (zero on fault)
+ * @param[out] info  tick report (may be NULL)
+ * @retval MCA_OK      qdot is the scheme's command
+ * @retval MCA_EFAULT  fault (new or latched): qdot is zero, info->fault says why
+ * @retval MCA_EINVAL  NULL pointers (qdot zeroed where possible)
+ */
+int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
+                        double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info);
+
+/** Last QP assembled and the PDNN's phi (for --dump-qp; not meaningful for APF). */
+const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

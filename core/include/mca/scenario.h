@@ -1,0 +1,113 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/scenario.h
+ * Task (scenario) files and desired end-effector paths.
+ *
+ * A scenario names the arms (URDF, tip link, base placement, initial joints), one desired path per arm,
+ * the duration and the scheme parameters (d1, d2, K, epsilon, ...). It is a YAML file parsed with libcyaml
+ * (start-up only); see config/scenarios/*.yaml and docs/scheme.md for the format.
+ *
+ * Paths are evaluated on the 1 kHz path: mca_path_eval() is real-time safe (no allocation, bounded time).
+ * A path may be anchored at the arm's end-effector position at start (frame "start"): its points are then
+ * offsets from that position, fixed by mca_path_anchor() when the task starts.
+ */
+#ifndef MCA_SCENARIO_H
+#define MCA_SCENARIO_H
+
+#include <stddef.h>
+
+#include "mca/limits.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Most waypoints of one path. */
+#define MCA_PATH_MAX_POINTS 64
+
+typedef enum mca_path_kind {
+    MCA_PATH_HOLD = 0,      /**< stay at the start position */
+    MCA_PATH_CIRCLE = 1,    /**< circle through the start position, phase 2 pi sin^2(pi t / 2T) */
+    MCA_PATH_WAYPOINTS = 2, /**< straight segments between waypoints, quintic timing per segment */
+} mca_path_kind_t;
+
+typedef struct mca_path {
+    mca_path_kind_t kind;
+    int relative;    /**< 1: points/centre are offsets from the anchor (end effector at start) */
+    double anchor[3]; /**< set by mca_path_anchor() (zero until then) */
+    double t0;       /**< path time offset: the path starts at task time t0 (holds before) */
+    /* circle: r(s) = anchor - R u + R (cos phi u + sin phi v), phi = turns * 2 pi sin^2(pi s / 2T) */
+    double radius;
+    double u[3];     /**< unit, in-plane: anchor sits at centre + R u */
+    double v[3];     /**< unit, in-plane, orthogonal to u */
+    double period;   /**< T [s] */
+    double turns;    /**< full turns in T (1) */
+    /* waypoints: p[0] reached at t0 (relative: p[0] usually 0), segment i from p[i] to p[i+1] lasts dur[i] */
+    int n_points;
+    double p[MCA_PATH_MAX_POINTS][3];
+    double dur[MCA_PATH_MAX_POINTS]; /**< dur[i]: duration of segment i -> i+1 [s] (> 0) */
+} mca_path_t;
+
+/** Fix a path's anchor (the end effector's position at task start). Start-up/rt safe. */
+void mca_path_anchor(mca_path_t *path, const double ee_start[3]);
+
+/**
+ * Desired position and velocity at task time t (real-time safe). Before t0 and after the end the path
+ * holds its first/last point with zero velocity.
+ * @retval MCA_OK, MCA_EINVAL (NULL or non-finite t)
+ */
+int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3]);
+
+/** Task time at which the path ends. */
+double mca_path_end_time(const mca_path_t *path);
+
+/** One arm of a scenario. */
+typedef struct mca_scenario_arm {
+    char name[32];
+    char urdf[512];      /**< absolute path (relative paths in the file are resolved against the file) */
+    char tip_link[64];   /**< "" = the single leaf link */
+    double base_xyz[3];
+    double base_rpy[3];
+    int n_q0;            /**< entries given for q0 (must equal the chain's dof once loaded) */
+    double q0[MCA_MAX_DOF];
+    mca_path_t path;
+} mca_scenario_arm_t;
+
+/** Scheme and fault parameters a scenario may set (defaults in mca_scenario_defaults()). */
+typedef struct mca_scenario_params {
+    double d1, d2;          /**< inner/outer safety thresholds [m] */
+    double K;               /**< position feedback gain [1/s] */
+    double epsilon;         /**< joint-limit gain of (19) [1/s] */
+    double dt;              /**< tick period [s] (0.001) */
+    double v_normal;        /**< normal form: allowed approach speed S(d) * v_normal [m/s] */
+    double v_floor;         /**< componentwise form: least captured approach rate [m/s] */
+    int form;               /**< mca_collision_form_t (0 componentwise, 1 normal) */
+} mca_scenario_params_t;
+
+typedef struct mca_scenario {
+    char name[64];
+    char source[512];     /**< file it was loaded from */
+    int n_arms;
+    mca_scenario_arm_t arm[MCA_MAX_ARMS];
+    double duration;      /**< task length [s] */
+    int has_form;         /**< 1 when the file set the collision form */
+    mca_scenario_params_t params;
+    int n_sample_times;   /**< instants for the Table-I style report */
+    double sample_times[16];
+} mca_scenario_t;
+
+/** Defaults: d1 0.05, d2 0.12, K 20, epsilon 5, dt 0.001, normal form, v_normal 0.5. */
+void mca_scenario_defaults(mca_scenario_t *scn);
+
+/**
+ * Parse a scenario YAML file (start-up only; allocates inside libcyaml and frees before returning).
+ * @param[out] scn  filled on success (unchanged on error)
+ * @param[out] err  message naming the file, the line when known, and the field at fault
+ * @retval MCA_OK, MCA_ENOENT (file missing), MCA_EPARSE (bad YAML, unknown/missing field),
+ *         MCA_ERANGE (value out of range: too many arms/points, d1 >= d2, non-positive duration, ...)
+ */
+int mca_scenario_load(const char *path, mca_scenario_t *scn, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

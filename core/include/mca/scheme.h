@@ -1,0 +1,125 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/scheme.h
+ * QP assembly of the MCA scheme (paper (19)-(28)) for N arms:
+ *
+ *   phi = [qdot_0; qdot_1; ...]                   (arm a's joints at offset var_off[a])
+ *   G phi = alpha:   rows 3a..3a+2 = J_a qdot_a = rdot_d + K (r_d - r)         (22)/(26)
+ *   lb <= phi <= ub: eta-/eta+ of (19)-(20)                                     (24)/(27)
+ *   U phi <= beta:   per arm a, per link l of a, a FIXED block of rows (3 rows componentwise, 1 row
+ *                    normal form) for the critical point P on link l against the closest link of any
+ *                    other arm (E on that link).                                (10)-(14)/(28)
+ * Inactive rows (link farther than d2, or a link with no critical point) keep their place with
+ * beta = +big and U = 0, so the layout never changes between ticks and the PDNN warm start stays valid.
+ *
+ * Collision forms (see docs/scheme.md for the reading of the paper's (12)):
+ *  - componentwise (paper (10)-(12)): rows r_PE <> J_P (r_PE = E - P, <> = row-wise scaling),
+ *    beta_i = S(d) max{c_i, v_floor * |r_PE,i|} where c_i = (r_PE <> J_P qdot)_i captured when the
+ *    link entered the band (d fell below d2) and frozen while it stays inside;
+ *  - normal: one row n^T J_P qdot <= S(d) v_normal with n = (E - P) / |E - P| (approach speed of P
+ *    towards E; each arm limits its own approach, as the paper's block-diagonal U).
+ * Real-time safe: no allocation, no I/O.
+ */
+#ifndef MCA_SCHEME_H
+#define MCA_SCHEME_H
+
+#include "mca/chain.h"
+#include "mca/qp.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mca_collision_form {
+    MCA_FORM_COMPONENTWISE = 0, /**< paper (10)-(12): three rows per critical point */
+    MCA_FORM_NORMAL = 1,        /**< one row per critical point along P -> E */
+} mca_collision_form_t;
+
+typedef struct mca_scheme_params {
+    int collision;              /**< 1: collision rows (MCA), 0: none (MVN (25)-(27)) */
+    mca_collision_form_t form;
+    double d1, d2;              /**< safety thresholds [m], 0 <= d1 < d2 */
+    double K;                   /**< position feedback gain [1/s] */
+    double epsilon;             /**< joint-limit gain of (19) [1/s] */
+    double v_normal;            /**< normal form: approach speed allowed at d >= d2 [m/s] */
+    double v_floor;             /**< componentwise: least captured rate per unit |r_PE,i| [1/s] */
+    double big;                 /**< bound of an inactive row (the PDNN's varpi or less) */
+} mca_scheme_params_t;
+
+/** Critical point of one link against the closest link of the other arms. */
+typedef struct mca_link_critical {
+    int valid;        /**< 0: no other arm (row inactive) */
+    int other_arm;
+    int other_link;
+    double d;         /**< surface distance [m] */
+    double p[3];      /**< on this link's axis */
+    double e[3];      /**< on the other link's axis */
+} mca_link_critical_t;
+
+/** Memory between ticks (componentwise capture). Zero it with mca_scheme_state_reset(). */
+typedef struct mca_scheme_state {
+    int in_band[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    double captured[MCA_MAX_ARMS][MCA_MAX_LINKS][3];
+} mca_scheme_state_t;
+
+/** What one assembly found. */
+typedef struct mca_scheme_info {
+    int active_rows;     /**< collision rows with a finite bound */
+    double brake;        /**< smallest S(d) over the links with a critical point (1 when none) */
+    int var_off[MCA_MAX_ARMS];
+    int row_off[MCA_MAX_ARMS]; /**< first inequality row of each arm */
+    int rows_per_link;   /**< 3 componentwise, 1 normal, 0 MVN */
+} mca_scheme_info_t;
+
+/** Defaults: collision on, normal form, d1 0.05, d2 0.12, K 20, epsilon 5, v_normal 0.5, v_floor 0,
+ *  big 1e6. */
+void mca_scheme_default_params(mca_scheme_params_t *p);
+
+/** Smooth brake (13): 1 for d >= d2, sin^2(pi/2 (d - d1)/(d2 - d1)) between, 0 for d <= d1. */
+double mca_brake_s(double d, double d1, double d2);
+
+/** Diamond product (10): rows[i][j] = r[i] * J[i][j] for the first dof columns (others zeroed). */
+void mca_diamond_rows(const double r[3], const double J[3][MCA_MAX_DOF], int dof,
+                      double rows[3][MCA_MAX_DOF]);
+
+/**
+ * Joint bounds (19)-(20): lb = max{eps (q- - q), -qdot_max}, ub = min{eps (q+ - q), qdot_max};
+ * continuous joints get the velocity limits only.
+ * @retval MCA_OK
+ * @retval MCA_EINFEASIBLE a joint is so far beyond a limit that lb > ub (lb, ub still written)
+ * @retval MCA_EINVAL NULL or non-finite q
+ */
+int mca_joint_bounds(const mca_chain_t *chain, const double *q, double epsilon, double *lb, double *ub);
+
+/** Reset the between-tick memory (task start, fault clear). */
+void mca_scheme_state_reset(mca_scheme_state_t *st);
+
+/** Rows per link for these parameters (0, 1 or 3). */
+int mca_scheme_rows_per_link(const mca_scheme_params_t *p);
+
+/**
+ * Assemble the QP (25)-(28) for n_arms arms (real-time safe).
+ * @param p       parameters
+ * @param n_arms  1..MCA_MAX_ARMS
+ * @param chain   chain of each arm
+ * @param kin     kinematic state of each arm (mca_fk at q)
+ * @param q       joint positions of each arm
+ * @param r_d     desired end-effector position of each arm
+ * @param rdot_d  desired end-effector velocity of each arm
+ * @param crit    critical point of each link of each arm ([a][l], l < dof_a + 1)
+ * @param phi_prev previous tick's phi (for the componentwise capture; NULL = zero)
+ * @param st      between-tick memory (updated)
+ * @param[out] qp    the QP (reset and filled)
+ * @param[out] info  layout and brake summary (may be NULL)
+ * @retval MCA_OK, MCA_EINVAL (NULL/sizes), MCA_ERANGE (QP above the maximums),
+ *         MCA_EINFEASIBLE (joint bounds contradict)
+ */
+int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chain_t *const chain[],
+                        const mca_kin_t kin[], const double *const q[], const double r_d[][3],
+                        const double rdot_d[][3], const mca_link_critical_t crit[][MCA_MAX_LINKS],
+                        const double *phi_prev, mca_scheme_state_t *st, mca_qp_t *qp,
+                        mca_scheme_info_t *info);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
