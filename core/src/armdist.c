@@ -8,15 +8,13 @@
 #include "mca/segdist.h"
 #include "mca/vec3.h"
 
-static int kin_ok(const mca_chain_t *chain, const mca_kin_t *kin)
-{
+static int kin_ok(const mca_chain_t *chain, const mca_kin_t *kin) {
     return chain != NULL && kin != NULL && chain->dof >= 1 && chain->dof <= MCA_MAX_DOF &&
            kin->dof == chain->dof && kin->n_points == chain->dof + 2;
 }
 
 static void set_pair(mca_link_pair_t *lp, int link, int other, double d, double d_axis, const double p[3],
-                     const double e[3])
-{
+                     const double e[3]) {
     lp->link = link;
     lp->other_link = other;
     lp->d = d;
@@ -26,8 +24,7 @@ static void set_pair(mca_link_pair_t *lp, int link, int other, double d, double 
 }
 
 int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const mca_chain_t *chain_b,
-                      const mca_kin_t *kin_b, mca_dist_method_t method, mca_arm_distances_t *out)
-{
+                      const mca_kin_t *kin_b, mca_dist_method_t method, mca_arm_distances_t *out) {
     const mca_lsdm_params_t params = {MCA_LSDM_DEFAULT_TOL, MCA_LSDM_DEFAULT_MAX_ITER};
     mca_segdist_t sd;
     int na, nb, i, j, rc, iters = 0;
@@ -63,8 +60,8 @@ int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const 
         for (j = 0; j < nb; j++) {
             if (method == MCA_DIST_LSDM) {
                 /* ENOTCONV still leaves the best pair found; the cap bounds the time. */
-                rc = mca_segdist_lsdm(kin_a->point[i], kin_a->point[i + 1], kin_b->point[j], kin_b->point[j + 1],
-                                      &params, &sd);
+                rc = mca_segdist_lsdm(kin_a->point[i], kin_a->point[i + 1], kin_b->point[j],
+                                      kin_b->point[j + 1], &params, &sd);
                 iters += sd.iterations;
             } else {
                 rc = mca_segdist_closed(kin_a->point[i], kin_a->point[i + 1], kin_b->point[j],

@@ -8,14 +8,12 @@
 #include "mca/segdist.h"
 #include "mca/vec3.h"
 
-static int finite3(const double *v)
-{
+static int finite3(const double *v) {
     return v != NULL && isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
 }
 
 /* NaN (e.g. 0/0 on a degenerate segment) maps to 0 so the result stays a feasible point. */
-static double clamp01(double x)
-{
+static double clamp01(double x) {
     if (!(x > 0.0)) {
         return 0.0;
     }
@@ -23,8 +21,7 @@ static double clamp01(double x)
 }
 
 /* Parameter of the point of segment c + t v closest to p (dot-product form, exact clamping). */
-static double seg_param(const double p[3], const double c[3], const double v[3], double vv)
-{
+static double seg_param(const double p[3], const double c[3], const double v[3], double vv) {
     double w[3];
     if (!(vv > 0.0)) {
         return 0.0;
@@ -34,8 +31,7 @@ static double seg_param(const double p[3], const double c[3], const double v[3],
 }
 
 /* |s u - (c + t v)|^2 in the frame where A is the origin. */
-static double pair_d2(const double u[3], const double c[3], const double v[3], double s, double t)
-{
+static double pair_d2(const double u[3], const double c[3], const double v[3], double s, double t) {
     double p[3], e[3], w[3];
     p[0] = s * u[0];
     p[1] = s * u[1];
@@ -46,8 +42,7 @@ static double pair_d2(const double u[3], const double c[3], const double v[3], d
 }
 
 static void fill_out(const double a[3], const double b[3], const double c[3], const double d[3], double s,
-                     double t, mca_segdist_t *out)
-{
+                     double t, mca_segdist_t *out) {
     double u[3], v[3];
     mca_v3_sub(u, b, a);
     mca_v3_sub(v, d, c);
@@ -75,8 +70,7 @@ static void fill_out(const double a[3], const double b[3], const double c[3], co
  * that attains it. Coordinates are taken relative to A to keep large offsets from eating precision.
  */
 int mca_segdist_closed(const double a[3], const double b[3], const double c[3], const double d[3],
-                       mca_segdist_t *out)
-{
+                       mca_segdist_t *out) {
     double u[3], c0[3], d0[3], v[3], n[3], tmp[3], x[3];
     double uu, vv, nn, s, t, d2, best_d2, best_s, best_t;
     static const double zero[3] = {0.0, 0.0, 0.0};
@@ -144,8 +138,8 @@ int mca_segdist_closed(const double a[3], const double b[3], const double c[3], 
     return MCA_OK;
 }
 
-double mca_point_segment_paper(const double o[3], const double a[3], const double b[3], double h[3], double *s)
-{
+double mca_point_segment_paper(const double o[3], const double a[3], const double b[3], double h[3],
+                               double *s) {
     double ab[3], ob[3], oa[3];
     double ab2, ab_len, ob2, oa2, hb, sv;
 
@@ -183,8 +177,7 @@ double mca_point_segment_paper(const double o[3], const double a[3], const doubl
 }
 
 double mca_segdist_lower_bound(const double a[3], const double b[3], const double c[3], const double d[3],
-                               const double p[3], const double e[3])
-{
+                               const double p[3], const double e[3]) {
     double w[3], r[3], len, lo_ab, hi_cd, x, lb;
 
     mca_v3_sub(w, p, e);
@@ -215,8 +208,7 @@ enum lsdm_rule { RULE_PAPER, RULE_GAP };
  * the separating-plane certificate proves the pair within tol of the minimum.
  */
 static int lsdm_run(const double a[3], const double b[3], const double c[3], const double d[3],
-                    const mca_lsdm_params_t *params, enum lsdm_rule rule, mca_segdist_t *out)
-{
+                    const mca_lsdm_params_t *params, enum lsdm_rule rule, mca_segdist_t *out) {
     mca_lsdm_params_t def = {MCA_LSDM_DEFAULT_TOL, MCA_LSDM_DEFAULT_MAX_ITER};
     double x[3], y[3], sx = 1.0, ty = 0.0, dcur, dprev = INFINITY;
     double best = INFINITY, bs = 1.0, bt = 0.0;
@@ -267,13 +259,11 @@ static int lsdm_run(const double a[3], const double b[3], const double c[3], con
 }
 
 int mca_segdist_lsdm(const double a[3], const double b[3], const double c[3], const double d[3],
-                     const mca_lsdm_params_t *params, mca_segdist_t *out)
-{
+                     const mca_lsdm_params_t *params, mca_segdist_t *out) {
     return lsdm_run(a, b, c, d, params, RULE_PAPER, out);
 }
 
 int mca_segdist_lsdm_certified(const double a[3], const double b[3], const double c[3], const double d[3],
-                               const mca_lsdm_params_t *params, mca_segdist_t *out)
-{
+                               const mca_lsdm_params_t *params, mca_segdist_t *out) {
     return lsdm_run(a, b, c, d, params, RULE_GAP, out);
 }

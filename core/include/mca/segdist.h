@@ -14,11 +14,11 @@ extern "C" {
 #endif
 
 typedef struct mca_segdist {
-    double d;      /**< distance |P - E| */
-    double p[3];   /**< critical point P on AB */
-    double e[3];   /**< critical point E on CD */
-    double s;      /**< P = A + s (B - A), s in [0, 1] */
-    double t;      /**< E = C + t (D - C), t in [0, 1] */
+    double d;       /**< distance |P - E| */
+    double p[3];    /**< critical point P on AB */
+    double e[3];    /**< critical point E on CD */
+    double s;       /**< P = A + s (B - A), s in [0, 1] */
+    double t;       /**< E = C + t (D - C), t in [0, 1] */
     int iterations; /**< point-to-segment projections done (LSDM); 0 for the closed form */
 } mca_segdist_t;
 
@@ -61,7 +61,8 @@ double mca_segdist_lower_bound(const double a[3], const double b[3], const doubl
 
 /** Paper's Step 1: closest point H on segment AB to point O (zero-length AB gives A).
  *  @param[out] h closest point; @param[out] s H = A + s (B - A) (may be NULL). @return |OH| */
-double mca_point_segment_paper(const double o[3], const double a[3], const double b[3], double h[3], double *s);
+double mca_point_segment_paper(const double o[3], const double a[3], const double b[3], double h[3],
+                               double *s);
 
 #ifdef __cplusplus
 }

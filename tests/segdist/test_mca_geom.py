@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Runs the mca-geom tool on good and bad input and checks numbers (known answers) and exit codes.
+usage: test_mca_geom.py MCA_GEOM ROBOTS_DIR"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+TOOL = sys.argv[1]
+ROBOTS = sys.argv[2]
+failures = 0
+
+
+def run(args, stdin=""):
+    p = subprocess.run([TOOL] + args, input=stdin, capture_output=True, text=True, timeout=30)
+    return p.returncode, p.stdout, p.stderr
+
+
+def check(cond, what):
+    global failures
+    if not cond:
+        failures += 1
+        print("FAIL:", what)
+    else:
+        print("ok:  ", what)
+
+
+def close(a, b, tol):
+    return all(abs(x - y) <= tol for x, y in zip(a, b)) and len(a) == len(b)
+
+
+def rows(out):
+    return [[float(x) for x in ln.split()] for ln in out.splitlines() if ln.strip()]
+
+
+# --- segdist: known answers ---
+GOOD = """# crossing perpendicular segments 0.3 apart
+-1 0 0 1 0 0 0 -1 0.3 0 1 0.3
+
+   # collinear disjoint: P = B, E = C, d = 2
+0 0 0 1 0 0 3 0 0 5 0 0
+0 0 0 1 0 0 1 -1 0 1 1 0
+1 2 3 1 2 3 4 6 3 4 6 3
+"""
+EXPECT = [
+    [0.3, 0, 0, 0, 0, 0, 0.3],
+    [2, 1, 0, 0, 3, 0, 0],
+    [0, 1, 0, 0, 1, 0, 0],
+    [5, 1, 2, 3, 4, 6, 3],
+]
+for method, tol in (("closed", 1e-15), ("lsdm", 1e-9), ("lsdm-cert", 1e-9)):
+    rc, out, err = run(["segdist", "--method", method], GOOD)
+    r = rows(out)
+    check(rc == 0 and len(r) == 4, f"segdist {method}: exit 0, 4 answers (comments/blank skipped) [{rc} {err}]")
+    for i, exp in enumerate(EXPECT):
+        check(i < len(r) and close(r[i][:7], exp, tol), f"segdist {method}: line {i} = {exp}")
+    iters = [int(x[7]) for x in r]
+    if method == "closed":
+        check(all(i == 0 for i in iters), "closed form reports 0 iterations")
+    else:
+        # the paper's rule needs two projections to see a decline; the certificate may stop after one
+        least = 2 if method == "lsdm" else 1
+        check(all(i >= least for i in iters), f"{method} reports >= {least} projections {iters}")
+# default method is the closed form, output is %.17g (round-trips)
+rc, out, _ = run(["segdist"], "0 0 0 1 0 0 0.1 0.2 0 0.1 0.2 1\n")
+check(rc == 0 and float(out.split()[0]) == 0.2 and float(out.split()[1]) == 0.1 and len(out.split()[0]) >= 17,
+      "default closed, %.17g output: " + out.strip())
+
+# paper's tolerance on a near-parallel pair stops early (documented behaviour), closed form does not
+NEARPAR = "0 0 0 1 0 0 -1 0.1 -1e-3 1 0.1 1e-3\n"
+rc, out, _ = run(["segdist", "--method", "lsdm", "--tol", "1e-5"], NEARPAR)
+d_lsdm = float(out.split()[0])
+rc2, out2, _ = run(["segdist"], NEARPAR)
+check(rc == 0 and abs(float(out2.split()[0]) - 0.1) < 1e-15, "closed: near-parallel d = 0.1")
+# B -> H1 = (x', 0.1, 1e-3 x') with x' = 1 / (1 + 1e-6); H1 -> (x', 0, 0): d = sqrt(0.01 + 1e-6 x'^2)
+check(abs(d_lsdm - math.sqrt(0.01 + 1e-6 / (1 + 1e-6) ** 2)) < 1e-14, f"lsdm tol 1e-5 stops early at {d_lsdm}")
+rc, out, err = run(["segdist", "--method", "lsdm-cert", "--tol", "1e-9", "--max-iter", "50"], NEARPAR)
+check(rc == 0 and "cap" in err and len(rows(out)) == 1, "lsdm-cert at its cap: answer printed + warning")
+
+# --- segdist: bad input ---
+for bad, lineno, answered, what in (
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3\n\n1 2 3\n", 3, 1, "wrong count"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3\n0 0 0 1 0 0 0 -1 0.3 0 1 0.3 7\n", 2, 1, "too many"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3\n0 0 0 1 0 0 0 -1 abc 0 1 0.3\n", 2, 1, "non-number"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3\n#\n0 0 0 1 0 0 0 -1 nan 0 1 0.3\n", 3, 1, "NaN"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 inf\n", 1, 0, "inf"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 1e999\n", 1, 0, "overflow"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3x\n", 1, 0, "trailing junk"),
+):
+    rc, out, err = run(["segdist"], bad)
+    r = rows(out)
+    check(rc == 2 and f"line {lineno}:" in err and len(r) == answered and all(abs(x[0] - 0.3) < 1e-15 for x in r),
+          f"segdist {what}: exit 2, 'line {lineno}' on stderr, {answered} earlier answer(s) [{rc} {err.strip()}]")
+rc, _, err = run(["segdist", "--method", "dpsl"], "")
+check(rc == 2 and "dpsl" in err, "unknown method: exit 2")
+rc, _, err = run(["segdist", "--tol", "-1"], "")
+check(rc == 2, "negative tol: exit 2")
+
+# --- fk ---
+pa10 = os.path.join(ROBOTS, "pa10plus.urdf")
+jaco = os.path.join(ROBOTS, "jaco2.urdf")
+
+
+def fk(urdf, q):
+    rc, out, err = run(["fk", "--robot", urdf] + [repr(x) for x in q])
+    pts = {}
+    joints = []
+    for ln in out.splitlines():
+        f = ln.split()
+        if f[0] == "joint":
+            joints.append([float(x) for x in f[3:6]])
+        else:
+            pts[f[0]] = [float(x) for x in f[1:4]]
+    return rc, pts, joints, err
+
+
+# PA10+ at zero stands straight up: 0.317 + 0.45 + 0.48 + 0.07 (flange) + 0.25 (tool) = 1.567 m
+rc, pts, joints, err = fk(pa10, [0.0] * 8)
+check(rc == 0 and len(joints) == 8, f"fk pa10plus: exit 0, 8 joints [{err}]")
+check(close(pts.get("ee", []), [0, 0, 1.567], 1e-12), f"fk pa10plus zero: ee = (0, 0, 1.567): {pts.get('ee')}")
+# Only the shoulder pitch S2 moved by pi/2: the straight arm lies horizontal at the shoulder height 0.317 m,
+# 1.25 m from the shoulder
+rc, pts, joints, err = fk(pa10, [0, math.pi / 2, 0, 0, 0, 0, 0, 0])
+ee = pts["ee"]
+check(rc == 0 and abs(ee[2] - 0.317) < 1e-12 and abs(math.hypot(ee[0], ee[1]) - 1.25) < 1e-12,
+      f"fk pa10plus S2 = pi/2: ee horizontal at z = 0.317, 1.25 m out: {ee}")
+# JACO2: base yaw q1 rotates the end effector about z: z and |xy| unchanged
+q = [0.3, 2.9, 1.1, -0.4, 0.7, 1.3]
+rc, p0, _, _ = fk(jaco, q)
+rc1, p1, _, _ = fk(jaco, [q[0] + 0.9] + q[1:])
+check(rc == 0 and rc1 == 0 and abs(p0["ee"][2] - p1["ee"][2]) < 1e-12
+      and abs(math.hypot(*p0["ee"][:2]) - math.hypot(*p1["ee"][:2])) < 1e-12, "fk jaco2: q1 is a yaw about z")
+
+rc, _, _, err = fk(pa10, [0.0] * 7)
+check(rc == 2 and "8 joints" in err, f"fk wrong number of q: exit 2 [{err.strip()}]")
+rc, _, _, err = fk(pa10, [0.0] * 9)
+check(rc == 2, f"fk too many q: exit 2 [{err.strip()}]")
+rc, out, err = run(["fk", "--robot", pa10, "0", "0", "zero", "0", "0", "0", "0", "0"])
+check(rc == 2 and "zero" in err, f"fk non-numeric q: exit 2 [{err.strip()}]")
+with tempfile.TemporaryDirectory() as td:
+    bad = os.path.join(td, "broken.urdf")
+    with open(bad, "w") as f:
+        f.write("<robot name='x'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>")
+    rc, out, err = run(["fk", "--robot", bad, "0"])
+    check(rc == 2 and "broken.urdf" in err, f"fk malformed URDF: exit 2, names the file [{err.strip()}]")
+rc, _, err = run(["fk", "--robot", "/nonexistent/robot.urdf", "0"])
+check(rc == 2 and "/nonexistent/robot.urdf" in err, "fk missing file: exit 2")
+rc, _, err = run(["fk", "0", "0"])
+check(rc == 2, "fk without --robot: exit 2")
+
+# --- help / usage ---
+rc, out, _ = run(["--help"])
+check(rc == 0 and "segdist" in out and "fk --robot" in out, "--help: exit 0, lists commands")
+rc, _, err = run(["frobnicate"])
+check(rc == 2 and "frobnicate" in err, "unknown command: exit 2")
+
+print(f"{failures} failure(s)")
+sys.exit(1 if failures else 0)

@@ -1,0 +1,236 @@
+/* SPDX-License-Identifier: MIT */
+/* mca-geom: command-line access to the geometry of mca_core (segment distances, forward kinematics). */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mca/chain.h"
+#include "mca/err.h"
+#include "mca/segdist.h"
+
+#define EXIT_BAD_INPUT 2
+
+static void usage(FILE *f) {
+    fputs("usage: mca-geom <command> [options]\n"
+          "\n"
+          "commands:\n"
+          "  segdist [--method closed|lsdm|lsdm-cert] [--tol T] [--max-iter N]\n"
+          "      Minimum distance between segments AB and CD. Reads stdin, one pair per line:\n"
+          "        ax ay az bx by bz cx cy cz dx dy dz\n"
+          "      and prints per line: d px py pz ex ey ez iterations   (%.17g; P on AB, E on CD).\n"
+          "      Blank lines and lines whose first non-blank character is '#' are skipped.\n"
+          "      closed (default): exact closed form, iterations = 0.\n"
+          "      lsdm: the paper's LSDM, stops when the distance declines by less than T\n"
+          "            (default 1e-12; the paper uses 1e-5), at most N projections (default 200).\n"
+          "      lsdm-cert: LSDM that stops when a separating-plane certificate proves d within T.\n"
+          "      A line with the wrong count of numbers, a non-number, NaN or inf is an error:\n"
+          "      message with its line number on stderr, exit code 2 (lines before it are answered).\n"
+          "      An LSDM that hits the cap is still printed, with a warning on stderr.\n"
+          "\n"
+          "  fk --robot FILE.urdf [--tip LINK] q1 ... qn\n"
+          "      Forward kinematics at joint angles q [rad] (n = the chain's DOF). Prints\n"
+          "        root x y z / joint i NAME x y z (each joint origin) / ee x y z   (world frame, m).\n"
+          "      Bad URDF, unknown tip link, wrong number of q or non-numeric q: exit code 2.\n"
+          "      LINK defaults to the URDF's single leaf link (tool_tip in config/robots/).\n"
+          "\n"
+          "  --help   this text\n",
+          f);
+}
+
+/* Parse a whole token as a finite double. */
+static int parse_finite(const char *tok, double *out) {
+    char *end;
+    errno = 0;
+    *out = strtod(tok, &end);
+    if (end == tok || *end != '\0' || !isfinite(*out)) {
+        return -1;
+    }
+    return 0;
+}
+
+static int cmd_segdist(int argc, char **argv) {
+    enum { M_CLOSED, M_LSDM, M_CERT } method = M_CLOSED;
+    mca_lsdm_params_t params = {MCA_LSDM_DEFAULT_TOL, MCA_LSDM_DEFAULT_MAX_ITER};
+    char *line = NULL;
+    size_t cap = 0;
+    long lineno = 0;
+    int status = 0;
+
+    for (int i = 0; i < argc; i++) {
+        if (strcmp(argv[i], "--method") == 0 && i + 1 < argc) {
+            const char *m = argv[++i];
+            if (strcmp(m, "closed") == 0) {
+                method = M_CLOSED;
+            } else if (strcmp(m, "lsdm") == 0) {
+                method = M_LSDM;
+            } else if (strcmp(m, "lsdm-cert") == 0) {
+                method = M_CERT;
+            } else {
+                fprintf(stderr, "mca-geom segdist: unknown --method '%s' (closed, lsdm or lsdm-cert)\n", m);
+                return EXIT_BAD_INPUT;
+            }
+        } else if (strcmp(argv[i], "--tol") == 0 && i + 1 < argc) {
+            if (parse_finite(argv[++i], &params.tol) != 0 || params.tol < 0.0) {
+                fprintf(stderr, "mca-geom segdist: --tol '%s' is not a finite number >= 0\n", argv[i]);
+                return EXIT_BAD_INPUT;
+            }
+        } else if (strcmp(argv[i], "--max-iter") == 0 && i + 1 < argc) {
+            char *end;
+            long v = strtol(argv[++i], &end, 10);
+            if (*argv[i] == '\0' || *end != '\0' || v < 2 || v > 100000000L) {
+                fprintf(stderr, "mca-geom segdist: --max-iter '%s' is not an integer in [2, 1e8]\n", argv[i]);
+                return EXIT_BAD_INPUT;
+            }
+            params.max_iter = (int)v;
+        } else {
+            fprintf(stderr, "mca-geom segdist: unknown or incomplete option '%s' (see --help)\n", argv[i]);
+            return EXIT_BAD_INPUT;
+        }
+    }
+
+    while (getline(&line, &cap, stdin) != -1) {
+        double v[12];
+        int n = 0, rc;
+        char *p = line, *tok, *save = NULL;
+        mca_segdist_t r;
+
+        lineno++;
+        while (*p == ' ' || *p == '\t') {
+            p++;
+        }
+        if (*p == '#' || *p == '\n' || *p == '\r' || *p == '\0') {
+            continue;
+        }
+        for (tok = strtok_r(p, " \t\r\n,", &save); tok != NULL; tok = strtok_r(NULL, " \t\r\n,", &save)) {
+            double x;
+            if (n == 12) {
+                n++; /* too many: counted below */
+                break;
+            }
+            if (parse_finite(tok, &x) != 0) {
+                fflush(stdout);
+                fprintf(stderr, "mca-geom segdist: stdin line %ld: field %d '%s' is not a finite number\n",
+                        lineno, n + 1, tok);
+                status = EXIT_BAD_INPUT;
+                goto out;
+            }
+            v[n++] = x;
+        }
+        if (n != 12) {
+            fflush(stdout);
+            fprintf(stderr,
+                    "mca-geom segdist: stdin line %ld: expected 12 numbers (A B C D, x y z each), got %s%d\n",
+                    lineno, n > 12 ? "more than " : "", n > 12 ? 12 : n);
+            status = EXIT_BAD_INPUT;
+            goto out;
+        }
+        if (method == M_CLOSED) {
+            rc = mca_segdist_closed(&v[0], &v[3], &v[6], &v[9], &r);
+        } else if (method == M_LSDM) {
+            rc = mca_segdist_lsdm(&v[0], &v[3], &v[6], &v[9], &params, &r);
+        } else {
+            rc = mca_segdist_lsdm_certified(&v[0], &v[3], &v[6], &v[9], &params, &r);
+        }
+        if (rc != MCA_OK && rc != MCA_ENOTCONV) {
+            fflush(stdout);
+            fprintf(stderr, "mca-geom segdist: stdin line %ld: %s\n", lineno, mca_strerror(rc));
+            status = EXIT_BAD_INPUT;
+            goto out;
+        }
+        printf("%.17g %.17g %.17g %.17g %.17g %.17g %.17g %d\n", r.d, r.p[0], r.p[1], r.p[2], r.e[0], r.e[1],
+               r.e[2], r.iterations);
+        if (rc == MCA_ENOTCONV) {
+            fflush(stdout);
+            fprintf(stderr, "mca-geom segdist: stdin line %ld: warning: LSDM hit the cap of %d projections\n",
+                    lineno, params.max_iter);
+        }
+    }
+out:
+    free(line);
+    fflush(stdout);
+    return status;
+}
+
+static int cmd_fk(int argc, char **argv) {
+    const char *robot = NULL, *tip = NULL;
+    double q[MCA_MAX_DOF];
+    int nq = 0, rc;
+    char err[512] = "";
+    mca_chain_t chain;
+    mca_kin_t kin;
+    int i;
+
+    for (i = 0; i < argc; i++) {
+        if (strcmp(argv[i], "--robot") == 0 && i + 1 < argc) {
+            robot = argv[++i];
+        } else if (strcmp(argv[i], "--tip") == 0 && i + 1 < argc) {
+            tip = argv[++i];
+        } else if (strcmp(argv[i], "--") == 0) {
+            i++;
+            break;
+        } else if (argv[i][0] == '-' && argv[i][1] == '-') {
+            fprintf(stderr, "mca-geom fk: unknown or incomplete option '%s' (see --help)\n", argv[i]);
+            return EXIT_BAD_INPUT;
+        } else {
+            break;
+        }
+    }
+    if (robot == NULL) {
+        fprintf(stderr, "mca-geom fk: --robot FILE.urdf is required\n");
+        return EXIT_BAD_INPUT;
+    }
+    rc = mca_chain_load_urdf(&chain, robot, tip, err, sizeof err);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "mca-geom fk: %s: %s\n", mca_strerror(rc), err[0] ? err : robot);
+        return EXIT_BAD_INPUT;
+    }
+    for (; i < argc; i++) {
+        if (nq >= MCA_MAX_DOF || nq >= chain.dof) {
+            nq++;
+            continue; /* counted for the message */
+        }
+        if (parse_finite(argv[i], &q[nq]) != 0) {
+            fprintf(stderr, "mca-geom fk: q%d '%s' is not a finite number\n", nq + 1, argv[i]);
+            return EXIT_BAD_INPUT;
+        }
+        nq++;
+    }
+    if (nq != chain.dof) {
+        fprintf(stderr, "mca-geom fk: %s has %d joints but %d joint angle(s) were given\n", robot, chain.dof,
+                nq);
+        return EXIT_BAD_INPUT;
+    }
+    rc = mca_fk(&chain, q, &kin);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "mca-geom fk: forward kinematics failed: %s\n", mca_strerror(rc));
+        return EXIT_BAD_INPUT;
+    }
+    printf("root %.17g %.17g %.17g\n", kin.point[0][0], kin.point[0][1], kin.point[0][2]);
+    for (i = 0; i < chain.dof; i++) {
+        printf("joint %d %s %.17g %.17g %.17g\n", i + 1, chain.joint[i].name, kin.point[i + 1][0],
+               kin.point[i + 1][1], kin.point[i + 1][2]);
+    }
+    printf("ee %.17g %.17g %.17g\n", kin.ee[0], kin.ee[1], kin.ee[2]);
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) {
+        usage(stderr);
+        return EXIT_BAD_INPUT;
+    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    if (strcmp(argv[1], "segdist") == 0) {
+        return cmd_segdist(argc - 2, argv + 2);
+    }
+    if (strcmp(argv[1], "fk") == 0) {
+        return cmd_fk(argc - 2, argv + 2);
+    }
+    fprintf(stderr, "mca-geom: unknown command '%s' (see mca-geom --help)\n", argv[1]);
+    return EXIT_BAD_INPUT;
+}
