@@ -51,6 +51,15 @@ enum mca_arm_fault {
     MCA_ARM_FAULT_BUS = 5,            /**< bus error / bus-off */
 };
 
+/** Per-actuator fault flag bits (feedback.fault_flags[j]); latched until MCA_ACT_CLEAR_FAULT. */
+enum {
+    MCA_ACT_FLT_LIMIT_LOW = 1u << 0,  /**< position clamped at the lower limit */
+    MCA_ACT_FLT_LIMIT_HIGH = 1u << 1, /**< position clamped at the upper limit */
+    MCA_ACT_FLT_VEL_SAT = 1u << 2,    /**< commanded velocity saturated at the velocity limit */
+    MCA_ACT_FLT_VELOCITY = 1u << 3,   /**< commanded velocity above the fault ratio (fault raised) */
+    MCA_ACT_FLT_ACTUATOR = 1u << 4,   /**< actuator fault (injected in simulation) */
+};
+
 typedef struct mca_arm_command {
     uint32_t frame_id;                  /**< sequence number, +1 per cycle */
     int n;                              /**< actuators */
@@ -103,6 +112,12 @@ int mca_arm_read(mca_arm_t *arm, mca_arm_feedback_t *fb);
 int mca_arm_write(mca_arm_t *arm, const mca_arm_command_t *cmd);
 int mca_arm_stats(mca_arm_t *arm, mca_arm_stats_t *st);
 const char *mca_arm_backend_name(const mca_arm_t *arm);
+/** The backend context of @p arm if it was wrapped with @p ops, else NULL (safe downcast used by
+ *  backend-specific extensions such as mca_sim_backend_*()). */
+void *mca_arm_backend_ctx(const mca_arm_t *arm, const mca_arm_ops_t *ops);
+/** Constant names for logs and tools ("SERVOING", "WATCHDOG", ...); never NULL. */
+const char *mca_arm_state_name(mca_arm_state_t state);
+const char *mca_arm_fault_name(unsigned fault_code);
 /** Close the backend and free the handle (shut-down only). NULL is allowed. */
 void mca_arm_close(mca_arm_t *arm);
 
