@@ -9,16 +9,14 @@
 #include "mca/err.h"
 #include "mca/vec3.h"
 
-void mca_pose_identity(mca_pose_t *pose)
-{
+void mca_pose_identity(mca_pose_t *pose) {
     memset(pose, 0, sizeof(*pose));
     pose->R[0][0] = 1.0;
     pose->R[1][1] = 1.0;
     pose->R[2][2] = 1.0;
 }
 
-void mca_pose_mul(mca_pose_t *out, const mca_pose_t *a, const mca_pose_t *b)
-{
+void mca_pose_mul(mca_pose_t *out, const mca_pose_t *a, const mca_pose_t *b) {
     mca_pose_t r; /* local copy so that out may alias a or b */
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) {
@@ -29,8 +27,7 @@ void mca_pose_mul(mca_pose_t *out, const mca_pose_t *a, const mca_pose_t *b)
     *out = r;
 }
 
-void mca_pose_apply(double out[3], const mca_pose_t *pose, const double x[3])
-{
+void mca_pose_apply(double out[3], const mca_pose_t *pose, const double x[3]) {
     double r[3];
     for (int i = 0; i < 3; i++) {
         r[i] = pose->R[i][0] * x[0] + pose->R[i][1] * x[1] + pose->R[i][2] * x[2] + pose->p[i];
@@ -38,8 +35,7 @@ void mca_pose_apply(double out[3], const mca_pose_t *pose, const double x[3])
     mca_v3_set(out, r);
 }
 
-void mca_pose_from_xyz_rpy(mca_pose_t *pose, const double xyz[3], const double rpy[3])
-{
+void mca_pose_from_xyz_rpy(mca_pose_t *pose, const double xyz[3], const double rpy[3]) {
     const double cr = cos(rpy[0]), sr = sin(rpy[0]);
     const double cp = cos(rpy[1]), sp = sin(rpy[1]);
     const double cy = cos(rpy[2]), sy = sin(rpy[2]);
@@ -56,14 +52,12 @@ void mca_pose_from_xyz_rpy(mca_pose_t *pose, const double xyz[3], const double r
     mca_v3_set(pose->p, xyz);
 }
 
-void mca_chain_set_base(mca_chain_t *chain, const double xyz[3], const double rpy[3])
-{
+void mca_chain_set_base(mca_chain_t *chain, const double xyz[3], const double rpy[3]) {
     mca_pose_from_xyz_rpy(&chain->base, xyz, rpy);
 }
 
 /* Rotation by angle q about the unit axis a (Rodrigues): R = I + s K + (1 - c) K^2. */
-static void rot_axis_angle(double R[3][3], const double a[3], double q)
-{
+static void rot_axis_angle(double R[3][3], const double a[3], double q) {
     const double s = sin(q), c = cos(q), v = 1.0 - c;
     R[0][0] = c + a[0] * a[0] * v;
     R[0][1] = a[0] * a[1] * v - a[2] * s;
@@ -76,8 +70,7 @@ static void rot_axis_angle(double R[3][3], const double a[3], double q)
     R[2][2] = c + a[2] * a[2] * v;
 }
 
-int mca_fk(const mca_chain_t *chain, const double *q, mca_kin_t *kin)
-{
+int mca_fk(const mca_chain_t *chain, const double *q, mca_kin_t *kin) {
     if (!chain || !q || !kin || chain->dof < 1 || chain->dof > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }
@@ -110,8 +103,7 @@ int mca_fk(const mca_chain_t *chain, const double *q, mca_kin_t *kin)
     return MCA_OK;
 }
 
-int mca_jacobian_point(const mca_kin_t *kin, int link, const double x[3], double J[3][MCA_MAX_DOF])
-{
+int mca_jacobian_point(const mca_kin_t *kin, int link, const double x[3], double J[3][MCA_MAX_DOF]) {
     if (!kin || !x || !J || kin->dof < 1 || kin->dof > MCA_MAX_DOF || link < 0 || link > kin->dof) {
         return MCA_EINVAL;
     }
@@ -128,16 +120,14 @@ int mca_jacobian_point(const mca_kin_t *kin, int link, const double x[3], double
     return MCA_OK;
 }
 
-int mca_jacobian_ee(const mca_kin_t *kin, double J[3][MCA_MAX_DOF])
-{
+int mca_jacobian_ee(const mca_kin_t *kin, double J[3][MCA_MAX_DOF]) {
     if (!kin) {
         return MCA_EINVAL;
     }
     return mca_jacobian_point(kin, kin->dof, kin->ee, J);
 }
 
-int mca_chain_clamp_q(const mca_chain_t *chain, double *q)
-{
+int mca_chain_clamp_q(const mca_chain_t *chain, double *q) {
     if (!chain || !q || chain->dof < 1 || chain->dof > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }

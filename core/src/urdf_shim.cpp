@@ -27,10 +27,9 @@ namespace {
 
 /* Collects urdfdom's console messages while it parses (single-threaded start-up). */
 class CaptureHandler : public console_bridge::OutputHandler {
-public:
+  public:
     std::string text;
-    void log(const std::string &msg, console_bridge::LogLevel level, const char *, int) override
-    {
+    void log(const std::string &msg, console_bridge::LogLevel level, const char *, int) override {
         if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) {
             if (!text.empty()) {
                 text += "; ";
@@ -41,9 +40,13 @@ public:
 };
 
 class CaptureScope {
-public:
-    explicit CaptureScope(CaptureHandler *h) { console_bridge::useOutputHandler(h); }
-    ~CaptureScope() { console_bridge::restorePreviousOutputHandler(); }
+  public:
+    explicit CaptureScope(CaptureHandler *h) {
+        console_bridge::useOutputHandler(h);
+    }
+    ~CaptureScope() {
+        console_bridge::restorePreviousOutputHandler();
+    }
     CaptureScope(const CaptureScope &) = delete;
     CaptureScope &operator=(const CaptureScope &) = delete;
 };
@@ -54,8 +57,7 @@ struct Ctx {
     size_t errlen;
     std::map<std::string, int> joint_line; /* joint name -> line in the file (0: unknown) */
 
-    int fail(int rc, const char *fmt, ...) __attribute__((format(printf, 3, 4)))
-    {
+    int fail(int rc, const char *fmt, ...) __attribute__((format(printf, 3, 4))) {
         if (err && errlen > 0) {
             int n = snprintf(err, errlen, "%s: ", path);
             if (n < 0) {
@@ -71,8 +73,7 @@ struct Ctx {
         return rc;
     }
     /* "LINE: joint 'name'" prefix text for a joint, without the line when it is unknown. */
-    std::string joint_ref(const std::string &name) const
-    {
+    std::string joint_ref(const std::string &name) const {
         auto it = joint_line.find(name);
         std::string s;
         if (it != joint_line.end() && it->second > 0) {
@@ -82,8 +83,7 @@ struct Ctx {
     }
 };
 
-void pose_from_urdf(mca_pose_t *out, const urdf::Pose &p)
-{
+void pose_from_urdf(mca_pose_t *out, const urdf::Pose &p) {
     double x = p.rotation.x, y = p.rotation.y, z = p.rotation.z, w = p.rotation.w;
     const double n = std::sqrt(x * x + y * y + z * z + w * w);
     if (n > 0.0) {
@@ -109,8 +109,7 @@ void pose_from_urdf(mca_pose_t *out, const urdf::Pose &p)
 }
 
 /* Largest capsule radius among the <collision> cylinders/spheres of a link (0: none). */
-double link_radius(const urdf::LinkConstSharedPtr &link)
-{
+double link_radius(const urdf::LinkConstSharedPtr &link) {
     std::vector<urdf::CollisionSharedPtr> cols = link->collision_array;
     if (cols.empty() && link->collision) {
         cols.push_back(link->collision);
@@ -129,8 +128,7 @@ double link_radius(const urdf::LinkConstSharedPtr &link)
     return r;
 }
 
-const char *type_name(int type)
-{
+const char *type_name(int type) {
     switch (type) {
     case urdf::Joint::REVOLUTE:
         return "revolute";
@@ -150,8 +148,7 @@ const char *type_name(int type)
 }
 
 /* XML-level checks that urdfdom would only report without a line number. */
-int prescan(Ctx &cx, const std::string &text)
-{
+int prescan(Ctx &cx, const std::string &text) {
     TiXmlDocument doc;
     doc.Parse(text.c_str());
     if (doc.Error()) {
@@ -180,8 +177,7 @@ int prescan(Ctx &cx, const std::string &text)
     return MCA_OK;
 }
 
-int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
-{
+int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
     /* File first, so that a missing file gets its own code and text. */
     FILE *f = fopen(cx.path, "rb");
     if (!f) {
@@ -240,9 +236,10 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
             }
         }
         if (n_leaves != 1) {
-            return cx.fail(MCA_EPARSE,
-                           "the link tree branches into %d leaf links (%s%s): no single chain; name the tip link",
-                           n_leaves, leaves.c_str(), n_leaves > 4 ? ", ..." : "");
+            return cx.fail(
+                MCA_EPARSE,
+                "the link tree branches into %d leaf links (%s%s): no single chain; name the tip link",
+                n_leaves, leaves.c_str(), n_leaves > 4 ? ", ..." : "");
         }
     }
 
@@ -288,7 +285,7 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
 
     mca_pose_t acc; /* previous joint frame (or root) -> current link frame, fixed joints folded */
     mca_pose_identity(&acc);
-    int k = 0;                         /* joints placed so far */
+    int k = 0;                             /* joints placed so far */
     c->link_radius[0] = link_radius(root); /* link 0 belongs to the root (and fixed children) */
     for (size_t i = 0; i < path.size(); i++) {
         const urdf::JointSharedPtr &j = path[i];
@@ -299,7 +296,8 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
             mca_joint_model_t *jm = &c->joint[k];
             const std::string ref = cx.joint_ref(j->name);
             if (j->name.size() >= sizeof(jm->name)) {
-                return cx.fail(MCA_EPARSE, "%s: name longer than %zu characters", ref.c_str(), sizeof(jm->name) - 1);
+                return cx.fail(MCA_EPARSE, "%s: name longer than %zu characters", ref.c_str(),
+                               sizeof(jm->name) - 1);
             }
             snprintf(jm->name, sizeof(jm->name), "%s", j->name.c_str());
             jm->origin = acc;
@@ -312,12 +310,12 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
             jm->axis[1] = ay / an;
             jm->axis[2] = az / an;
             if (!j->limits) {
-                return cx.fail(MCA_EPARSE, "%s: %s joint has no <limit> (its velocity limit is needed)", ref.c_str(),
-                               type_name(j->type));
+                return cx.fail(MCA_EPARSE, "%s: %s joint has no <limit> (its velocity limit is needed)",
+                               ref.c_str(), type_name(j->type));
             }
             if (!(j->limits->velocity > 0.0) || !std::isfinite(j->limits->velocity)) {
-                return cx.fail(MCA_EPARSE, "%s: <limit velocity> must be finite and > 0 (got %g)", ref.c_str(),
-                               j->limits->velocity);
+                return cx.fail(MCA_EPARSE, "%s: <limit velocity> must be finite and > 0 (got %g)",
+                               ref.c_str(), j->limits->velocity);
             }
             jm->vel_limit = j->limits->velocity;
             if (j->type == urdf::Joint::CONTINUOUS) {
@@ -327,8 +325,8 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
             } else {
                 const double lo = j->limits->lower, hi = j->limits->upper;
                 if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) {
-                    return cx.fail(MCA_EPARSE, "%s: <limit lower=%g upper=%g> is not a finite interval", ref.c_str(),
-                                   lo, hi);
+                    return cx.fail(MCA_EPARSE, "%s: <limit lower=%g upper=%g> is not a finite interval",
+                                   ref.c_str(), lo, hi);
                 }
                 jm->lower = lo;
                 jm->upper = hi;
@@ -356,8 +354,7 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link)
 } // namespace
 
 extern "C" int mca_chain_load_urdf(mca_chain_t *chain, const char *path, const char *tip_link, char *err,
-                                   size_t errlen)
-{
+                                   size_t errlen) {
     Ctx cx{path ? path : "(null)", err, errlen, {}};
     if (!chain || !path) {
         return cx.fail(MCA_EINVAL, "NULL chain or path");

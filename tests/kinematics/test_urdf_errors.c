@@ -1,0 +1,217 @@
+/* SPDX-License-Identifier: MIT */
+/* mca_chain_load_urdf on bad and unusual URDFs (tests/kinematics/data/): each error returns its
+ * code, names the file and the faulty element, and leaves the chain untouched; fixed joints are
+ * folded correctly and side branches are ignored when the tip is named. */
+#include "kin_test_util.h"
+
+#include <math.h>
+#include <string.h>
+
+#ifndef KIN_DATA_DIR
+#error "KIN_DATA_DIR must be set by CMake"
+#endif
+
+#define ERRLEN 512
+
+typedef struct {
+    char path[512];
+    char err[ERRLEN];
+    mca_chain_t chain;
+    int rc;
+} load_t;
+
+/* Load data/<file>; the chain starts filled with a sentinel byte to detect writes on error. */
+static void load_data(load_t *l, const char *file, const char *tip) {
+    snprintf(l->path, sizeof(l->path), "%s/%s", KIN_DATA_DIR, file);
+    memset(&l->chain, 0xA5, sizeof(l->chain));
+    memset(l->err, 0, sizeof(l->err));
+    l->rc = mca_chain_load_urdf(&l->chain, l->path, tip, l->err, sizeof(l->err));
+    print_message("%s -> rc %d: %s\n", file, l->rc, l->err);
+}
+
+static void assert_error(const load_t *l, int rc, const char *needle1, const char *needle2) {
+    assert_int_equal(l->rc, rc);
+    /* the message starts with the file path, then names the element */
+    assert_int_equal(strncmp(l->err, l->path, strlen(l->path)), 0);
+    if (needle1) {
+        assert_non_null(strstr(l->err, needle1));
+    }
+    if (needle2) {
+        assert_non_null(strstr(l->err, needle2));
+    }
+    mca_chain_t sentinel;
+    memset(&sentinel, 0xA5, sizeof(sentinel));
+    assert_memory_equal(&l->chain, &sentinel, sizeof(sentinel));
+}
+
+static void test_missing_file(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "does_not_exist.urdf", "tool_tip");
+    assert_error(&l, MCA_ENOENT, "cannot open", "No such file");
+}
+
+static void test_malformed_xml(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "malformed.urdf", NULL);
+    assert_error(&l, MCA_EPARSE, "malformed XML", "line ");
+}
+
+static void test_prismatic(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "prismatic.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'slider'", "prismatic");
+    assert_non_null(strstr(l.err, "line 12"));
+}
+
+static void test_revolute_without_limit(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "nolimit.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'j2'", "revolute joint has no <limit>");
+    assert_non_null(strstr(l.err, "line 12"));
+}
+
+static void test_continuous_without_limit(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "continuous_nolimit.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'spin'", "<limit>");
+}
+
+static void test_zero_velocity_limit(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "no_velocity.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'j1'", "velocity");
+}
+
+static void test_zero_axis(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "zero_axis.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'j1'", "<axis>");
+}
+
+static void test_too_many_joints(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "toomany.urdf", "tool_tip");
+    assert_error(&l, MCA_ERANGE, "9 revolute joints", "MCA_MAX_DOF (8)");
+}
+
+static void test_unknown_tip(void **state) {
+    (void)state;
+    load_t l;
+    snprintf(l.path, sizeof(l.path), "%s/jaco2.urdf", MCA_ROBOTS_DIR);
+    memset(&l.chain, 0xA5, sizeof(l.chain));
+    l.rc = mca_chain_load_urdf(&l.chain, l.path, "no_such_link", l.err, sizeof(l.err));
+    print_message("jaco2.urdf tip 'no_such_link' -> rc %d: %s\n", l.rc, l.err);
+    assert_error(&l, MCA_ENOENT, "tip link 'no_such_link'", NULL);
+}
+
+static void test_unknown_parent_link(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "bad_parent.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "ghost_link", NULL);
+}
+
+static void test_branch_without_tip(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "branched.urdf", NULL);
+    assert_error(&l, MCA_EPARSE, "leaf links", "'camera'");
+}
+
+static void test_branch_with_tip(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "branched.urdf", "tool_tip");
+    assert_int_equal(l.rc, MCA_OK);
+    assert_int_equal(l.chain.dof, 2);
+    assert_string_equal(l.chain.joint[0].name, "j1");
+    assert_string_equal(l.chain.joint[1].name, "j2");
+    /* a tip inside the chain: the chain stops there */
+    load_data(&l, "branched.urdf", "l1");
+    assert_int_equal(l.rc, MCA_OK);
+    assert_int_equal(l.chain.dof, 1);
+}
+
+static void test_fixed_fold(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "fixed_fold.urdf", NULL); /* single leaf: tool_tip */
+    assert_int_equal(l.rc, MCA_OK);
+    assert_string_equal(l.chain.name, "fixed_fold");
+    assert_int_equal(l.chain.dof, 2);
+    assert_true(l.chain.joint[1].continuous);
+    assert_true(isinf(l.chain.joint[1].lower) && l.chain.joint[1].lower < 0);
+    assert_true(isinf(l.chain.joint[1].upper) && l.chain.joint[1].upper > 0);
+    assert_true(fabs(l.chain.joint[1].vel_limit - 2.5) < 1e-15);
+    assert_true(fabs(l.chain.joint[1].axis[2] - 1.0) < 1e-15); /* (0 0 2) normalised */
+    /* radii: link 0 = plate sphere, link 1 = cover cylinder on a fixed child, link 2 = max of two */
+    assert_true(fabs(l.chain.link_radius[0] - 0.11) < 1e-15);
+    assert_true(fabs(l.chain.link_radius[1] - 0.07) < 1e-15);
+    assert_true(fabs(l.chain.link_radius[2] - 0.05) < 1e-15);
+    uint64_t seed = 99;
+    for (int n = 0; n < 100; n++) {
+        const double q[2] = {kin_rand(&seed, -3, 3), kin_rand(&seed, -10, 10)};
+        mca_kin_t k;
+        assert_int_equal(mca_fk(&l.chain, q, &k), MCA_OK);
+        /* expected, worked out by hand in data/fixed_fold.urdf */
+        const double c1 = cos(q[0]), s1 = sin(q[0]);
+        const double j2[3] = {c1 * 0.3 - s1 * 0.1, s1 * 0.3 + c1 * 0.1, 0.3};
+        const double a = q[0] + KIN_PI / 2 + q[1];
+        const double tip[3] = {j2[0] + 0.2 * cos(a), j2[1] + 0.2 * sin(a), 0.3};
+        const double p1[3] = {0, 0, 0.3};
+        for (int i = 0; i < 3; i++) {
+            assert_true(fabs(k.point[0][i]) < 1e-15);
+            assert_true(fabs(k.point[1][i] - p1[i]) < 1e-12);
+            assert_true(fabs(k.point[2][i] - j2[i]) < 1e-12);
+            assert_true(fabs(k.point[3][i] - tip[i]) < 1e-12);
+        }
+    }
+}
+
+static void test_null_arguments(void **state) {
+    (void)state;
+    char path[512], err[ERRLEN];
+    snprintf(path, sizeof(path), "%s/jaco2.urdf", MCA_ROBOTS_DIR);
+    mca_chain_t c;
+    assert_int_equal(mca_chain_load_urdf(NULL, path, NULL, err, sizeof(err)), MCA_EINVAL);
+    assert_int_equal(mca_chain_load_urdf(&c, NULL, NULL, err, sizeof(err)), MCA_EINVAL);
+    /* err may be NULL, and a tiny buffer is truncated, not overrun */
+    assert_int_equal(mca_chain_load_urdf(&c, path, "nope", NULL, 0), MCA_ENOENT);
+    char tiny[8];
+    memset(tiny, 'x', sizeof(tiny));
+    assert_int_equal(mca_chain_load_urdf(&c, path, "nope", tiny, 5), MCA_ENOENT);
+    assert_int_equal(tiny[4], '\0');
+    assert_int_equal(tiny[5], 'x');
+    /* success clears the message */
+    strcpy(err, "stale");
+    assert_int_equal(mca_chain_load_urdf(&c, path, "tool_tip", err, sizeof(err)), MCA_OK);
+    assert_string_equal(err, "");
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_malformed_xml),
+        cmocka_unit_test(test_prismatic),
+        cmocka_unit_test(test_revolute_without_limit),
+        cmocka_unit_test(test_continuous_without_limit),
+        cmocka_unit_test(test_zero_velocity_limit),
+        cmocka_unit_test(test_zero_axis),
+        cmocka_unit_test(test_too_many_joints),
+        cmocka_unit_test(test_unknown_tip),
+        cmocka_unit_test(test_unknown_parent_link),
+        cmocka_unit_test(test_branch_without_tip),
+        cmocka_unit_test(test_branch_with_tip),
+        cmocka_unit_test(test_fixed_fold),
+        cmocka_unit_test(test_null_arguments),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
