@@ -4,7 +4,7 @@
  *
  * A scenario names the arms (URDF, tip link, base placement, initial joints), one desired path per arm,
  * the duration and the scheme parameters (d1, d2, K, epsilon, ...). It is a YAML file parsed with libcyaml
- * (start-up only); see config/scenarios/*.yaml and docs/scheme.md for the format.
+ * (start-up only); see the files in config/scenarios/ and docs/scheme.md for the format.
  *
  * Paths are evaluated on the 1 kHz path: mca_path_eval() is real-time safe (no allocation, bounded time).
  * A path may be anchored at the arm's end-effector position at start (frame "start"): its points are then

@@ -1,0 +1,493 @@
+/* SPDX-License-Identifier: MIT */
+/* One controller tick for N arms (FK, distances, QP, PDNN, faults); see mca/controller.h. */
+#include "mca/controller.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "mca/err.h"
+#include "mca/vec3.h"
+
+static const char *const fault_names[] = {
+    [MCA_CTRL_FAULT_NONE] = "none",
+    [MCA_CTRL_FAULT_NAN] = "nan",
+    [MCA_CTRL_FAULT_NOT_CONVERGED] = "pdnn-not-converged",
+    [MCA_CTRL_FAULT_INFEASIBLE] = "joint-bounds-infeasible",
+    [MCA_CTRL_FAULT_DISTANCE] = "distance-below-d1",
+    [MCA_CTRL_FAULT_FAKE_ATTRACTOR] = "fake-attractor",
+    [MCA_CTRL_FAULT_INPUT] = "bad-input",
+};
+
+const char *mca_ctrl_fault_name(int fault)
+{
+    if (fault < 0 || fault >= (int)(sizeof fault_names / sizeof fault_names[0])) {
+        return "unknown";
+    }
+    return fault_names[fault];
+}
+
+void mca_controller_default_config(mca_controller_config_t *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    cfg->scheme = MCA_SCHEME_MCA;
+    mca_scheme_default_params(&cfg->sp);
+    mca_pdnn_default_params(&cfg->pdnn);
+    mca_apf_default_params(&cfg->apf);
+    cfg->dist_method = MCA_DIST_CLOSED;
+    cfg->dt = 0.001;
+    cfg->fault_residual = 1e-6;
+    cfg->eq_tol = 1e-4;
+    cfg->fault_distance = 1;
+}
+
+int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
+                                        mca_scheme_kind_t scheme, char *err, size_t errlen)
+{
+    if (!cfg || !scn || scn->n_arms < 1 || scn->n_arms > MCA_MAX_ARMS) {
+        if (err && errlen) {
+            snprintf(err, errlen, "controller: bad scenario");
+        }
+        return MCA_EINVAL;
+    }
+    mca_controller_default_config(cfg);
+    cfg->n_arms = scn->n_arms;
+    cfg->scheme = scheme;
+    for (int a = 0; a < scn->n_arms; a++) {
+        const mca_scenario_arm_t *sa = &scn->arm[a];
+        int rc = mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err,
+                                     errlen);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        if (sa->n_q0 != cfg->chain[a].dof) {
+            if (err && errlen) {
+                snprintf(err, errlen, "%s: arms[%d].q0 has %d values but %s has %d joints", scn->source, a,
+                         sa->n_q0, sa->urdf, cfg->chain[a].dof);
+            }
+            return MCA_EINVAL;
+        }
+        mca_chain_set_base(&cfg->chain[a], sa->base_xyz, sa->base_rpy);
+        cfg->path[a] = sa->path;
+    }
+    cfg->sp.collision = scheme == MCA_SCHEME_MCA;
+    cfg->sp.form = (mca_collision_form_t)scn->params.form;
+    cfg->sp.d1 = scn->params.d1;
+    cfg->sp.d2 = scn->params.d2;
+    cfg->sp.K = scn->params.K;
+    cfg->sp.epsilon = scn->params.epsilon;
+    cfg->sp.v_normal = scn->params.v_normal;
+    cfg->sp.v_floor = scn->params.v_floor;
+    cfg->dt = scn->params.dt;
+    /* The baselines are run to show what happens without the scheme: no distance fault for them. */
+    cfg->fault_distance = scheme == MCA_SCHEME_MCA;
+    return MCA_OK;
+}
+
+int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg)
+{
+    if (!ctrl || !cfg || cfg->n_arms < 1 || cfg->n_arms > MCA_MAX_ARMS || !(cfg->dt > 0.0) ||
+        !(cfg->sp.d1 >= 0.0) || !(cfg->sp.d1 < cfg->sp.d2) || !(cfg->sp.epsilon > 0.0) ||
+        !(cfg->sp.K >= 0.0) || !(cfg->sp.big > 0.0) || cfg->scheme < MCA_SCHEME_MCA ||
+        cfg->scheme > MCA_SCHEME_APF) {
+        return MCA_EINVAL;
+    }
+    for (int a = 0; a < cfg->n_arms; a++) {
+        if (cfg->chain[a].dof < 1 || cfg->chain[a].dof > MCA_MAX_DOF) {
+            return MCA_EINVAL;
+        }
+    }
+    memset(ctrl, 0, sizeof *ctrl);
+    ctrl->cfg = *cfg;
+    ctrl->cfg.sp.collision = cfg->scheme == MCA_SCHEME_MCA;
+    mca_pdnn_init(&ctrl->pdnn);
+    mca_controller_reset(ctrl);
+    return MCA_OK;
+}
+
+void mca_controller_reset(mca_controller_t *ctrl)
+{
+    ctrl->started = 0;
+    ctrl->t_start = 0.0;
+    ctrl->fault = MCA_CTRL_FAULT_NONE;
+    ctrl->fault_text[0] = 0;
+    ctrl->has_prev = 0;
+    ctrl->ticks = 0;
+    ctrl->pdnn.h = 0; /* cold start */
+    mca_scheme_state_reset(&ctrl->sstate);
+    memset(ctrl->phi, 0, sizeof ctrl->phi);
+    memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
+    memset(ctrl->apf, 0, sizeof ctrl->apf);
+}
+
+void mca_controller_clear_fault(mca_controller_t *ctrl)
+{
+    ctrl->fault = MCA_CTRL_FAULT_NONE;
+    ctrl->fault_text[0] = 0;
+    ctrl->has_prev = 0;
+    ctrl->pdnn.h = 0;
+    mca_scheme_state_reset(&ctrl->sstate);
+    memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
+}
+
+const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi)
+{
+    if (phi) {
+        *phi = ctrl->phi;
+    }
+    return &ctrl->qp;
+}
+
+static int64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+/* Latch a fault (the first cause wins) with a message; snprintf into a fixed buffer does not allocate. */
+static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...)
+{
+    if (ctrl->fault != MCA_CTRL_FAULT_NONE) {
+        return;
+    }
+    ctrl->fault = code;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(ctrl->fault_text, sizeof ctrl->fault_text, fmt, ap);
+    va_end(ap);
+}
+
+/* Per link of every arm: the closest link of any other arm, and the global minimum. */
+static int distances(mca_controller_t *ctrl, mca_tick_info_t *info)
+{
+    const int na = ctrl->cfg.n_arms;
+    for (int a = 0; a < na; a++) {
+        for (int l = 0; l < MCA_MAX_LINKS; l++) {
+            ctrl->crit[a][l].valid = 0;
+            ctrl->crit[a][l].d = INFINITY;
+            info->link_distance[a][l] = INFINITY;
+        }
+    }
+    info->min_distance = INFINITY;
+    info->min_arm_a = info->min_arm_b = info->min_link_a = info->min_link_b = -1;
+    for (int a = 0; a < na; a++) {
+        for (int b = a + 1; b < na; b++) {
+            mca_arm_distances_t *ad = &ctrl->dist[a][b];
+            int rc = mca_arm_distances(&ctrl->cfg.chain[a], &ctrl->kin[a], &ctrl->cfg.chain[b], &ctrl->kin[b],
+                                       ctrl->cfg.dist_method, ad);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            for (int side = 0; side < 2; side++) {
+                const int me = side ? b : a, other = side ? a : b;
+                const mca_link_pair_t *lp = side ? ad->b_to_a : ad->a_to_b;
+                const int nl = side ? ad->n_links_b : ad->n_links_a;
+                for (int l = 0; l < nl && l < MCA_MAX_LINKS; l++) {
+                    mca_link_critical_t *c = &ctrl->crit[me][l];
+                    if (!c->valid || lp[l].d < c->d) {
+                        c->valid = 1;
+                        c->other_arm = other;
+                        c->other_link = lp[l].other_link;
+                        c->d = lp[l].d;
+                        mca_v3_set(c->p, lp[l].p);
+                        mca_v3_set(c->e, lp[l].e);
+                    }
+                }
+            }
+            if (ad->min.d < info->min_distance) {
+                info->min_distance = ad->min.d;
+                info->min_arm_a = a;
+                info->min_arm_b = b;
+                info->min_link_a = ad->min.link;
+                info->min_link_b = ad->min.other_link;
+                mca_v3_set(info->min_p, ad->min.p);
+                mca_v3_set(info->min_e, ad->min.e);
+            }
+        }
+    }
+    for (int a = 0; a < na; a++) {
+        for (int l = 0; l < MCA_MAX_LINKS; l++) {
+            info->link_distance[a][l] = ctrl->crit[a][l].d;
+        }
+    }
+    return MCA_OK;
+}
+
+/* APF baseline (40)-(46) for every arm. */
+static int apf_tick(mca_controller_t *ctrl, const double r_d[][3], const double rdot_d[][3],
+                    double *const qdot[MCA_MAX_ARMS])
+{
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    int off = 0;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        const int dof = cfg->chain[a].dof;
+        double J[3][MCA_MAX_DOF], v_ee[3] = {0, 0, 0}, v_att[3], qd[MCA_MAX_DOF];
+        int rc = mca_jacobian_ee(&ctrl->kin[a], J);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < dof; j++) {
+                v_ee[i] += J[i][j] * ctrl->phi_prev[off + j];
+            }
+        }
+        mca_apf_attractive(&cfg->apf, &ctrl->apf[a], ctrl->kin[a].ee, v_ee, r_d[a], rdot_d[a], cfg->dt, v_att);
+        rc = mca_apf_pinv_apply(J, dof, cfg->apf.damping, v_att, qd);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        /* (45): repulsion on every link whose critical point is inside the influence distance. */
+        for (int l = 0; l <= dof; l++) {
+            const mca_link_critical_t *c = &ctrl->crit[a][l];
+            if (!c->valid || c->d >= cfg->apf.d || l == 0) {
+                continue;
+            }
+            double dir[3], Jp[3][MCA_MAX_DOF], qr[MCA_MAX_DOF];
+            mca_v3_sub(dir, c->p, c->e); /* obstacle -> critical point */
+            const double nrm = mca_v3_norm(dir);
+            if (!(nrm > 1e-12)) {
+                continue;
+            }
+            const double sp = mca_apf_rep_speed(&cfg->apf, c->d);
+            double v_rep[3];
+            for (int i = 0; i < 3; i++) {
+                v_rep[i] = sp * dir[i] / nrm;
+            }
+            rc = mca_jacobian_point(&ctrl->kin[a], l, c->p, Jp);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            /* a link moved by few joints has a rank-deficient J_P: the damped pseudoinverse handles it */
+            rc = mca_apf_pinv_apply(Jp, dof, fmax(cfg->apf.damping, 1e-6), v_rep, qr);
+            if (rc != MCA_OK) {
+                continue;
+            }
+            for (int j = 0; j < dof; j++) {
+                qd[j] += qr[j];
+            }
+        }
+        for (int j = 0; j < dof; j++) {
+            /* respect the joint velocity limits as the QP's bounds would */
+            const double vl = cfg->chain[a].joint[j].vel_limit;
+            double v = qd[j];
+            if (vl > 0.0) {
+                v = fmax(-vl, fmin(vl, v));
+            }
+            qdot[a][j] = v;
+            ctrl->phi[off + j] = v;
+        }
+        off += dof;
+    }
+    return MCA_OK;
+}
+
+static void zero_cmd(const mca_controller_t *ctrl, double *const qdot[MCA_MAX_ARMS])
+{
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        if (qdot[a]) {
+            for (int j = 0; j < ctrl->cfg.chain[a].dof; j++) {
+                qdot[a][j] = 0.0;
+            }
+        }
+    }
+}
+
+int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
+                        double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info_out)
+{
+    const int64_t t_enter = now_ns();
+    if (!ctrl || !q || !qdot) {
+        return MCA_EINVAL;
+    }
+    mca_tick_info_t scratch;
+    mca_tick_info_t *info = info_out ? info_out : &scratch;
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const int na = cfg->n_arms;
+    info->t = t;
+    info->n_arms = na;
+    info->brake = 1.0;
+    info->active_rows = 0;
+    info->pdnn_steps = 0;
+    info->pdnn_residual = 0.0;
+    info->pdnn_converged = 0;
+    info->eq_residual = 0.0;
+    info->task_t = ctrl && ctrl->started ? t - ctrl->t_start : 0.0;
+    info->min_distance = INFINITY;
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        info->ee_error[a] = 0.0;
+        for (int l = 0; l < MCA_MAX_LINKS; l++) {
+            info->link_distance[a][l] = INFINITY;
+        }
+    }
+    for (int a = 0; a < na; a++) {
+        if (!q[a] || !qdot[a]) {
+            zero_cmd(ctrl, qdot);
+            raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "NULL joint array for arm %d", a);
+            goto fault;
+        }
+    }
+    if (ctrl->fault != MCA_CTRL_FAULT_NONE) {
+        /* latched: command zero, but keep reporting the distances (the arms are still braking) */
+        int ok = 1;
+        for (int a = 0; a < na && ok; a++) {
+            ok = mca_fk(&cfg->chain[a], q[a], &ctrl->kin[a]) == MCA_OK;
+        }
+        if (ok) {
+            distances(ctrl, info);
+        }
+        goto fault;
+    }
+
+    /* 1. kinematics */
+    for (int a = 0; a < na; a++) {
+        if (mca_fk(&cfg->chain[a], q[a], &ctrl->kin[a]) != MCA_OK) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "arm %d: non-finite joint position", a);
+            goto fault;
+        }
+    }
+    if (!ctrl->started) {
+        for (int a = 0; a < na; a++) {
+            mca_path_anchor(&ctrl->cfg.path[a], ctrl->kin[a].ee);
+        }
+        ctrl->t_start = t;
+        ctrl->started = 1;
+    }
+    info->task_t = t - ctrl->t_start;
+
+    /* 2. desired paths */
+    double r_d[MCA_MAX_ARMS][3], rdot_d[MCA_MAX_ARMS][3];
+    for (int a = 0; a < na; a++) {
+        mca_path_eval(&cfg->path[a], info->task_t, r_d[a], rdot_d[a]);
+        mca_v3_set(info->ee[a], ctrl->kin[a].ee);
+        mca_v3_set(info->ee_desired[a], r_d[a]);
+        info->ee_error[a] = mca_v3_dist(r_d[a], ctrl->kin[a].ee);
+    }
+
+    /* 3. distances */
+    if (distances(ctrl, info) != MCA_OK) {
+        raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "distance computation failed");
+        goto fault;
+    }
+    const double d1 = cfg->sp.d1;
+    if (cfg->fault_distance && info->min_distance < d1) {
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, "distance %.4f m < d1 %.4f m (arm %d link %d, arm %d link %d)",
+                    info->min_distance, d1, info->min_arm_a, info->min_link_a, info->min_arm_b,
+                    info->min_link_b);
+        goto fault;
+    }
+
+    /* 4. scheme */
+    if (cfg->scheme == MCA_SCHEME_APF) {
+        if (apf_tick(ctrl, (const double(*)[3])r_d, (const double(*)[3])rdot_d, qdot) != MCA_OK) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "APF: singular Jacobian");
+            goto fault;
+        }
+    } else {
+        const mca_chain_t *chains[MCA_MAX_ARMS];
+        for (int a = 0; a < na; a++) {
+            chains[a] = &cfg->chain[a];
+        }
+        mca_scheme_info_t si;
+        int rc = mca_scheme_assemble(&cfg->sp, na, chains, ctrl->kin, q, (const double(*)[3])r_d,
+                                     (const double(*)[3])rdot_d,
+                                     (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
+                                     ctrl->has_prev ? ctrl->phi_prev : NULL, &ctrl->sstate, &ctrl->qp, &si);
+        if (rc == MCA_EINFEASIBLE) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_INFEASIBLE, "joint bounds contradict (a joint is beyond its limit)");
+            goto fault;
+        }
+        if (rc != MCA_OK) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+            goto fault;
+        }
+        info->brake = si.brake;
+        info->active_rows = si.active_rows;
+        mca_pdnn_result_t pr;
+        rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &cfg->pdnn, ctrl->phi, &pr);
+        info->pdnn_steps = pr.steps;
+        info->pdnn_residual = pr.residual;
+        info->pdnn_converged = pr.converged;
+        if (rc == MCA_EINVAL) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "PDNN rejected the QP (non-finite data)");
+            goto fault;
+        }
+        const mca_qp_t *qp = &ctrl->qp;
+        for (int j = 0; j < qp->n; j++) {
+            if (!isfinite(ctrl->phi[j])) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "PDNN output not finite");
+                goto fault;
+            }
+        }
+        double eq = 0.0;
+        for (int i = 0; i < qp->n_eq; i++) {
+            double s = -qp->alpha[i];
+            for (int j = 0; j < qp->n; j++) {
+                s += qp->G[i][j] * ctrl->phi[j];
+            }
+            eq = fmax(eq, fabs(s));
+        }
+        info->eq_residual = eq;
+        if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
+            /* an infeasible QP (tracking against avoidance) never converges: name it as the paper does */
+            if (eq > cfg->eq_tol) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
+                            "tracking contradicts avoidance: PDNN residual %.2e after %d steps, "
+                            "||G phi - alpha|| = %.2e m/s, min distance %.4f m",
+                            pr.residual, pr.steps, eq, info->min_distance);
+            } else {
+                raise_fault(ctrl, MCA_CTRL_FAULT_NOT_CONVERGED, "PDNN residual %.2e after %d steps (fault > %.1e)",
+                            pr.residual, pr.steps, cfg->fault_residual);
+            }
+            goto fault;
+        }
+        if (eq > cfg->eq_tol) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
+                        "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance",
+                        eq, cfg->eq_tol);
+            goto fault;
+        }
+        int off = 0;
+        for (int a = 0; a < na; a++) {
+            for (int j = 0; j < cfg->chain[a].dof; j++) {
+                qdot[a][j] = ctrl->phi[off + j];
+            }
+            off += cfg->chain[a].dof;
+        }
+    }
+
+    /* 5. the distance must not cross d1 before the next tick: linear prediction from the last two ticks */
+    if (cfg->fault_distance && ctrl->has_prev && isfinite(info->min_distance) &&
+        isfinite(ctrl->min_distance_prev)) {
+        const double pred = 2.0 * info->min_distance - ctrl->min_distance_prev;
+        if (pred < d1) {
+            raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE,
+                        "distance %.4f m predicted to fall below d1 %.4f m next tick (arm %d link %d, arm %d "
+                        "link %d)",
+                        info->min_distance, d1, info->min_arm_a, info->min_link_a, info->min_arm_b,
+                        info->min_link_b);
+            goto fault;
+        }
+    }
+    memcpy(ctrl->phi_prev, ctrl->phi, sizeof ctrl->phi_prev);
+    ctrl->min_distance_prev = info->min_distance;
+    ctrl->has_prev = 1;
+    ctrl->ticks++;
+    info->fault = MCA_CTRL_FAULT_NONE;
+    info->fault_text[0] = 0;
+    info->compute_ns = now_ns() - t_enter;
+    return MCA_OK;
+
+fault:
+    zero_cmd(ctrl, qdot);
+    memset(ctrl->phi, 0, sizeof ctrl->phi);
+    memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
+    ctrl->pdnn.h = 0;
+    ctrl->ticks++;
+    info->fault = ctrl->fault;
+    memcpy(info->fault_text, ctrl->fault_text, sizeof info->fault_text);
+    info->compute_ns = now_ns() - t_enter;
+    return MCA_EFAULT;
+}

@@ -1,0 +1,522 @@
+/* SPDX-License-Identifier: MIT */
+/* Scenario (task) files and desired end-effector paths; see mca/scenario.h and docs/scheme.md. */
+#include "mca/scenario.h"
+
+#include <cyaml/cyaml.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "mca/err.h"
+#include "mca/scheme.h"
+#include "mca/vec3.h"
+
+/* ---------------------------------------------------------------- paths (real-time safe) */
+
+void mca_path_anchor(mca_path_t *path, const double ee_start[3])
+{
+    mca_v3_set(path->anchor, ee_start);
+}
+
+static void path_point(const mca_path_t *path, int i, double out[3])
+{
+    if (path->relative) {
+        mca_v3_add(out, path->anchor, path->p[i]);
+    } else {
+        mca_v3_set(out, path->p[i]);
+    }
+}
+
+double mca_path_end_time(const mca_path_t *path)
+{
+    switch (path->kind) {
+    case MCA_PATH_CIRCLE:
+        return path->t0 + path->period;
+    case MCA_PATH_WAYPOINTS: {
+        double t = path->t0;
+        for (int i = 0; i + 1 < path->n_points; i++) {
+            t += path->dur[i];
+        }
+        return t;
+    }
+    default:
+        return path->t0;
+    }
+}
+
+int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
+{
+    if (!path || !r || !rdot || !isfinite(t)) {
+        return MCA_EINVAL;
+    }
+    double s = t - path->t0;
+    rdot[0] = rdot[1] = rdot[2] = 0.0;
+    switch (path->kind) {
+    case MCA_PATH_CIRCLE: {
+        const double T = path->period;
+        if (s < 0.0) {
+            s = 0.0;
+        }
+        if (s > T) {
+            s = T;
+        }
+        /* phi = 2 pi turns sin^2(pi s / 2T): starts and ends at rest (as in the Zhang-group papers). */
+        const double w = M_PI / (2.0 * T);
+        const double sw = sin(w * s), cw = cos(w * s);
+        const double k = 2.0 * M_PI * path->turns;
+        const double phi = k * sw * sw;
+        const double phidot = k * 2.0 * sw * cw * w;
+        const double R = path->radius;
+        for (int i = 0; i < 3; i++) {
+            const double c = path->anchor[i] - R * path->u[i];
+            r[i] = c + R * (cos(phi) * path->u[i] + sin(phi) * path->v[i]);
+            rdot[i] = R * phidot * (-sin(phi) * path->u[i] + cos(phi) * path->v[i]);
+        }
+        return MCA_OK;
+    }
+    case MCA_PATH_WAYPOINTS: {
+        if (path->n_points < 1) {
+            mca_v3_set(r, path->anchor);
+            return MCA_OK;
+        }
+        if (s <= 0.0 || path->n_points == 1) {
+            path_point(path, 0, r);
+            return MCA_OK;
+        }
+        for (int i = 0; i + 1 < path->n_points; i++) {
+            const double T = path->dur[i];
+            if (s < T) {
+                /* quintic 10u^3 - 15u^4 + 6u^5: rest to rest, zero acceleration at both ends */
+                const double u = s / T;
+                const double u2 = u * u, u3 = u2 * u;
+                const double h = u3 * (10.0 - 15.0 * u + 6.0 * u2);
+                const double hd = 30.0 * u2 * (1.0 - 2.0 * u + u2) / T;
+                double a[3], b[3];
+                path_point(path, i, a);
+                path_point(path, i + 1, b);
+                for (int k = 0; k < 3; k++) {
+                    r[k] = a[k] + h * (b[k] - a[k]);
+                    rdot[k] = hd * (b[k] - a[k]);
+                }
+                return MCA_OK;
+            }
+            s -= T;
+        }
+        path_point(path, path->n_points - 1, r);
+        return MCA_OK;
+    }
+    default:
+        mca_v3_set(r, path->anchor);
+        return MCA_OK;
+    }
+}
+
+/* ---------------------------------------------------------------- YAML (start-up only) */
+
+enum raw_kind { RAW_HOLD, RAW_CIRCLE, RAW_WAYPOINTS };
+enum raw_form { RAW_COMPONENTWISE, RAW_NORMAL };
+
+struct raw_path {
+    enum raw_kind kind;
+    bool *relative;
+    double *t0, *radius, *period, *turns;
+    double *u;
+    unsigned u_count;
+    double *v;
+    unsigned v_count;
+    double (*points)[3];
+    unsigned points_count;
+    double *durations;
+    unsigned durations_count;
+};
+
+struct raw_arm {
+    char *name;
+    char *urdf;
+    char *tip_link;
+    double *base_xyz;
+    unsigned base_xyz_count;
+    double *base_rpy;
+    unsigned base_rpy_count;
+    double *q0;
+    unsigned q0_count;
+    struct raw_path path;
+};
+
+struct raw_scn {
+    char *name;
+    double duration;
+    double *dt, *d1, *d2, *K, *epsilon, *v_normal, *v_floor;
+    enum raw_form *form;
+    double *sample_times;
+    unsigned sample_times_count;
+    struct raw_arm *arms;
+    unsigned arms_count;
+};
+
+static const cyaml_strval_t kind_strings[] = {
+    {"hold", RAW_HOLD},
+    {"circle", RAW_CIRCLE},
+    {"waypoints", RAW_WAYPOINTS},
+};
+static const cyaml_strval_t form_strings[] = {
+    {"componentwise", RAW_COMPONENTWISE},
+    {"normal", RAW_NORMAL},
+};
+
+static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
+static const cyaml_schema_value_t point_entry = {
+    CYAML_VALUE_SEQUENCE_FIXED(CYAML_FLAG_FLOW, double, &float_entry, 3)};
+
+#define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
+
+static const cyaml_schema_field_t path_fields[] = {
+    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, struct raw_path, kind, kind_strings,
+                     CYAML_ARRAY_LEN(kind_strings)),
+    CYAML_FIELD_BOOL_PTR("relative", OPT, struct raw_path, relative),
+    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_path, t0),
+    CYAML_FIELD_FLOAT_PTR("radius", OPT, struct raw_path, radius),
+    CYAML_FIELD_FLOAT_PTR("period", OPT, struct raw_path, period),
+    CYAML_FIELD_FLOAT_PTR("turns", OPT, struct raw_path, turns),
+    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, struct raw_path, u, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, struct raw_path, v, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("points", OPT, struct raw_path, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, struct raw_path, durations, &float_entry, 1,
+                         MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t arm_fields[] = {
+    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_arm, name, 1, 31),
+    CYAML_FIELD_STRING_PTR("urdf", CYAML_FLAG_POINTER, struct raw_arm, urdf, 1, 400),
+    CYAML_FIELD_STRING_PTR("tip_link", OPT, struct raw_arm, tip_link, 0, 63),
+    CYAML_FIELD_SEQUENCE("base_xyz", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_arm, base_xyz,
+                         &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("q0", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1,
+                         MCA_MAX_DOF),
+    CYAML_FIELD_MAPPING("path", CYAML_FLAG_DEFAULT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_value_t arm_entry = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct raw_arm, arm_fields),
+};
+
+static const cyaml_schema_field_t scn_fields[] = {
+    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_scn, name, 1, 63),
+    CYAML_FIELD_FLOAT("duration", CYAML_FLAG_DEFAULT, struct raw_scn, duration),
+    CYAML_FIELD_FLOAT_PTR("dt", OPT, struct raw_scn, dt),
+    CYAML_FIELD_FLOAT_PTR("d1", OPT, struct raw_scn, d1),
+    CYAML_FIELD_FLOAT_PTR("d2", OPT, struct raw_scn, d2),
+    CYAML_FIELD_FLOAT_PTR("K", OPT, struct raw_scn, K),
+    CYAML_FIELD_FLOAT_PTR("epsilon", OPT, struct raw_scn, epsilon),
+    CYAML_FIELD_FLOAT_PTR("v_normal", OPT, struct raw_scn, v_normal),
+    CYAML_FIELD_FLOAT_PTR("v_floor", OPT, struct raw_scn, v_floor),
+    CYAML_FIELD_ENUM_PTR("form", OPT, struct raw_scn, form, form_strings, CYAML_ARRAY_LEN(form_strings)),
+    CYAML_FIELD_SEQUENCE("sample_times", OPT | CYAML_FLAG_FLOW, struct raw_scn, sample_times, &float_entry,
+                         1, 16),
+    CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_scn, arms, &arm_entry, 1, MCA_MAX_ARMS),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_value_t scn_schema = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct raw_scn, scn_fields),
+};
+
+/* libcyaml reports errors (with a backtrace naming field, line and column) through its log function:
+ * keep the error lines so the caller's message names them. */
+struct log_buf {
+    char text[768];
+    size_t len;
+};
+
+static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args)
+{
+    struct log_buf *b = ctx;
+    if (level < CYAML_LOG_ERROR || b->len + 2 >= sizeof b->text) {
+        return;
+    }
+    char line[256];
+    vsnprintf(line, sizeof line, fmt, args);
+    for (char *c = line; *c; c++) {
+        if (*c == '\n' || *c == '\t') {
+            *c = ' ';
+        }
+    }
+    int w = snprintf(b->text + b->len, sizeof b->text - b->len, "%s", line);
+    if (w > 0) {
+        b->len += (size_t)w;
+        if (b->len >= sizeof b->text) {
+            b->len = sizeof b->text - 1;
+        }
+    }
+}
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || !errlen) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+/* Line of the (nth, 0-based) occurrence of "key:" in the file, for messages about values that parsed but
+ * are out of range (libcyaml keeps no positions after loading). 0 when not found. */
+static int key_line(const char *path, const char *key, int nth)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        return 0;
+    }
+    char buf[1024];
+    int line = 0, found = 0, seen = 0;
+    const size_t kl = strlen(key);
+    while (fgets(buf, sizeof buf, f)) {
+        line++;
+        const char *c = buf;
+        while (*c == ' ' || *c == '-') {
+            c++;
+        }
+        if (strncmp(c, key, kl) == 0 && c[kl] == ':') {
+            if (seen++ == nth) {
+                found = line;
+                break;
+            }
+        }
+    }
+    fclose(f);
+    return found;
+}
+
+#define FAIL_AT(key, nth, ...)                                                                          \
+    do {                                                                                                \
+        char m_[256];                                                                                   \
+        snprintf(m_, sizeof m_, __VA_ARGS__);                                                           \
+        set_err(err, errlen, "%s:%d: %s", path, key_line(path, key, nth), m_);                          \
+        rc = MCA_ERANGE;                                                                                \
+        goto out;                                                                                       \
+    } while (0)
+
+void mca_scenario_defaults(mca_scenario_t *scn)
+{
+    memset(scn, 0, sizeof *scn);
+    scn->params.d1 = 0.05;
+    scn->params.d2 = 0.12;
+    scn->params.K = 20.0;
+    scn->params.epsilon = 5.0;
+    scn->params.dt = 0.001;
+    scn->params.v_normal = 0.5;
+    scn->params.v_floor = 0.0;
+    scn->params.form = MCA_FORM_NORMAL;
+}
+
+static int unit3(double out[3], const double *in)
+{
+    const double n = mca_v3_norm(in);
+    if (!(n > 1e-9) || !isfinite(n)) {
+        return -1;
+    }
+    for (int i = 0; i < 3; i++) {
+        out[i] = in[i] / n;
+    }
+    return 0;
+}
+
+static int positive(const double *v)
+{
+    return v && isfinite(*v) && *v > 0.0;
+}
+
+int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen)
+{
+    if (!path || !scn_out) {
+        set_err(err, errlen, "scenario: NULL argument");
+        return MCA_EINVAL;
+    }
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        set_err(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        return MCA_ENOENT;
+    }
+    fclose(f);
+
+    struct log_buf lb = {.len = 0};
+    lb.text[0] = 0;
+    const cyaml_config_t cfg = {
+        .log_fn = log_collect,
+        .log_ctx = &lb,
+        .mem_fn = cyaml_mem,
+        .log_level = CYAML_LOG_ERROR,
+        .flags = CYAML_CFG_DEFAULT,
+    };
+    struct raw_scn *raw = NULL;
+    cyaml_err_t cerr = cyaml_load_file(path, &cfg, &scn_schema, (cyaml_data_t **)&raw, NULL);
+    if (cerr != CYAML_OK) {
+        set_err(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
+        return MCA_EPARSE;
+    }
+
+    mca_scenario_t scn;
+    int rc = MCA_OK;
+    mca_scenario_defaults(&scn);
+    snprintf(scn.name, sizeof scn.name, "%s", raw->name);
+    snprintf(scn.source, sizeof scn.source, "%s", path);
+    scn.duration = raw->duration;
+    if (!(isfinite(scn.duration) && scn.duration > 0.0)) {
+        FAIL_AT("duration", 0, "duration: must be > 0 (got %g)", raw->duration);
+    }
+    mca_scenario_params_t *p = &scn.params;
+    if (raw->dt) {
+        if (!positive(raw->dt) || *raw->dt > 0.1) {
+            FAIL_AT("dt", 0, "dt: must be in (0, 0.1] s (got %g)", *raw->dt);
+        }
+        p->dt = *raw->dt;
+    }
+    if (raw->d1) {
+        p->d1 = *raw->d1;
+    }
+    if (raw->d2) {
+        p->d2 = *raw->d2;
+    }
+    if (!(isfinite(p->d1) && isfinite(p->d2) && p->d1 >= 0.0 && p->d1 < p->d2)) {
+        FAIL_AT("d2", 0, "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
+    }
+    if (raw->K) {
+        if (!(isfinite(*raw->K) && *raw->K >= 0.0)) {
+            FAIL_AT("K", 0, "K: must be >= 0 (got %g)", *raw->K);
+        }
+        p->K = *raw->K;
+    }
+    if (raw->epsilon) {
+        if (!positive(raw->epsilon)) {
+            FAIL_AT("epsilon", 0, "epsilon: must be > 0 (got %g)", *raw->epsilon);
+        }
+        p->epsilon = *raw->epsilon;
+    }
+    if (raw->v_normal) {
+        if (!positive(raw->v_normal)) {
+            FAIL_AT("v_normal", 0, "v_normal: must be > 0 (got %g)", *raw->v_normal);
+        }
+        p->v_normal = *raw->v_normal;
+    }
+    if (raw->v_floor) {
+        if (!(isfinite(*raw->v_floor) && *raw->v_floor >= 0.0)) {
+            FAIL_AT("v_floor", 0, "v_floor: must be >= 0 (got %g)", *raw->v_floor);
+        }
+        p->v_floor = *raw->v_floor;
+    }
+    if (raw->form) {
+        scn.has_form = 1;
+        p->form = *raw->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
+    }
+    scn.n_sample_times = (int)raw->sample_times_count;
+    for (unsigned i = 0; i < raw->sample_times_count; i++) {
+        scn.sample_times[i] = raw->sample_times[i];
+    }
+
+    scn.n_arms = (int)raw->arms_count;
+    for (unsigned a = 0; a < raw->arms_count; a++) {
+        const struct raw_arm *ra = &raw->arms[a];
+        mca_scenario_arm_t *sa = &scn.arm[a];
+        const int ai = (int)a;
+        snprintf(sa->name, sizeof sa->name, "%s", ra->name);
+        if (ra->urdf[0] == '/') {
+            snprintf(sa->urdf, sizeof sa->urdf, "%s", ra->urdf);
+        } else {
+            /* relative to the scenario file's directory */
+            const char *slash = strrchr(path, '/');
+            const int dl = slash ? (int)(slash - path) : 1;
+            snprintf(sa->urdf, sizeof sa->urdf, "%.*s/%s", dl, slash ? path : ".", ra->urdf);
+        }
+        snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link ? ra->tip_link : "");
+        for (int i = 0; i < 3; i++) {
+            sa->base_xyz[i] = ra->base_xyz[i];
+            sa->base_rpy[i] = ra->base_rpy ? ra->base_rpy[i] : 0.0;
+        }
+        sa->n_q0 = (int)ra->q0_count;
+        for (unsigned j = 0; j < ra->q0_count; j++) {
+            sa->q0[j] = ra->q0[j];
+        }
+        const struct raw_path *rp = &ra->path;
+        mca_path_t *pp = &sa->path;
+        memset(pp, 0, sizeof *pp);
+        pp->relative = rp->relative ? (*rp->relative ? 1 : 0) : 1;
+        pp->t0 = rp->t0 ? *rp->t0 : 0.0;
+        if (!(isfinite(pp->t0) && pp->t0 >= 0.0)) {
+            FAIL_AT("t0", 0, "arms[%d].path.t0: must be >= 0", ai);
+        }
+        switch (rp->kind) {
+        case RAW_HOLD:
+            pp->kind = MCA_PATH_HOLD;
+            pp->relative = 1;
+            break;
+        case RAW_CIRCLE:
+            pp->kind = MCA_PATH_CIRCLE;
+            pp->relative = 1;
+            if (!positive(rp->radius)) {
+                FAIL_AT("kind", ai, "arms[%d].path.radius: circle needs radius > 0", ai);
+            }
+            if (!positive(rp->period)) {
+                FAIL_AT("kind", ai, "arms[%d].path.period: circle needs period > 0", ai);
+            }
+            if (!rp->u || !rp->v) {
+                FAIL_AT("kind", ai, "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
+            }
+            pp->radius = *rp->radius;
+            pp->period = *rp->period;
+            pp->turns = rp->turns ? *rp->turns : 1.0;
+            if (!(isfinite(pp->turns) && pp->turns > 0.0)) {
+                FAIL_AT("turns", 0, "arms[%d].path.turns: must be > 0", ai);
+            }
+            {
+                double u[3], v[3];
+                if (unit3(u, rp->u) != 0) {
+                    FAIL_AT("u", ai, "arms[%d].path.u: zero vector", ai);
+                }
+                /* Gram-Schmidt: v orthogonal to u */
+                mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u);
+                if (unit3(pp->v, v) != 0) {
+                    FAIL_AT("v", ai, "arms[%d].path.v: parallel to u", ai);
+                }
+                mca_v3_set(pp->u, u);
+            }
+            break;
+        case RAW_WAYPOINTS:
+            pp->kind = MCA_PATH_WAYPOINTS;
+            if (!rp->points || rp->points_count < 1) {
+                FAIL_AT("kind", ai, "arms[%d].path.points: waypoints need points", ai);
+            }
+            if (rp->points_count > 1 && (!rp->durations || rp->durations_count + 1 != rp->points_count)) {
+                FAIL_AT("points", ai, "arms[%d].path.durations: need one duration per segment (%u points, %u "
+                        "durations)", ai, rp->points_count, rp->durations ? rp->durations_count : 0u);
+            }
+            pp->n_points = (int)rp->points_count;
+            for (unsigned i = 0; i < rp->points_count; i++) {
+                for (int k = 0; k < 3; k++) {
+                    pp->p[i][k] = rp->points[i][k];
+                    if (!isfinite(pp->p[i][k])) {
+                        FAIL_AT("points", ai, "arms[%d].path.points[%u]: not finite", ai, i);
+                    }
+                }
+                if (i + 1 < rp->points_count) {
+                    if (!positive(&rp->durations[i])) {
+                        FAIL_AT("durations", ai, "arms[%d].path.durations[%u]: must be > 0", ai, i);
+                    }
+                    pp->dur[i] = rp->durations[i];
+                }
+            }
+            break;
+        }
+    }
+    *scn_out = scn;
+out:
+    cyaml_free(&cfg, &scn_schema, raw, 0);
+    return rc;
+}

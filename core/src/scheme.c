@@ -1,0 +1,214 @@
+/* SPDX-License-Identifier: MIT */
+/* QP assembly of the MCA scheme, paper (19)-(28); see mca/scheme.h and docs/scheme.md. */
+#include "mca/scheme.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mca/err.h"
+#include "mca/vec3.h"
+
+void mca_scheme_default_params(mca_scheme_params_t *p)
+{
+    memset(p, 0, sizeof *p);
+    p->collision = 1;
+    p->form = MCA_FORM_NORMAL;
+    p->d1 = 0.05;
+    p->d2 = 0.12;
+    p->K = 20.0;
+    p->epsilon = 5.0;
+    p->v_normal = 0.5;
+    p->v_floor = 0.0;
+    p->big = 1e6;
+}
+
+double mca_brake_s(double d, double d1, double d2)
+{
+    if (d >= d2) {
+        return 1.0;
+    }
+    if (d <= d1) {
+        return 0.0;
+    }
+    const double s = sin(0.5 * M_PI * (d - d1) / (d2 - d1));
+    return s * s;
+}
+
+void mca_diamond_rows(const double r[3], const double J[3][MCA_MAX_DOF], int dof,
+                      double rows[3][MCA_MAX_DOF])
+{
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            rows[i][j] = j < dof ? r[i] * J[i][j] : 0.0;
+        }
+    }
+}
+
+int mca_joint_bounds(const mca_chain_t *chain, const double *q, double epsilon, double *lb, double *ub)
+{
+    if (!chain || !q || !lb || !ub || !(epsilon > 0.0)) {
+        return MCA_EINVAL;
+    }
+    int rc = MCA_OK;
+    for (int j = 0; j < chain->dof; j++) {
+        const mca_joint_model_t *jm = &chain->joint[j];
+        if (!isfinite(q[j])) {
+            return MCA_EINVAL;
+        }
+        double lo = -jm->vel_limit;
+        double hi = jm->vel_limit;
+        if (!jm->continuous) {
+            lo = fmax(lo, epsilon * (jm->lower - q[j]));
+            hi = fmin(hi, epsilon * (jm->upper - q[j]));
+        }
+        lb[j] = lo;
+        ub[j] = hi;
+        if (lo > hi) {
+            rc = MCA_EINFEASIBLE;
+        }
+    }
+    return rc;
+}
+
+void mca_scheme_state_reset(mca_scheme_state_t *st)
+{
+    memset(st, 0, sizeof *st);
+}
+
+int mca_scheme_rows_per_link(const mca_scheme_params_t *p)
+{
+    if (!p->collision) {
+        return 0;
+    }
+    return p->form == MCA_FORM_COMPONENTWISE ? 3 : 1;
+}
+
+/* Joint velocity of arm a from phi (NULL phi = 0). */
+static double phi_at(const double *phi, int off, int j)
+{
+    return phi ? phi[off + j] : 0.0;
+}
+
+int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chain_t *const chain[],
+                        const mca_kin_t kin[], const double *const q[], const double r_d[][3],
+                        const double rdot_d[][3], const mca_link_critical_t crit[][MCA_MAX_LINKS],
+                        const double *phi_prev, mca_scheme_state_t *st, mca_qp_t *qp,
+                        mca_scheme_info_t *info)
+{
+    if (!p || !chain || !kin || !q || !r_d || !rdot_d || !st || !qp || n_arms < 1 ||
+        n_arms > MCA_MAX_ARMS || (p->collision && !crit)) {
+        return MCA_EINVAL;
+    }
+    const int rpl = mca_scheme_rows_per_link(p);
+    int var_off[MCA_MAX_ARMS], row_off[MCA_MAX_ARMS];
+    int n = 0, n_ineq = 0;
+    for (int a = 0; a < n_arms; a++) {
+        if (!chain[a] || !q[a] || chain[a]->dof < 1 || chain[a]->dof > MCA_MAX_DOF) {
+            return MCA_EINVAL;
+        }
+        var_off[a] = n;
+        row_off[a] = n_ineq;
+        n += chain[a]->dof;
+        n_ineq += rpl * (chain[a]->dof + 1);
+    }
+    int rc = mca_qp_reset(qp, n, MCA_TASK_DIM * n_arms, n_ineq);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    int bounds_rc = MCA_OK;
+    int active = 0;
+    double brake = 1.0;
+    for (int a = 0; a < n_arms; a++) {
+        const mca_chain_t *ch = chain[a];
+        const mca_kin_t *kn = &kin[a];
+        const int dof = ch->dof, vo = var_off[a];
+        double J[3][MCA_MAX_DOF];
+        /* (22): J qdot = rdot_d + K (r_d - r); the feedback term stops Euler drift accumulating. */
+        rc = mca_jacobian_ee(kn, J);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < dof; j++) {
+                qp->G[3 * a + i][vo + j] = J[i][j];
+            }
+            qp->alpha[3 * a + i] = rdot_d[a][i] + p->K * (r_d[a][i] - kn->ee[i]);
+        }
+        /* (19)-(20) */
+        rc = mca_joint_bounds(ch, q[a], p->epsilon, &qp->lb[vo], &qp->ub[vo]);
+        if (rc == MCA_EINVAL) {
+            return rc;
+        }
+        if (rc != MCA_OK) {
+            bounds_rc = rc;
+        }
+        if (!rpl) {
+            continue;
+        }
+        /* (10)-(14)/(28): one fixed block of rows per link. */
+        for (int l = 0; l <= dof; l++) {
+            const int r0 = row_off[a] + rpl * l;
+            const mca_link_critical_t *c = &crit[a][l];
+            for (int k = 0; k < rpl; k++) {
+                qp->beta[r0 + k] = p->big; /* U rows already zero: inactive */
+            }
+            if (!c->valid || c->d >= p->d2) {
+                st->in_band[a][l] = 0;
+                continue;
+            }
+            const double s = mca_brake_s(c->d, p->d1, p->d2);
+            brake = fmin(brake, s);
+            double Jp[3][MCA_MAX_DOF];
+            rc = mca_jacobian_point(kn, l, c->p, Jp);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            double r_pe[3];
+            mca_v3_sub(r_pe, c->e, c->p);
+            if (p->form == MCA_FORM_NORMAL) {
+                const double nrm = mca_v3_norm(r_pe);
+                if (!(nrm > 1e-12)) {
+                    continue; /* axes touch: no direction; the distance fault handles it */
+                }
+                for (int j = 0; j < dof; j++) {
+                    qp->U[r0][vo + j] = (r_pe[0] * Jp[0][j] + r_pe[1] * Jp[1][j] + r_pe[2] * Jp[2][j]) / nrm;
+                }
+                qp->beta[r0] = s * p->v_normal;
+                active++;
+            } else {
+                double rows[3][MCA_MAX_DOF];
+                mca_diamond_rows(r_pe, Jp, dof, rows);
+                if (!st->in_band[a][l]) {
+                    /* (12): the approach rate when the link enters the band (d falls below d2), from the
+                     * previous tick's velocity, kept while the link stays inside. */
+                    for (int i = 0; i < 3; i++) {
+                        double v = 0.0;
+                        for (int j = 0; j < dof; j++) {
+                            v += rows[i][j] * phi_at(phi_prev, vo, j);
+                        }
+                        st->captured[a][l][i] = fmax(v, 0.0);
+                    }
+                    st->in_band[a][l] = 1;
+                }
+                for (int i = 0; i < 3; i++) {
+                    for (int j = 0; j < dof; j++) {
+                        qp->U[r0 + i][vo + j] = rows[i][j];
+                    }
+                    const double floor = p->v_floor * fabs(r_pe[i]);
+                    qp->beta[r0 + i] = s * fmax(st->captured[a][l][i], floor);
+                }
+                active += 3;
+            }
+        }
+    }
+    if (info) {
+        info->active_rows = active;
+        info->brake = brake;
+        info->rows_per_link = rpl;
+        for (int a = 0; a < MCA_MAX_ARMS; a++) {
+            info->var_off[a] = a < n_arms ? var_off[a] : n;
+            info->row_off[a] = a < n_arms ? row_off[a] : n_ineq;
+        }
+    }
+    return bounds_rc;
+}
