@@ -1,0 +1,263 @@
+/* SPDX-License-Identifier: MIT */
+/* SocketCAN backend of mca/arm.h (see mca/arm_can.h). */
+#include "mca/arm_can.h"
+
+#include <stdio.h>  /* snprintf */
+#include <stdlib.h> /* calloc, free */
+#include <string.h> /* memset, memcpy */
+
+#include <linux/can.h>
+#include <linux/can/error.h>
+
+#include "mca/err.h"
+
+int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n)
+{
+    if (!l || n < 1 || n > MCA_MAX_DOF || id_base % MCA_CAN_ID_BLOCK != 0 || id_base > MCA_CAN_ID_BASE_MAX) {
+        return MCA_EINVAL;
+    }
+    memset(l, 0, sizeof(*l));
+    l->id_base = id_base;
+    l->n = n;
+    mca_can_seq_reset(&l->seq_fb);
+    mca_can_seq_reset(&l->seq_state);
+    mca_can_seq_reset(&l->seq_fault);
+    return MCA_OK;
+}
+
+static int ignored(uint64_t *counter)
+{
+    (*counter)++;
+    return MCA_EAGAIN;
+}
+
+int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f)
+{
+    if (!l || !f) {
+        return MCA_EINVAL;
+    }
+    if (f->can_id & CAN_ERR_FLAG) {
+        l->st.bus_errors++;
+        l->err_pending = 1;
+        if (f->can_id & CAN_ERR_BUSOFF) {
+            l->st.bus_off = 1;
+        }
+        if (f->can_id & CAN_ERR_RESTARTED) {
+            l->st.bus_off = 0;
+        }
+        return MCA_OK;
+    }
+    if ((f->can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) || (f->can_id & CAN_SFF_MASK) < l->id_base ||
+        (f->can_id & CAN_SFF_MASK) >= l->id_base + MCA_CAN_ID_BLOCK) {
+        return ignored(&l->st.rx_unknown_id);
+    }
+    uint8_t counter = 0;
+    switch ((f->can_id & CAN_SFF_MASK) - l->id_base) {
+    case MCA_CAN_OFF_FEEDBACK: {
+        mca_arm_feedback_t fb = l->fb;
+        if (!f->fd || mca_can_decode_feedback(f->data, f->len, l->n, &fb, &counter) != MCA_OK) {
+            return ignored(&l->st.rx_bad_length);
+        }
+        if (!mca_can_seq_accept(&l->seq_fb, counter)) {
+            return ignored(&l->st.rx_bad_counter);
+        }
+        fb.frame_id = mca_can_unwrap16(l->last_frame_id, (uint16_t)fb.frame_id);
+        memcpy(fb.fault_flags, l->fault_flags, sizeof(fb.fault_flags));
+        fb.stamp_ns = f->stamp_ns;
+        l->fb = fb;
+        l->fb_new = 1;
+        l->st.feedback_received++;
+        l->st.bus_off = 0; /* feedback got through: the bus works again */
+        return MCA_OK;
+    }
+    case MCA_CAN_OFF_STATE: {
+        mca_can_state_msg_t m;
+        if (mca_can_decode_state(f->data, f->len, &m, &counter) != MCA_OK) {
+            return ignored(&l->st.rx_bad_length);
+        }
+        if (!mca_can_seq_accept(&l->seq_state, counter)) {
+            return ignored(&l->st.rx_bad_counter);
+        }
+        l->state = m;
+        l->have_state = 1;
+        return MCA_OK;
+    }
+    case MCA_CAN_OFF_FAULT: {
+        mca_can_fault_msg_t m;
+        if (mca_can_decode_fault(f->data, f->len, &m, &counter) != MCA_OK) {
+            return ignored(&l->st.rx_bad_length);
+        }
+        if (!mca_can_seq_accept(&l->seq_fault, counter)) {
+            return ignored(&l->st.rx_bad_counter);
+        }
+        memcpy(l->fault_flags, m.fault_flags, sizeof(l->fault_flags));
+        return MCA_OK;
+    }
+    default: /* our own command id from another node, or an id the protocol does not define */
+        return ignored(&l->st.rx_unknown_id);
+    }
+}
+
+int mca_can_link_encode(const mca_can_link_t *l, const mca_arm_command_t *cmd, uint8_t out[MCA_CAN_LEN_COMMAND])
+{
+    if (!l || !cmd || cmd->n != l->n) {
+        return MCA_EINVAL;
+    }
+    return mca_can_encode_command(cmd, l->tx_counter, out);
+}
+
+void mca_can_link_sent(mca_can_link_t *l, const mca_arm_command_t *cmd)
+{
+    if (!l || !cmd) {
+        return;
+    }
+    l->tx_counter++;
+    l->last_frame_id = cmd->frame_id;
+    l->st.commands_sent++;
+}
+
+int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb)
+{
+    if (!l || !fb) {
+        return MCA_EINVAL;
+    }
+    int fresh = l->fb_new;
+    if (fresh) {
+        *fb = l->fb;
+        l->fb_new = 0;
+    }
+    if (l->err_pending || l->st.bus_off) {
+        l->err_pending = 0;
+        return MCA_EIO;
+    }
+    return fresh ? MCA_OK : MCA_EAGAIN;
+}
+
+void mca_can_options_default(mca_can_options_t *opt)
+{
+    if (opt) {
+        opt->brs = 1;
+        opt->err_mask = CAN_ERR_MASK;
+        opt->rx_burst = 64;
+    }
+}
+
+typedef struct can_backend {
+    int fd;
+    mca_can_options_t opt;
+    mca_can_link_t link;
+} can_backend_t;
+
+static int can_read(void *ctx, mca_arm_feedback_t *fb)
+{
+    can_backend_t *b = ctx;
+    mca_can_frame_t f;
+    for (int i = 0; i < b->opt.rx_burst; i++) {
+        int rc = mca_can_sock_recv(b->fd, &f);
+        if (rc == MCA_EAGAIN) {
+            break;
+        }
+        if (rc != MCA_OK) {
+            return MCA_EIO;
+        }
+        mca_can_link_rx(&b->link, &f);
+    }
+    return mca_can_link_take(&b->link, fb);
+}
+
+static int can_write(void *ctx, const mca_arm_command_t *cmd)
+{
+    can_backend_t *b = ctx;
+    uint8_t buf[MCA_CAN_LEN_COMMAND];
+    int rc = mca_can_link_encode(&b->link, cmd, buf);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    rc = mca_can_sock_send(b->fd, b->link.id_base + MCA_CAN_OFF_COMMAND, buf, sizeof(buf), 1, b->opt.brs);
+    if (rc == MCA_OK) {
+        mca_can_link_sent(&b->link, cmd);
+    }
+    return rc;
+}
+
+static int can_stats(void *ctx, mca_arm_stats_t *st)
+{
+    const can_backend_t *b = ctx;
+    *st = b->link.st;
+    return MCA_OK;
+}
+
+static void can_close(void *ctx)
+{
+    can_backend_t *b = ctx;
+    if (b) {
+        mca_can_sock_close(b->fd);
+        free(b);
+    }
+}
+
+static const mca_arm_ops_t can_ops = {
+    .name = "socketcan",
+    .read = can_read,
+    .write = can_write,
+    .stats = can_stats,
+    .close = can_close,
+};
+
+int mca_can_backend_open(mca_arm_t **arm, const char *iface, uint32_t id_base, int n_joints,
+                         const mca_can_options_t *opt, char *err, size_t errlen)
+{
+    if (!arm || !iface) {
+        return MCA_EINVAL;
+    }
+    can_backend_t *b = calloc(1, sizeof(*b));
+    if (!b) {
+        return MCA_ENOMEM;
+    }
+    b->fd = -1;
+    if (opt) {
+        b->opt = *opt;
+    } else {
+        mca_can_options_default(&b->opt);
+    }
+    if (b->opt.rx_burst < 1) {
+        b->opt.rx_burst = 1;
+    }
+    int rc = mca_can_link_init(&b->link, id_base, n_joints);
+    if (rc != MCA_OK) {
+        if (err && errlen) {
+            snprintf(err, errlen, "can: bad id base 0x%x or joint count %d", (unsigned)id_base, n_joints);
+        }
+        free(b);
+        return rc;
+    }
+    rc = mca_can_sock_open(&b->fd, iface, id_base, b->opt.err_mask, err, errlen);
+    if (rc != MCA_OK) {
+        free(b);
+        return rc;
+    }
+    rc = mca_arm_wrap(arm, &can_ops, b);
+    if (rc != MCA_OK) {
+        can_close(b);
+    }
+    return rc;
+}
+
+int mca_can_backend_state(const mca_arm_t *arm, mca_can_state_msg_t *st)
+{
+    const can_backend_t *b = mca_arm_backend_ctx(arm, &can_ops);
+    if (!b || !st) {
+        return MCA_EINVAL;
+    }
+    if (!b->link.have_state) {
+        return MCA_EAGAIN;
+    }
+    *st = b->link.state;
+    return MCA_OK;
+}
+
+int mca_can_backend_fd(const mca_arm_t *arm)
+{
+    const can_backend_t *b = mca_arm_backend_ctx(arm, &can_ops);
+    return b ? b->fd : MCA_EINVAL;
+}
