@@ -77,6 +77,10 @@ typedef struct mca_kin {
  * @retval MCA_ENOENT  file missing or tip link not found
  * @retval MCA_EPARSE  not valid URDF, or a joint lacks limits / has a prismatic or planar type
  * @retval MCA_ERANGE  more than MCA_MAX_DOF joints
+ * @retval MCA_EIO     file exists but cannot be read
+ * @retval MCA_EINVAL  NULL chain or path
+ * @retval MCA_ENOMEM  allocation failed inside the parser
+ * Messages start with the path, then the line and element when known (docs/robots.md).
  */
 int mca_chain_load_urdf(mca_chain_t *chain, const char *path, const char *tip_link, char *err, size_t errlen);
 
