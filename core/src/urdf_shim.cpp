@@ -152,8 +152,11 @@ int prescan(Ctx &cx, const std::string &text) {
     TiXmlDocument doc;
     doc.Parse(text.c_str());
     if (doc.Error()) {
-        return cx.fail(MCA_EPARSE, "line %d, column %d: malformed XML: %s", doc.ErrorRow(), doc.ErrorCol(),
-                       doc.ErrorDesc());
+        if (doc.ErrorRow() > 0) {
+            return cx.fail(MCA_EPARSE, "line %d, column %d: malformed XML: %s", doc.ErrorRow(),
+                           doc.ErrorCol(), doc.ErrorDesc());
+        }
+        return cx.fail(MCA_EPARSE, "malformed XML: %s", doc.ErrorDesc());
     }
     const TiXmlElement *robot = doc.FirstChildElement("robot");
     if (!robot) {

@@ -196,6 +196,34 @@ static void test_null_arguments(void **state) {
     assert_string_equal(err, "");
 }
 
+static void test_empty_file(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "empty.urdf", NULL);
+    assert_error(&l, MCA_EPARSE, "malformed XML", NULL);
+}
+
+static void test_not_a_robot(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "not_robot.urdf", NULL);
+    assert_error(&l, MCA_EPARSE, "<robot>", NULL);
+}
+
+static void test_bad_interval(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "bad_interval.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'j1'", "not a finite interval");
+}
+
+static void test_no_revolute_joint(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "only_fixed.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "no revolute joint", NULL);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_missing_file),
@@ -212,6 +240,10 @@ int main(void) {
         cmocka_unit_test(test_branch_with_tip),
         cmocka_unit_test(test_fixed_fold),
         cmocka_unit_test(test_null_arguments),
+        cmocka_unit_test(test_empty_file),
+        cmocka_unit_test(test_not_a_robot),
+        cmocka_unit_test(test_bad_interval),
+        cmocka_unit_test(test_no_revolute_joint),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
