@@ -1,0 +1,173 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/dds_bridge.h
+ * DDS bridge: publishes the controller's state on Cyclone DDS without ever making the 1 kHz loop
+ * wait. The loop fills a plain C snapshot per tick and calls mca_dds_bridge_push() (wait-free copy
+ * into a lock-free drop-oldest ring, see mca/ring.h); a normal-priority publisher thread owned by
+ * the bridge drains the ring and writes the DDS samples. If the thread falls behind, the oldest
+ * snapshots are dropped and counted, never the loop delayed.
+ *
+ * Topics (types in dds/mca_dds.idl, QoS in docs/dds.md), one sample per published snapshot:
+ *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id)
+ *   mca/joint_command    mca::dds::JointCommand     one per arm   (key arm_id)
+ *   mca/distances        mca::dds::Distances        one per pair  (key pair_id = index in pair[])
+ *   mca/controller_status mca::dds::ControllerStatus every status_divisor-th published snapshot,
+ *                        on any change of state or fault code, and once more at destroy.
+ *
+ * Calling context of each function: init (start-up/shut-down, may allocate and block), rt (the 1 kHz
+ * loop: no allocation, no lock, no system call), non-rt (any normal thread).
+ */
+#ifndef MCA_DDS_BRIDGE_H
+#define MCA_DDS_BRIDGE_H
+
+#include <stdint.h>
+
+#include "mca/limits.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Unordered pairs of arms a snapshot can carry. */
+#define MCA_MAX_PAIRS (MCA_MAX_ARMS * (MCA_MAX_ARMS - 1) / 2)
+/** Longest fault text (bytes, without the terminating NUL), = string<64> in the IDL. */
+#define MCA_DDS_FAULT_TEXT_MAX 64
+/** Longest frame id (bytes, without NUL), = string<32> in the IDL. */
+#define MCA_DDS_FRAME_ID_MAX 32
+
+/** Controller state; same numbering as mca::dds::ControllerState. */
+typedef enum mca_dds_state {
+    MCA_DDS_STATE_INIT = 0,
+    MCA_DDS_STATE_READY = 1,
+    MCA_DDS_STATE_RUNNING = 2,
+    MCA_DDS_STATE_BRAKING = 3,
+    MCA_DDS_STATE_STOPPED = 4,
+    MCA_DDS_STATE_FAULT = 5,
+} mca_dds_state_t;
+
+/** One arm at one tick: measured state and the command sent. Entries [n_dof..] are ignored. */
+typedef struct mca_dds_arm_snapshot {
+    uint32_t n_dof;                         /**< joints, <= MCA_MAX_DOF */
+    double position[MCA_MAX_DOF];           /**< measured [rad] */
+    double velocity[MCA_MAX_DOF];           /**< measured [rad/s] */
+    double effort[MCA_MAX_DOF];             /**< measured [N m] */
+    double velocity_setpoint[MCA_MAX_DOF];  /**< commanded [rad/s] */
+    double position_reference[MCA_MAX_DOF]; /**< commanded [rad] */
+} mca_dds_arm_snapshot_t;
+
+/** Distance picture of one pair of arms (P on arm_a, E on arm_b). */
+typedef struct mca_dds_pair_snapshot {
+    uint8_t arm_a, arm_b;
+    int16_t link_a, link_b;                /**< links holding P and E */
+    uint32_t n_links_a, n_links_b;         /**< valid entries of link_distance_a/_b */
+    double min_distance;                   /**< global minimum surface distance [m] */
+    double p[3], e[3];                     /**< critical points (world) */
+    double d1, d2;                         /**< safety thresholds [m] */
+    double brake_factor;                   /**< S(d), eq. (13) */
+    double link_distance_a[MCA_MAX_LINKS]; /**< per link of a: closest distance to b */
+    double link_distance_b[MCA_MAX_LINKS]; /**< per link of b: closest distance to a */
+} mca_dds_pair_snapshot_t;
+
+/** Controller health (published on mca/controller_status). */
+typedef struct mca_dds_status_snapshot {
+    mca_dds_state_t state;
+    int32_t fault_code;                          /**< 0 or a negative MCA_E* code */
+    char fault_text[MCA_DDS_FAULT_TEXT_MAX + 1]; /**< NUL-terminated (truncated if longer) */
+    uint64_t ticks, overruns;
+    int64_t compute_p50_ns, compute_p99_ns, compute_max_ns;
+    int64_t jitter_p50_ns, jitter_p99_ns, jitter_max_ns;
+    uint32_t pdnn_steps;
+    double pdnn_residual;
+    double min_distance_so_far;
+    int64_t min_distance_stamp_ns;
+} mca_dds_status_snapshot_t;
+
+/** Everything published for one tick. Plain data: the loop keeps one and overwrites it each tick. */
+typedef struct mca_dds_snapshot {
+    uint64_t tick;    /**< controller tick number */
+    int64_t stamp_ns; /**< tick time stamp [ns] (CLOCK_MONOTONIC in this repo's programs) */
+    uint32_t n_arms;  /**< <= MCA_MAX_ARMS */
+    uint32_t n_pairs; /**< <= MCA_MAX_PAIRS */
+    mca_dds_arm_snapshot_t arm[MCA_MAX_ARMS];
+    mca_dds_pair_snapshot_t pair[MCA_MAX_PAIRS];
+    mca_dds_status_snapshot_t status;
+} mca_dds_snapshot_t;
+
+/** Bridge settings; start from mca_dds_config_default(). */
+typedef struct mca_dds_config {
+    uint32_t domain_id;      /**< DDS domain (0..230) */
+    const char *config_path; /**< Cyclone XML file, or NULL for CYCLONEDDS_URI / built-in defaults */
+    uint32_t rate_divisor;   /**< publish every Nth pushed snapshot; 1 = every tick (default) */
+    uint32_t ring_capacity;  /**< snapshots in the ring, power of two (default 256) */
+    uint32_t status_divisor; /**< status every Nth published snapshot (default 100) + on change */
+    uint32_t poll_period_us; /**< publisher thread's sleep when the ring is empty (default 200) */
+    uint8_t controller_id;   /**< key of ControllerStatus (default 0) */
+    const char *frame_id;    /**< JointCommand.frame_id (default "world"); copied at create */
+} mca_dds_config_t;
+
+/** Bridge counters. */
+typedef struct mca_dds_stats {
+    uint64_t offered;      /**< mca_dds_bridge_push() calls */
+    uint64_t queued;       /**< snapshots put into the ring (offered / rate_divisor) */
+    uint64_t published;    /**< snapshots written to DDS */
+    uint64_t dropped;      /**< snapshots lost to ring overrun */
+    uint64_t pending;      /**< snapshots in the ring now */
+    uint64_t samples;      /**< DDS samples written (all topics) */
+    uint64_t write_errors; /**< dds_write failures */
+    uint64_t invalid;      /**< snapshots rejected (n_arms, n_dof, ... out of range) */
+} mca_dds_stats_t;
+
+typedef struct mca_dds_bridge mca_dds_bridge_t;
+
+/** Default settings (domain 0, no config file, every tick, 256 snapshots). Context: any. */
+void mca_dds_config_default(mca_dds_config_t *cfg);
+
+/**
+ * Create participant, topics and writers, allocate the ring and start the publisher thread.
+ * Context: init.
+ * @param[out] out  new bridge (unchanged on error)
+ * @param[in]  cfg  settings (copied)
+ * @retval MCA_OK
+ * @retval MCA_EINVAL  NULL argument, divisor 0, capacity not a power of two, domain id out of range,
+ *                     frame id too long
+ * @retval MCA_ENOENT  config_path names a file that cannot be read
+ * @retval MCA_EIO     Cyclone DDS refused (bad XML, no usable network interface, ...); reason on stderr
+ * @retval MCA_ENOMEM
+ */
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);
+
+/**
+ * Hand one snapshot to the publisher. Copies it into the ring (every rate_divisor-th call) and
+ * returns; never waits, never fails. Context: rt, from ONE thread only (the loop).
+ */
+void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
+
+/** Counters. Context: non-rt (any thread). @retval MCA_OK @retval MCA_EINVAL */
+int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out);
+
+/**
+ * Wait until the writer of topic (one of the MCA_DDS_TOPIC_* names; NULL = every topic) has at least
+ * n matched readers, or timeout_ms passes. For tests and tools that must not lose the first samples.
+ * Context: non-rt.
+ * @retval MCA_OK @retval MCA_ETIMEDOUT @retval MCA_EINVAL NULL bridge or unknown topic
+ */
+int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n, uint32_t timeout_ms);
+
+/**
+ * Stop the publisher thread after it has written every queued snapshot, publish the final status
+ * (with the final drop count), wait up to 1 s for reliable readers to acknowledge, delete the DDS
+ * entities and free the bridge. NULL is ignored. The loop must no longer call push. Context: init.
+ * @param[out] final_stats  if not NULL, the counters after the last write (published + dropped +
+ *                          invalid == queued)
+ */
+void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats);
+
+/** Topic names (also in docs/dds.md). */
+#define MCA_DDS_TOPIC_JOINT_STATE "mca/joint_state"
+#define MCA_DDS_TOPIC_JOINT_COMMAND "mca/joint_command"
+#define MCA_DDS_TOPIC_DISTANCES "mca/distances"
+#define MCA_DDS_TOPIC_STATUS "mca/controller_status"
+
+#ifdef __cplusplus
+}
+#endif
+#endif

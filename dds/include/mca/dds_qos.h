@@ -1,0 +1,38 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/dds_qos.h
+ * Shared Cyclone DDS set-up for mca publishers and subscribers (bridge, mca-monitor, tests), so both
+ * ends use the same QoS (docs/dds.md). Context of every function: init / non-rt.
+ */
+#ifndef MCA_DDS_QOS_H
+#define MCA_DDS_QOS_H
+
+#include <dds/dds.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Largest domain id accepted (Cyclone's default port mapping ends at 232). */
+#define MCA_DDS_MAX_DOMAIN 230
+
+/** QoS of the 1 kHz streams (joint state, command, distances): reliable, keep-last 16, volatile.
+ *  Caller frees with dds_delete_qos(). */
+dds_qos_t *mca_dds_qos_stream(void);
+
+/** QoS of the controller status: reliable, transient-local, keep-last 1 (late joiners get the current
+ *  status). Caller frees with dds_delete_qos(). */
+dds_qos_t *mca_dds_qos_status(void);
+
+/**
+ * Create a participant on domain_id. With config_path non-NULL the domain is first created from that
+ * Cyclone XML file (its handle in *domain, to dds_delete() after the participant); otherwise
+ * CYCLONEDDS_URI or the defaults apply and *domain is 0.
+ * @return participant handle (> 0), or a negative MCA_E* code (MCA_ENOENT unreadable file,
+ *         MCA_EINVAL bad domain id, MCA_EIO Cyclone error; reason printed on stderr)
+ */
+dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,381 @@
+/* SPDX-License-Identifier: MIT */
+/* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher thread -> Cyclone DDS writers. */
+#include "mca/dds_bridge.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "mca/dds_qos.h"
+#include "mca/err.h"
+#include "mca/ring.h"
+#include "mca_dds.h" /* idlc output: mca_dds_JointState, ... */
+
+enum { W_STATE, W_COMMAND, W_DIST, W_STATUS, W_COUNT };
+static const char *const topic_names[W_COUNT] = {MCA_DDS_TOPIC_JOINT_STATE, MCA_DDS_TOPIC_JOINT_COMMAND,
+                                                 MCA_DDS_TOPIC_DISTANCES, MCA_DDS_TOPIC_STATUS};
+
+struct mca_dds_bridge {
+    mca_ring_t ring; /* first: cache-line aligned by aligned_alloc */
+    void *storage;
+    mca_dds_config_t cfg;
+    char frame_id[MCA_DDS_FRAME_ID_MAX + 1];
+
+    _Atomic uint64_t offered; /* written by the rt thread only */
+    /* Written by the publisher thread only. */
+    _Atomic uint64_t published, samples, write_errors, invalid;
+    _Atomic int stop;
+
+    dds_entity_t domain, participant;
+    dds_entity_t topic[W_COUNT], writer[W_COUNT];
+    pthread_t thread;
+    int thread_started;
+
+    /* Publisher thread state. */
+    mca_dds_snapshot_t work;
+    int have_status;
+    mca_dds_status_snapshot_t last_status;
+    uint64_t last_tick;
+    int64_t last_stamp;
+    uint64_t since_status;
+};
+
+static void bump(_Atomic uint64_t *c) {
+    /* Single writer per counter: load + store, no locked instruction. */
+    atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + 1u, memory_order_relaxed);
+}
+
+void mca_dds_config_default(mca_dds_config_t *cfg) {
+    if (cfg == NULL) {
+        return;
+    }
+    memset(cfg, 0, sizeof *cfg);
+    cfg->domain_id = 0;
+    cfg->config_path = NULL;
+    cfg->rate_divisor = 1;
+    cfg->ring_capacity = 256;
+    cfg->status_divisor = 100;
+    cfg->poll_period_us = 200;
+    cfg->controller_id = 0;
+    cfg->frame_id = "world";
+}
+
+static dds_sequence_double seq_of(double *buf, uint32_t n) {
+    dds_sequence_double s = {._maximum = n, ._length = n, ._buffer = buf, ._release = false};
+    return s;
+}
+
+static int snapshot_valid(const mca_dds_snapshot_t *s) {
+    if (s->n_arms > MCA_MAX_ARMS || s->n_pairs > MCA_MAX_PAIRS) {
+        return 0;
+    }
+    for (uint32_t i = 0; i < s->n_arms; ++i) {
+        if (s->arm[i].n_dof > MCA_MAX_DOF) {
+            return 0;
+        }
+    }
+    for (uint32_t k = 0; k < s->n_pairs; ++k) {
+        if (s->pair[k].n_links_a > MCA_MAX_LINKS || s->pair[k].n_links_b > MCA_MAX_LINKS) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static void write_one(mca_dds_bridge_t *b, int w, const void *sample) {
+    if (dds_write(b->writer[w], sample) < 0) {
+        bump(&b->write_errors);
+    } else {
+        bump(&b->samples);
+    }
+}
+
+static void write_status(mca_dds_bridge_t *b) {
+    const mca_dds_status_snapshot_t *st = &b->last_status;
+    mca_ring_stats_t rs;
+    mca_ring_stats(&b->ring, &rs);
+    mca_dds_ControllerStatus m;
+    memset(&m, 0, sizeof m);
+    m.controller_id = b->cfg.controller_id;
+    m.tick = b->last_tick;
+    m.stamp_ns = b->last_stamp;
+    m.state = (int32_t)st->state;
+    m.fault_code = st->fault_code;
+    memcpy(m.fault_text, st->fault_text, sizeof m.fault_text - 1);
+    m.fault_text[sizeof m.fault_text - 1] = '\0';
+    m.ticks = st->ticks;
+    m.overruns = st->overruns;
+    m.compute_p50_ns = st->compute_p50_ns;
+    m.compute_p99_ns = st->compute_p99_ns;
+    m.compute_max_ns = st->compute_max_ns;
+    m.jitter_p50_ns = st->jitter_p50_ns;
+    m.jitter_p99_ns = st->jitter_p99_ns;
+    m.jitter_max_ns = st->jitter_max_ns;
+    m.pdnn_steps = st->pdnn_steps;
+    m.pdnn_residual = st->pdnn_residual;
+    m.min_distance_so_far = st->min_distance_so_far;
+    m.min_distance_stamp_ns = st->min_distance_stamp_ns;
+    m.snapshots_dropped = rs.dropped;
+    write_one(b, W_STATUS, &m);
+    b->since_status = 0;
+}
+
+static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
+    if (!snapshot_valid(s)) {
+        bump(&b->invalid);
+        return;
+    }
+    for (uint32_t i = 0; i < s->n_arms; ++i) {
+        mca_dds_arm_snapshot_t *a = &s->arm[i];
+        const mca_dds_JointState js = {
+            .arm_id = (uint8_t)i,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .position = seq_of(a->position, a->n_dof),
+            .velocity = seq_of(a->velocity, a->n_dof),
+            .effort = seq_of(a->effort, a->n_dof),
+        };
+        write_one(b, W_STATE, &js);
+        mca_dds_JointCommand jc = {
+            .arm_id = (uint8_t)i,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .velocity_setpoint = seq_of(a->velocity_setpoint, a->n_dof),
+            .position_reference = seq_of(a->position_reference, a->n_dof),
+        };
+        memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
+        write_one(b, W_COMMAND, &jc);
+    }
+    for (uint32_t k = 0; k < s->n_pairs; ++k) {
+        mca_dds_pair_snapshot_t *p = &s->pair[k];
+        mca_dds_Distances d = {
+            .pair_id = (uint8_t)k,
+            .arm_a = p->arm_a,
+            .arm_b = p->arm_b,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .min_distance = p->min_distance,
+            .link_a = p->link_a,
+            .link_b = p->link_b,
+            .d1 = p->d1,
+            .d2 = p->d2,
+            .brake_factor = p->brake_factor,
+            .link_distance_a = seq_of(p->link_distance_a, p->n_links_a),
+            .link_distance_b = seq_of(p->link_distance_b, p->n_links_b),
+        };
+        memcpy(d.p, p->p, sizeof d.p);
+        memcpy(d.e, p->e, sizeof d.e);
+        write_one(b, W_DIST, &d);
+    }
+    const int changed = !b->have_status || s->status.state != b->last_status.state ||
+                        s->status.fault_code != b->last_status.fault_code;
+    b->last_status = s->status;
+    b->last_status.fault_text[MCA_DDS_FAULT_TEXT_MAX] = '\0';
+    b->last_tick = s->tick;
+    b->last_stamp = s->stamp_ns;
+    b->have_status = 1;
+    if (changed || ++b->since_status >= b->cfg.status_divisor) {
+        write_status(b);
+    }
+    bump(&b->published);
+}
+
+static void *publisher_main(void *arg) {
+    mca_dds_bridge_t *b = arg;
+    const struct timespec nap = {0, (long)b->cfg.poll_period_us * 1000L};
+    for (;;) {
+        /* Read stop BEFORE trying the ring: once stop is seen, one more empty pop means drained. */
+        const int stop = atomic_load_explicit(&b->stop, memory_order_acquire);
+        if (mca_ring_pop(&b->ring, &b->work) == MCA_OK) {
+            publish(b, &b->work);
+            continue;
+        }
+        if (stop) {
+            break;
+        }
+        nanosleep(&nap, NULL);
+    }
+    return NULL;
+}
+
+static int is_pow2(uint32_t x) {
+    return x >= 2 && (x & (x - 1u)) == 0;
+}
+
+static void delete_entities(mca_dds_bridge_t *b) {
+    if (b->participant > 0) {
+        dds_delete(b->participant); /* deletes topics and writers too */
+    }
+    if (b->domain > 0) {
+        dds_delete(b->domain);
+    }
+}
+
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
+    if (out == NULL || cfg == NULL || cfg->rate_divisor == 0 || cfg->status_divisor == 0 ||
+        !is_pow2(cfg->ring_capacity) || cfg->ring_capacity > MCA_RING_MAX_CAPACITY ||
+        cfg->domain_id > MCA_DDS_MAX_DOMAIN || cfg->poll_period_us == 0 || cfg->poll_period_us > 1000000) {
+        return MCA_EINVAL;
+    }
+    const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
+    if (strlen(frame) > MCA_DDS_FRAME_ID_MAX) {
+        fprintf(stderr, "mca dds: frame id '%s' longer than %d bytes\n", frame, MCA_DDS_FRAME_ID_MAX);
+        return MCA_EINVAL;
+    }
+    const size_t sz = (sizeof(mca_dds_bridge_t) + 63u) & ~(size_t)63u;
+    mca_dds_bridge_t *b = aligned_alloc(64, sz);
+    if (b == NULL) {
+        return MCA_ENOMEM;
+    }
+    memset(b, 0, sizeof *b);
+    b->cfg = *cfg;
+    snprintf(b->frame_id, sizeof b->frame_id, "%s", frame);
+    b->cfg.frame_id = b->frame_id;
+    b->cfg.config_path = NULL; /* not kept: the caller's string may go away */
+
+    const size_t bytes = MCA_RING_STORAGE_SIZE(sizeof(mca_dds_snapshot_t), cfg->ring_capacity);
+    b->storage = aligned_alloc(64, (bytes + 63u) & ~(size_t)63u);
+    if (b->storage == NULL) {
+        free(b);
+        return MCA_ENOMEM;
+    }
+    int rc = mca_ring_init(&b->ring, b->storage, bytes, sizeof(mca_dds_snapshot_t), cfg->ring_capacity);
+    if (rc != MCA_OK) {
+        free(b->storage);
+        free(b);
+        return rc;
+    }
+
+    const dds_entity_t p = mca_dds_open_participant(cfg->domain_id, cfg->config_path, &b->domain);
+    if (p < 0) {
+        free(b->storage);
+        free(b);
+        return (int)p;
+    }
+    b->participant = p;
+
+    const dds_topic_descriptor_t *const descs[W_COUNT] = {&mca_dds_JointState_desc,
+                                                          &mca_dds_JointCommand_desc, &mca_dds_Distances_desc,
+                                                          &mca_dds_ControllerStatus_desc};
+    dds_qos_t *qs = mca_dds_qos_stream();
+    dds_qos_t *qst = mca_dds_qos_status();
+    rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
+    for (int w = 0; w < W_COUNT && rc == MCA_OK; ++w) {
+        const dds_qos_t *q = w == W_STATUS ? qst : qs;
+        b->topic[w] = dds_create_topic(p, descs[w], topic_names[w], q, NULL);
+        b->writer[w] = b->topic[w] > 0 ? dds_create_writer(p, b->topic[w], q, NULL) : b->topic[w];
+        if (b->writer[w] < 0) {
+            fprintf(stderr, "mca dds: cannot create topic/writer '%s': %s\n", topic_names[w],
+                    dds_strretcode(b->writer[w]));
+            rc = MCA_EIO;
+        }
+    }
+    dds_delete_qos(qs);
+    dds_delete_qos(qst);
+    if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_main, b) != 0) {
+        rc = MCA_ENOMEM;
+    }
+    if (rc != MCA_OK) {
+        delete_entities(b);
+        free(b->storage);
+        free(b);
+        return rc;
+    }
+    b->thread_started = 1;
+    pthread_setname_np(b->thread, "mca-dds-pub");
+    *out = b;
+    return MCA_OK;
+}
+
+void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
+    const uint64_t n = atomic_load_explicit(&bridge->offered, memory_order_relaxed);
+    atomic_store_explicit(&bridge->offered, n + 1u, memory_order_relaxed);
+    if (bridge->cfg.rate_divisor == 1 || n % bridge->cfg.rate_divisor == 0) {
+        mca_ring_push(&bridge->ring, snap);
+    }
+}
+
+int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
+    if (bridge == NULL || out == NULL) {
+        return MCA_EINVAL;
+    }
+    mca_ring_stats_t rs;
+    mca_ring_stats(&bridge->ring, &rs);
+    out->offered = atomic_load_explicit(&bridge->offered, memory_order_relaxed);
+    out->queued = rs.pushed;
+    out->dropped = rs.dropped;
+    out->pending = rs.pending;
+    out->published = atomic_load_explicit(&bridge->published, memory_order_relaxed);
+    out->samples = atomic_load_explicit(&bridge->samples, memory_order_relaxed);
+    out->write_errors = atomic_load_explicit(&bridge->write_errors, memory_order_relaxed);
+    out->invalid = atomic_load_explicit(&bridge->invalid, memory_order_relaxed);
+    return MCA_OK;
+}
+
+int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n,
+                                uint32_t timeout_ms) {
+    if (bridge == NULL) {
+        return MCA_EINVAL;
+    }
+    int first = 0, last = W_COUNT - 1;
+    if (topic != NULL) {
+        first = -1;
+        for (int w = 0; w < W_COUNT; ++w) {
+            if (strcmp(topic, topic_names[w]) == 0) {
+                first = last = w;
+            }
+        }
+        if (first < 0) {
+            return MCA_EINVAL;
+        }
+    }
+    struct timespec t0, now;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    const struct timespec nap = {0, 10 * 1000 * 1000};
+    for (;;) {
+        int ok = 0;
+        for (int w = first; w <= last; ++w) {
+            dds_publication_matched_status_t st;
+            if (dds_get_publication_matched_status(bridge->writer[w], &st) == DDS_RETCODE_OK &&
+                st.current_count >= n) {
+                ok++;
+            }
+        }
+        if (ok == last - first + 1) {
+            return MCA_OK;
+        }
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        const int64_t ms = (now.tv_sec - t0.tv_sec) * 1000 + (now.tv_nsec - t0.tv_nsec) / 1000000;
+        if (ms >= (int64_t)timeout_ms) {
+            return MCA_ETIMEDOUT;
+        }
+        nanosleep(&nap, NULL);
+    }
+}
+
+void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats) {
+    if (bridge == NULL) {
+        return;
+    }
+    if (bridge->thread_started) {
+        atomic_store_explicit(&bridge->stop, 1, memory_order_release);
+        pthread_join(bridge->thread, NULL);
+    }
+    if (bridge->have_status) {
+        write_status(bridge); /* final status, with the final drop count */
+    }
+    for (int w = 0; w < W_COUNT; ++w) {
+        if (bridge->writer[w] > 0) {
+            dds_wait_for_acks(bridge->writer[w], DDS_SECS(1));
+        }
+    }
+    if (final_stats != NULL) {
+        mca_dds_bridge_stats(bridge, final_stats);
+    }
+    delete_entities(bridge);
+    free(bridge->storage);
+    free(bridge);
+}
