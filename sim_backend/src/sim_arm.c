@@ -208,6 +208,17 @@ static double clampd(double x, double lo, double hi)
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
+/* Step towards target, at most lim; lands exactly on the target when within lim (1e-9 relative slack
+ * so that accumulated rounding does not leave a 1e-17 rad/s residue for one more cycle). */
+static double step_to(double v0, double target, double lim)
+{
+    double dv = target - v0;
+    if (fabs(dv) <= lim * (1.0 + 1e-9)) {
+        return target;
+    }
+    return dv > 0 ? v0 + lim : v0 - lim;
+}
+
 /* One cycle of an acceleration-limited velocity: dec while |v| shrinks towards 0, acc while it grows;
  * a sign change spends |v0|/dec of the cycle reaching 0 and the rest accelerating. */
 static double rate_limit(double v0, double target, double acc, double dec, double dt)
@@ -217,14 +228,14 @@ static double rate_limit(double v0, double target, double acc, double dec, doubl
         return target;
     }
     if (v0 == 0.0 || (v0 > 0) == (dv > 0)) {
-        return v0 + clampd(dv, -acc * dt, acc * dt);
+        return step_to(v0, target, acc * dt);
     }
     if (fabs(dv) <= fabs(v0)) { /* target between 0 and v0: pure deceleration */
-        return v0 + clampd(dv, -dec * dt, dec * dt);
+        return step_to(v0, target, dec * dt);
     }
     double t0 = fabs(v0) / dec; /* time to reach zero */
-    if (t0 >= dt) {
-        return v0 > 0 ? v0 - dec * dt : v0 + dec * dt;
+    if (t0 >= dt * (1.0 - 1e-9)) {
+        return step_to(v0, 0.0, dec * dt);
     }
     double mag = fmin(fabs(target), acc * (dt - t0));
     return target > 0 ? mag : -mag;
