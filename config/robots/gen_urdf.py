@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 """Write config/robots/{jaco2,mico2,pa10plus}.urdf from published numbers (stdlib only).
 
-Run from anywhere:  python3 config/robots/gen_urdf.py
+Run from anywhere:  python3 config/robots/gen_urdf.py [--out DIR]
+(--out writes elsewhere; the test kinematics.urdf_generated compares that output with the committed files.)
 The URDFs are committed; this script documents where every number comes from and lets them be
 regenerated exactly. See docs/robots.md for the conventions and the reasons behind each choice.
 """
@@ -10,6 +11,7 @@ import math
 import os
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = HERE
 DEG = math.pi / 180.0
 
 
@@ -66,7 +68,7 @@ def write_urdf(fname, robot, comment, root_radius, joints, tool_xyz, tool_rpy):
                '    <child link="tool_tip"/>\n    <origin xyz="%s" rpy="%s"/>\n  </joint>\n'
                % (parent, vec(tool_xyz), vec(tool_rpy)))
     out.append("</robot>\n")
-    with open(os.path.join(HERE, fname), "w") as fh:
+    with open(os.path.join(OUT, fname), "w") as fh:
         fh.write("".join(out))
 
 
@@ -140,6 +142,13 @@ def pa10plus():
 
 
 if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) == 3 and sys.argv[1] == "--out":
+        OUT = sys.argv[2]
+        os.makedirs(OUT, exist_ok=True)
+    elif len(sys.argv) != 1:
+        sys.exit("usage: gen_urdf.py [--out DIR]")
     # Segment radii [m]: index 0 = root sphere, then one per joint's child link.
     kinova("jaco2.urdf", "jaco2", 0.2755, 0.4100, 0.2073, 0.0741, 0.0741, 0.1600, 0.0098,
            (47, 313), (19, 341), [0.05, 0.05, 0.045, 0.045, 0.04, 0.04, 0.045], "Kinova JACO2 j2n6s300")
