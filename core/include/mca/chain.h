@@ -81,6 +81,7 @@ typedef struct mca_kin {
  * @retval MCA_EINVAL  NULL chain or path
  * @retval MCA_ENOMEM  allocation failed inside the parser
  * Messages start with the path, then the line and element when known (docs/robots.md).
+ * Not thread-safe: urdfdom's console output is captured through a process-wide handler.
  */
 int mca_chain_load_urdf(mca_chain_t *chain, const char *path, const char *tip_link, char *err, size_t errlen);
 
