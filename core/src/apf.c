@@ -27,28 +27,31 @@ double mca_apf_rep_speed(const mca_apf_params_t *p, double d_min)
     return p->v_rep_max / (1.0 + exp(2.0 * d_min * p->theta / p->d));
 }
 
-void mca_apf_attractive(const mca_apf_params_t *p, mca_apf_state_t *st, const double ee[3],
-                        const double ee_vel[3], const double goal[3], const double goal_vel[3], double dt,
-                        double v_att[3])
+void mca_apf_attractive(const mca_apf_params_t *p, const double ee[3], const double goal[3],
+                        const double goal_vel[3], double v_att[3])
 {
-    double ep[3], ev[3];
+    double ep[3], n[3] = {0, 0, 0};
     mca_v3_sub(ep, goal, ee);
-    mca_v3_sub(ev, goal_vel, ee_vel);
-    const double e_p = mca_v3_norm(ep), e_v = mca_v3_norm(ev);
-    double de_p = 0.0, de_v = 0.0;
-    if (st->primed && dt > 0.0) {
-        de_p = (e_p - st->e_pos_prev) / dt;
-        de_v = (e_v - st->e_vel_prev) / dt;
+    const double e_p = mca_v3_norm(ep);
+    if (e_p > 0.0) {
+        for (int i = 0; i < 3; i++) {
+            n[i] = ep[i] / e_p;
+        }
     }
-    st->primed = 1;
-    st->e_pos_prev = e_p;
-    st->e_vel_prev = e_v;
-    const double dp = p->k_pos * e_p + p->d_pos * de_p; /* (40) */
-    const double dv = p->k_vel * e_v + p->d_vel * de_v; /* (41) */
+    /* (c I + a n n^T) V = b, c = 1 + (1 - rho) K_V, a = rho D_P,
+     * b = rho K_P e_P n + a n (n^T S_G) + (1 - rho) K_V S_G */
+    const double c = 1.0 + (1.0 - p->rho) * p->k_vel;
+    const double a = p->rho * p->d_pos;
+    const double ns = mca_v3_dot(n, goal_vel);
+    double b[3];
     for (int i = 0; i < 3; i++) {
-        const double vp = e_p > 0.0 ? dp * ep[i] / e_p : 0.0;
-        const double vv = e_v > 0.0 ? dv * ev[i] / e_v : 0.0;
-        v_att[i] = p->rho * vp + (1.0 - p->rho) * vv; /* (42) */
+        b[i] = p->rho * p->k_pos * e_p * n[i] + a * n[i] * ns + (1.0 - p->rho) * p->k_vel * goal_vel[i];
+    }
+    /* Sherman-Morrison: V = (b - a/(c + a |n|^2) n (n^T b)) / c */
+    const double nn = mca_v3_dot(n, n);
+    const double nb = mca_v3_dot(n, b);
+    for (int i = 0; i < 3; i++) {
+        v_att[i] = (b[i] - a / (c + a * nn) * n[i] * nb) / c;
     }
 }
 

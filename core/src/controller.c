@@ -119,7 +119,6 @@ void mca_controller_reset(mca_controller_t *ctrl)
     mca_scheme_state_reset(&ctrl->sstate);
     memset(ctrl->phi, 0, sizeof ctrl->phi);
     memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
-    memset(ctrl->apf, 0, sizeof ctrl->apf);
 }
 
 void mca_controller_clear_fault(mca_controller_t *ctrl)
@@ -224,17 +223,12 @@ static int apf_tick(mca_controller_t *ctrl, const double r_d[][3], const double 
     int off = 0;
     for (int a = 0; a < cfg->n_arms; a++) {
         const int dof = cfg->chain[a].dof;
-        double J[3][MCA_MAX_DOF], v_ee[3] = {0, 0, 0}, v_att[3], qd[MCA_MAX_DOF];
+        double J[3][MCA_MAX_DOF], v_att[3], qd[MCA_MAX_DOF];
         int rc = mca_jacobian_ee(&ctrl->kin[a], J);
         if (rc != MCA_OK) {
             return rc;
         }
-        for (int i = 0; i < 3; i++) {
-            for (int j = 0; j < dof; j++) {
-                v_ee[i] += J[i][j] * ctrl->phi_prev[off + j];
-            }
-        }
-        mca_apf_attractive(&cfg->apf, &ctrl->apf[a], ctrl->kin[a].ee, v_ee, r_d[a], rdot_d[a], cfg->dt, v_att);
+        mca_apf_attractive(&cfg->apf, ctrl->kin[a].ee, r_d[a], rdot_d[a], v_att);
         rc = mca_apf_pinv_apply(J, dof, cfg->apf.damping, v_att, qd);
         if (rc != MCA_OK) {
             return rc;
@@ -310,6 +304,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->n_arms = na;
     info->brake = 1.0;
     info->active_rows = 0;
+    info->binding_rows = 0;
     info->pdnn_steps = 0;
     info->pdnn_residual = 0.0;
     info->pdnn_converged = 0;
@@ -448,6 +443,15 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                         "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance",
                         eq, cfg->eq_tol);
             goto fault;
+        }
+        for (int i = 0; i < qp->n_ineq; i++) {
+            if (qp->beta[i] < cfg->sp.big) {
+                double s = 0.0;
+                for (int j = 0; j < qp->n; j++) {
+                    s += qp->U[i][j] * ctrl->phi[j];
+                }
+                info->binding_rows += s >= qp->beta[i] - 1e-9;
+            }
         }
         int off = 0;
         for (int a = 0; a < na; a++) {

@@ -32,25 +32,23 @@ typedef struct mca_apf_params {
 /** Table III: K_Pos 100, D_Pos 0.1, K_Vel 5, D_Vel 0.1, rho 0.8, d 0.12, v_Rep-max 0.001, theta 1. */
 void mca_apf_default_params(mca_apf_params_t *p);
 
-/** Memory of one arm between ticks (previous errors for the D terms). */
-typedef struct mca_apf_state {
-    int primed;
-    double e_pos_prev;
-    double e_vel_prev;
-} mca_apf_state_t;
-
 /** Repulsive speed (43): v_max / (1 + exp(2 d_min theta / d)). */
 double mca_apf_rep_speed(const mca_apf_params_t *p, double d_min);
 
 /**
- * Attractive velocity (40)-(42) of one end effector.
- * @param ee, ee_vel     end-effector position and velocity (J qdot_prev)
- * @param goal, goal_vel desired position and velocity
- * @param dt             tick period (for the D terms; first call uses 0 derivative)
+ * Attractive velocity (40)-(42) of one end effector, solved as the continuous-time law it is.
+ * In (40)-(41) the end-effector velocity S_E is the commanded V_Att itself (J J^+ = I), and
+ * de_P/dt = n^T (S_G - S_E) with n = (P_G - P_E)/e_P. Evaluating S_E from the previous tick instead
+ * makes the discrete loop oscillate (eigenvalue -1 with Table III's gains at 1 kHz), so the linear
+ * equation V = rho (K_P e_P + D_P n^T (S_G - V)) n + (1 - rho) K_V (S_G - V) is solved for V
+ * (Sherman-Morrison). de_V/dt would need the acceleration of the loop itself: D_V's term is left out.
+ * @param ee    end-effector position P_E
+ * @param goal  desired position P_G
+ * @param goal_vel desired velocity S_G
+ * @param[out] v_att V_Att
  */
-void mca_apf_attractive(const mca_apf_params_t *p, mca_apf_state_t *st, const double ee[3],
-                        const double ee_vel[3], const double goal[3], const double goal_vel[3], double dt,
-                        double v_att[3]);
+void mca_apf_attractive(const mca_apf_params_t *p, const double ee[3], const double goal[3],
+                        const double goal_vel[3], double v_att[3]);
 
 /** Pseudoinverse J^+ v (3 x dof Jacobian, J^T (J J^T + damping I)^-1 v). @retval MCA_OK, MCA_EINFEASIBLE
  *  (singular J J^T) */

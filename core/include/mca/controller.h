@@ -105,6 +105,7 @@ typedef struct mca_tick_info {
     double link_distance[MCA_MAX_ARMS][MCA_MAX_LINKS]; /**< per link: closest link of any other arm */
     double brake;                           /**< smallest S(d) over the links (1: free) */
     int active_rows;                        /**< collision rows with a finite bound */
+    int binding_rows;                       /**< collision rows at their bound (U phi >= beta - 1e-9) */
     /* solver */
     int pdnn_steps;
     double pdnn_residual;
@@ -135,7 +136,6 @@ typedef struct mca_controller {
     mca_pdnn_t pdnn;
     double phi[MCA_QP_MAX_VARS];
     double phi_prev[MCA_QP_MAX_VARS];
-    mca_apf_state_t apf[MCA_MAX_ARMS];
     double min_distance_prev;
     int has_prev;
     uint64_t ticks;

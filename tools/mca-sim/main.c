@@ -1,0 +1,260 @@
+/* SPDX-License-Identifier: MIT */
+/* mca-sim: run a scenario in virtual time through the controller tick and print a Table-I style report.
+ *   mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR] [--dump-every N]
+ *           [--dump-max N] [--form componentwise|normal] [--euler] [--duration S] [--summary FILE]
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "mca/err.h"
+#include "simrun.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
+               "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
+               "               [--duration S] [--summary FILE.json]\n"
+               "  --csv OUT      per-tick CSV (with several schemes: OUT gets -<scheme> before .csv)\n"
+               "  --dump-qp DIR  write QPs (mca_qp_dump_json with the PDNN's phi) for tools/qp-check\n"
+               "  --euler        integrate qdot directly instead of the in-process sim backend\n"
+               "  --summary F    JSON summary of every run (for tests)\n");
+}
+
+static int parse_int(const char *s, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || *end || end == s || v < 0 || v > 100000000) {
+        return -1;
+    }
+    *out = (int)v;
+    return 0;
+}
+
+static void csv_name(char *out, size_t len, const char *base, const char *scheme, int multi)
+{
+    if (!multi) {
+        snprintf(out, len, "%s", base);
+        return;
+    }
+    const char *dot = strrchr(base, '.');
+    if (dot && strcmp(dot, ".csv") == 0) {
+        snprintf(out, len, "%.*s-%s.csv", (int)(dot - base), base, scheme);
+    } else {
+        snprintf(out, len, "%s-%s", base, scheme);
+    }
+}
+
+static void print_dist(double d)
+{
+    if (isnan(d)) {
+        printf(" %12s", "-");
+    } else {
+        printf(" %10.5f m", d);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    const char *scenario = NULL, *schemes = "mca", *csv = NULL, *dump = NULL, *summary = NULL;
+    mca_simrun_opts_t o;
+    mca_simrun_default_opts(&o);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--euler")) {
+            o.use_backend = 0;
+            continue;
+        }
+        if (!v) {
+            fprintf(stderr, "mca-sim: %s needs a value\n", a);
+            usage(stderr);
+            return 2;
+        }
+        i++;
+        if (!strcmp(a, "--scenario")) {
+            scenario = v;
+        } else if (!strcmp(a, "--scheme")) {
+            schemes = v;
+        } else if (!strcmp(a, "--csv")) {
+            csv = v;
+        } else if (!strcmp(a, "--dump-qp")) {
+            dump = v;
+        } else if (!strcmp(a, "--summary")) {
+            summary = v;
+        } else if (!strcmp(a, "--dump-every")) {
+            if (parse_int(v, &o.dump_every) || o.dump_every < 1) {
+                fprintf(stderr, "mca-sim: --dump-every: bad value '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--dump-max")) {
+            if (parse_int(v, &o.dump_max)) {
+                fprintf(stderr, "mca-sim: --dump-max: bad value '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--pdnn-max-steps")) {
+            if (parse_int(v, &o.pdnn_max_steps)) {
+                fprintf(stderr, "mca-sim: --pdnn-max-steps: bad value '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--duration")) {
+            char *end;
+            o.duration = strtod(v, &end);
+            if (*end || !(o.duration > 0.0)) {
+                fprintf(stderr, "mca-sim: --duration: bad value '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--form")) {
+            if (!strcmp(v, "componentwise")) {
+                o.form = MCA_FORM_COMPONENTWISE;
+            } else if (!strcmp(v, "normal")) {
+                o.form = MCA_FORM_NORMAL;
+            } else {
+                fprintf(stderr, "mca-sim: --form: '%s' is not componentwise or normal\n", v);
+                return 2;
+            }
+        } else {
+            fprintf(stderr, "mca-sim: unknown option '%s'\n", a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (!scenario) {
+        fprintf(stderr, "mca-sim: --scenario is required\n");
+        usage(stderr);
+        return 2;
+    }
+    mca_scheme_kind_t list[3];
+    int n_list = 0;
+    {
+        char buf[64];
+        snprintf(buf, sizeof buf, "%s", schemes);
+        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+            if (n_list == 3) {
+                fprintf(stderr, "mca-sim: --scheme: at most 3 schemes\n");
+                return 2;
+            }
+            if (!strcmp(tok, "mca")) {
+                list[n_list++] = MCA_SCHEME_MCA;
+            } else if (!strcmp(tok, "mvn")) {
+                list[n_list++] = MCA_SCHEME_MVN;
+            } else if (!strcmp(tok, "apf")) {
+                list[n_list++] = MCA_SCHEME_APF;
+            } else {
+                fprintf(stderr, "mca-sim: --scheme: '%s' is not mca, mvn or apf\n", tok);
+                return 2;
+            }
+        }
+    }
+    if (dump && mkdir(dump, 0755) != 0 && errno != EEXIST) {
+        fprintf(stderr, "mca-sim: --dump-qp %s: %s\n", dump, strerror(errno));
+        return 1;
+    }
+    static mca_scenario_t scn;
+    char err[1024] = "";
+    int rc = mca_scenario_load(scenario, &scn, err, sizeof err);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "mca-sim: %s\n", err);
+        return 1;
+    }
+    static mca_simrun_result_t res[3];
+    for (int s = 0; s < n_list; s++) {
+        char csvp[1024];
+        o.scheme = list[s];
+        if (csv) {
+            csv_name(csvp, sizeof csvp, csv, mca_simrun_scheme_name(list[s]), n_list > 1);
+            o.csv_path = csvp;
+        }
+        o.dump_dir = dump;
+        rc = mca_simrun(&scn, &o, &res[s], err, sizeof err);
+        if (rc != MCA_OK) {
+            fprintf(stderr, "mca-sim: %s\n", err);
+            return 1;
+        }
+    }
+    const double d1 = scn.params.d1, d2 = scn.params.d2;
+    printf("scenario %s (%s), d1 %.3f m, d2 %.3f m, form %s, arms simulated by %s\n", scn.name, scenario, d1, d2,
+           (o.form >= 0 ? o.form : scn.params.form) == MCA_FORM_COMPONENTWISE ? "componentwise" : "normal",
+           o.use_backend ? "the sim backend" : "Euler integration");
+    if (scn.n_sample_times > 0) {
+        printf("\nminimum distance at sampled instants (Table I style)\n%8s %8s %8s", "t", "d1", "d2");
+        for (int s = 0; s < n_list; s++) {
+            printf(" %9s scheme", res[s].scheme);
+        }
+        printf("\n");
+        for (int i = 0; i < scn.n_sample_times; i++) {
+            printf("%7.1fs %6.2fm %6.2fm", scn.sample_times[i], d1, d2);
+            for (int s = 0; s < n_list; s++) {
+                print_dist(res[s].sample_d[i]);
+                printf("    ");
+            }
+            printf("\n");
+        }
+    }
+    printf("\n%-6s %12s %9s %12s %12s %12s %9s %9s %10s %10s %10s\n", "scheme", "min d [m]", "at [s]",
+           "max err [m]", "err free[m]", "eq res", "pdnn max", "pdnn avg", "tick p50", "tick p99", "tick max");
+    for (int s = 0; s < n_list; s++) {
+        const mca_simrun_result_t *r = &res[s];
+        printf("%-6s %12.5f %9.3f %12.3e %12.3e %12.3e %9d %9.1f %8.1fus %8.1fus %8.1fus\n", r->scheme,
+               r->min_distance, r->min_distance_t, r->max_err, r->max_err_free, r->eq_residual_max,
+               r->pdnn_steps_max, r->pdnn_steps_mean, r->compute_p50 / 1e3, r->compute_p99 / 1e3,
+               r->compute_max / 1e3);
+    }
+    for (int s = 0; s < n_list; s++) {
+        const mca_simrun_result_t *r = &res[s];
+        if (r->min_distance < d1) {
+            printf("%s: distance below d1 (%.5f m at %.3f s)\n", r->scheme, r->min_distance, r->min_distance_t);
+        }
+        if (r->fault) {
+            printf("%s: FAULT %s at t = %.3f s (distance %.5f m): %s; %s at %.3f s, min distance after the "
+                   "fault %.5f m\n",
+                   r->scheme, mca_ctrl_fault_name(r->fault), r->fault_t, r->fault_distance, r->fault_text,
+                   r->stopped ? "arms stopped" : "arms NOT stopped", r->stop_t, r->min_distance_after_fault);
+        }
+        if (dump) {
+            printf("%s: %d QPs dumped to %s (%d with binding collision rows)\n", r->scheme, r->dumped, dump,
+                   r->dumped_binding);
+        }
+    }
+    if (summary) {
+        FILE *f = fopen(summary, "w");
+        if (!f) {
+            fprintf(stderr, "mca-sim: --summary %s: %s\n", summary, strerror(errno));
+            return 1;
+        }
+        fprintf(f, "{\"scenario\":\"%s\",\"d1\":%.9g,\"d2\":%.9g,\"runs\":[", scn.name, d1, d2);
+        for (int s = 0; s < n_list; s++) {
+            const mca_simrun_result_t *r = &res[s];
+            fprintf(f,
+                    "%s{\"scheme\":\"%s\",\"ticks\":%d,\"min_distance\":%.9g,\"min_distance_t\":%.6g,"
+                    "\"max_err\":%.6g,\"max_err_free\":%.6g,\"max_err_nobrake\":%.6g,\"fault\":%d,"
+                    "\"fault_name\":\"%s\",\"fault_t\":%.6g,\"fault_distance\":%.9g,\"stopped\":%d,"
+                    "\"stop_t\":%.6g,\"min_distance_after_fault\":%.9g,\"pdnn_steps_max\":%d,"
+                    "\"pdnn_steps_mean\":%.3f,\"pdnn_residual_max\":%.3g,\"eq_residual_max\":%.3g,"
+                    "\"binding_ticks\":%d,\"compute_p50_ns\":%lld,\"compute_p99_ns\":%lld,"
+                    "\"compute_max_ns\":%lld,\"dumped\":%d,\"dumped_binding\":%d,\"samples\":[",
+                    s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
+                    r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
+                    isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
+                    isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0, r->pdnn_steps_max,
+                    r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max, r->binding_ticks,
+                    (long long)r->compute_p50, (long long)r->compute_p99, (long long)r->compute_max, r->dumped,
+                    r->dumped_binding);
+            for (int i = 0; i < r->n_samples; i++) {
+                fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i], isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);
+            }
+            fprintf(f, "]}");
+        }
+        fprintf(f, "]}\n");
+        fclose(f);
+    }
+    return 0;
+}

@@ -1,0 +1,69 @@
+/* SPDX-License-Identifier: MIT */
+/** @file simrun.h
+ * Run one scenario in virtual time through the controller tick (the same mca_controller_tick the daemon
+ * runs), the arms simulated by the in-process sim backend (mca_sim_backend_open) or by plain Euler
+ * integration of qdot. Used by mca-sim and by tests/scheme. Not real-time code (it writes CSV/JSON).
+ */
+#ifndef MCA_SIMRUN_H
+#define MCA_SIMRUN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mca/controller.h"
+#include "mca/scenario.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mca_simrun_opts {
+    mca_scheme_kind_t scheme;
+    int form;             /**< -1: the scenario's; else mca_collision_form_t */
+    int use_backend;      /**< 1: sim backend (default), 0: Euler integration q += qdot dt */
+    const char *csv_path; /**< per-tick CSV, NULL: none */
+    const char *dump_dir; /**< QP dumps (mca_qp_dump_json), NULL: none */
+    int dump_every;       /**< dump every Nth tick (and every max(1, N/5)th tick with binding rows) */
+    int dump_max;         /**< most dumps per run (0: no limit) */
+    double duration;      /**< <= 0: the scenario's */
+    double settle;        /**< seconds to run on after the arms stopped following a fault */
+    int pdnn_max_steps;   /**< > 0: override */
+} mca_simrun_opts_t;
+
+typedef struct mca_simrun_result {
+    char scheme[8];
+    int ticks;
+    double min_distance, min_distance_t;
+    double max_err;          /**< max |r_d - r| over arms and ticks before any fault [m] */
+    double max_err_free;     /**< same, over ticks where no collision row binds */
+    double max_err_nobrake;  /**< same, over ticks with S(d) = 1 (no link inside d2) */
+    int fault;               /**< first fault (mca_ctrl_fault_t) */
+    char fault_text[160];
+    double fault_t, fault_distance;
+    int stopped;             /**< 1: all joints at rest after the fault */
+    double stop_t;
+    double min_distance_after_fault;
+    int n_samples;
+    double sample_t[16], sample_d[16];
+    int pdnn_steps_max;
+    double pdnn_steps_mean;
+    double pdnn_residual_max;
+    double eq_residual_max;
+    int binding_ticks;       /**< ticks with at least one binding collision row */
+    int64_t compute_p50, compute_p99, compute_max;
+    int dumped, dumped_binding;
+} mca_simrun_result_t;
+
+void mca_simrun_default_opts(mca_simrun_opts_t *o);
+
+/** Run. @retval MCA_OK (the run happened; faults are in the result), or an error (err says why). */
+int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
+               size_t errlen);
+
+/** Scheme name ("mca", "mvn", "apf"). */
+const char *mca_simrun_scheme_name(mca_scheme_kind_t s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
