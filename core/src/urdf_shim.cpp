@@ -191,13 +191,19 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
     std::string text;
     char buf[4096];
     size_t got;
-    while ((got = fread(buf, 1, sizeof(buf), f)) > 0) {
+    const size_t max_size = 16u << 20; /* a URDF is kilobytes; this stops e.g. /dev/zero */
+    while ((got = fread(buf, 1, sizeof(buf), f)) > 0 && text.size() <= max_size) {
         text.append(buf, got);
     }
-    const int read_err = ferror(f) ? errno : 0;
+    const bool read_failed = ferror(f) != 0;
+    const int read_errno = errno;
     fclose(f);
-    if (read_err) {
-        return cx.fail(MCA_EIO, "cannot read URDF file: %s", strerror(read_err));
+    if (read_failed) {
+        return cx.fail(MCA_EIO, "cannot read URDF file: %s",
+                       read_errno ? strerror(read_errno) : "read error");
+    }
+    if (text.size() > max_size) {
+        return cx.fail(MCA_EPARSE, "file is larger than %zu bytes: not a URDF", max_size);
     }
 
     int rc = prescan(cx, text);

@@ -224,6 +224,13 @@ static void test_no_revolute_joint(void **state) {
     assert_error(&l, MCA_EPARSE, "no revolute joint", NULL);
 }
 
+static void test_directory(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, ".", NULL); /* the data directory itself */
+    assert_error(&l, MCA_EIO, "cannot read", "directory");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_missing_file),
@@ -244,6 +251,7 @@ int main(void) {
         cmocka_unit_test(test_not_a_robot),
         cmocka_unit_test(test_bad_interval),
         cmocka_unit_test(test_no_revolute_joint),
+        cmocka_unit_test(test_directory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
