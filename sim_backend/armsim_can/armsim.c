@@ -1,0 +1,366 @@
+/* SPDX-License-Identifier: MIT */
+/* mca-armsim: arm firmware emulator behind CAN FD. Runs the simulated arm firmware (mca/sim_arm.h,
+ * the same object the in-process backend runs) on a 1 kHz absolute-time cycle and speaks the mca
+ * arm protocol (mca/can_proto.h): every cycle it takes the newest valid command frame, runs one
+ * firmware cycle and answers with a feedback frame; heartbeat/state every MCA_CAN_HEARTBEAT_CYCLES
+ * and on change; fault frame on change (and with the heartbeat while a fault is set).
+ * --lockstep runs one firmware cycle per valid command instead of the clock (virtual time: used to
+ * compare trajectories with the in-process backend; no watchdog without commands in that mode).
+ * Exits cleanly on SIGTERM/SIGINT, printing its counters. Bad arguments: message, exit 2. */
+#include <errno.h>
+#include <getopt.h>
+#include <inttypes.h>
+#include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <linux/can.h>
+#include <linux/can/error.h>
+
+#include "mca/can_proto.h"
+#include "mca/can_sock.h"
+#include "mca/chain.h"
+#include "mca/err.h"
+#include "mca/sim_arm.h"
+
+static volatile sig_atomic_t g_stop;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_stop = 1;
+}
+
+typedef struct armsim_counters {
+    uint64_t frames_rx, cmd_accepted, cmd_superseded, rx_bad_length, rx_bad_counter, rx_unknown_id;
+    uint64_t bus_errors, tx_feedback, tx_state, tx_fault, tx_dropped, overruns;
+} armsim_counters_t;
+
+typedef struct armsim {
+    int fd;
+    uint32_t base;
+    mca_sim_arm_t arm;
+    mca_can_seq_t seq;
+    uint32_t frame_ref; /* last unwrapped command frame id */
+    int have_ref;
+    mca_arm_command_t cmd;
+    int have_cmd;
+    uint8_t ctr_fb, ctr_state, ctr_fault;
+    uint16_t sent_code;
+    uint16_t sent_flags[MCA_MAX_DOF];
+    int sent_state;
+    armsim_counters_t c;
+} armsim_t;
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: mca-armsim --iface IF (--robot URDF | --joints N) [--id-base 0x100] [--watchdog-cycles 3]\n"
+               "                  [--period-us 1000] [--acc-limit A] [--dec-limit D] [--q0 a,b,...]\n"
+               "                  [--lockstep] [--duration S] [--stats FILE]\n");
+}
+
+static int parse_long(const char *opt, const char *s, long lo, long hi, long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(s, &end, 0);
+    if (errno || !end || *end || v < lo || v > hi) {
+        fprintf(stderr, "mca-armsim: %s '%s': expected an integer in %ld..%ld\n", opt, s, lo, hi);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+static int parse_double(const char *opt, const char *s, double lo, double *out)
+{
+    char *end = NULL;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || !end || *end || !isfinite(v) || v < lo) {
+        fprintf(stderr, "mca-armsim: %s '%s': expected a number >= %g\n", opt, s, lo);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* Drain the socket: keep the newest valid command; count and drop everything else. */
+static void drain(armsim_t *s)
+{
+    mca_can_frame_t f;
+    while (mca_can_sock_recv(s->fd, &f) == MCA_OK) {
+        s->c.frames_rx++;
+        if (f.can_id & CAN_ERR_FLAG) {
+            s->c.bus_errors++;
+            continue;
+        }
+        uint32_t id = f.can_id & CAN_SFF_MASK;
+        if ((f.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) || id != s->base + MCA_CAN_OFF_COMMAND) {
+            s->c.rx_unknown_id++; /* our own feedback ids from another node, or undefined ids */
+            continue;
+        }
+        mca_arm_command_t cmd;
+        uint8_t ctr;
+        if (!f.fd || mca_can_decode_command(f.data, f.len, &cmd, &ctr) != MCA_OK) {
+            s->c.rx_bad_length++;
+            continue;
+        }
+        if (!mca_can_seq_accept(&s->seq, ctr)) {
+            s->c.rx_bad_counter++;
+            continue;
+        }
+        cmd.frame_id = s->have_ref ? mca_can_unwrap16(s->frame_ref, (uint16_t)cmd.frame_id) : cmd.frame_id;
+        s->frame_ref = cmd.frame_id;
+        s->have_ref = 1;
+        if (s->have_cmd) {
+            s->c.cmd_superseded++;
+        }
+        s->cmd = cmd;
+        s->have_cmd = 1;
+        s->c.cmd_accepted++;
+    }
+}
+
+static void send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len, uint64_t *ok, uint8_t *ctr)
+{
+    if (mca_can_sock_send(s->fd, s->base + off, buf, len, 1, 1) == MCA_OK) {
+        (*ok)++;
+        (*ctr)++;
+    } else {
+        s->c.tx_dropped++;
+    }
+}
+
+/* One firmware cycle and its frames. */
+static void cycle(armsim_t *s, double dt)
+{
+    mca_arm_feedback_t fb;
+    int rc = mca_sim_arm_cycle(&s->arm, s->have_cmd ? &s->cmd : NULL, dt, &fb);
+    s->have_cmd = 0;
+    if (rc == MCA_OK) {
+        uint8_t buf[MCA_CAN_LEN_FEEDBACK];
+        if (mca_can_encode_feedback(&fb, s->ctr_fb, buf) == MCA_OK) {
+            send_frame(s, MCA_CAN_OFF_FEEDBACK, buf, sizeof(buf), &s->c.tx_feedback, &s->ctr_fb);
+        }
+    }
+    const mca_sim_arm_t *a = &s->arm;
+    int n = a->cfg.n;
+    int beat = a->cycle % MCA_CAN_HEARTBEAT_CYCLES == 0;
+    int flags_changed = memcmp(s->sent_flags, a->fault_flags, sizeof(s->sent_flags)) != 0;
+    int any_fault = a->fault_code != 0;
+    for (int j = 0; j < n; j++) {
+        any_fault |= a->fault_flags[j] != 0;
+    }
+    if (beat || (int)a->state != s->sent_state) {
+        mca_can_state_msg_t m = {
+            .state = (uint8_t)a->state,
+            .n = (uint8_t)n,
+            .fault_code = a->fault_code,
+            .missed = (uint16_t)(a->missed > 65535 ? 65535 : a->missed),
+            .rx_errors = (uint8_t)(s->c.rx_bad_length + s->c.rx_bad_counter + s->c.rx_unknown_id),
+        };
+        uint8_t buf[MCA_CAN_LEN_STATE];
+        mca_can_encode_state(&m, s->ctr_state, buf);
+        send_frame(s, MCA_CAN_OFF_STATE, buf, sizeof(buf), &s->c.tx_state, &s->ctr_state);
+        s->sent_state = (int)a->state;
+    }
+    if (flags_changed || a->fault_code != s->sent_code || (beat && any_fault)) {
+        mca_can_fault_msg_t m;
+        memset(&m, 0, sizeof(m));
+        m.state = (uint8_t)a->state;
+        m.fault_code = a->fault_code;
+        memcpy(m.fault_flags, a->fault_flags, sizeof(m.fault_flags));
+        uint8_t buf[MCA_CAN_LEN_FAULT];
+        mca_can_encode_fault(&m, s->ctr_fault, buf);
+        send_frame(s, MCA_CAN_OFF_FAULT, buf, sizeof(buf), &s->c.tx_fault, &s->ctr_fault);
+        s->sent_code = a->fault_code;
+        memcpy(s->sent_flags, a->fault_flags, sizeof(s->sent_flags));
+    }
+}
+
+static void ts_add_ns(struct timespec *t, long ns)
+{
+    t->tv_nsec += ns;
+    while (t->tv_nsec >= 1000000000L) {
+        t->tv_nsec -= 1000000000L;
+        t->tv_sec++;
+    }
+}
+
+static int64_t ts_ns(const struct timespec *t)
+{
+    return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
+}
+
+static void print_counters(FILE *f, const armsim_t *s)
+{
+    const mca_sim_arm_counters_t *fw = &s->arm.cnt;
+    fprintf(f,
+            "cycles=%" PRIu64 " frames_rx=%" PRIu64 " cmd_accepted=%" PRIu64 " cmd_superseded=%" PRIu64
+            " rx_bad_length=%" PRIu64 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64 " bus_errors=%" PRIu64
+            " tx_feedback=%" PRIu64 " tx_state=%" PRIu64 " tx_fault=%" PRIu64 " tx_dropped=%" PRIu64
+            " overruns=%" PRIu64 " fw_cmd_accepted=%" PRIu64 " fw_cmd_stale=%" PRIu64 " watchdog_trips=%" PRIu64
+            " state=%s fault_code=%u\n",
+            fw->cycles, s->c.frames_rx, s->c.cmd_accepted, s->c.cmd_superseded, s->c.rx_bad_length,
+            s->c.rx_bad_counter, s->c.rx_unknown_id, s->c.bus_errors, s->c.tx_feedback, s->c.tx_state,
+            s->c.tx_fault, s->c.tx_dropped, s->c.overruns, fw->cmd_accepted, fw->cmd_stale, fw->watchdog_trips,
+            mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code);
+}
+
+int main(int argc, char **argv)
+{
+    const char *iface = NULL, *robot = NULL, *stats = NULL, *q0s = NULL;
+    long base = 0x100, wd = 3, period_us = 1000, joints = 0;
+    double acc = -1, dec = -1, duration = 0;
+    int lockstep = 0;
+    static const struct option opts[] = {
+        {"iface", required_argument, 0, 'i'},      {"robot", required_argument, 0, 'r'},
+        {"joints", required_argument, 0, 'n'},     {"id-base", required_argument, 0, 'b'},
+        {"watchdog-cycles", required_argument, 0, 'w'}, {"period-us", required_argument, 0, 'p'},
+        {"acc-limit", required_argument, 0, 'a'},  {"dec-limit", required_argument, 0, 'd'},
+        {"q0", required_argument, 0, 'q'},         {"lockstep", no_argument, 0, 'l'},
+        {"duration", required_argument, 0, 't'},   {"stats", required_argument, 0, 's'},
+        {"help", no_argument, 0, 'h'},             {0, 0, 0, 0},
+    };
+    int o;
+    while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
+        int bad = 0;
+        switch (o) {
+        case 'i': iface = optarg; break;
+        case 'r': robot = optarg; break;
+        case 'n': bad = parse_long("--joints", optarg, 1, MCA_MAX_DOF, &joints); break;
+        case 'b': bad = parse_long("--id-base", optarg, 0, MCA_CAN_ID_BASE_MAX, &base); break;
+        case 'w': bad = parse_long("--watchdog-cycles", optarg, 1, 100000, &wd); break;
+        case 'p': bad = parse_long("--period-us", optarg, 100, 1000000, &period_us); break;
+        case 'a': bad = parse_double("--acc-limit", optarg, 1e-9, &acc); break;
+        case 'd': bad = parse_double("--dec-limit", optarg, 1e-9, &dec); break;
+        case 'q': q0s = optarg; break;
+        case 'l': lockstep = 1; break;
+        case 't': bad = parse_double("--duration", optarg, 0, &duration); break;
+        case 's': stats = optarg; break;
+        case 'h': usage(stdout); return 0;
+        default: usage(stderr); return 2;
+        }
+        if (bad) {
+            return 2;
+        }
+    }
+    if (optind != argc || !iface || (!robot == !joints)) {
+        fprintf(stderr, "mca-armsim: %s\n",
+                optind != argc ? "unexpected argument"
+                               : (!iface ? "--iface is required" : "give exactly one of --robot and --joints"));
+        usage(stderr);
+        return 2;
+    }
+    if (base % MCA_CAN_ID_BLOCK) {
+        fprintf(stderr, "mca-armsim: --id-base 0x%lx: must be a multiple of 0x%x\n", base, MCA_CAN_ID_BLOCK);
+        return 2;
+    }
+
+    static armsim_t s; /* large (delay line): static storage */
+    mca_sim_arm_config_t cfg;
+    char err[256] = "";
+    if (robot) {
+        static mca_chain_t chain;
+        int rc = mca_chain_load_urdf(&chain, robot, NULL, err, sizeof(err));
+        if (rc != MCA_OK) {
+            fprintf(stderr, "mca-armsim: --robot %s: %s\n", robot, err[0] ? err : mca_strerror(rc));
+            return 2;
+        }
+        mca_sim_arm_config_from_chain(&cfg, &chain);
+    } else {
+        mca_sim_arm_config_default(&cfg, (int)joints);
+    }
+    cfg.watchdog_cycles = (int)wd;
+    cfg.dt = (double)period_us * 1e-6;
+    cfg.stamp_monotonic = 1;
+    for (int j = 0; j < cfg.n; j++) {
+        if (acc > 0) {
+            cfg.acc_limit[j] = acc;
+        }
+        if (dec > 0) {
+            cfg.dec_limit[j] = dec;
+        }
+    }
+    if (q0s) {
+        const char *p = q0s;
+        for (int j = 0; j < cfg.n; j++) {
+            char *end = NULL;
+            cfg.q0[j] = strtod(p, &end);
+            if (end == p || !isfinite(cfg.q0[j]) || (*end != ',' && *end != 0) || (*end == 0 && j != cfg.n - 1)) {
+                fprintf(stderr, "mca-armsim: --q0 '%s': expected %d comma-separated numbers\n", q0s, cfg.n);
+                return 2;
+            }
+            p = end + 1;
+        }
+    }
+    if (mca_sim_arm_init(&s.arm, &cfg, err, sizeof(err)) != MCA_OK) {
+        fprintf(stderr, "mca-armsim: arm configuration: %s\n", err);
+        return 2;
+    }
+    s.base = (uint32_t)base;
+    s.sent_state = -1;
+    mca_can_seq_reset(&s.seq);
+    int rc = mca_can_sock_open(&s.fd, iface, s.base, CAN_ERR_MASK, err, sizeof(err));
+    if (rc != MCA_OK) {
+        fprintf(stderr, "mca-armsim: %s\n", err);
+        return 1;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof(sa));
+    sa.sa_handler = on_signal;
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+    fprintf(stderr, "mca-armsim: %s id base 0x%03lx, %d joints, watchdog %ld cycles, %s %ld us\n", iface, base, cfg.n,
+            wd, lockstep ? "lockstep, dt" : "period", period_us);
+
+    const long period_ns = period_us * 1000L;
+    const double dt = cfg.dt;
+    struct timespec start, next, now;
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    next = start;
+    const int64_t end_ns = duration > 0 ? ts_ns(&start) + (int64_t)(duration * 1e9) : INT64_MAX;
+    while (!g_stop) {
+        if (lockstep) {
+            struct pollfd pfd = {.fd = s.fd, .events = POLLIN};
+            poll(&pfd, 1, 100);
+            drain(&s);
+            if (s.have_cmd) {
+                cycle(&s, dt);
+            }
+            clock_gettime(CLOCK_MONOTONIC, &now);
+        } else {
+            drain(&s);
+            cycle(&s, dt);
+            ts_add_ns(&next, period_ns);
+            while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL) == EINTR && !g_stop) {
+            }
+            clock_gettime(CLOCK_MONOTONIC, &now);
+            if (ts_ns(&now) - ts_ns(&next) > period_ns) {
+                /* Missed whole periods (preempted): count and restart the schedule from now. */
+                s.c.overruns++;
+                next = now;
+            }
+        }
+        if (ts_ns(&now) >= end_ns) {
+            break;
+        }
+    }
+    print_counters(stderr, &s);
+    if (stats) {
+        FILE *f = fopen(stats, "w");
+        if (!f) {
+            fprintf(stderr, "mca-armsim: --stats %s: %s\n", stats, strerror(errno));
+        } else {
+            print_counters(f, &s);
+            fclose(f);
+        }
+    }
+    mca_can_sock_close(s.fd);
+    return 0;
+}
