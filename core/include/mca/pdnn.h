@@ -17,34 +17,63 @@
 extern "C" {
 #endif
 
+/** How the Euler step kappa is chosen when params.kappa <= 0 (docs/pdnn.md derives both). */
+enum mca_pdnn_step {
+    /** kappa_k = gamma * ||e||^2 / ||(I+M^T) e||^2 each step (He's projection-contraction step; always
+     *  >= gamma / ||I+M||^2, so it is never smaller than the fixed bound step). Default. */
+    MCA_PDNN_STEP_ADAPTIVE = 0,
+    /** One kappa = gamma / ||I+M||_2^2 per solve (the global stability bound, kappa < 2 / ||I+M||^2). */
+    MCA_PDNN_STEP_BOUND = 1,
+};
+
 typedef struct mca_pdnn_params {
     double kappa;  /**< Euler step (lambda * dt); <= 0: chosen each solve from the stability bound */
     double tol;    /**< residual tolerance ||P_Omega(y - (My+q)) - y||_inf */
     int max_steps; /**< step cap per solve */
     double big;    /**< the paper's varpi, stands for +infinity in Omega */
+    /* Added fields; a zeroed value means the default. */
+    int step_rule; /**< enum mca_pdnn_step, used when kappa <= 0 */
+    double gamma;  /**< step factor in (0, 2) for the bound/adaptive rules; <= 0: 1.9 */
+    int no_row_scaling; /**< 1: iterate on G, U as given (plain); 0: rows of G, U scaled to unit norm
+                             (same phi, better conditioned dynamics) */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
     int steps;          /**< Euler steps taken */
     double residual;    /**< final ||e(y)||_inf */
     int converged;      /**< residual <= tol */
-    double kappa;       /**< step size used */
+    double kappa;       /**< step size used (adaptive rule: the last step taken) */
+    /* Added fields. */
+    int warm;           /**< 2: whole y reused, 1: phi and v_e reused (n_ineq changed), 0: cold */
+    double kappa_bound; /**< gamma / ||I+M||_2^2 (upper-bounded norm) of the iterated (scaled) problem */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
 typedef struct mca_pdnn {
     int h;                      /**< current length of y (0: cold) */
-    double y[MCA_QP_MAX_H];
+    double y[MCA_QP_MAX_H];     /**< [phi; v_e; v_i] of the last solve, duals of the unscaled QP */
+    /* Added fields: sizes of the last solve (partial warm start) and the solver's private workspace, kept
+     * here so that a solve needs no allocation and little stack. */
+    int n, n_eq, n_ineq;
+    double ws_N[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< [G; -U] row-scaled, m x n */
+    double ws_q[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                     /**< [-alpha; beta] row-scaled */
+    double ws_d[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                     /**< row scale factors */
+    double ws_lo[MCA_QP_MAX_H], ws_hi[MCA_QP_MAX_H];                  /**< Omega */
+    double ws_y[MCA_QP_MAX_H];                                        /**< iterate (scaled duals) */
 } mca_pdnn_t;
 
 /** Defaults: kappa from the bound, tol 1e-9, max_steps, big 1e10. */
 void mca_pdnn_default_params(mca_pdnn_params_t *params);
 
-/** Cold state (y = 0). */
+/** Cold state (y = 0). Call once before the first solve (the state is large: keep it static or in a
+ *  struct allocated at start-up, not on a small stack). */
 void mca_pdnn_init(mca_pdnn_t *s);
 
 /**
- * Solve @p qp, starting from the state's y when its size matches the QP's (else from 0).
+ * Solve @p qp, starting from the state's y when its size matches the QP's (else from 0; when only n_ineq
+ * changed, phi and v_e are still reused and v_i starts at 0).
+ * @param params  NULL: defaults
+ * @param result  may be NULL
  * @param[out] phi  the primal part (qp->n values)
  * @retval MCA_OK         converged
  * @retval MCA_ENOTCONV   step cap hit (phi, result still filled from the last iterate)

@@ -1,0 +1,37 @@
+/* SPDX-License-Identifier: MIT */
+/* Private: the Eigen side of the LVI-PDNN solver (core/src/pdnn_eigen.cpp), called by pdnn.c only. */
+#ifndef MCA_PDNN__EIGEN_H
+#define MCA_PDNN__EIGEN_H
+
+#include "mca/pdnn.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** What the iteration needs; all arrays belong to the caller (the mca_pdnn_t workspace). */
+typedef struct mca_pdnn__problem {
+    int n, m, n_eq;   /**< primal size, dual size (n_eq + n_ineq), leading equality rows */
+    const double *N;  /**< m x n row-major, [G; -U] (row-scaled) */
+    const double *q;  /**< m, [-alpha; beta] (row-scaled) */
+    const double *d;  /**< m, row scale factors: true dual = d * iterated dual */
+    const double *lo; /**< n + m, Omega lower bounds */
+    const double *hi; /**< n + m, Omega upper bounds */
+} mca_pdnn__problem_t;
+
+/** Upper bound on ||N||_2^2: Gershgorin row bound of N^T N. No allocation. */
+double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p);
+
+/**
+ * Explicit Euler steps y += kappa_k (I + M^T) e(y) from y (n + m values, updated in place) until the
+ * residual of the UNSCALED problem is <= tol or max_steps updates were made. kappa_fixed > 0: constant
+ * step; else kappa_k = gamma ||e||^2 / ||(I + M^T) e||^2. Fills steps, residual, converged, kappa.
+ * No allocation.
+ */
+void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, double kappa_fixed, double gamma, double tol,
+                       int max_steps, mca_pdnn_result_t *res);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
