@@ -1,0 +1,388 @@
+/* SPDX-License-Identifier: MIT */
+/* DDS bridge, in one process: argument and config errors, every pushed snapshot arrives intact on a
+ * DDS reader, rate divisor, ring overrun accounting (published + dropped == queued, also in the final
+ * ControllerStatus), rejected snapshots. argv[1] = Cyclone XML, argv[2] = domain id. The bridge under
+ * test uses CYCLONEDDS_URI (set by ctest) so that the readers here can share its domain. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "mca/dds_bridge.h"
+#include "mca/dds_qos.h"
+#include "mca/dds_synth.h"
+#include "mca/err.h"
+#include "mca_dds.h"
+
+static const char *g_config;
+static uint32_t g_domain;
+
+static void test_create_rejects_bad_arguments(void **state) {
+    (void)state;
+    mca_dds_config_t cfg;
+    mca_dds_bridge_t *b = (mca_dds_bridge_t *)0x1;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    assert_int_equal(mca_dds_bridge_create(NULL, &cfg), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, NULL), MCA_EINVAL);
+    cfg.rate_divisor = 0;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    cfg.rate_divisor = 1;
+    cfg.ring_capacity = 100;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    cfg.ring_capacity = 16;
+    cfg.domain_id = 231;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    cfg.domain_id = g_domain;
+    cfg.frame_id = "a_frame_name_that_is_longer_than_32_bytes";
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    cfg.frame_id = NULL;
+    cfg.config_path = "/nonexistent/mca/cyclone.xml";
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_ENOENT);
+    assert_ptr_equal(b, (mca_dds_bridge_t *)0x1); /* untouched on error */
+    mca_dds_stats_t st;
+    assert_int_equal(mca_dds_bridge_stats(NULL, &st), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_wait_readers(NULL, NULL, 1, 1), MCA_EINVAL);
+    mca_dds_bridge_destroy(NULL, NULL); /* no crash */
+}
+
+static void test_create_rejects_bad_xml(void **state) {
+    (void)state;
+    char path[] = "/tmp/mca_dds_bad_XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    static const char bad[] = "<CycloneDDS><Domain><General><NoSuchElement>1</NoSuchElement></General>"
+                              "</Domain></CycloneDDS>";
+    assert_int_equal(write(fd, bad, sizeof bad - 1), (ssize_t)(sizeof bad - 1));
+    close(fd);
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.config_path = path;
+    mca_dds_bridge_t *b = NULL;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EIO);
+    assert_null(b);
+    unlink(path);
+
+    /* The shipped loopback config itself is accepted. */
+    cfg.config_path = g_config;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    mca_dds_stats_t st;
+    mca_dds_bridge_destroy(b, &st);
+    assert_int_equal(st.offered, 0);
+}
+
+/* Readers on the bridge's domain, created in this process (local delivery). */
+typedef struct readers {
+    dds_entity_t pp, rd_dist, rd_js, rd_jc, rd_st;
+} readers_t;
+
+static void open_readers(readers_t *r) {
+    dds_entity_t dom = 0;
+    r->pp = mca_dds_open_participant(g_domain, NULL, &dom);
+    assert_true(r->pp > 0);
+    dds_qos_t *qs = mca_dds_qos_stream();
+    dds_qos_t *qst = mca_dds_qos_status();
+    dds_qset_history(qs, DDS_HISTORY_KEEP_LAST, 4096); /* the test reads only at the end */
+    const dds_entity_t td =
+        dds_create_topic(r->pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
+    const dds_entity_t tj =
+        dds_create_topic(r->pp, &mca_dds_JointState_desc, MCA_DDS_TOPIC_JOINT_STATE, qs, NULL);
+    const dds_entity_t tc =
+        dds_create_topic(r->pp, &mca_dds_JointCommand_desc, MCA_DDS_TOPIC_JOINT_COMMAND, qs, NULL);
+    const dds_entity_t ts =
+        dds_create_topic(r->pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
+    r->rd_dist = dds_create_reader(r->pp, td, qs, NULL);
+    r->rd_js = dds_create_reader(r->pp, tj, qs, NULL);
+    r->rd_jc = dds_create_reader(r->pp, tc, qs, NULL);
+    r->rd_st = dds_create_reader(r->pp, ts, qst, NULL);
+    dds_delete_qos(qs);
+    dds_delete_qos(qst);
+    assert_true(r->rd_dist > 0 && r->rd_js > 0 && r->rd_jc > 0 && r->rd_st > 0);
+}
+
+static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32_t poll_us) {
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.rate_divisor = divisor;
+    cfg.ring_capacity = capacity;
+    cfg.poll_period_us = poll_us;
+    cfg.frame_id = "base_link";
+    mca_dds_bridge_t *b = NULL;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    assert_non_null(b);
+    return b;
+}
+
+/* Take every valid Distances sample: ticks into out (in arrival order); checks each one against the
+ * snapshot that tick produced. Returns the count. */
+static int take_distances(dds_entity_t rd, uint64_t *out, int max) {
+    enum { BATCH = 256 };
+    void *buf[BATCH];
+    dds_sample_info_t info[BATCH];
+    int got = 0;
+    for (;;) {
+        memset(buf, 0, sizeof buf);
+        const int n = dds_take(rd, buf, info, BATCH, BATCH);
+        assert_true(n >= 0);
+        if (n == 0) {
+            break;
+        }
+        for (int i = 0; i < n; ++i) {
+            if (!info[i].valid_data) {
+                continue;
+            }
+            const mca_dds_Distances *d = buf[i];
+            mca_dds_snapshot_t ref;
+            double mn = INFINITY;
+            int64_t ms = 0;
+            mca_dds_synth_fill(&ref, d->tick, 0, &mn, &ms);
+            const mca_dds_pair_snapshot_t *p = &ref.pair[0];
+            assert_int_equal(d->pair_id, 0);
+            assert_int_equal(d->stamp_ns, (int64_t)(1000 + d->tick)); /* stamps chosen by the pushes */
+            assert_true(d->min_distance == p->min_distance);
+            assert_memory_equal(d->p, p->p, sizeof d->p);
+            assert_memory_equal(d->e, p->e, sizeof d->e);
+            assert_int_equal(d->link_a, p->link_a);
+            assert_int_equal(d->link_b, p->link_b);
+            assert_true(d->brake_factor == p->brake_factor);
+            assert_int_equal(d->link_distance_a._length, p->n_links_a);
+            assert_int_equal(d->link_distance_b._length, p->n_links_b);
+            assert_memory_equal(d->link_distance_a._buffer, p->link_distance_a,
+                                p->n_links_a * sizeof(double));
+            assert_memory_equal(d->link_distance_b._buffer, p->link_distance_b,
+                                p->n_links_b * sizeof(double));
+            assert_true(got < max);
+            out[got++] = d->tick;
+        }
+        dds_return_loan(rd, buf, n);
+    }
+    return got;
+}
+
+static int take_joint_states(dds_entity_t rd, int *per_arm) {
+    enum { BATCH = 256 };
+    void *buf[BATCH];
+    dds_sample_info_t info[BATCH];
+    int got = 0;
+    for (;;) {
+        memset(buf, 0, sizeof buf);
+        const int n = dds_take(rd, buf, info, BATCH, BATCH);
+        if (n <= 0) {
+            break;
+        }
+        for (int i = 0; i < n; ++i) {
+            if (!info[i].valid_data) {
+                continue;
+            }
+            const mca_dds_JointState *js = buf[i];
+            mca_dds_snapshot_t ref;
+            double mn = INFINITY;
+            int64_t ms = 0;
+            mca_dds_synth_fill(&ref, js->tick, 0, &mn, &ms);
+            assert_true(js->arm_id < ref.n_arms);
+            const mca_dds_arm_snapshot_t *a = &ref.arm[js->arm_id];
+            assert_int_equal(js->position._length, a->n_dof);
+            assert_memory_equal(js->position._buffer, a->position, a->n_dof * sizeof(double));
+            assert_memory_equal(js->velocity._buffer, a->velocity, a->n_dof * sizeof(double));
+            assert_memory_equal(js->effort._buffer, a->effort, a->n_dof * sizeof(double));
+            per_arm[js->arm_id]++;
+            got++;
+        }
+        dds_return_loan(rd, buf, n);
+    }
+    return got;
+}
+
+static int take_last_status(dds_entity_t rd, mca_dds_ControllerStatus *out) {
+    void *buf[1] = {NULL};
+    dds_sample_info_t info[1];
+    const int n = dds_take(rd, buf, info, 1, 1);
+    int ok = 0;
+    if (n == 1 && info[0].valid_data) {
+        *out = *(const mca_dds_ControllerStatus *)buf[0];
+        ok = 1;
+    }
+    if (n > 0) {
+        dds_return_loan(rd, buf, n);
+    }
+    return ok;
+}
+
+static void push_range(mca_dds_bridge_t *b, uint64_t n) {
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    for (uint64_t k = 0; k < n; ++k) {
+        mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms);
+        mca_dds_bridge_push(b, &snap);
+    }
+}
+
+static void test_every_snapshot_arrives_intact(void **state) {
+    (void)state;
+    mca_dds_bridge_t *b = make_bridge(1, 256, 200);
+    readers_t r;
+    open_readers(&r);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, NULL, 1, 10000), MCA_OK);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, "no/such/topic", 1, 10), MCA_EINVAL);
+    enum { N = 200 };
+    push_range(b, N); /* 200 < ring capacity 256: nothing can be dropped */
+    mca_dds_stats_t st;
+    mca_dds_bridge_destroy(b, &st);
+    assert_int_equal(st.offered, N);
+    assert_int_equal(st.queued, N);
+    assert_int_equal(st.published, N);
+    assert_int_equal(st.dropped, 0);
+    assert_int_equal(st.write_errors, 0);
+    /* per snapshot: 2 arms x (state + command) + 1 pair; status on changes, every 100th, and final */
+    assert_true(st.samples >= (uint64_t)N * 5 + 1);
+
+    uint64_t ticks[N];
+    assert_int_equal(take_distances(r.rd_dist, ticks, N), N);
+    for (int i = 0; i < N; ++i) {
+        assert_int_equal(ticks[i], (uint64_t)i);
+    }
+    int per_arm[MCA_MAX_ARMS] = {0};
+    assert_int_equal(take_joint_states(r.rd_js, per_arm), 2 * N);
+    assert_int_equal(per_arm[0], N);
+    assert_int_equal(per_arm[1], N);
+
+    /* One JointCommand checked field by field, including the configured frame id. */
+    void *buf[1] = {NULL};
+    dds_sample_info_t info[1];
+    assert_int_equal(dds_take(r.rd_jc, buf, info, 1, 1), 1);
+    const mca_dds_JointCommand *jc = buf[0];
+    assert_string_equal(jc->frame_id, "base_link");
+    mca_dds_snapshot_t ref;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    mca_dds_synth_fill(&ref, jc->tick, 0, &mn, &ms);
+    assert_memory_equal(jc->velocity_setpoint._buffer, ref.arm[jc->arm_id].velocity_setpoint,
+                        ref.arm[jc->arm_id].n_dof * sizeof(double));
+    assert_memory_equal(jc->position_reference._buffer, ref.arm[jc->arm_id].position_reference,
+                        ref.arm[jc->arm_id].n_dof * sizeof(double));
+    dds_return_loan(r.rd_jc, buf, 1);
+
+    mca_dds_ControllerStatus s;
+    assert_true(take_last_status(r.rd_st, &s));
+    assert_int_equal(s.ticks, N); /* the final status is of the last snapshot */
+    assert_int_equal(s.tick, N - 1);
+    assert_int_equal(s.snapshots_dropped, 0);
+    /* d falls from 0.18 m over ticks 0..1000: the running minimum is d at the last tick. */
+    assert_true(s.min_distance_so_far == 0.02 + 0.16 * ((double)(1000 - (N - 1)) / 1000.0));
+    dds_delete(r.pp);
+}
+
+static void test_rate_divisor(void **state) {
+    (void)state;
+    mca_dds_bridge_t *b = make_bridge(5, 64, 200);
+    readers_t r;
+    open_readers(&r);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 10000), MCA_OK);
+    push_range(b, 50);
+    mca_dds_stats_t st;
+    mca_dds_bridge_destroy(b, &st);
+    assert_int_equal(st.offered, 50);
+    assert_int_equal(st.queued, 10);
+    assert_int_equal(st.published, 10);
+    uint64_t ticks[16];
+    assert_int_equal(take_distances(r.rd_dist, ticks, 16), 10);
+    for (int i = 0; i < 10; ++i) {
+        assert_int_equal(ticks[i], (uint64_t)(5 * i)); /* ticks 0, 5, 10, ... */
+    }
+    dds_delete(r.pp);
+}
+
+static void test_overrun_drops_oldest_and_counts(void **state) {
+    (void)state;
+    /* Ring of 4 drained every 300 ms: 100 snapshots pushed at once must mostly be dropped. */
+    mca_dds_bridge_t *b = make_bridge(1, 4, 300000);
+    readers_t r;
+    open_readers(&r);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, NULL, 1, 10000), MCA_OK);
+    push_range(b, 100);
+    mca_dds_stats_t st;
+    assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
+    assert_int_equal(st.queued, 100);
+    assert_true(st.dropped >= 80); /* the drain thread sleeps 300 ms: at most a few were popped */
+    mca_dds_bridge_destroy(b, &st);
+    assert_int_equal(st.queued, 100);
+    assert_int_equal(st.published + st.dropped + st.invalid, st.queued);
+    assert_true(st.published >= 4);
+
+    uint64_t ticks[100];
+    const int n = take_distances(r.rd_dist, ticks, 100);
+    assert_int_equal((uint64_t)n, st.published);
+    for (int i = 1; i < n; ++i) {
+        assert_true(ticks[i] > ticks[i - 1]);
+    }
+    assert_int_equal(ticks[n - 1], 99); /* the newest are kept */
+    assert_int_equal(ticks[n - 4], 96);
+
+    mca_dds_ControllerStatus s;
+    assert_true(take_last_status(r.rd_st, &s));
+    assert_int_equal(s.snapshots_dropped, st.dropped);
+    dds_delete(r.pp);
+}
+
+static void test_invalid_snapshot_rejected(void **state) {
+    (void)state;
+    mca_dds_bridge_t *b = make_bridge(1, 16, 200);
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    mca_dds_synth_fill(&snap, 0, 0, &mn, &ms);
+    snap.n_arms = MCA_MAX_ARMS + 1;
+    mca_dds_bridge_push(b, &snap);
+    mca_dds_synth_fill(&snap, 1, 0, &mn, &ms);
+    snap.arm[1].n_dof = MCA_MAX_DOF + 1;
+    mca_dds_bridge_push(b, &snap);
+    mca_dds_synth_fill(&snap, 2, 0, &mn, &ms);
+    snap.pair[0].n_links_b = MCA_MAX_LINKS + 1;
+    mca_dds_bridge_push(b, &snap);
+    mca_dds_synth_fill(&snap, 3, 0, &mn, &ms);
+    mca_dds_bridge_push(b, &snap);
+    mca_dds_stats_t st;
+    mca_dds_bridge_destroy(b, &st);
+    assert_int_equal(st.invalid, 3);
+    assert_int_equal(st.published, 1);
+}
+
+static void test_brake_factor_eq13(void **state) {
+    (void)state;
+    /* Closed values of S(d) = sin^2(pi/2 (d-d1)/(d2-d1)) between the thresholds. */
+    assert_true(mca_dds_brake_factor(0.20, 0.05, 0.12) == 1.0);
+    assert_true(mca_dds_brake_factor(0.12, 0.05, 0.12) == 1.0);
+    assert_true(mca_dds_brake_factor(0.05, 0.05, 0.12) == 0.0);
+    assert_true(mca_dds_brake_factor(0.01, 0.05, 0.12) == 0.0);
+    assert_true(fabs(mca_dds_brake_factor(0.085, 0.05, 0.12) - 0.5) < 1e-15);              /* midpoint */
+    assert_true(fabs(mca_dds_brake_factor(0.05 + 0.07 / 3.0, 0.05, 0.12) - 0.25) < 1e-15); /* sin^2(pi/6) */
+}
+
+int main(int argc, char **argv) {
+    if (argc != 3) {
+        fprintf(stderr, "usage: test_dds_bridge LOOPBACK_XML DOMAIN\n");
+        return 2;
+    }
+    g_config = argv[1];
+    g_domain = (uint32_t)strtoul(argv[2], NULL, 10);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_create_rejects_bad_arguments),
+        cmocka_unit_test(test_create_rejects_bad_xml),
+        cmocka_unit_test(test_every_snapshot_arrives_intact),
+        cmocka_unit_test(test_rate_divisor),
+        cmocka_unit_test(test_overrun_drops_oldest_and_counts),
+        cmocka_unit_test(test_invalid_snapshot_rejected),
+        cmocka_unit_test(test_brake_factor_eq13),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

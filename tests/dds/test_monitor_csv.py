@@ -1,0 +1,115 @@
+# SPDX-License-Identifier: MIT
+"""mca-monitor shows what a running publisher sends: run mca-dds-synth and `mca-monitor --csv FILE
+--count N`, then check every CSV row against the published pattern (recomputed here, mca_types.py):
+distances, margins to d1/d2, S(d), critical links and points, strictly increasing ticks, >= 99.9 % of
+the N consecutive ticks. Also the monitor's command-line errors and its clean exit on SIGINT.
+usage: test_monitor_csv.py --synth PATH --monitor PATH --config XML --domain N"""
+import argparse
+import csv
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import mca_types as m  # noqa: E402
+
+COUNT = 3000
+
+
+def check_rows(rows):
+    errors = []
+    ticks = [int(r["tick"]) for r in rows]
+    if any(b <= a for a, b in zip(ticks, ticks[1:])):
+        errors.append("ticks not strictly increasing")
+    span = ticks[-1] - ticks[0] + 1
+    if len(rows) < 0.999 * span:
+        errors.append(f"{span - len(rows)} of {span} ticks missing")
+    for r in rows:
+        k = int(r["tick"])
+        want = m.expected_distances(k)
+        d = float(r["min_distance"])
+        got = dict(pair_id=int(r["pair_id"]), arm_a=int(r["arm_a"]), arm_b=int(r["arm_b"]), tick=k,
+                   min_distance=d, p=[float(r[c]) for c in ("px", "py", "pz")],
+                   e=[float(r[c]) for c in ("ex", "ey", "ez")], link_a=int(r["link_a"]),
+                   link_b=int(r["link_b"]), d1=float(r["d1"]), d2=float(r["d2"]))
+        for key, val in got.items():
+            if val != want[key]:
+                errors.append(f"tick {k} {key}: csv {val!r} published {want[key]!r}")
+        if float(r["margin_d1"]) != d - m.D1 or float(r["margin_d2"]) != d - m.D2:
+            errors.append(f"tick {k}: margins {r['margin_d1']} {r['margin_d2']}")
+        if abs(float(r["brake_factor"]) - m.brake_factor(d, m.D1, m.D2)) > 1e-12:
+            errors.append(f"tick {k}: S {r['brake_factor']} != {m.brake_factor(d, m.D1, m.D2)}")
+        if r["state"] not in ("?", "RUNNING", "BRAKING"):
+            errors.append(f"tick {k}: state {r['state']}")
+        if int(r["rx_ns"]) < int(r["stamp_ns"]):
+            errors.append(f"tick {k}: received before it was stamped")
+    return errors
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--synth", required=True)
+    ap.add_argument("--monitor", required=True)
+    ap.add_argument("--config", required=True)
+    ap.add_argument("--domain", type=int, required=True)
+    a = ap.parse_args()
+    dom = ["--domain", str(a.domain), "--config", a.config]
+    errors = []
+
+    # Command-line errors: clear message, non-zero exit, no crash.
+    for args, code, text in ((["--domain", "999"], 2, "--domain"), (["--count", "x"], 2, "--count"),
+                             (["--bogus"], 2, "usage"), (["--duration", "-1"], 2, "--duration"),
+                             (dom + ["--csv", "/nonexistent/dir/x.csv"], 1, "/nonexistent/dir/x.csv"),
+                             (["--config", "/nonexistent.xml", "--count", "1"], 1, "/nonexistent.xml")):
+        p = subprocess.run([a.monitor] + args, capture_output=True, text=True, timeout=20)
+        if p.returncode != code or text not in p.stderr:
+            errors.append(f"mca-monitor {' '.join(args)}: exit {p.returncode} (want {code}), stderr {p.stderr!r}")
+    if subprocess.run([a.monitor, "--help"], capture_output=True, timeout=20).returncode != 0:
+        errors.append("--help does not exit 0")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "d.csv")
+        mon = subprocess.Popen([a.monitor, "--csv", path, "--count", str(COUNT), "--no-color"] + dom,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        pub = subprocess.Popen([a.synth, "--ticks", str(COUNT + 1000), "--wait-readers", "1", "--wait-topic",
+                                "mca/distances", "--wait-timeout", "20000"] + dom,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        mout, merr = mon.communicate(timeout=60)
+        pout, perr = pub.communicate(timeout=60)
+        print(pout.strip())
+        print(merr.strip())
+        if mon.returncode != 0 or pub.returncode != 0:
+            errors.append(f"exit codes monitor {mon.returncode} publisher {pub.returncode}: {merr} {perr}")
+        with open(path) as f:
+            rows = list(csv.DictReader(f))
+        if len(rows) != COUNT:
+            errors.append(f"CSV has {len(rows)} rows, want {COUNT} (--count)")
+        elif int(rows[0]["tick"]) != 0:
+            errors.append(f"first row is tick {rows[0]['tick']}, the publisher waited for the monitor")
+        if rows:
+            errors += check_rows(rows)
+        if "ALARM" not in mout and "WARN" not in mout and "OK" not in mout:
+            errors.append(f"no live line on stdout: {mout[-300:]!r}")
+
+        # Ctrl-C: clean exit 0, CSV closed with its header.
+        path2 = os.path.join(tmp, "e.csv")
+        mon = subprocess.Popen([a.monitor, "--csv", path2] + dom, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+        time.sleep(0.5)
+        mon.send_signal(signal.SIGINT)
+        _, merr = mon.communicate(timeout=20)
+        if mon.returncode != 0 or not open(path2).readline().startswith("rx_ns,tick,"):
+            errors.append(f"SIGINT: exit {mon.returncode}, stderr {merr!r}")
+
+    if errors:
+        for e in errors[:20]:
+            print("FAIL:", e)
+        raise SystemExit(f"FAIL: {len(errors)} problem(s)")
+    print(f"PASS: {COUNT} CSV rows equal to the published values")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,351 @@
+/* SPDX-License-Identifier: MIT */
+/* mca-monitor: command-line DDS subscriber. One live line per pair of arms (minimum distance, margins
+ * to d1 and d2, brake factor S(d), critical links, controller state, alarm word), optional CSV of every
+ * Distances sample, and at exit the end-to-end latency (tick stamp -> receipt here, same host clock).
+ * Exit 0 on success or Ctrl-C, 1 on a run-time error, 2 on bad usage. */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "mca/dds_bridge.h" /* MCA_DDS_TOPIC_*, MCA_MAX_PAIRS */
+#include "mca/dds_qos.h"
+#include "mca/err.h"
+#include "mca_dds.h" /* mca_dds_Distances, mca_dds_ControllerStatus */
+
+static volatile sig_atomic_t g_stop;
+
+static void on_signal(int sig) {
+    (void)sig;
+    g_stop = 1;
+}
+
+static const char *const state_names[] = {"INIT", "READY", "RUNNING", "BRAKING", "STOPPED", "FAULT"};
+
+static const char *state_name(int s) {
+    return (s >= 0 && s < (int)(sizeof state_names / sizeof state_names[0])) ? state_names[s] : "?";
+}
+
+typedef struct pair_view {
+    int seen;
+    mca_dds_Distances last; /* sequences not kept (loaned memory) */
+} pair_view_t;
+
+typedef struct monitor {
+    int color, tty;
+    int lines_drawn;
+    pair_view_t pair[256];
+    int have_status;
+    int32_t state;
+    int32_t fault_code;
+    char fault_text[65];
+    uint64_t dropped;
+    FILE *csv;
+    uint64_t samples;
+    int64_t *lat; /* latency samples [ns] */
+    size_t n_lat, cap_lat;
+} monitor_t;
+
+static int64_t now_ns(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static void usage(FILE *f) {
+    fprintf(f, "usage: mca-monitor [options]\n"
+               "Live view of the mca distances and controller state published on DDS.\n"
+               "  --domain N      DDS domain id (default 0)\n"
+               "  --config FILE   Cyclone DDS XML (default: CYCLONEDDS_URI or built-in)\n"
+               "  --csv FILE      write every Distances sample to FILE (CSV, header line first)\n"
+               "  --count N       exit after N Distances samples\n"
+               "  --duration S    exit after S seconds\n"
+               "  --no-color      no ANSI colours (default when stdout is not a terminal)\n"
+               "  --help\n"
+               "Alarm word: OK above d2, WARN below d2, ALARM below d1. Ctrl-C exits cleanly.\n");
+}
+
+static const char *alarm_word(const mca_dds_Distances *d, const char **color) {
+    if (d->min_distance < d->d1) {
+        *color = "\033[1;31m";
+        return "ALARM";
+    }
+    if (d->min_distance < d->d2) {
+        *color = "\033[1;33m";
+        return "WARN";
+    }
+    *color = "\033[32m";
+    return "OK";
+}
+
+static void draw(monitor_t *m) {
+    if (m->tty && m->lines_drawn > 0) {
+        printf("\033[%dA", m->lines_drawn); /* back to the first line of the block */
+    }
+    int lines = 0;
+    for (int k = 0; k < 256; ++k) {
+        if (!m->pair[k].seen) {
+            continue;
+        }
+        const mca_dds_Distances *d = &m->pair[k].last;
+        const char *col = "";
+        const char *word = alarm_word(d, &col);
+        printf("%spair %d (arm %d-%d) d=%8.1f mm  d-d1=%8.1f mm  d-d2=%8.1f mm  S=%5.3f  links %d/%d  %-7s  "
+               "%s%-5s%s",
+               m->tty ? "\r\033[K" : "", k, d->arm_a, d->arm_b, d->min_distance * 1e3,
+               (d->min_distance - d->d1) * 1e3, (d->min_distance - d->d2) * 1e3, d->brake_factor, d->link_a,
+               d->link_b, m->have_status ? state_name(m->state) : "?", m->color ? col : "", word,
+               m->color ? "\033[0m" : "");
+        if (m->have_status && m->fault_code != 0) {
+            printf("  fault %d %s", m->fault_code, m->fault_text);
+        }
+        printf("\n");
+        lines++;
+    }
+    if (lines == 0) {
+        printf("%swaiting for distances...\n", m->tty ? "\r\033[K" : "");
+        lines = 1;
+    }
+    m->lines_drawn = lines;
+    fflush(stdout);
+}
+
+static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx) {
+    if (m->csv == NULL) {
+        return 0;
+    }
+    const int n =
+        fprintf(m->csv,
+                "%lld,%llu,%lld,%u,%u,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%.17g,%.17g,%.17g,"
+                "%.17g,%.17g,%.17g,%s\n",
+                (long long)rx, (unsigned long long)d->tick, (long long)d->stamp_ns, d->pair_id, d->arm_a,
+                d->arm_b, d->min_distance, d->min_distance - d->d1, d->min_distance - d->d2, d->d1, d->d2,
+                d->brake_factor, d->link_a, d->link_b, d->p[0], d->p[1], d->p[2], d->e[0], d->e[1], d->e[2],
+                m->have_status ? state_name(m->state) : "?");
+    return n < 0 ? -1 : 0;
+}
+
+static int cmp_i64(const void *a, const void *b) {
+    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out) {
+    char *end = NULL;
+    errno = 0;
+    const unsigned long long v = strtoull(s, &end, 10);
+    if (errno != 0 || end == s || *end != '\0' || s[0] == '-' || v > max) {
+        fprintf(stderr, "mca-monitor: %s: '%s' is not an integer in 0..%llu\n", name, s, max);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    unsigned long long domain = 0, count = 0;
+    double duration = 0.0;
+    const char *config = NULL, *csv_path = NULL;
+    int no_color = 0;
+    static const struct option opts[] = {
+        {"domain", required_argument, NULL, 'd'},   {"config", required_argument, NULL, 'c'},
+        {"csv", required_argument, NULL, 'o'},      {"count", required_argument, NULL, 'n'},
+        {"duration", required_argument, NULL, 't'}, {"no-color", no_argument, NULL, 'C'},
+        {"help", no_argument, NULL, 'h'},           {NULL, 0, NULL, 0},
+    };
+    int c;
+    while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
+        switch (c) {
+        case 'd':
+            if (parse_u64(optarg, "--domain", MCA_DDS_MAX_DOMAIN, &domain) != 0) {
+                return 2;
+            }
+            break;
+        case 'c':
+            config = optarg;
+            break;
+        case 'o':
+            csv_path = optarg;
+            break;
+        case 'n':
+            if (parse_u64(optarg, "--count", 1000000000ULL, &count) != 0) {
+                return 2;
+            }
+            break;
+        case 't': {
+            char *end = NULL;
+            duration = strtod(optarg, &end);
+            if (end == optarg || *end != '\0' || !(duration > 0.0 && duration < 1e7)) {
+                fprintf(stderr, "mca-monitor: --duration: '%s' is not a positive number of seconds\n",
+                        optarg);
+                return 2;
+            }
+            break;
+        }
+        case 'C':
+            no_color = 1;
+            break;
+        case 'h':
+            usage(stdout);
+            return 0;
+        default:
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "mca-monitor: unexpected argument '%s'\n", argv[optind]);
+        usage(stderr);
+        return 2;
+    }
+
+    static monitor_t m;
+    m.tty = isatty(STDOUT_FILENO);
+    m.color = m.tty && !no_color;
+    if (csv_path != NULL) {
+        m.csv = fopen(csv_path, "w");
+        if (m.csv == NULL) {
+            fprintf(stderr, "mca-monitor: cannot write CSV file '%s': %s\n", csv_path, strerror(errno));
+            return 1;
+        }
+        fprintf(m.csv, "rx_ns,tick,stamp_ns,pair_id,arm_a,arm_b,min_distance,margin_d1,margin_d2,d1,d2,"
+                       "brake_factor,link_a,link_b,px,py,pz,ex,ey,ez,state\n");
+    }
+    m.cap_lat = 1u << 20;
+    m.lat = malloc(m.cap_lat * sizeof *m.lat);
+    if (m.lat == NULL) {
+        fprintf(stderr, "mca-monitor: out of memory\n");
+        return 1;
+    }
+
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    int rc = 0;
+    dds_entity_t dom = 0;
+    const dds_entity_t pp = mca_dds_open_participant((uint32_t)domain, config, &dom);
+    if (pp < 0) {
+        free(m.lat);
+        if (m.csv != NULL) {
+            fclose(m.csv);
+        }
+        return 1;
+    }
+    dds_qos_t *qs = mca_dds_qos_stream();
+    dds_qos_t *qst = mca_dds_qos_status();
+    /* A deeper reader history than the writer's 16: a slow terminal must not cost CSV rows. */
+    dds_qset_history(qs, DDS_HISTORY_KEEP_LAST, 1024);
+    const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
+    const dds_entity_t ts =
+        dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
+    const dds_entity_t rd = td > 0 ? dds_create_reader(pp, td, qs, NULL) : td;
+    const dds_entity_t rs = ts > 0 ? dds_create_reader(pp, ts, qst, NULL) : ts;
+    dds_delete_qos(qs);
+    dds_delete_qos(qst);
+    if (rd < 0 || rs < 0) {
+        fprintf(stderr, "mca-monitor: cannot create readers: %s\n", dds_strretcode(rd < 0 ? rd : rs));
+        rc = 1;
+        goto out;
+    }
+    const dds_entity_t ws = dds_create_waitset(pp);
+    const dds_entity_t cd = dds_create_readcondition(rd, DDS_ANY_STATE);
+    const dds_entity_t cs = dds_create_readcondition(rs, DDS_ANY_STATE);
+    dds_waitset_attach(ws, cd, rd);
+    dds_waitset_attach(ws, cs, rs);
+
+    const int64_t t_start = now_ns();
+    int64_t last_draw = 0;
+    enum { BATCH = 64 };
+    void *buf[BATCH];
+    dds_sample_info_t info[BATCH];
+    while (!g_stop) {
+        dds_waitset_wait(ws, NULL, 0, DDS_MSECS(100));
+        memset(buf, 0, sizeof buf);
+        int n = dds_take(rs, buf, info, BATCH, BATCH);
+        for (int i = 0; i < n; ++i) {
+            if (info[i].valid_data) {
+                const mca_dds_ControllerStatus *s = buf[i];
+                m.have_status = 1;
+                m.state = s->state;
+                m.fault_code = s->fault_code;
+                m.dropped = s->snapshots_dropped;
+                snprintf(m.fault_text, sizeof m.fault_text, "%s", s->fault_text);
+            }
+        }
+        if (n > 0) {
+            dds_return_loan(rs, buf, n);
+        }
+        memset(buf, 0, sizeof buf);
+        n = dds_take(rd, buf, info, BATCH, BATCH);
+        const int64_t rx = now_ns();
+        int done = 0;
+        for (int i = 0; i < n && !done; ++i) {
+            if (!info[i].valid_data) {
+                continue;
+            }
+            const mca_dds_Distances *d = buf[i];
+            pair_view_t *pv = &m.pair[d->pair_id];
+            pv->seen = 1;
+            pv->last = *d;
+            pv->last.link_distance_a._buffer = NULL; /* loaned memory: do not keep pointers */
+            pv->last.link_distance_b._buffer = NULL;
+            if (csv_row(&m, d, rx) != 0) {
+                fprintf(stderr, "mca-monitor: write error on '%s'\n", csv_path);
+                rc = 1;
+                g_stop = 1;
+            }
+            if (m.n_lat < m.cap_lat) {
+                m.lat[m.n_lat++] = rx - d->stamp_ns;
+            }
+            m.samples++;
+            if (count > 0 && m.samples >= count) {
+                done = 1;
+            }
+        }
+        if (n > 0) {
+            dds_return_loan(rd, buf, n);
+        }
+        const int64_t now = now_ns();
+        const int64_t redraw = m.tty ? 50000000LL : 1000000000LL; /* 20 Hz on a terminal, else 1 Hz */
+        if (now - last_draw >= redraw || done) {
+            draw(&m);
+            last_draw = now;
+        }
+        if (done || (duration > 0.0 && (double)(now - t_start) * 1e-9 >= duration)) {
+            break;
+        }
+    }
+out:
+    if (m.csv != NULL && fclose(m.csv) != 0) {
+        fprintf(stderr, "mca-monitor: write error on '%s'\n", csv_path);
+        rc = 1;
+    }
+    fprintf(stderr, "mca-monitor: %llu distance samples", (unsigned long long)m.samples);
+    if (m.n_lat > 0) {
+        qsort(m.lat, m.n_lat, sizeof *m.lat, cmp_i64);
+        const size_t i50 = (m.n_lat - 1) / 2, i99 = (size_t)floor(0.99 * (double)(m.n_lat - 1));
+        fprintf(stderr, "; latency stamp->receipt p50 %.1f us p99 %.1f us max %.1f us (n=%zu)",
+                (double)m.lat[i50] * 1e-3, (double)m.lat[i99] * 1e-3, (double)m.lat[m.n_lat - 1] * 1e-3,
+                m.n_lat);
+    }
+    if (m.have_status) {
+        fprintf(stderr, "; controller %s, bridge dropped %llu", state_name(m.state),
+                (unsigned long long)m.dropped);
+    }
+    fprintf(stderr, "\n");
+    free(m.lat);
+    dds_delete(pp);
+    if (dom > 0) {
+        dds_delete(dom);
+    }
+    return rc;
+}
