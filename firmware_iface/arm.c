@@ -14,8 +14,7 @@ struct mca_arm {
     void *ctx;
 };
 
-int mca_arm_wrap(mca_arm_t **arm, const mca_arm_ops_t *ops, void *ctx)
-{
+int mca_arm_wrap(mca_arm_t **arm, const mca_arm_ops_t *ops, void *ctx) {
     if (!arm || !ops || !ops->read || !ops->write) {
         return MCA_EINVAL;
     }
@@ -29,8 +28,7 @@ int mca_arm_wrap(mca_arm_t **arm, const mca_arm_ops_t *ops, void *ctx)
     return MCA_OK;
 }
 
-int mca_arm_read(mca_arm_t *arm, mca_arm_feedback_t *fb)
-{
+int mca_arm_read(mca_arm_t *arm, mca_arm_feedback_t *fb) {
     if (!arm || !fb) {
         return MCA_EINVAL;
     }
@@ -42,8 +40,7 @@ int mca_arm_read(mca_arm_t *arm, mca_arm_feedback_t *fb)
     return rc;
 }
 
-int mca_arm_write(mca_arm_t *arm, const mca_arm_command_t *cmd)
-{
+int mca_arm_write(mca_arm_t *arm, const mca_arm_command_t *cmd) {
     if (!arm || !cmd || cmd->n < 1 || cmd->n > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }
@@ -56,8 +53,7 @@ int mca_arm_write(mca_arm_t *arm, const mca_arm_command_t *cmd)
     return arm->ops->write(arm->ctx, cmd);
 }
 
-int mca_arm_stats(mca_arm_t *arm, mca_arm_stats_t *st)
-{
+int mca_arm_stats(mca_arm_t *arm, mca_arm_stats_t *st) {
     if (!arm || !st) {
         return MCA_EINVAL;
     }
@@ -68,24 +64,21 @@ int mca_arm_stats(mca_arm_t *arm, mca_arm_stats_t *st)
     return arm->ops->stats(arm->ctx, st);
 }
 
-const char *mca_arm_backend_name(const mca_arm_t *arm)
-{
+const char *mca_arm_backend_name(const mca_arm_t *arm) {
     if (!arm || !arm->ops->name) {
         return "none";
     }
     return arm->ops->name;
 }
 
-void *mca_arm_backend_ctx(const mca_arm_t *arm, const mca_arm_ops_t *ops)
-{
+void *mca_arm_backend_ctx(const mca_arm_t *arm, const mca_arm_ops_t *ops) {
     if (!arm || arm->ops != ops) {
         return NULL;
     }
     return arm->ctx;
 }
 
-void mca_arm_close(mca_arm_t *arm)
-{
+void mca_arm_close(mca_arm_t *arm) {
     if (!arm) {
         return;
     }
@@ -95,27 +88,38 @@ void mca_arm_close(mca_arm_t *arm)
     free(arm);
 }
 
-const char *mca_arm_state_name(mca_arm_state_t state)
-{
+const char *mca_arm_state_name(mca_arm_state_t state) {
     switch (state) {
-    case MCA_ARM_INIT: return "INIT";
-    case MCA_ARM_READY: return "READY";
-    case MCA_ARM_SERVOING: return "SERVOING";
-    case MCA_ARM_BRAKING: return "BRAKING";
-    case MCA_ARM_FAULT: return "FAULT";
-    default: return "UNKNOWN";
+    case MCA_ARM_INIT:
+        return "INIT";
+    case MCA_ARM_READY:
+        return "READY";
+    case MCA_ARM_SERVOING:
+        return "SERVOING";
+    case MCA_ARM_BRAKING:
+        return "BRAKING";
+    case MCA_ARM_FAULT:
+        return "FAULT";
+    default:
+        return "UNKNOWN";
     }
 }
 
-const char *mca_arm_fault_name(unsigned fault_code)
-{
+const char *mca_arm_fault_name(unsigned fault_code) {
     switch (fault_code) {
-    case MCA_ARM_FAULT_NONE: return "NONE";
-    case MCA_ARM_FAULT_WATCHDOG: return "WATCHDOG";
-    case MCA_ARM_FAULT_JOINT_LIMIT: return "JOINT_LIMIT";
-    case MCA_ARM_FAULT_VELOCITY: return "VELOCITY";
-    case MCA_ARM_FAULT_INJECTED: return "INJECTED";
-    case MCA_ARM_FAULT_BUS: return "BUS";
-    default: return "UNKNOWN";
+    case MCA_ARM_FAULT_NONE:
+        return "NONE";
+    case MCA_ARM_FAULT_WATCHDOG:
+        return "WATCHDOG";
+    case MCA_ARM_FAULT_JOINT_LIMIT:
+        return "JOINT_LIMIT";
+    case MCA_ARM_FAULT_VELOCITY:
+        return "VELOCITY";
+    case MCA_ARM_FAULT_INJECTED:
+        return "INJECTED";
+    case MCA_ARM_FAULT_BUS:
+        return "BUS";
+    default:
+        return "UNKNOWN";
     }
 }

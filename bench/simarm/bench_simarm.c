@@ -15,15 +15,13 @@
 #define N_BATCH 41
 #define ON (MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE)
 
-static double now_ns(void)
-{
+static double now_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
+static int cmp_double(const void *a, const void *b) {
     const double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
@@ -31,8 +29,7 @@ static int cmp_double(const void *a, const void *b)
 static volatile double sink;
 static mca_sim_arm_t fw;
 
-static void config(mca_sim_arm_config_t *cfg)
-{
+static void config(mca_sim_arm_config_t *cfg) {
     mca_sim_arm_config_default(cfg, MCA_MAX_DOF);
     for (int j = 0; j < MCA_MAX_DOF; j++) {
         cfg->lower[j] = -3.0;
@@ -46,8 +43,7 @@ static void config(mca_sim_arm_config_t *cfg)
 }
 
 /* A slow sine so the arm keeps moving within its limits for the whole run. */
-static void fill(mca_arm_command_t *c, uint32_t id)
-{
+static void fill(mca_arm_command_t *c, uint32_t id) {
     c->frame_id = id;
     c->n = MCA_MAX_DOF;
     for (int j = 0; j < MCA_MAX_DOF; j++) {
@@ -56,8 +52,7 @@ static void fill(mca_arm_command_t *c, uint32_t id)
     }
 }
 
-int main(void)
-{
+int main(void) {
     mca_sim_arm_config_t cfg;
     config(&cfg);
     char err[256];

@@ -12,8 +12,7 @@
 
 #define SIM_PI 3.14159265358979323846
 
-void mca_sim_arm_config_default(mca_sim_arm_config_t *cfg, int n)
-{
+void mca_sim_arm_config_default(mca_sim_arm_config_t *cfg, int n) {
     if (!cfg) {
         return;
     }
@@ -33,8 +32,7 @@ void mca_sim_arm_config_default(mca_sim_arm_config_t *cfg, int n)
     cfg->watchdog_cycles = 3;
 }
 
-int mca_sim_arm_config_from_chain(mca_sim_arm_config_t *cfg, const mca_chain_t *chain)
-{
+int mca_sim_arm_config_from_chain(mca_sim_arm_config_t *cfg, const mca_chain_t *chain) {
     if (!cfg || !chain || chain->dof < 1 || chain->dof > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }
@@ -57,8 +55,7 @@ int mca_sim_arm_config_from_chain(mca_sim_arm_config_t *cfg, const mca_chain_t *
 }
 
 /* Format one error message; returns rc so checks read as `return fail(...)`. */
-static int fail(char *err, size_t errlen, int rc, const char *field, int j, double val, const char *why)
-{
+static int fail(char *err, size_t errlen, int rc, const char *field, int j, double val, const char *why) {
     if (err && errlen) {
         if (j >= 0) {
             snprintf(err, errlen, "sim arm config: %s[%d] = %g: %s", field, j, val, why);
@@ -69,18 +66,15 @@ static int fail(char *err, size_t errlen, int rc, const char *field, int j, doub
     return rc;
 }
 
-static int pos_finite(double x)
-{
+static int pos_finite(double x) {
     return isfinite(x) && x > 0;
 }
 
-static int nonneg_finite(double x)
-{
+static int nonneg_finite(double x) {
     return isfinite(x) && x >= 0;
 }
 
-int mca_sim_arm_config_check(const mca_sim_arm_config_t *cfg, char *err, size_t errlen)
-{
+int mca_sim_arm_config_check(const mca_sim_arm_config_t *cfg, char *err, size_t errlen) {
     if (!cfg) {
         return fail(err, errlen, MCA_EINVAL, "config", -1, 0, "NULL");
     }
@@ -167,8 +161,7 @@ int mca_sim_arm_config_check(const mca_sim_arm_config_t *cfg, char *err, size_t 
     return MCA_OK;
 }
 
-int mca_sim_arm_init(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg, char *err, size_t errlen)
-{
+int mca_sim_arm_init(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg, char *err, size_t errlen) {
     if (!arm) {
         return fail(err, errlen, MCA_EINVAL, "arm", -1, 0, "NULL");
     }
@@ -187,8 +180,7 @@ int mca_sim_arm_init(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg, char *
 }
 
 /* splitmix64 (Steele, Lea, Flood 2014): full-period, seedable, no hidden global state. */
-static uint64_t splitmix64(uint64_t *s)
-{
+static uint64_t splitmix64(uint64_t *s) {
     uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -196,22 +188,19 @@ static uint64_t splitmix64(uint64_t *s)
 }
 
 /* Standard normal by Box-Muller; u1 in (0, 1] so log() is finite. */
-static double gauss(uint64_t *s)
-{
+static double gauss(uint64_t *s) {
     double u1 = ((double)(splitmix64(s) >> 11) + 1.0) * (1.0 / 9007199254740992.0);
     double u2 = (double)(splitmix64(s) >> 11) * (1.0 / 9007199254740992.0);
     return sqrt(-2.0 * log(u1)) * cos(2.0 * SIM_PI * u2);
 }
 
-static double clampd(double x, double lo, double hi)
-{
+static double clampd(double x, double lo, double hi) {
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
 /* Step towards target, at most lim; lands exactly on the target when within lim (1e-9 relative slack
  * so that accumulated rounding does not leave a 1e-17 rad/s residue for one more cycle). */
-static double step_to(double v0, double target, double lim)
-{
+static double step_to(double v0, double target, double lim) {
     double dv = target - v0;
     if (fabs(dv) <= lim * (1.0 + 1e-9)) {
         return target;
@@ -221,8 +210,7 @@ static double step_to(double v0, double target, double lim)
 
 /* One cycle of an acceleration-limited velocity: dec while |v| shrinks towards 0, acc while it grows;
  * a sign change spends |v0|/dec of the cycle reaching 0 and the rest accelerating. */
-static double rate_limit(double v0, double target, double acc, double dec, double dt)
-{
+static double rate_limit(double v0, double target, double acc, double dec, double dt) {
     double dv = target - v0;
     if (dv == 0.0) {
         return target;
@@ -242,21 +230,24 @@ static double rate_limit(double v0, double target, double acc, double dec, doubl
 }
 
 /* Latch the first fault cause; a moving arm brakes first, a standing one faults at once. */
-static void raise_fault(mca_sim_arm_t *arm, uint16_t code)
-{
+static void raise_fault(mca_sim_arm_t *arm, uint16_t code) {
     if (arm->fault_code == MCA_ARM_FAULT_NONE) {
         arm->fault_code = code;
     }
     switch (arm->state) {
-    case MCA_ARM_SERVOING: arm->state = MCA_ARM_BRAKING; break;
+    case MCA_ARM_SERVOING:
+        arm->state = MCA_ARM_BRAKING;
+        break;
     case MCA_ARM_BRAKING:
-    case MCA_ARM_FAULT: break;
-    default: arm->state = MCA_ARM_FAULT; break;
+    case MCA_ARM_FAULT:
+        break;
+    default:
+        arm->state = MCA_ARM_FAULT;
+        break;
     }
 }
 
-static int all_flags(const mca_arm_command_t *c, int n, uint8_t mask)
-{
+static int all_flags(const mca_arm_command_t *c, int n, uint8_t mask) {
     for (int j = 0; j < n; j++) {
         if ((c->flags[j] & mask) != mask) {
             return 0;
@@ -265,8 +256,7 @@ static int all_flags(const mca_arm_command_t *c, int n, uint8_t mask)
     return 1;
 }
 
-static int any_flag(const mca_arm_command_t *c, int n, uint8_t mask)
-{
+static int any_flag(const mca_arm_command_t *c, int n, uint8_t mask) {
     for (int j = 0; j < n; j++) {
         if (c->flags[j] & mask) {
             return 1;
@@ -276,8 +266,7 @@ static int any_flag(const mca_arm_command_t *c, int n, uint8_t mask)
 }
 
 /* Take the setpoint of an accepted command (saturated); may raise FAULT_VELOCITY. */
-static void take_setpoint(mca_sim_arm_t *arm, const mca_arm_command_t *c)
-{
+static void take_setpoint(mca_sim_arm_t *arm, const mca_arm_command_t *c) {
     const mca_sim_arm_config_t *cfg = &arm->cfg;
     int over = 0;
     for (int j = 0; j < cfg->n; j++) {
@@ -298,8 +287,7 @@ static void take_setpoint(mca_sim_arm_t *arm, const mca_arm_command_t *c)
     }
 }
 
-static void make_feedback(mca_sim_arm_t *arm, mca_arm_feedback_t *fb, int noisy)
-{
+static void make_feedback(mca_sim_arm_t *arm, mca_arm_feedback_t *fb, int noisy) {
     const mca_sim_arm_config_t *cfg = &arm->cfg;
     memset(fb, 0, sizeof(*fb));
     fb->frame_id = arm->last_frame_id;
@@ -330,8 +318,7 @@ static void make_feedback(mca_sim_arm_t *arm, mca_arm_feedback_t *fb, int noisy)
     }
 }
 
-void mca_sim_arm_snapshot(const mca_sim_arm_t *arm, mca_arm_feedback_t *fb)
-{
+void mca_sim_arm_snapshot(const mca_sim_arm_t *arm, mca_arm_feedback_t *fb) {
     if (!arm || !fb) {
         return;
     }
@@ -339,8 +326,7 @@ void mca_sim_arm_snapshot(const mca_sim_arm_t *arm, mca_arm_feedback_t *fb)
     make_feedback((mca_sim_arm_t *)arm, fb, 0);
 }
 
-int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double dt, mca_arm_feedback_t *fb)
-{
+int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double dt, mca_arm_feedback_t *fb) {
     if (!arm || !fb || !isfinite(dt) || dt <= 0) {
         return MCA_EINVAL;
     }
@@ -362,10 +348,17 @@ int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double d
                 raise_fault(arm, MCA_ARM_FAULT_INJECTED);
             }
             break;
-        case MCA_SIM_INJ_FREEZE: freeze |= active; break;
-        case MCA_SIM_INJ_SILENT: silent |= active; break;
-        case MCA_SIM_INJ_DROP_RX: drop |= active; break;
-        default: break;
+        case MCA_SIM_INJ_FREEZE:
+            freeze |= active;
+            break;
+        case MCA_SIM_INJ_SILENT:
+            silent |= active;
+            break;
+        case MCA_SIM_INJ_DROP_RX:
+            drop |= active;
+            break;
+        default:
+            break;
         }
     }
 
@@ -446,7 +439,8 @@ int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double d
                 memset(arm->fault_flags, 0, sizeof(arm->fault_flags));
             }
             break;
-        default: break;
+        default:
+            break;
         }
     }
 
@@ -512,5 +506,35 @@ int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double d
     }
     *fb = arm->last_fb;
     arm->cnt.feedback_sent++;
+    return MCA_OK;
+}
+
+int mca_sim_arm_inject_now(mca_sim_arm_t *arm, int kind, uint64_t duration, int joint) {
+    if (!arm || kind < MCA_SIM_INJ_ACTUATOR || kind > MCA_SIM_INJ_DROP_RX) {
+        return MCA_EINVAL;
+    }
+    if (kind == MCA_SIM_INJ_ACTUATOR && (joint < 0 || joint >= arm->cfg.n)) {
+        return MCA_EINVAL;
+    }
+    mca_sim_arm_config_t *cfg = &arm->cfg;
+    /* reuse a slot whose injection is over, so a long run can inject repeatedly */
+    int slot = -1;
+    for (int i = 0; i < cfg->n_inject && slot < 0; i++) {
+        const mca_sim_inject_t *in = &cfg->inject[i];
+        int over = in->kind == MCA_SIM_INJ_ACTUATOR
+                       ? in->at_cycle < arm->cycle
+                       : (in->duration != 0 && in->at_cycle + in->duration <= arm->cycle);
+        if (over) {
+            slot = i;
+        }
+    }
+    if (slot < 0) {
+        if (cfg->n_inject >= MCA_SIM_MAX_INJECT) {
+            return MCA_ERANGE;
+        }
+        slot = cfg->n_inject++;
+    }
+    cfg->inject[slot] =
+        (mca_sim_inject_t){.kind = kind, .at_cycle = arm->cycle, .duration = duration, .joint = joint};
     return MCA_OK;
 }

@@ -13,16 +13,14 @@ typedef struct sim_ctx {
     mca_arm_stats_t st;
 } sim_ctx_t;
 
-static void sim_cycle(sim_ctx_t *c, const mca_arm_command_t *cmd)
-{
+static void sim_cycle(sim_ctx_t *c, const mca_arm_command_t *cmd) {
     if (mca_sim_arm_cycle(&c->fw, cmd, c->fw.cfg.dt, &c->fb) == MCA_OK) {
         c->fresh = 1;
         c->st.feedback_received++;
     }
 }
 
-static int sim_read(void *ctx, mca_arm_feedback_t *fb)
-{
+static int sim_read(void *ctx, mca_arm_feedback_t *fb) {
     sim_ctx_t *c = ctx;
     if (!c->fresh) {
         return MCA_EAGAIN;
@@ -32,8 +30,7 @@ static int sim_read(void *ctx, mca_arm_feedback_t *fb)
     return MCA_OK;
 }
 
-static int sim_write(void *ctx, const mca_arm_command_t *cmd)
-{
+static int sim_write(void *ctx, const mca_arm_command_t *cmd) {
     sim_ctx_t *c = ctx;
     if (cmd->n != c->fw.cfg.n) {
         return MCA_EINVAL;
@@ -43,14 +40,12 @@ static int sim_write(void *ctx, const mca_arm_command_t *cmd)
     return MCA_OK;
 }
 
-static int sim_stats(void *ctx, mca_arm_stats_t *st)
-{
+static int sim_stats(void *ctx, mca_arm_stats_t *st) {
     *st = ((sim_ctx_t *)ctx)->st;
     return MCA_OK;
 }
 
-static void sim_close(void *ctx)
-{
+static void sim_close(void *ctx) {
     free(ctx);
 }
 
@@ -62,8 +57,7 @@ static const mca_arm_ops_t sim_ops = {
     .close = sim_close,
 };
 
-int mca_sim_backend_open(mca_arm_t **arm, const mca_sim_arm_config_t *cfg, char *err, size_t errlen)
-{
+int mca_sim_backend_open(mca_arm_t **arm, const mca_sim_arm_config_t *cfg, char *err, size_t errlen) {
     if (!arm) {
         return MCA_EINVAL;
     }
@@ -83,14 +77,12 @@ int mca_sim_backend_open(mca_arm_t **arm, const mca_sim_arm_config_t *cfg, char 
     return rc;
 }
 
-mca_sim_arm_t *mca_sim_backend_firmware(mca_arm_t *arm)
-{
+mca_sim_arm_t *mca_sim_backend_firmware(mca_arm_t *arm) {
     sim_ctx_t *c = mca_arm_backend_ctx(arm, &sim_ops);
     return c ? &c->fw : NULL;
 }
 
-int mca_sim_backend_idle(mca_arm_t *arm, int cycles)
-{
+int mca_sim_backend_idle(mca_arm_t *arm, int cycles) {
     sim_ctx_t *c = mca_arm_backend_ctx(arm, &sim_ops);
     if (!c || cycles < 0) {
         return MCA_EINVAL;

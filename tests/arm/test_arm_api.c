@@ -27,8 +27,7 @@ typedef struct fake {
     mca_arm_command_t last;
 } fake_t;
 
-static int fake_read(void *ctx, mca_arm_feedback_t *fb)
-{
+static int fake_read(void *ctx, mca_arm_feedback_t *fb) {
     fake_t *f = ctx;
     f->reads++;
     if (f->read_rc == MCA_OK) {
@@ -39,23 +38,21 @@ static int fake_read(void *ctx, mca_arm_feedback_t *fb)
     return f->read_rc;
 }
 
-static int fake_write(void *ctx, const mca_arm_command_t *cmd)
-{
+static int fake_write(void *ctx, const mca_arm_command_t *cmd) {
     fake_t *f = ctx;
     f->writes++;
     f->last = *cmd;
     return MCA_OK;
 }
 
-static void fake_close(void *ctx)
-{
+static void fake_close(void *ctx) {
     ((fake_t *)ctx)->closed++;
 }
 
-static const mca_arm_ops_t fake_ops = {.name = "fake", .read = fake_read, .write = fake_write, .close = fake_close};
+static const mca_arm_ops_t fake_ops = {
+    .name = "fake", .read = fake_read, .write = fake_write, .close = fake_close};
 
-static mca_arm_command_t cmd_all(uint32_t id, int n, uint8_t flags, double v)
-{
+static mca_arm_command_t cmd_all(uint32_t id, int n, uint8_t flags, double v) {
     mca_arm_command_t c;
     memset(&c, 0, sizeof(c));
     c.frame_id = id;
@@ -67,8 +64,7 @@ static mca_arm_command_t cmd_all(uint32_t id, int n, uint8_t flags, double v)
     return c;
 }
 
-static void test_generic_layer(void **state)
-{
+static void test_generic_layer(void **state) {
     (void)state;
     fake_t f = {0};
     mca_arm_t *arm = NULL;
@@ -126,8 +122,7 @@ static void test_generic_layer(void **state)
 }
 
 /* ---- sim backend ---- */
-static mca_sim_arm_config_t sim_cfg(int n)
-{
+static mca_sim_arm_config_t sim_cfg(int n) {
     mca_sim_arm_config_t cfg;
     mca_sim_arm_config_default(&cfg, n);
     for (int j = 0; j < n; j++) {
@@ -138,8 +133,7 @@ static mca_sim_arm_config_t sim_cfg(int n)
     return cfg;
 }
 
-static void test_sim_open_errors(void **state)
-{
+static void test_sim_open_errors(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg = sim_cfg(2);
     cfg.dt = -1;
@@ -152,8 +146,7 @@ static void test_sim_open_errors(void **state)
     assert_int_equal(mca_sim_backend_open(NULL, &cfg, err, sizeof(err)), MCA_EINVAL);
 }
 
-static void test_sim_read_write_eagain(void **state)
-{
+static void test_sim_read_write_eagain(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg = sim_cfg(3);
     mca_arm_t *arm = NULL;
@@ -204,8 +197,7 @@ static void test_sim_read_write_eagain(void **state)
 
 /* A controller that stops writing: the watchdog brakes the arm, read reports MCA_EFAULT, a
  * clear-fault command brings it back to READY. */
-static void test_sim_watchdog_through_api(void **state)
-{
+static void test_sim_watchdog_through_api(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg = sim_cfg(2);
     mca_arm_t *arm = NULL;
@@ -240,8 +232,7 @@ static void test_sim_watchdog_through_api(void **state)
 }
 
 /* Silenced firmware: writes succeed, reads see nothing, then feedback resumes. */
-static void test_sim_silent_eagain(void **state)
-{
+static void test_sim_silent_eagain(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg = sim_cfg(1);
     cfg.n_inject = 1;
@@ -266,10 +257,44 @@ static void test_sim_silent_eagain(void **state)
     mca_arm_close(arm);
 }
 
+/* The backend adds nothing to the physics: the same commands give bit-identical feedback to the
+ * firmware model driven directly (what mca-armsim runs behind CAN). */
+static mca_sim_arm_t g_fw;
+
+static void test_sim_backend_matches_firmware(void **state) {
+    (void)state;
+    mca_sim_arm_config_t cfg = sim_cfg(4);
+    cfg.lag_tau = 0.02;
+    cfg.latency_cycles = 3;
+    cfg.noise_pos = 1e-3;
+    cfg.noise_vel = 1e-2;
+    cfg.seed = 99;
+    cfg.n_inject = 1;
+    cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_DROP_RX, .at_cycle = 400, .duration = 10};
+    mca_arm_t *arm = NULL;
+    assert_int_equal(mca_sim_backend_open(&arm, &cfg, NULL, 0), MCA_OK);
+    assert_int_equal(mca_sim_arm_init(&g_fw, &cfg, NULL, 0), MCA_OK);
+    mca_arm_feedback_t a, b;
+    assert_int_equal(mca_arm_read(arm, &a), MCA_OK);
+    for (uint32_t id = 1; id <= 1000; id++) {
+        mca_arm_command_t c = cmd_all(id, 4, ON, 0);
+        for (int j = 0; j < 4; j++) {
+            c.velocity[j] = 0.7 * sin(0.01 * id + j);
+        }
+        assert_int_equal(mca_arm_write(arm, &c), MCA_OK);
+        int ra = mca_arm_read(arm, &a);
+        int rb = mca_sim_arm_cycle(&g_fw, &c, cfg.dt, &b);
+        assert_int_equal(ra == MCA_EFAULT ? MCA_OK : ra, rb);
+        assert_fb_equal(&a, &b);
+    }
+    assert_int_equal(b.state, MCA_ARM_FAULT); /* the dropped commands tripped the watchdog */
+    assert_int_equal(b.fault_code, MCA_ARM_FAULT_WATCHDOG);
+    mca_arm_close(arm);
+}
+
 /* The intended use: read, P control on position, write, every 1 ms; the arm reaches the target
  * within the time the velocity and acceleration limits allow. */
-static void test_sim_closed_loop(void **state)
-{
+static void test_sim_closed_loop(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg = sim_cfg(2);
     cfg.lag_tau = 0.01;
@@ -298,14 +323,11 @@ static void test_sim_closed_loop(void **state)
     mca_arm_close(arm);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_generic_layer),
-        cmocka_unit_test(test_sim_open_errors),
-        cmocka_unit_test(test_sim_read_write_eagain),
-        cmocka_unit_test(test_sim_watchdog_through_api),
-        cmocka_unit_test(test_sim_silent_eagain),
+        cmocka_unit_test(test_generic_layer),         cmocka_unit_test(test_sim_open_errors),
+        cmocka_unit_test(test_sim_read_write_eagain), cmocka_unit_test(test_sim_watchdog_through_api),
+        cmocka_unit_test(test_sim_silent_eagain),     cmocka_unit_test(test_sim_backend_matches_firmware),
         cmocka_unit_test(test_sim_closed_loop),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -22,8 +22,7 @@
 static mca_sim_arm_t g_arm; /* large (delay line): keep off the test stack */
 static mca_sim_arm_t g_arm2;
 
-static void base_cfg(mca_sim_arm_config_t *c, int n)
-{
+static void base_cfg(mca_sim_arm_config_t *c, int n) {
     mca_sim_arm_config_default(c, n);
     for (int j = 0; j < n; j++) {
         c->vel_limit[j] = 1.0;
@@ -32,8 +31,7 @@ static void base_cfg(mca_sim_arm_config_t *c, int n)
     }
 }
 
-static mca_arm_command_t cmd_all(uint32_t id, int n, uint8_t flags, double v)
-{
+static mca_arm_command_t cmd_all(uint32_t id, int n, uint8_t flags, double v) {
     mca_arm_command_t c;
     memset(&c, 0, sizeof(c));
     c.frame_id = id;
@@ -45,8 +43,7 @@ static mca_arm_command_t cmd_all(uint32_t id, int n, uint8_t flags, double v)
     return c;
 }
 
-static void init_arm(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg)
-{
+static void init_arm(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg) {
     char err[160];
     int rc = mca_sim_arm_init(arm, cfg, err, sizeof(err));
     if (rc != MCA_OK) {
@@ -55,24 +52,21 @@ static void init_arm(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg)
 }
 
 /* One cycle with a servo command of velocity v on every joint. */
-static mca_arm_feedback_t step(mca_sim_arm_t *arm, uint32_t id, double v)
-{
+static mca_arm_feedback_t step(mca_sim_arm_t *arm, uint32_t id, double v) {
     mca_arm_command_t c = cmd_all(id, arm->cfg.n, ON, v);
     mca_arm_feedback_t fb;
     assert_int_equal(mca_sim_arm_cycle(arm, &c, DT, &fb), MCA_OK);
     return fb;
 }
 
-static mca_arm_feedback_t idle(mca_sim_arm_t *arm)
-{
+static mca_arm_feedback_t idle(mca_sim_arm_t *arm) {
     mca_arm_feedback_t fb;
     assert_int_equal(mca_sim_arm_cycle(arm, NULL, DT, &fb), MCA_OK);
     return fb;
 }
 
 /* Once at speed, position grows by exactly v * elapsed time. */
-static void test_constant_velocity_linear(void **state)
-{
+static void test_constant_velocity_linear(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 2);
@@ -93,8 +87,7 @@ static void test_constant_velocity_linear(void **state)
 }
 
 /* From rest with acceleration a to speed V: q = a t^2 / 2 while t <= V/a, then linear. */
-static void test_acceleration_ramp_closed_form(void **state)
-{
+static void test_acceleration_ramp_closed_form(void **state) {
     (void)state;
     const double a = 2.0, V = 0.5, T = V / a; /* 250 cycles: the ramp ends on a cycle boundary */
     mca_sim_arm_config_t cfg;
@@ -116,8 +109,7 @@ static void test_acceleration_ramp_closed_form(void **state)
 }
 
 /* Ramp end inside a cycle: the discrete model stays within a dt^2 bound of the continuous formula. */
-static void test_acceleration_ramp_off_grid(void **state)
-{
+static void test_acceleration_ramp_off_grid(void **state) {
     (void)state;
     const double a = 3.0, V = 0.5, T = V / a; /* 166.67 cycles */
     mca_sim_arm_config_t cfg;
@@ -133,8 +125,7 @@ static void test_acceleration_ramp_off_grid(void **state)
 }
 
 /* Slowing uses dec, speeding up acc, and a reversal spends |v|/dec to zero then accelerates. */
-static void test_deceleration_and_reversal(void **state)
-{
+static void test_deceleration_and_reversal(void **state) {
     (void)state;
     const double acc = 2.0, dec = 4.0, V = 0.5;
     mca_sim_arm_config_t cfg;
@@ -165,8 +156,7 @@ static void test_deceleration_and_reversal(void **state)
 }
 
 /* Commands above vel_limit are saturated (flag, no fault) or, with a fault ratio, fault the arm. */
-static void test_velocity_limit(void **state)
-{
+static void test_velocity_limit(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 2);
@@ -198,8 +188,7 @@ static void test_velocity_limit(void **state)
 }
 
 /* First-order lag: sampled step response u (1 - exp(-t / T)). */
-static void test_lag_step_response(void **state)
-{
+static void test_lag_step_response(void **state) {
     (void)state;
     const double tau = 0.05, u = 0.6;
     mca_sim_arm_config_t cfg;
@@ -215,8 +204,7 @@ static void test_lag_step_response(void **state)
 }
 
 /* Transport latency of k cycles shifts the whole response by exactly k cycles. */
-static void run_profile(mca_sim_arm_t *arm, double *v, uint32_t *ids, int cycles)
-{
+static void run_profile(mca_sim_arm_t *arm, double *v, uint32_t *ids, int cycles) {
     for (int k = 0; k < cycles; k++) {
         double u = k < 20 ? 0.1 : (k < 60 ? 0.8 : -0.3);
         mca_arm_feedback_t fb = step(arm, (uint32_t)(k + 1), u);
@@ -225,8 +213,7 @@ static void run_profile(mca_sim_arm_t *arm, double *v, uint32_t *ids, int cycles
     }
 }
 
-static void test_latency_exact_shift(void **state)
-{
+static void test_latency_exact_shift(void **state) {
     (void)state;
     enum { N = 150, L = 7 };
     static double v0[N], vL[N];
@@ -257,8 +244,7 @@ static void test_latency_exact_shift(void **state)
 }
 
 /* Noise: same seed -> same sequence; other seed -> different; statistics match sigma; truth clean. */
-static void test_noise_deterministic(void **state)
-{
+static void test_noise_deterministic(void **state) {
     (void)state;
     enum { N = 20000 };
     const double sp = 0.01, sv = 0.002;
@@ -304,8 +290,7 @@ static void test_noise_deterministic(void **state)
 }
 
 /* Position limits: clamp exactly at the limit, flag the joint, brake the others, FAULT JOINT_LIMIT. */
-static void test_position_limits(void **state)
-{
+static void test_position_limits(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 2);
@@ -350,8 +335,7 @@ static void test_position_limits(void **state)
 }
 
 /* Watchdog: braking starts in exactly the watchdog_cycles-th missed cycle, at exactly dec. */
-static void check_watchdog(int W)
-{
+static void check_watchdog(int W) {
     const double V = 0.8, dec = 4.0;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 3);
@@ -410,8 +394,7 @@ static void check_watchdog(int W)
     assert_int_equal(fb.state, MCA_ARM_SERVOING);
 }
 
-static void test_watchdog_braking(void **state)
-{
+static void test_watchdog_braking(void **state) {
     (void)state;
     check_watchdog(3); /* PA-10 */
     check_watchdog(1);
@@ -419,8 +402,7 @@ static void test_watchdog_braking(void **state)
 }
 
 /* Stopping distance after a watchdog trip: (W - 1) held cycles + the braking ramp. */
-static void test_watchdog_stop_distance(void **state)
-{
+static void test_watchdog_stop_distance(void **state) {
     (void)state;
     const double V = 0.6, dec = 3.0;
     const int W = 3;
@@ -441,8 +423,7 @@ static void test_watchdog_stop_distance(void **state)
 }
 
 /* Repeated or older frame ids are not applied (and count as missed cycles for the watchdog). */
-static void test_stale_frame_ids(void **state)
-{
+static void test_stale_frame_ids(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 1);
@@ -481,8 +462,7 @@ static void test_stale_frame_ids(void **state)
 }
 
 /* INIT -> READY after init_cycles; READY needs both flags on every actuator; requested stop -> READY. */
-static void test_state_machine(void **state)
-{
+static void test_state_machine(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 2);
@@ -526,8 +506,7 @@ static void test_state_machine(void **state)
 }
 
 /* Torque model: inertia * acceleration + damping * velocity. */
-static void test_torque_model(void **state)
-{
+static void test_torque_model(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 1);
@@ -543,8 +522,7 @@ static void test_torque_model(void **state)
 }
 
 /* Fault injection: actuator fault, frozen feedback, silent firmware, dropped commands. */
-static void test_fault_injection(void **state)
-{
+static void test_fault_injection(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     base_cfg(&cfg, 2);
@@ -576,7 +554,7 @@ static void test_fault_injection(void **state)
     }
     for (int k = 0; k < 5; k++) {
         fb = step(&g_arm, id++, 0.3);
-        assert_memory_equal(&fb, &frozen, sizeof(fb));
+        assert_fb_equal(&fb, &frozen);
     }
     fb = step(&g_arm, id++, 0.3);
     assert_int_equal(fb.frame_id, id - 1);
@@ -613,8 +591,48 @@ static void test_fault_injection(void **state)
     assert_int_equal(g_arm.cnt.cmd_dropped, 3);
 }
 
-static void test_config_errors(void **state)
-{
+/* Injections scheduled at run time start with the next cycle; finished slots are reused. */
+static void test_inject_now(void **state) {
+    (void)state;
+    mca_sim_arm_config_t cfg;
+    base_cfg(&cfg, 2);
+    init_arm(&g_arm, &cfg);
+    mca_arm_feedback_t fb;
+    uint32_t id = 1;
+    for (; id <= 5; id++) {
+        step(&g_arm, id, 0.2);
+    }
+    assert_int_equal(mca_sim_arm_inject_now(NULL, MCA_SIM_INJ_SILENT, 1, 0), MCA_EINVAL);
+    assert_int_equal(mca_sim_arm_inject_now(&g_arm, 0, 1, 0), MCA_EINVAL);
+    assert_int_equal(mca_sim_arm_inject_now(&g_arm, MCA_SIM_INJ_ACTUATOR, 0, 2), MCA_EINVAL);
+    assert_int_equal(mca_sim_arm_inject_now(&g_arm, MCA_SIM_INJ_SILENT, 2, 0), MCA_OK);
+    for (int k = 0; k < 2; k++) {
+        mca_arm_command_t c = cmd_all(id++, 2, ON, 0.2);
+        assert_int_equal(mca_sim_arm_cycle(&g_arm, &c, DT, &fb), MCA_EAGAIN);
+    }
+    fb = step(&g_arm, id++, 0.2);
+    assert_int_equal(fb.state, MCA_ARM_SERVOING);
+    /* the finished SILENT slot is reused: the table does not grow */
+    assert_int_equal(mca_sim_arm_inject_now(&g_arm, MCA_SIM_INJ_ACTUATOR, 0, 1), MCA_OK);
+    assert_int_equal(g_arm.cfg.n_inject, 1);
+    fb = step(&g_arm, id++, 0.2);
+    assert_int_equal(fb.state, MCA_ARM_FAULT); /* dec 1e9: stops within the cycle */
+    assert_int_equal(fb.fault_code, MCA_ARM_FAULT_INJECTED);
+    assert_true(fb.fault_flags[1] & MCA_ACT_FLT_ACTUATOR);
+    /* the ACTUATOR injection has fired: its slot is reused too */
+    assert_int_equal(mca_sim_arm_inject_now(&g_arm, MCA_SIM_INJ_FREEZE, 0, 0), MCA_OK);
+    assert_int_equal(g_arm.cfg.n_inject, 1);
+    for (int i = 1; i < MCA_SIM_MAX_INJECT; i++) { /* never-ending freezes fill the table */
+        assert_int_equal(mca_sim_arm_inject_now(&g_arm, MCA_SIM_INJ_FREEZE, 0, 0), MCA_OK);
+    }
+    assert_int_equal(g_arm.cfg.n_inject, MCA_SIM_MAX_INJECT);
+    assert_int_equal(mca_sim_arm_inject_now(&g_arm, MCA_SIM_INJ_FREEZE, 0, 0), MCA_ERANGE);
+    mca_arm_feedback_t frozen = fb;
+    fb = step(&g_arm, id++, 0.2);
+    assert_fb_equal(&fb, &frozen);
+}
+
+static void test_config_errors(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
     char err[160];
@@ -670,8 +688,7 @@ static void test_config_errors(void **state)
 }
 
 /* Limits from a URDF chain model (filled by hand: the loader is tested elsewhere). */
-static void test_config_from_chain(void **state)
-{
+static void test_config_from_chain(void **state) {
     (void)state;
     static mca_chain_t ch;
     memset(&ch, 0, sizeof(ch));
@@ -696,8 +713,7 @@ static void test_config_from_chain(void **state)
     assert_int_equal(mca_sim_arm_config_from_chain(&cfg, &ch), MCA_EINVAL);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_constant_velocity_linear),
         cmocka_unit_test(test_acceleration_ramp_closed_form),
@@ -714,6 +730,7 @@ int main(void)
         cmocka_unit_test(test_state_machine),
         cmocka_unit_test(test_torque_model),
         cmocka_unit_test(test_fault_injection),
+        cmocka_unit_test(test_inject_now),
         cmocka_unit_test(test_config_errors),
         cmocka_unit_test(test_config_from_chain),
     };

@@ -87,40 +87,40 @@ typedef struct mca_sim_inject {
 } mca_sim_inject_t;
 
 typedef struct mca_sim_arm_config {
-    int n;                           /**< joints, 1..MCA_MAX_DOF */
-    double lower[MCA_MAX_DOF];       /**< position limits [rad]; +-INFINITY = none */
+    int n;                     /**< joints, 1..MCA_MAX_DOF */
+    double lower[MCA_MAX_DOF]; /**< position limits [rad]; +-INFINITY = none */
     double upper[MCA_MAX_DOF];
-    double vel_limit[MCA_MAX_DOF];   /**< |v| limit [rad/s], > 0 */
-    double acc_limit[MCA_MAX_DOF];   /**< speeding up [rad/s^2], > 0 */
-    double dec_limit[MCA_MAX_DOF];   /**< slowing down and braking [rad/s^2], > 0 */
-    double inertia[MCA_MAX_DOF];     /**< torque model [kg m^2], >= 0 */
-    double damping[MCA_MAX_DOF];     /**< torque model [N m s/rad], >= 0 */
-    double q0[MCA_MAX_DOF];          /**< initial positions [rad], within the limits */
-    double dt;                       /**< cycle of the in-process backend [s] (default 0.001) */
-    double lag_tau;                  /**< first-order lag time constant [s]; 0 = none */
-    int latency_cycles;              /**< command transport delay, 0..MCA_SIM_MAX_LATENCY */
-    double noise_pos;                /**< measurement noise sigma [rad]; 0 = none */
-    double noise_vel;                /**< measurement noise sigma [rad/s]; 0 = none */
-    uint64_t seed;                   /**< noise generator seed */
-    int watchdog_cycles;             /**< missed cycles before braking, >= 1 (PA-10: 3) */
-    int init_cycles;                 /**< cycles spent in INIT before READY, >= 0 */
-    double vel_fault_ratio;          /**< |cmd| > ratio * vel_limit raises FAULT_VELOCITY; 0 = never
-                                          (commands are only saturated) */
-    int stamp_monotonic;             /**< 1: fb.stamp_ns = CLOCK_MONOTONIC; 0: virtual time k*dt */
-    int n_inject;                    /**< entries used in inject[] */
+    double vel_limit[MCA_MAX_DOF]; /**< |v| limit [rad/s], > 0 */
+    double acc_limit[MCA_MAX_DOF]; /**< speeding up [rad/s^2], > 0 */
+    double dec_limit[MCA_MAX_DOF]; /**< slowing down and braking [rad/s^2], > 0 */
+    double inertia[MCA_MAX_DOF];   /**< torque model [kg m^2], >= 0 */
+    double damping[MCA_MAX_DOF];   /**< torque model [N m s/rad], >= 0 */
+    double q0[MCA_MAX_DOF];        /**< initial positions [rad], within the limits */
+    double dt;                     /**< cycle of the in-process backend [s] (default 0.001) */
+    double lag_tau;                /**< first-order lag time constant [s]; 0 = none */
+    int latency_cycles;            /**< command transport delay, 0..MCA_SIM_MAX_LATENCY */
+    double noise_pos;              /**< measurement noise sigma [rad]; 0 = none */
+    double noise_vel;              /**< measurement noise sigma [rad/s]; 0 = none */
+    uint64_t seed;                 /**< noise generator seed */
+    int watchdog_cycles;           /**< missed cycles before braking, >= 1 (PA-10: 3) */
+    int init_cycles;               /**< cycles spent in INIT before READY, >= 0 */
+    double vel_fault_ratio;        /**< |cmd| > ratio * vel_limit raises FAULT_VELOCITY; 0 = never
+                                        (commands are only saturated) */
+    int stamp_monotonic;           /**< 1: fb.stamp_ns = CLOCK_MONOTONIC; 0: virtual time k*dt */
+    int n_inject;                  /**< entries used in inject[] */
     mca_sim_inject_t inject[MCA_SIM_MAX_INJECT];
 } mca_sim_arm_config_t;
 
 /** Firmware-side counters (only grow). */
 typedef struct mca_sim_arm_counters {
-    uint64_t cycles;            /**< mca_sim_arm_cycle() calls */
-    uint64_t cmd_received;      /**< non-NULL commands handed in */
-    uint64_t cmd_dropped;       /**< lost by MCA_SIM_INJ_DROP_RX */
-    uint64_t cmd_accepted;      /**< delivered, valid and fresh */
-    uint64_t cmd_stale;         /**< delivered with a stale or repeated frame id */
-    uint64_t cmd_invalid;       /**< delivered with a wrong n or a non-finite velocity */
+    uint64_t cycles;       /**< mca_sim_arm_cycle() calls */
+    uint64_t cmd_received; /**< non-NULL commands handed in */
+    uint64_t cmd_dropped;  /**< lost by MCA_SIM_INJ_DROP_RX */
+    uint64_t cmd_accepted; /**< delivered, valid and fresh */
+    uint64_t cmd_stale;    /**< delivered with a stale or repeated frame id */
+    uint64_t cmd_invalid;  /**< delivered with a wrong n or a non-finite velocity */
     uint64_t watchdog_trips;
-    uint64_t feedback_sent;     /**< cycles that produced feedback */
+    uint64_t feedback_sent; /**< cycles that produced feedback */
 } mca_sim_arm_counters_t;
 
 /** The simulated arm. Caller-provided storage; fields are read-only for users (q and v are the true,
@@ -128,19 +128,19 @@ typedef struct mca_sim_arm_counters {
 typedef struct mca_sim_arm {
     mca_sim_arm_config_t cfg;
     mca_arm_state_t state;
-    uint16_t fault_code;        /**< latched (FAULT) or pending (BRAKING) fault */
+    uint16_t fault_code; /**< latched (FAULT) or pending (BRAKING) fault */
     uint16_t fault_flags[MCA_MAX_DOF];
-    double q[MCA_MAX_DOF];      /**< true position [rad] */
-    double v[MCA_MAX_DOF];      /**< true velocity [rad/s] */
-    double r[MCA_MAX_DOF];      /**< lagged setpoint [rad/s] */
-    double u[MCA_MAX_DOF];      /**< held commanded setpoint [rad/s] (saturated) */
-    double tau[MCA_MAX_DOF];    /**< modelled torque [N m] */
-    uint64_t cycle;             /**< completed cycles */
-    uint32_t last_frame_id;     /**< newest accepted frame id */
-    int have_frame;             /**< 1 once a command was accepted */
-    int missed;                 /**< consecutive cycles without a valid command (SERVOING) */
-    uint64_t rng;               /**< splitmix64 state */
-    int64_t t_ns;               /**< virtual time: sum of dt [ns] */
+    double q[MCA_MAX_DOF];   /**< true position [rad] */
+    double v[MCA_MAX_DOF];   /**< true velocity [rad/s] */
+    double r[MCA_MAX_DOF];   /**< lagged setpoint [rad/s] */
+    double u[MCA_MAX_DOF];   /**< held commanded setpoint [rad/s] (saturated) */
+    double tau[MCA_MAX_DOF]; /**< modelled torque [N m] */
+    uint64_t cycle;          /**< completed cycles */
+    uint32_t last_frame_id;  /**< newest accepted frame id */
+    int have_frame;          /**< 1 once a command was accepted */
+    int missed;              /**< consecutive cycles without a valid command (SERVOING) */
+    uint64_t rng;            /**< splitmix64 state */
+    int64_t t_ns;            /**< virtual time: sum of dt [ns] */
     mca_sim_arm_counters_t cnt;
     /* transport delay line: slot (cycle % (latency + 1)) */
     mca_arm_command_t delay[MCA_SIM_MAX_LATENCY + 1];
@@ -186,6 +186,13 @@ int mca_sim_arm_init(mca_sim_arm_t *arm, const mca_sim_arm_config_t *cfg, char *
  * @retval MCA_EINVAL  NULL arm/fb or bad dt (nothing run)
  */
 int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double dt, mca_arm_feedback_t *fb);
+
+/**
+ * Schedule a fault injection starting with the next cycle (real-time safe; e.g. a daemon or demo
+ * command "fail this arm now"). Same meaning as a cfg.inject[] entry with at_cycle = arm->cycle.
+ * @retval MCA_OK, MCA_EINVAL (NULL, unknown kind, joint out of range), MCA_ERANGE (table full)
+ */
+int mca_sim_arm_inject_now(mca_sim_arm_t *arm, int kind, uint64_t duration, int joint);
 
 /** Noise-free feedback of the current state without running a cycle (e.g. the initial pose). */
 void mca_sim_arm_snapshot(const mca_sim_arm_t *arm, mca_arm_feedback_t *fb);
