@@ -554,13 +554,58 @@ static void test_arm_distances_known(void **state) {
     assert_true(fabs(out.a_to_b[0].d - (0.5 - 0.1)) <= 1e-12);
 }
 
+/* Two PA10+ (real URDF, real FK) standing straight up 1 m apart: every link lies on a vertical line, so
+ * the axis distance of links i, j is 1 when their height ranges overlap, else hypot(1, gap). */
+static void test_arm_distances_pa10_pair(void **state) {
+    (void)state;
+    mca_chain_t ca, cb;
+    mca_kin_t ka, kb;
+    mca_arm_distances_t out;
+    char err[256];
+    const char *urdf = MCA_ROBOTS_DIR "/pa10plus.urdf";
+    const double base_b[3] = {1.0, 0.0, 0.0}, yaw[3] = {0, 0, 2.0};
+    double q[MCA_MAX_DOF] = {0};
+    assert_int_equal(mca_chain_load_urdf(&ca, urdf, NULL, err, sizeof err), MCA_OK);
+    cb = ca;
+    mca_chain_set_base(&cb, base_b, yaw); /* yaw about its own vertical axis moves no link */
+    assert_int_equal(mca_fk(&ca, q, &ka), MCA_OK);
+    assert_int_equal(mca_fk(&cb, q, &kb), MCA_OK);
+    assert_int_equal(mca_arm_distances(&ca, &ka, &cb, &kb, MCA_DIST_CLOSED, &out), MCA_OK);
+    double gmin = INFINITY;
+    for (int i = 0; i <= ca.dof; i++) {
+        double amin = INFINITY;
+        for (int j = 0; j <= cb.dof; j++) {
+            double lo_a = fmin(ka.point[i][2], ka.point[i + 1][2]),
+                   hi_a = fmax(ka.point[i][2], ka.point[i + 1][2]);
+            double lo_b = fmin(kb.point[j][2], kb.point[j + 1][2]),
+                   hi_b = fmax(kb.point[j][2], kb.point[j + 1][2]);
+            double gap = fmax(0.0, fmax(lo_a - hi_b, lo_b - hi_a));
+            amin = fmin(amin, sqrt(1.0 + gap * gap) - ca.link_radius[i] - cb.link_radius[j]);
+        }
+        assert_true(fabs(out.a_to_b[i].d - amin) < 1e-12);
+        gmin = fmin(gmin, amin);
+    }
+    assert_true(fabs(out.min.d - gmin) < 1e-12);
+    assert_true(fabs(out.min.d_axis - 1.0) < 1e-12);
+    /* the direction P -> E is +x */
+    assert_true(fabs(out.min.e[0] - out.min.p[0] - 1.0) < 1e-12);
+    print_message("PA10+ pair 1 m apart: min surface distance %.6f m (links %d, %d)\n", out.min.d,
+                  out.min.link, out.min.other_link);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_closed_exact),           cmocka_unit_test(test_closed_rejects_bad_input),
-        cmocka_unit_test(test_paper_step1_cases),      cmocka_unit_test(test_closed_vs_brute),
-        cmocka_unit_test(test_lsdm_vs_closed),         cmocka_unit_test(test_lsdm_near_parallel_early_stop),
-        cmocka_unit_test(test_lower_bound_is_a_bound), cmocka_unit_test(test_arm_distances_known),
-        cmocka_unit_test(test_arm_distances_brute),    cmocka_unit_test(test_arm_distances_bad_input),
+        cmocka_unit_test(test_closed_exact),
+        cmocka_unit_test(test_closed_rejects_bad_input),
+        cmocka_unit_test(test_paper_step1_cases),
+        cmocka_unit_test(test_closed_vs_brute),
+        cmocka_unit_test(test_lsdm_vs_closed),
+        cmocka_unit_test(test_lsdm_near_parallel_early_stop),
+        cmocka_unit_test(test_lower_bound_is_a_bound),
+        cmocka_unit_test(test_arm_distances_known),
+        cmocka_unit_test(test_arm_distances_brute),
+        cmocka_unit_test(test_arm_distances_bad_input),
+        cmocka_unit_test(test_arm_distances_pa10_pair),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
