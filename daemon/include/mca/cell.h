@@ -1,0 +1,105 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/cell.h
+ * Cell configuration of the controller daemon `mcad` (config/cells/NAME.yaml, format in docs/daemon.md):
+ * the arms (model, base placement, initial joints, backend), the task (a scenario file and/or inline
+ * paths), the scheme and solver parameters, DDS and real-time settings.
+ *
+ * mca_cell_load() parses the file with libcyaml against a fixed schema and then checks the meaning
+ * (d1 < d2, files exist, q0 length = the URDF's joint count, backend known, period > 0, ...). Every
+ * error message starts "FILE:LINE: FIELD: reason" (LINE 0 when no line can be named), so an operator
+ * can go straight to the bad line. Nothing is commanded before the cell has loaded without error.
+ *
+ * Context: start-up only (allocates inside libcyaml and frees before returning, loads URDFs).
+ */
+#ifndef MCA_CELL_H
+#define MCA_CELL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mca/controller.h"
+#include "mca/limits.h"
+#include "mca/scenario.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mca_cell_backend {
+    MCA_CELL_BACKEND_SIM = 0,       /**< in-process simulated arm (mca/sim_backend.h) */
+    MCA_CELL_BACKEND_SOCKETCAN = 1, /**< SocketCAN CAN FD (mca/arm_can.h) */
+} mca_cell_backend_t;
+
+/** Hardware side of one arm (the model and path live in the cell's scenario). */
+typedef struct mca_cell_arm {
+    mca_cell_backend_t backend;
+    char interface[32];            /**< socketcan: "vcan0", "can0" */
+    uint32_t id_base;              /**< socketcan: the arm's CAN id block */
+    double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
+    /* sim backend model */
+    double sim_lag_tau;            /**< first-order velocity lag [s] */
+    int sim_latency_cycles;        /**< command transport delay [cycles] */
+    double sim_noise_pos;          /**< measurement noise sigma [rad] */
+} mca_cell_arm_t;
+
+/** DDS publishing. */
+typedef struct mca_cell_dds {
+    int enabled;
+    uint32_t domain;
+    char config[512];         /**< Cyclone XML (absolute), "" = CYCLONEDDS_URI / defaults */
+    uint32_t publish_divisor; /**< publish every Nth tick */
+} mca_cell_dds_t;
+
+/** Real-time settings. */
+typedef struct mca_cell_rt {
+    int64_t period_ns;        /**< loop period (1 ms) */
+    int priority;             /**< SCHED_FIFO priority 1..99; 0 = SCHED_OTHER */
+    int cpu;                  /**< CPU to pin the loop to, -1 = none */
+    int overrun_limit;        /**< consecutive overruns that are a fault */
+    int lost_feedback_cycles; /**< cycles without new feedback from an arm that are a fault */
+    int lock_memory;          /**< mlockall + pre-faulting */
+    int dma_latency;          /**< hold /dev/cpu_dma_latency at 0 while running */
+} mca_cell_rt_t;
+
+typedef struct mca_cell {
+    char name[64];
+    char source[512];              /**< file it was loaded from */
+    mca_scenario_t scn;            /**< task: arms' models, placements, q0, paths, duration, d1, d2, ... */
+    mca_scheme_kind_t scheme;
+    mca_cell_arm_t arm[MCA_MAX_ARMS];
+    /* solver overrides (< 0 / 0: the controller's default) */
+    int pdnn_max_steps;
+    double pdnn_tol;
+    double eq_tol;
+    double fault_residual;
+    mca_cell_dds_t dds;
+    mca_cell_rt_t rt;
+    double stop_after;             /**< [s] of running after which the daemon stops by itself; 0 = never */
+    uint64_t debug_stall_after_ticks; /**< test hook: the loop stalls after this many ticks; 0 = never */
+} mca_cell_t;
+
+/**
+ * Load and check a cell file; also loads every arm's URDF to check q0 against the joint count.
+ * @param[out] cell  filled on success (unchanged on error); large, keep it off small stacks
+ * @param[out] err   "FILE:LINE: FIELD: reason"
+ * @retval MCA_OK
+ * @retval MCA_ENOENT  cell, scenario, URDF or DDS config file missing
+ * @retval MCA_EPARSE  YAML syntax, wrong type, unknown key, missing required field
+ * @retval MCA_ERANGE  a value out of range (d1 >= d2, period <= 0, priority, DOF mismatch, ...)
+ * @retval MCA_EINVAL  NULL argument
+ */
+int mca_cell_load(const char *path, mca_cell_t *cell, char *err, size_t errlen);
+
+/**
+ * Controller configuration of a loaded cell (loads URDFs: start-up only).
+ * @retval MCA_OK or the codes of mca_controller_config_from_scenario()
+ */
+int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err, size_t errlen);
+
+/** "sim" / "socketcan". */
+const char *mca_cell_backend_name(mca_cell_backend_t b);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,152 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/daemon.h
+ * The controller daemon's core (used by mcad and its tests): a cell's arms, controller and DDS bridge,
+ * the per-tick step and the 1 kHz real-time loop around it.
+ *
+ * States (same numbering as mca_dds_state_t):
+ *   INIT -> READY (arms answered, DDS up) -> RUNNING (ticking the controller)
+ *   RUNNING --(stop request: SIGTERM/SIGINT, stop_after)--> BRAKING --(all commands at 0)--> STOPPED
+ *   RUNNING --(fault)--> BRAKING --(all commands at 0)--> FAULT
+ * Faults: controller fault (NaN, infeasible/not converged QP, distance below d1, fake attractor),
+ * rt.overrun_limit consecutive overruns, no new feedback from an arm for rt.lost_feedback_cycles,
+ * an arm reporting FAULT/BRAKING on its own, a bus error burst. BRAKING ramps every joint's
+ * commanded velocity down at the arm's dec_limit (cell), then STOPPED/FAULT command zero velocity
+ * with the servo released (the arm's brakes take over). The reason is logged and published.
+ *
+ * Context: open/close and mca_daemon_start/join are start-up/shut-down; mca_daemon_step is rt (no
+ * allocation, no locks, no blocking I/O; logs via mca/rtlog.h); the request/read-out functions are
+ * any thread.
+ */
+#ifndef MCA_DAEMON_H
+#define MCA_DAEMON_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "mca/arm.h"
+#include "mca/cell.h"
+#include "mca/controller.h"
+#include "mca/ring.h"
+#include "mca/rtlog.h"
+#include "mca/rtstats.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mca_daemon_state {
+    MCA_DAEMON_INIT = 0,
+    MCA_DAEMON_READY = 1,
+    MCA_DAEMON_RUNNING = 2,
+    MCA_DAEMON_BRAKING = 3,
+    MCA_DAEMON_STOPPED = 4,
+    MCA_DAEMON_FAULT = 5,
+} mca_daemon_state_t;
+
+/** Daemon fault causes (besides the controller's, which are reported as MCA_DAEMON_FAULT_CONTROLLER). */
+typedef enum mca_daemon_fault {
+    MCA_DAEMON_FAULT_NONE = 0,
+    MCA_DAEMON_FAULT_CONTROLLER = 1,    /**< controller tick fault (info.fault says which) */
+    MCA_DAEMON_FAULT_OVERRUN = 2,       /**< rt.overrun_limit consecutive overruns */
+    MCA_DAEMON_FAULT_LOST_FEEDBACK = 3, /**< no new feedback for rt.lost_feedback_cycles */
+    MCA_DAEMON_FAULT_ARM = 4,           /**< an arm reports FAULT or brakes on its own */
+    MCA_DAEMON_FAULT_BUS = 5,           /**< bus error on an arm's link */
+} mca_daemon_fault_t;
+
+const char *mca_daemon_state_name(int state);
+
+/** Options not in the cell file. */
+typedef struct mca_daemon_opts {
+    int no_dds;            /**< 1: do not publish (overrides the cell) */
+    int no_rt;             /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
+    const char *csv_path;  /**< per-tick CSV (written by a non-rt thread), NULL: none */
+    double stop_after;     /**< > 0: overrides the cell's stop_after [s] */
+    FILE *log;             /**< where log lines go (stderr) */
+} mca_daemon_opts_t;
+
+/** One CSV row (rt -> writer ring). */
+typedef struct mca_daemon_csv_rec {
+    double t;
+    int state;
+    double q[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double qdot_cmd[MCA_MAX_ARMS][MCA_MAX_DOF];
+    mca_tick_info_t info;
+} mca_daemon_csv_rec_t;
+
+#define MCA_DAEMON_CSV_CAPACITY 4096
+
+/** Final/online figures. */
+typedef struct mca_daemon_summary {
+    int state;
+    uint64_t ticks, overruns, skipped_periods;
+    int64_t jitter_p50_ns, jitter_p99_ns, jitter_p999_ns, jitter_max_ns;
+    int64_t compute_p50_ns, compute_p99_ns, compute_max_ns;
+    int64_t ctrl_p50_ns, ctrl_p99_ns, ctrl_max_ns; /**< mca_controller_tick alone */
+    double min_distance, min_distance_t;
+    int fault;          /**< mca_daemon_fault_t */
+    int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */
+    char fault_text[160];
+    double fault_t;
+    uint64_t log_dropped, csv_dropped;
+    int sched_fifo;     /**< 1 when the loop ran SCHED_FIFO */
+    int mem_locked;
+    int dma_latency_held;
+} mca_daemon_summary_t;
+
+typedef struct mca_daemon mca_daemon_t; /**< opaque */
+
+/**
+ * Open everything a cell needs (start-up): controller, arms (waits up to 2 s for each to answer),
+ * DDS bridge, log ring. State READY on success.
+ * @retval MCA_OK, MCA_ENOMEM, or a backend/controller/DDS error (err says which arm/part)
+ */
+int mca_daemon_open(mca_daemon_t **d, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
+                    size_t errlen);
+
+/** Start the real-time loop thread (SCHED_FIFO where permitted, else a warning and SCHED_OTHER). */
+int mca_daemon_start(mca_daemon_t *d);
+
+/** Ask the loop to brake and stop (any thread, async-signal safe). */
+void mca_daemon_request_stop(mca_daemon_t *d);
+/** Test hook: make the loop stall (stop ticking) until a stop request (any thread). */
+void mca_daemon_request_stall(mca_daemon_t *d);
+/** 1 once the loop thread has ended. */
+int mca_daemon_finished(const mca_daemon_t *d);
+/** Ticks done so far (any thread; the supervisor's liveness check). */
+uint64_t mca_daemon_ticks(const mca_daemon_t *d);
+/** Current state (any thread). */
+int mca_daemon_state(const mca_daemon_t *d);
+
+/** Drain the log and CSV rings (non-rt; call often from ONE thread). @return records handled */
+int mca_daemon_service(mca_daemon_t *d);
+
+/** Wait for the loop thread to end. */
+int mca_daemon_join(mca_daemon_t *d);
+
+/** Figures so far (exact once the loop has ended; approximate while it runs). */
+void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
+/** Print the summary block on f ("<6>mcad: ..." lines). */
+void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f);
+
+/** Close arms, DDS (publishing the final status) and free (shut-down). NULL is allowed. */
+void mca_daemon_close(mca_daemon_t *d);
+
+/**
+ * One tick without the timing loop (rt): read feedback, controller, commands, DDS snapshot.
+ * Used by the loop and by tests that drive the daemon in virtual time.
+ * @param t  task time [s] of this tick
+ * @return the state after the tick
+ */
+int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns);
+
+/** Last command sent to arm a (tests). NULL if a is out of range. */
+const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);
+/** Arm handle (tests: sim backend fault injection). */
+mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,953 @@
+/* SPDX-License-Identifier: MIT */
+/* Cell configuration files of mcad (see mca/cell.h, docs/daemon.md). Start-up only. */
+#include "mca/cell.h"
+
+#include <cyaml/cyaml.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "mca/chain.h"
+#include "mca/err.h"
+#include "mca/scheme.h"
+#include "mca/vec3.h"
+
+/* ---------------------------------------------------------------- schema */
+
+enum raw_kind { RAW_HOLD, RAW_CIRCLE };
+enum raw_form { RAW_COMPONENTWISE, RAW_NORMAL };
+
+struct raw_path {
+    enum raw_kind kind;
+    double *t0, *radius, *period, *turns;
+    double *u;
+    unsigned u_count;
+    double *v;
+    unsigned v_count;
+};
+
+struct raw_sim {
+    double *lag_tau;
+    int *latency_cycles;
+    double *noise_pos;
+};
+
+struct raw_arm {
+    char *name;
+    char *backend;
+    char *interface;
+    long long *id_base;
+    char *urdf;
+    char *tip_link;
+    double *base_xyz;
+    unsigned base_xyz_count;
+    double *base_rpy;
+    unsigned base_rpy_count;
+    double *q0;
+    unsigned q0_count;
+    double *dec_limit;
+    struct raw_sim *sim;
+    struct raw_path *path;
+};
+
+struct raw_task {
+    char *scenario;
+    double *duration;
+};
+
+struct raw_solver {
+    double *K, *epsilon, *v_normal, *v_floor;
+    enum raw_form *form;
+    int *pdnn_max_steps;
+    double *pdnn_tol, *eq_tol, *fault_residual;
+};
+
+struct raw_dds {
+    bool *enabled;
+    long long *domain;
+    char *config;
+    long long *publish_divisor;
+};
+
+struct raw_rt {
+    long long *period_us;
+    int *priority;
+    int *cpu;
+    int *overrun_limit;
+    int *lost_feedback_cycles;
+    bool *lock_memory;
+    bool *dma_latency;
+};
+
+struct raw_cell {
+    char *name;
+    struct raw_task task;
+    char *scheme;
+    double *d1, *d2;
+    struct raw_solver *solver;
+    struct raw_arm *arms;
+    unsigned arms_count;
+    struct raw_dds *dds;
+    struct raw_rt *rt;
+    double *stop_after;
+    long long *debug_stall_after_ticks;
+};
+
+static const cyaml_strval_t kind_strings[] = {
+    {"hold", RAW_HOLD},
+    {"circle", RAW_CIRCLE},
+};
+static const cyaml_strval_t form_strings[] = {
+    {"componentwise", RAW_COMPONENTWISE},
+    {"normal", RAW_NORMAL},
+};
+
+#define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
+
+static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
+
+static const cyaml_schema_field_t path_fields[] = {
+    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, struct raw_path, kind, kind_strings,
+                     CYAML_ARRAY_LEN(kind_strings)),
+    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_path, t0),
+    CYAML_FIELD_FLOAT_PTR("radius", OPT, struct raw_path, radius),
+    CYAML_FIELD_FLOAT_PTR("period", OPT, struct raw_path, period),
+    CYAML_FIELD_FLOAT_PTR("turns", OPT, struct raw_path, turns),
+    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, struct raw_path, u, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, struct raw_path, v, &float_entry, 3, 3),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t sim_fields[] = {
+    CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, struct raw_sim, lag_tau),
+    CYAML_FIELD_INT_PTR("latency_cycles", OPT, struct raw_sim, latency_cycles),
+    CYAML_FIELD_FLOAT_PTR("noise_pos", OPT, struct raw_sim, noise_pos),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t arm_fields[] = {
+    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_arm, name, 1, 31),
+    CYAML_FIELD_STRING_PTR("backend", CYAML_FLAG_POINTER, struct raw_arm, backend, 1, 31),
+    CYAML_FIELD_STRING_PTR("interface", OPT, struct raw_arm, interface, 1, 31),
+    CYAML_FIELD_INT_PTR("id_base", OPT, struct raw_arm, id_base),
+    CYAML_FIELD_STRING_PTR("urdf", OPT, struct raw_arm, urdf, 1, 400),
+    CYAML_FIELD_STRING_PTR("tip_link", OPT, struct raw_arm, tip_link, 0, 63),
+    CYAML_FIELD_SEQUENCE("base_xyz", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_xyz, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("q0", OPT | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1, MCA_MAX_DOF),
+    CYAML_FIELD_FLOAT_PTR("dec_limit", OPT, struct raw_arm, dec_limit),
+    CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
+    CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_value_t arm_entry = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct raw_arm, arm_fields),
+};
+
+static const cyaml_schema_field_t task_fields[] = {
+    CYAML_FIELD_STRING_PTR("scenario", OPT, struct raw_task, scenario, 1, 400),
+    CYAML_FIELD_FLOAT_PTR("duration", OPT, struct raw_task, duration),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t solver_fields[] = {
+    CYAML_FIELD_FLOAT_PTR("K", OPT, struct raw_solver, K),
+    CYAML_FIELD_FLOAT_PTR("epsilon", OPT, struct raw_solver, epsilon),
+    CYAML_FIELD_FLOAT_PTR("v_normal", OPT, struct raw_solver, v_normal),
+    CYAML_FIELD_FLOAT_PTR("v_floor", OPT, struct raw_solver, v_floor),
+    CYAML_FIELD_ENUM_PTR("form", OPT, struct raw_solver, form, form_strings, CYAML_ARRAY_LEN(form_strings)),
+    CYAML_FIELD_INT_PTR("pdnn_max_steps", OPT, struct raw_solver, pdnn_max_steps),
+    CYAML_FIELD_FLOAT_PTR("pdnn_tol", OPT, struct raw_solver, pdnn_tol),
+    CYAML_FIELD_FLOAT_PTR("eq_tol", OPT, struct raw_solver, eq_tol),
+    CYAML_FIELD_FLOAT_PTR("fault_residual", OPT, struct raw_solver, fault_residual),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t dds_fields[] = {
+    CYAML_FIELD_BOOL_PTR("enabled", OPT, struct raw_dds, enabled),
+    CYAML_FIELD_INT_PTR("domain", OPT, struct raw_dds, domain),
+    CYAML_FIELD_STRING_PTR("config", OPT, struct raw_dds, config, 0, 400),
+    CYAML_FIELD_INT_PTR("publish_divisor", OPT, struct raw_dds, publish_divisor),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t rt_fields[] = {
+    CYAML_FIELD_INT_PTR("period_us", OPT, struct raw_rt, period_us),
+    CYAML_FIELD_INT_PTR("priority", OPT, struct raw_rt, priority),
+    CYAML_FIELD_INT_PTR("cpu", OPT, struct raw_rt, cpu),
+    CYAML_FIELD_INT_PTR("overrun_limit", OPT, struct raw_rt, overrun_limit),
+    CYAML_FIELD_INT_PTR("lost_feedback_cycles", OPT, struct raw_rt, lost_feedback_cycles),
+    CYAML_FIELD_BOOL_PTR("lock_memory", OPT, struct raw_rt, lock_memory),
+    CYAML_FIELD_BOOL_PTR("dma_latency", OPT, struct raw_rt, dma_latency),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t cell_fields[] = {
+    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_cell, name, 1, 63),
+    CYAML_FIELD_MAPPING("task", CYAML_FLAG_DEFAULT, struct raw_cell, task, task_fields),
+    CYAML_FIELD_STRING_PTR("scheme", OPT, struct raw_cell, scheme, 1, 15),
+    CYAML_FIELD_FLOAT_PTR("d1", OPT, struct raw_cell, d1),
+    CYAML_FIELD_FLOAT_PTR("d2", OPT, struct raw_cell, d2),
+    CYAML_FIELD_MAPPING_PTR("solver", OPT, struct raw_cell, solver, solver_fields),
+    CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_cell, arms, &arm_entry, 1, MCA_MAX_ARMS),
+    CYAML_FIELD_MAPPING_PTR("dds", OPT, struct raw_cell, dds, dds_fields),
+    CYAML_FIELD_MAPPING_PTR("rt", OPT, struct raw_cell, rt, rt_fields),
+    CYAML_FIELD_FLOAT_PTR("stop_after", OPT, struct raw_cell, stop_after),
+    CYAML_FIELD_INT_PTR("debug_stall_after_ticks", OPT, struct raw_cell, debug_stall_after_ticks),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_value_t cell_schema = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct raw_cell, cell_fields),
+};
+
+/* ---------------------------------------------------------------- messages */
+
+/* libcyaml reports a load error as an error line ("Load: Invalid INT value: 'x'") followed by a backtrace,
+ * innermost first ("  in mapping field 'priority' (line: 12, column: 13)"). Keep the first error text and
+ * the innermost position and build the dotted field path from the backtrace. */
+struct log_state {
+    char what[256];
+    int have_what;
+    int line, col;
+    char fields[8][48]; /* backtrace names, innermost first */
+    int n_fields;
+    int seq_index[8];   /* entry index when the frame is a sequence entry, else -1 */
+};
+
+static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args)
+{
+    struct log_state *s = ctx;
+    if (level < CYAML_LOG_ERROR) {
+        return;
+    }
+    char line[256];
+    vsnprintf(line, sizeof line, fmt, args);
+    size_t n = strlen(line);
+    while (n && (line[n - 1] == '\n' || line[n - 1] == ' ')) {
+        line[--n] = 0;
+    }
+    const char *p = line;
+    if (strncmp(p, "Load: ", 6) == 0) {
+        p += 6;
+    }
+    while (*p == ' ') {
+        p++;
+    }
+    int l = 0, c = 0;
+    if (strncmp(p, "in mapping field '", 18) == 0) {
+        const char *name = p + 18;
+        const char *q = strchr(name, '\'');
+        if (q && s->n_fields < 8) {
+            snprintf(s->fields[s->n_fields], sizeof s->fields[0], "%.*s", (int)(q - name), name);
+            s->seq_index[s->n_fields] = -1;
+            s->n_fields++;
+        }
+    } else if (strncmp(p, "in sequence entry '", 19) == 0) {
+        if (s->n_fields < 8) {
+            s->fields[s->n_fields][0] = 0;
+            s->seq_index[s->n_fields] = atoi(p + 19);
+            s->n_fields++;
+        }
+    } else if (strncmp(p, "Backtrace:", 10) == 0 || strncmp(p, "in mapping", 10) == 0 ||
+               strncmp(p, "in sequence", 11) == 0) {
+        /* other frames carry no name */
+    } else if (!s->have_what && *p) {
+        snprintf(s->what, sizeof s->what, "%s", p);
+        s->have_what = 1;
+    }
+    const char *lp = strstr(line, "(line: ");
+    if (lp && sscanf(lp, "(line: %d, column: %d)", &l, &c) == 2 && s->line == 0) {
+        s->line = l;
+        s->col = c;
+    }
+}
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || !errlen) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+static int indent_of(const char *s)
+{
+    int i = 0;
+    while (s[i] == ' ') {
+        i++;
+    }
+    return i;
+}
+
+/* Does line s (after indentation and "- ") start with "key:"? Flow mappings on one line also match
+ * ("rt: {period_us: 5}" for key period_us). */
+static int line_has_key(const char *s, const char *key)
+{
+    const size_t kl = strlen(key);
+    const char *c = s;
+    while (*c == ' ' || *c == '-') {
+        c++;
+    }
+    if (strncmp(c, key, kl) == 0 && (c[kl] == ':')) {
+        return 1;
+    }
+    for (const char *f = strchr(s, '{'); f; f = strchr(f + 1, ',')) {
+        const char *k = f + 1;
+        while (*k == ' ') {
+            k++;
+        }
+        if (strncmp(k, key, kl) == 0 && k[kl] == ':') {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Line of a field after loading (libcyaml keeps no positions once loaded): top-level `key`
+ * (sec NULL), `sec.key`, or `arms[idx].key` (sec "arms"). Falls back to the enclosing element's line;
+ * 0 when nothing matches. Comments and blank lines are skipped. */
+static int locate(const char *path, const char *sec, int idx, const char *key)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        return 0;
+    }
+    char buf[1024];
+    int line = 0, found = 0, in_sec = 0, sec_line = 0, item = -1, item_indent = -1, item_line = 0;
+    while (fgets(buf, sizeof buf, f)) {
+        line++;
+        const int ind = indent_of(buf);
+        if (buf[ind] == '#' || buf[ind] == '\n' || buf[ind] == 0) {
+            continue;
+        }
+        if (!sec) {
+            if (ind == 0 && line_has_key(buf, key)) {
+                found = line;
+                break;
+            }
+            continue;
+        }
+        if (ind == 0) {
+            if (in_sec) {
+                break; /* left the section */
+            }
+            if (line_has_key(buf, sec)) {
+                in_sec = 1;
+                sec_line = line;
+                if (idx < 0 && key && strchr(buf, '{') && line_has_key(buf, key)) {
+                    found = line;
+                    break;
+                }
+            }
+            continue;
+        }
+        if (!in_sec) {
+            continue;
+        }
+        if (idx >= 0) {
+            if (buf[ind] == '-' && (item_indent < 0 || ind == item_indent)) {
+                item_indent = ind;
+                item++;
+                if (item == idx) {
+                    item_line = line;
+                }
+            }
+            if (item != idx) {
+                continue;
+            }
+        }
+        if (key && line_has_key(buf, key)) {
+            found = line;
+            break;
+        }
+    }
+    fclose(f);
+    if (found) {
+        return found;
+    }
+    return item_line ? item_line : sec_line;
+}
+
+/* Where to report errors about one loaded field. */
+struct where {
+    const char *file;
+    const char *sec; /* NULL, "arms", "rt", ... */
+    int idx;         /* arm index or -1 */
+};
+
+/* "FILE:LINE: message" into err (vsnprintf: messages are cut at errlen, never overflow). */
+static void fail_at(char *err, size_t errlen, const char *file, int line, const char *fmt, ...)
+{
+    if (!err || !errlen) {
+        return;
+    }
+    int n = snprintf(err, errlen, "%s:%d: ", file, line);
+    if (n < 0 || (size_t)n >= errlen) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err + n, errlen - (size_t)n, fmt, ap);
+    va_end(ap);
+}
+
+#define FAIL(code, w, key, ...)                                                                         \
+    do {                                                                                                \
+        fail_at(err, errlen, (w).file, locate((w).file, (w).sec, (w).idx, key), __VA_ARGS__);           \
+        rc = (code);                                                                                    \
+        goto out;                                                                                       \
+    } while (0)
+
+/* Resolve `rel` against the directory of `base_file` (made absolute, so paths do not depend on the
+ * current directory later). */
+static void resolve(char *out, size_t outlen, const char *base_file, const char *rel)
+{
+    char abs_base[4096];
+    if (realpath(base_file, abs_base)) {
+        base_file = abs_base;
+    }
+    if (rel[0] == '/') {
+        snprintf(out, outlen, "%s", rel);
+        return;
+    }
+    const char *slash = strrchr(base_file, '/');
+    if (slash) {
+        snprintf(out, outlen, "%.*s/%s", (int)(slash - base_file), base_file, rel);
+    } else {
+        snprintf(out, outlen, "%s", rel);
+    }
+}
+
+static int readable(const char *p)
+{
+    return access(p, R_OK) == 0;
+}
+
+static int finite_pos(const double *v)
+{
+    return v && isfinite(*v) && *v > 0.0;
+}
+
+const char *mca_cell_backend_name(mca_cell_backend_t b)
+{
+    return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : "sim";
+}
+
+/* Inline path of a cell arm (hold or circle; richer paths belong in a scenario file). */
+static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, size_t whylen)
+{
+    memset(pp, 0, sizeof *pp);
+    pp->relative = 1;
+    pp->t0 = rp->t0 ? *rp->t0 : 0.0;
+    if (!(isfinite(pp->t0) && pp->t0 >= 0.0)) {
+        snprintf(why, whylen, "t0: must be >= 0");
+        return -1;
+    }
+    if (rp->kind == RAW_HOLD) {
+        pp->kind = MCA_PATH_HOLD;
+        return 0;
+    }
+    pp->kind = MCA_PATH_CIRCLE;
+    if (!finite_pos(rp->radius) || !finite_pos(rp->period) || !rp->u || !rp->v) {
+        snprintf(why, whylen, "circle: needs radius > 0, period > 0, u and v");
+        return -1;
+    }
+    pp->radius = *rp->radius;
+    pp->period = *rp->period;
+    pp->turns = rp->turns ? *rp->turns : 1.0;
+    if (!(isfinite(pp->turns) && pp->turns > 0.0)) {
+        snprintf(why, whylen, "turns: must be > 0");
+        return -1;
+    }
+    const double nu = mca_v3_norm(rp->u);
+    if (!(nu > 1e-9) || !isfinite(nu)) {
+        snprintf(why, whylen, "u: zero vector");
+        return -1;
+    }
+    double u[3], v[3];
+    for (int i = 0; i < 3; i++) {
+        u[i] = rp->u[i] / nu;
+    }
+    mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u); /* Gram-Schmidt */
+    const double nv = mca_v3_norm(v);
+    if (!(nv > 1e-9) || !isfinite(nv)) {
+        snprintf(why, whylen, "v: parallel to u");
+        return -1;
+    }
+    for (int i = 0; i < 3; i++) {
+        pp->u[i] = u[i];
+        pp->v[i] = v[i] / nv;
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------- load */
+
+int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
+{
+    if (!path || !out) {
+        set_err(err, errlen, "cell: NULL argument");
+        return MCA_EINVAL;
+    }
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        set_err(err, errlen, "%s:0: cannot open cell file: %s", path, strerror(errno));
+        return MCA_ENOENT;
+    }
+    fclose(fp);
+
+    struct log_state ls;
+    memset(&ls, 0, sizeof ls);
+    const cyaml_config_t ccfg = {
+        .log_fn = log_collect,
+        .log_ctx = &ls,
+        .mem_fn = cyaml_mem,
+        .log_level = CYAML_LOG_ERROR,
+        .flags = CYAML_CFG_DEFAULT,
+    };
+    struct raw_cell *raw = NULL;
+    cyaml_err_t cerr = cyaml_load_file(path, &ccfg, &cell_schema, (cyaml_data_t **)&raw, NULL);
+    if (cerr != CYAML_OK) {
+        /* field path, outermost first: arms[1].q0 */
+        char field[256] = "";
+        size_t fl = 0;
+        for (int i = ls.n_fields - 1; i >= 0 && fl < sizeof field - 1; i--) {
+            int w;
+            if (ls.seq_index[i] >= 0) {
+                w = snprintf(field + fl, sizeof field - fl, "[%d]", ls.seq_index[i]);
+            } else {
+                w = snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", ls.fields[i]);
+            }
+            if (w > 0) {
+                fl += (size_t)w;
+            }
+        }
+        if (fl >= sizeof field) {
+            field[sizeof field - 1] = 0;
+        }
+        set_err(err, errlen, "%s:%d:%d: %s: %s (%s)", path, ls.line, ls.col, field[0] ? field : "(document)",
+                ls.have_what ? ls.what : "invalid", cyaml_strerror(cerr));
+        return MCA_EPARSE;
+    }
+
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    int rc = MCA_OK;
+    const struct where top = {path, NULL, -1};
+    if (!cell) {
+        rc = MCA_ENOMEM;
+        set_err(err, errlen, "%s:0: out of memory", path);
+        goto out;
+    }
+    snprintf(cell->name, sizeof cell->name, "%s", raw->name);
+    snprintf(cell->source, sizeof cell->source, "%s", path);
+
+    /* task: a scenario file, or inline (arms carry urdf/base/q0/path themselves) */
+    mca_scenario_t *scn = &cell->scn;
+    const struct where wtask = {path, "task", -1};
+    if (raw->task.scenario) {
+        char sp[512];
+        resolve(sp, sizeof sp, path, raw->task.scenario);
+        if (!readable(sp)) {
+            FAIL(MCA_ENOENT, wtask, "scenario", "task.scenario: file '%s' not found", sp);
+        }
+        char serr[512];
+        int src = mca_scenario_load(sp, scn, serr, sizeof serr);
+        if (src != MCA_OK) {
+            FAIL(src, wtask, "scenario", "task.scenario: %s", serr);
+        }
+    } else {
+        mca_scenario_defaults(scn);
+        snprintf(scn->name, sizeof scn->name, "%s", raw->name);
+        snprintf(scn->source, sizeof scn->source, "%s", path);
+        scn->n_arms = 0;
+        if (!raw->task.duration) {
+            FAIL(MCA_EPARSE, wtask, "task", "task: an inline task needs 'duration' (or give 'scenario')");
+        }
+    }
+    if (raw->task.duration) {
+        if (!finite_pos(raw->task.duration)) {
+            FAIL(MCA_ERANGE, wtask, "duration", "task.duration: must be > 0 s (got %g)", *raw->task.duration);
+        }
+        scn->duration = *raw->task.duration;
+    }
+
+    cell->scheme = MCA_SCHEME_MCA;
+    if (raw->scheme) {
+        if (strcmp(raw->scheme, "mca") == 0) {
+            cell->scheme = MCA_SCHEME_MCA;
+        } else if (strcmp(raw->scheme, "mvn") == 0) {
+            cell->scheme = MCA_SCHEME_MVN;
+        } else if (strcmp(raw->scheme, "apf") == 0) {
+            cell->scheme = MCA_SCHEME_APF;
+        } else {
+            FAIL(MCA_ERANGE, top, "scheme", "scheme: unknown scheme '%s' (known: mca, mvn, apf)", raw->scheme);
+        }
+    }
+    if (raw->d1) {
+        scn->params.d1 = *raw->d1;
+    }
+    if (raw->d2) {
+        scn->params.d2 = *raw->d2;
+    }
+    if (!(isfinite(scn->params.d1) && isfinite(scn->params.d2) && scn->params.d1 >= 0.0 &&
+          scn->params.d1 < scn->params.d2)) {
+        FAIL(MCA_ERANGE, top, raw->d1 ? "d1" : "d2", "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)",
+             scn->params.d1, scn->params.d2);
+    }
+
+    cell->pdnn_max_steps = 0;
+    cell->pdnn_tol = cell->eq_tol = cell->fault_residual = -1.0;
+    if (raw->solver) {
+        const struct raw_solver *s = raw->solver;
+        const struct where ws = {path, "solver", -1};
+        if (s->K) {
+            if (!(isfinite(*s->K) && *s->K >= 0.0)) {
+                FAIL(MCA_ERANGE, ws, "K", "solver.K: must be >= 0 (got %g)", *s->K);
+            }
+            scn->params.K = *s->K;
+        }
+        if (s->epsilon) {
+            if (!finite_pos(s->epsilon)) {
+                FAIL(MCA_ERANGE, ws, "epsilon", "solver.epsilon: must be > 0 (got %g)", *s->epsilon);
+            }
+            scn->params.epsilon = *s->epsilon;
+        }
+        if (s->v_normal) {
+            if (!finite_pos(s->v_normal)) {
+                FAIL(MCA_ERANGE, ws, "v_normal", "solver.v_normal: must be > 0 (got %g)", *s->v_normal);
+            }
+            scn->params.v_normal = *s->v_normal;
+        }
+        if (s->v_floor) {
+            if (!(isfinite(*s->v_floor) && *s->v_floor >= 0.0)) {
+                FAIL(MCA_ERANGE, ws, "v_floor", "solver.v_floor: must be >= 0 (got %g)", *s->v_floor);
+            }
+            scn->params.v_floor = *s->v_floor;
+        }
+        if (s->form) {
+            scn->has_form = 1;
+            scn->params.form = *s->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
+        }
+        if (s->pdnn_max_steps) {
+            if (*s->pdnn_max_steps < 1) {
+                FAIL(MCA_ERANGE, ws, "pdnn_max_steps", "solver.pdnn_max_steps: must be >= 1 (got %d)",
+                     *s->pdnn_max_steps);
+            }
+            cell->pdnn_max_steps = *s->pdnn_max_steps;
+        }
+        if (s->pdnn_tol) {
+            if (!finite_pos(s->pdnn_tol)) {
+                FAIL(MCA_ERANGE, ws, "pdnn_tol", "solver.pdnn_tol: must be > 0 (got %g)", *s->pdnn_tol);
+            }
+            cell->pdnn_tol = *s->pdnn_tol;
+        }
+        if (s->eq_tol) {
+            if (!finite_pos(s->eq_tol)) {
+                FAIL(MCA_ERANGE, ws, "eq_tol", "solver.eq_tol: must be > 0 (got %g)", *s->eq_tol);
+            }
+            cell->eq_tol = *s->eq_tol;
+        }
+        if (s->fault_residual) {
+            if (!finite_pos(s->fault_residual)) {
+                FAIL(MCA_ERANGE, ws, "fault_residual", "solver.fault_residual: must be > 0 (got %g)",
+                     *s->fault_residual);
+            }
+            cell->fault_residual = *s->fault_residual;
+        }
+    }
+
+    /* arms: the cell names the hardware; model and path come from the scenario arm of the same name,
+     * and any model field given in the cell overrides it */
+    if (raw->task.scenario && raw->arms_count != (unsigned)scn->n_arms) {
+        const struct where wa = {path, "arms", -1};
+        FAIL(MCA_ERANGE, wa, NULL, "arms: %u arms but scenario '%s' has %d", raw->arms_count, scn->source,
+             scn->n_arms);
+    }
+    mca_scenario_arm_t sarm[MCA_MAX_ARMS];
+    memcpy(sarm, scn->arm, sizeof sarm);
+    for (unsigned a = 0; a < raw->arms_count; a++) {
+        const struct raw_arm *ra = &raw->arms[a];
+        const int ai = (int)a;
+        const struct where wa = {path, "arms", ai};
+        mca_cell_arm_t *ca = &cell->arm[a];
+        mca_scenario_arm_t *sa = &scn->arm[a];
+        for (unsigned b = 0; b < a; b++) {
+            if (strcmp(raw->arms[b].name, ra->name) == 0) {
+                FAIL(MCA_ERANGE, wa, "name", "arms[%d].name: '%s' used twice", ai, ra->name);
+            }
+        }
+        if (raw->task.scenario) {
+            int found = -1;
+            char names[160] = "";
+            for (int s = 0; s < scn->n_arms; s++) {
+                if (strcmp(sarm[s].name, ra->name) == 0) {
+                    found = s;
+                }
+                if (s) {
+                    strncat(names, ", ", sizeof names - strlen(names) - 1);
+                }
+                strncat(names, sarm[s].name, sizeof names - strlen(names) - 1);
+            }
+            if (found < 0) {
+                FAIL(MCA_ERANGE, wa, "name", "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai,
+                     ra->name, scn->source, names);
+            }
+            *sa = sarm[found];
+        } else {
+            memset(sa, 0, sizeof *sa);
+            snprintf(sa->name, sizeof sa->name, "%s", ra->name);
+            if (!ra->urdf || !ra->base_xyz || !ra->q0) {
+                FAIL(MCA_EPARSE, wa, NULL, "arms[%d]: an inline task needs urdf, base_xyz and q0 for every arm",
+                     ai);
+            }
+            sa->path.kind = MCA_PATH_HOLD;
+            sa->path.relative = 1;
+        }
+        /* backend */
+        if (strcmp(ra->backend, "sim") == 0) {
+            ca->backend = MCA_CELL_BACKEND_SIM;
+        } else if (strcmp(ra->backend, "socketcan") == 0) {
+            ca->backend = MCA_CELL_BACKEND_SOCKETCAN;
+            if (!ra->interface) {
+                FAIL(MCA_EPARSE, wa, "backend", "arms[%d].interface: required with backend socketcan", ai);
+            }
+            if (!ra->id_base) {
+                FAIL(MCA_EPARSE, wa, "backend", "arms[%d].id_base: required with backend socketcan", ai);
+            }
+        } else {
+            FAIL(MCA_ERANGE, wa, "backend", "arms[%d].backend: unknown backend '%s' (known: sim, socketcan)", ai,
+                 ra->backend);
+        }
+        if (ra->interface) {
+            snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);
+        }
+        if (ra->id_base) {
+            if (*ra->id_base < 0 || *ra->id_base > 0x7ff) {
+                FAIL(MCA_ERANGE, wa, "id_base", "arms[%d].id_base: must be in 0..0x7ff (got %lld)", ai,
+                     *ra->id_base);
+            }
+            ca->id_base = (uint32_t)*ra->id_base;
+        }
+        /* model overrides */
+        if (ra->urdf) {
+            resolve(sa->urdf, sizeof sa->urdf, path, ra->urdf);
+        }
+        if (!readable(sa->urdf)) {
+            FAIL(MCA_ENOENT, wa, "urdf", "arms[%d].urdf: file '%s' not found", ai, sa->urdf);
+        }
+        if (ra->tip_link) {
+            snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
+        }
+        for (int i = 0; i < 3; i++) {
+            if (ra->base_xyz) {
+                sa->base_xyz[i] = ra->base_xyz[i];
+            }
+            if (ra->base_rpy) {
+                sa->base_rpy[i] = ra->base_rpy[i];
+            }
+            if (!isfinite(sa->base_xyz[i]) || !isfinite(sa->base_rpy[i])) {
+                FAIL(MCA_ERANGE, wa, "base_xyz", "arms[%d].base_xyz/base_rpy: not finite", ai);
+            }
+        }
+        if (ra->q0) {
+            sa->n_q0 = (int)ra->q0_count;
+            for (unsigned j = 0; j < ra->q0_count; j++) {
+                sa->q0[j] = ra->q0[j];
+            }
+        }
+        if (ra->path) {
+            char why[128];
+            if (inline_path(&sa->path, ra->path, why, sizeof why) != 0) {
+                FAIL(MCA_ERANGE, wa, "path", "arms[%d].path.%s", ai, why);
+            }
+        }
+        /* the model: DOF must match q0, q0 within the joint limits */
+        mca_chain_t chain;
+        char cerrbuf[400];
+        int crc = mca_chain_load_urdf(&chain, sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, cerrbuf,
+                                      sizeof cerrbuf);
+        if (crc != MCA_OK) {
+            FAIL(crc, wa, "urdf", "arms[%d].urdf: %s", ai, cerrbuf);
+        }
+        if (sa->n_q0 != chain.dof) {
+            FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai, sa->n_q0,
+                 sa->urdf, chain.dof);
+        }
+        for (int j = 0; j < chain.dof; j++) {
+            const mca_joint_model_t *jm = &chain.joint[j];
+            if (!isfinite(sa->q0[j]) || (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
+                FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j,
+                     sa->q0[j], jm->name, jm->lower, jm->upper);
+            }
+        }
+        const double dec = ra->dec_limit ? *ra->dec_limit : 10.0;
+        if (!(isfinite(dec) && dec > 0.0)) {
+            FAIL(MCA_ERANGE, wa, "dec_limit", "arms[%d].dec_limit: must be > 0 rad/s^2 (got %g)", ai, dec);
+        }
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            ca->dec_limit[j] = dec;
+        }
+        if (ra->sim) {
+            if (ra->sim->lag_tau) {
+                if (!(isfinite(*ra->sim->lag_tau) && *ra->sim->lag_tau >= 0.0)) {
+                    FAIL(MCA_ERANGE, wa, "lag_tau", "arms[%d].sim.lag_tau: must be >= 0", ai);
+                }
+                ca->sim_lag_tau = *ra->sim->lag_tau;
+            }
+            if (ra->sim->latency_cycles) {
+                if (*ra->sim->latency_cycles < 0 || *ra->sim->latency_cycles > 64) {
+                    FAIL(MCA_ERANGE, wa, "latency_cycles", "arms[%d].sim.latency_cycles: must be in 0..64", ai);
+                }
+                ca->sim_latency_cycles = *ra->sim->latency_cycles;
+            }
+            if (ra->sim->noise_pos) {
+                if (!(isfinite(*ra->sim->noise_pos) && *ra->sim->noise_pos >= 0.0)) {
+                    FAIL(MCA_ERANGE, wa, "noise_pos", "arms[%d].sim.noise_pos: must be >= 0", ai);
+                }
+                ca->sim_noise_pos = *ra->sim->noise_pos;
+            }
+        }
+    }
+    scn->n_arms = (int)raw->arms_count;
+
+    /* DDS */
+    cell->dds.enabled = 1;
+    cell->dds.domain = 0;
+    cell->dds.publish_divisor = 1;
+    if (raw->dds) {
+        const struct raw_dds *d = raw->dds;
+        const struct where wd = {path, "dds", -1};
+        if (d->enabled) {
+            cell->dds.enabled = *d->enabled;
+        }
+        if (d->domain) {
+            if (*d->domain < 0 || *d->domain > 230) {
+                FAIL(MCA_ERANGE, wd, "domain", "dds.domain: must be in 0..230 (got %lld)", *d->domain);
+            }
+            cell->dds.domain = (uint32_t)*d->domain;
+        }
+        if (d->config && d->config[0]) {
+            resolve(cell->dds.config, sizeof cell->dds.config, path, d->config);
+            if (!readable(cell->dds.config)) {
+                FAIL(MCA_ENOENT, wd, "config", "dds.config: file '%s' not found", cell->dds.config);
+            }
+        }
+        if (d->publish_divisor) {
+            if (*d->publish_divisor < 1 || *d->publish_divisor > 100000) {
+                FAIL(MCA_ERANGE, wd, "publish_divisor", "dds.publish_divisor: must be in 1..100000 (got %lld)",
+                     *d->publish_divisor);
+            }
+            cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
+        }
+    }
+
+    /* real time */
+    mca_cell_rt_t *rt = &cell->rt;
+    rt->period_ns = 1000000;
+    rt->priority = 80;
+    rt->cpu = -1;
+    rt->overrun_limit = 10;
+    rt->lost_feedback_cycles = 10;
+    rt->lock_memory = 1;
+    rt->dma_latency = 1;
+    if (raw->rt) {
+        const struct raw_rt *r = raw->rt;
+        const struct where wr = {path, "rt", -1};
+        if (r->period_us) {
+            if (*r->period_us <= 0 || *r->period_us > 1000000) {
+                FAIL(MCA_ERANGE, wr, "period_us", "rt.period_us: must be in 1..1000000 us (got %lld)",
+                     *r->period_us);
+            }
+            rt->period_ns = *r->period_us * 1000;
+        }
+        if (r->priority) {
+            if (*r->priority < 0 || *r->priority > 99) {
+                FAIL(MCA_ERANGE, wr, "priority", "rt.priority: must be in 0..99 (0 = SCHED_OTHER; got %d)",
+                     *r->priority);
+            }
+            rt->priority = *r->priority;
+        }
+        if (r->cpu) {
+            const long ncpu = sysconf(_SC_NPROCESSORS_CONF);
+            if (*r->cpu < -1 || (ncpu > 0 && *r->cpu >= ncpu)) {
+                FAIL(MCA_ERANGE, wr, "cpu", "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1, *r->cpu);
+            }
+            rt->cpu = *r->cpu;
+        }
+        if (r->overrun_limit) {
+            if (*r->overrun_limit < 1) {
+                FAIL(MCA_ERANGE, wr, "overrun_limit", "rt.overrun_limit: must be >= 1 (got %d)", *r->overrun_limit);
+            }
+            rt->overrun_limit = *r->overrun_limit;
+        }
+        if (r->lost_feedback_cycles) {
+            if (*r->lost_feedback_cycles < 1) {
+                FAIL(MCA_ERANGE, wr, "lost_feedback_cycles", "rt.lost_feedback_cycles: must be >= 1 (got %d)",
+                     *r->lost_feedback_cycles);
+            }
+            rt->lost_feedback_cycles = *r->lost_feedback_cycles;
+        }
+        if (r->lock_memory) {
+            rt->lock_memory = *r->lock_memory;
+        }
+        if (r->dma_latency) {
+            rt->dma_latency = *r->dma_latency;
+        }
+    }
+    /* the controller's prediction uses the loop period */
+    scn->params.dt = (double)rt->period_ns * 1e-9;
+
+    if (raw->stop_after) {
+        if (!(isfinite(*raw->stop_after) && *raw->stop_after >= 0.0)) {
+            FAIL(MCA_ERANGE, top, "stop_after", "stop_after: must be >= 0 s (got %g)", *raw->stop_after);
+        }
+        cell->stop_after = *raw->stop_after;
+    }
+    if (raw->debug_stall_after_ticks) {
+        if (*raw->debug_stall_after_ticks < 0) {
+            FAIL(MCA_ERANGE, top, "debug_stall_after_ticks", "debug_stall_after_ticks: must be >= 0");
+        }
+        cell->debug_stall_after_ticks = (uint64_t)*raw->debug_stall_after_ticks;
+    }
+    *out = *cell;
+out:
+    free(cell);
+    cyaml_free(&ccfg, &cell_schema, raw, 0);
+    return rc;
+}
+
+int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err, size_t errlen)
+{
+    if (!cell || !cfg) {
+        set_err(err, errlen, "cell: NULL argument");
+        return MCA_EINVAL;
+    }
+    int rc = mca_controller_config_from_scenario(cfg, &cell->scn, cell->scheme, err, errlen);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    if (cell->pdnn_max_steps > 0) {
+        cfg->pdnn.max_steps = cell->pdnn_max_steps;
+    }
+    if (cell->pdnn_tol > 0.0) {
+        cfg->pdnn.tol = cell->pdnn_tol;
+    }
+    if (cell->eq_tol > 0.0) {
+        cfg->eq_tol = cell->eq_tol;
+    }
+    if (cell->fault_residual > 0.0) {
+        cfg->fault_residual = cell->fault_residual;
+    }
+    cfg->dt = (double)cell->rt.period_ns * 1e-9;
+    return MCA_OK;
+}

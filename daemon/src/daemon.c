@@ -1,0 +1,912 @@
+/* SPDX-License-Identifier: MIT */
+/* The controller daemon's core: arms + controller + DDS, the tick and the real-time loop (mca/daemon.h). */
+#include "mca/daemon.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <malloc.h>
+#include <math.h>
+#include <sched.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "mca/arm_can.h"
+#include "mca/dds_bridge.h"
+#include "mca/err.h"
+#include "mca/sim_backend.h"
+
+#define NS_PER_S 1000000000LL
+
+struct mca_daemon {
+    mca_cell_t cell;
+    mca_daemon_opts_t opts;
+    mca_controller_config_t ccfg;
+    mca_controller_t ctrl;
+    int n_arms;
+    int dof[MCA_MAX_ARMS];
+    mca_arm_t *arm[MCA_MAX_ARMS];
+    mca_dds_bridge_t *dds;
+    mca_rtlog_t log;
+
+    /* shared with other threads */
+    _Atomic int state;
+    _Atomic uint64_t ticks;
+    _Atomic int stop_request;
+    _Atomic int stall_request;
+    _Atomic int finished;
+    pthread_t thread;
+    int thread_started;
+
+    /* rt-owned state */
+    mca_arm_feedback_t fb[MCA_MAX_ARMS];
+    int have_fb[MCA_MAX_ARMS];
+    int lost[MCA_MAX_ARMS];
+    uint64_t bus_errors[MCA_MAX_ARMS];
+    mca_arm_command_t cmd[MCA_MAX_ARMS];
+    double q[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double qdot[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double vcmd[MCA_MAX_ARMS][MCA_MAX_DOF]; /* velocity last commanded (the brake ramp starts here) */
+    uint32_t frame_id;
+    int fault;          /* mca_daemon_fault_t; latched */
+    int ctrl_fault;
+    int fault_code;     /* negative MCA_E* for DDS */
+    char fault_text[160];
+    double fault_t;
+    int stop_pending;   /* BRAKING towards STOPPED (not FAULT) */
+    int consecutive_overruns;
+    uint64_t overruns, skipped;
+    mca_hist_t jitter, compute, ctrl_time;
+    double min_d, min_d_t;
+    int64_t min_d_stamp;
+    mca_tick_info_t info;
+    mca_dds_snapshot_t snap;
+    int64_t pct_cache[6];
+    int sched_fifo, mem_locked, dma_fd;
+
+    /* CSV: rt -> writer */
+    mca_ring_t csv_ring;
+    unsigned char *csv_storage;
+    FILE *csv;
+    mca_daemon_csv_rec_t csv_rec; /* rt scratch */
+    mca_daemon_csv_rec_t csv_out; /* writer scratch */
+};
+
+static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
+
+const char *mca_daemon_state_name(int s)
+{
+    return s >= 0 && s <= MCA_DAEMON_FAULT ? state_names[s] : "?";
+}
+
+static int64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * NS_PER_S + ts.tv_nsec;
+}
+
+static void set_err(char *err, size_t errlen, const char *fmt, const char *a, const char *b)
+{
+    if (err && errlen) {
+        snprintf(err, errlen, fmt, a, b);
+    }
+}
+
+#define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
+#define LOGN(d, lvl, fmt, n, a0, a1, a2, a3, txt) mca_rtlog(&(d)->log, lvl, fmt, n, a0, a1, a2, a3, txt)
+
+/* ---------------------------------------------------------------- start-up */
+
+static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen)
+{
+    const mca_cell_arm_t *ca = &d->cell.arm[a];
+    const mca_scenario_arm_t *sa = &d->cell.scn.arm[a];
+    char berr[256] = "";
+    int rc;
+    if (ca->backend == MCA_CELL_BACKEND_SIM) {
+        mca_sim_arm_config_t sc;
+        rc = mca_sim_arm_config_from_chain(&sc, &d->ccfg.chain[a]);
+        if (rc == MCA_OK) {
+            for (int j = 0; j < sc.n; j++) {
+                sc.q0[j] = sa->q0[j];
+                sc.dec_limit[j] = ca->dec_limit[j];
+                if (sc.acc_limit[j] < ca->dec_limit[j]) {
+                    sc.acc_limit[j] = ca->dec_limit[j];
+                }
+            }
+            sc.dt = (double)d->cell.rt.period_ns * 1e-9;
+            sc.lag_tau = ca->sim_lag_tau;
+            sc.latency_cycles = ca->sim_latency_cycles;
+            sc.noise_pos = ca->sim_noise_pos;
+            sc.seed = 1 + (uint64_t)a;
+            sc.stamp_monotonic = 1;
+            rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
+        }
+    } else {
+        rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], NULL, berr, sizeof berr);
+    }
+    if (rc != MCA_OK) {
+        if (err && errlen) {
+            snprintf(err, errlen, "arm '%s' (%s): cannot open: %s (%s)", sa->name,
+                     mca_cell_backend_name(ca->backend), berr[0] ? berr : "-", mca_strerror(rc));
+        }
+        return rc;
+    }
+    return MCA_OK;
+}
+
+/* Wait (start-up, up to 2 s) until arm a answers; a FAULT left over from an earlier run is cleared. */
+static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen)
+{
+    const int64_t deadline = now_ns() + 2 * NS_PER_S;
+    int cleared = 0;
+    mca_arm_command_t c;
+    memset(&c, 0, sizeof c);
+    c.n = d->dof[a];
+    while (now_ns() < deadline) {
+        mca_arm_feedback_t fb;
+        const int rc = mca_arm_read(d->arm[a], &fb);
+        if (rc == MCA_OK || rc == MCA_EFAULT) {
+            if (fb.state == MCA_ARM_FAULT && cleared < 3) {
+                fprintf(d->opts.log, "<5>mcad: arm '%s' reports FAULT (%s) at start: clearing it\n",
+                        d->cell.scn.arm[a].name, mca_arm_fault_name(fb.fault_code));
+                for (int j = 0; j < c.n; j++) {
+                    c.flags[j] = MCA_ACT_CLEAR_FAULT;
+                }
+                cleared++;
+            } else if (fb.state == MCA_ARM_READY || fb.state == MCA_ARM_SERVOING) {
+                if (fb.n != d->dof[a]) {
+                    snprintf(err, errlen, "arm '%s': answers with %d joints, the model has %d",
+                             d->cell.scn.arm[a].name, fb.n, d->dof[a]);
+                    return MCA_EINVAL;
+                }
+                d->fb[a] = fb;
+                d->have_fb[a] = 1;
+                for (int j = 0; j < fb.n; j++) {
+                    d->q[a][j] = fb.position[j];
+                }
+                return MCA_OK;
+            }
+        }
+        /* keep the arm side's link alive: zero velocity, servo off (brakes hold) */
+        c.frame_id = ++d->frame_id;
+        mca_arm_write(d->arm[a], &c);
+        for (int j = 0; j < c.n; j++) {
+            c.flags[j] = 0;
+        }
+        struct timespec ts = {0, d->cell.rt.period_ns};
+        nanosleep(&ts, NULL);
+    }
+    set_err(err, errlen, "arm '%s' (%s): no answer within 2 s", d->cell.scn.arm[a].name,
+            mca_cell_backend_name(d->cell.arm[a].backend));
+    return MCA_ETIMEDOUT;
+}
+
+int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
+                    size_t errlen)
+{
+    if (!out || !cell || !opts) {
+        return MCA_EINVAL;
+    }
+    mca_daemon_t *d = calloc(1, sizeof *d);
+    if (!d) {
+        return MCA_ENOMEM;
+    }
+    d->cell = *cell;
+    d->opts = *opts;
+    if (!d->opts.log) {
+        d->opts.log = stderr;
+    }
+    d->dma_fd = -1;
+    atomic_store(&d->state, MCA_DAEMON_INIT);
+    mca_rtlog_init(&d->log, "mcad");
+    mca_hist_reset(&d->jitter);
+    mca_hist_reset(&d->compute);
+    mca_hist_reset(&d->ctrl_time);
+    d->min_d = INFINITY;
+    d->min_d_t = 0.0;
+    int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
+    if (rc == MCA_OK) {
+        rc = mca_controller_init(&d->ctrl, &d->ccfg);
+        if (rc != MCA_OK) {
+            set_err(err, errlen, "%s: controller init failed: %s", cell->source, mca_strerror(rc));
+        }
+    }
+    if (rc != MCA_OK) {
+        mca_daemon_close(d);
+        return rc;
+    }
+    d->n_arms = d->ccfg.n_arms;
+    for (int a = 0; a < d->n_arms; a++) {
+        d->dof[a] = d->ccfg.chain[a].dof;
+        d->cmd[a].n = d->dof[a];
+    }
+    for (int a = 0; a < d->n_arms && rc == MCA_OK; a++) {
+        rc = open_arm(d, a, err, errlen);
+    }
+    for (int a = 0; a < d->n_arms && rc == MCA_OK; a++) {
+        rc = handshake(d, a, err, errlen);
+    }
+    if (rc == MCA_OK && cell->dds.enabled && !opts->no_dds) {
+        mca_dds_config_t dc;
+        mca_dds_config_default(&dc);
+        dc.domain_id = cell->dds.domain;
+        dc.config_path = cell->dds.config[0] ? cell->dds.config : NULL;
+        dc.rate_divisor = cell->dds.publish_divisor;
+        rc = mca_dds_bridge_create(&d->dds, &dc);
+        if (rc != MCA_OK) {
+            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
+                    dc.config_path ? " (check dds.config)" : "");
+        }
+    }
+    if (rc == MCA_OK && opts->csv_path) {
+        d->csv = fopen(opts->csv_path, "w");
+        const size_t sz = MCA_RING_STORAGE_SIZE(sizeof(mca_daemon_csv_rec_t), MCA_DAEMON_CSV_CAPACITY);
+        d->csv_storage = aligned_alloc(64, sz);
+        if (!d->csv || !d->csv_storage) {
+            set_err(err, errlen, "%s: cannot write the CSV file%s", opts->csv_path, "");
+            rc = MCA_EIO;
+        } else {
+            rc = mca_ring_init(&d->csv_ring, d->csv_storage, sz, sizeof(mca_daemon_csv_rec_t),
+                               MCA_DAEMON_CSV_CAPACITY);
+            memset(d->csv_storage, 0, sz); /* pre-fault */
+            /* header as mca-sim's, plus the daemon state and the commands */
+            fprintf(d->csv, "t");
+            for (int a = 0; a < d->n_arms; a++) {
+                for (int j = 0; j < d->dof[a]; j++) {
+                    fprintf(d->csv, ",q%d_%d", a, j);
+                }
+            }
+            for (int a = 0; a < d->n_arms; a++) {
+                fprintf(d->csv, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a, a, a,
+                        a, a, a, a, a, a, a);
+            }
+            fprintf(d->csv, ",min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,active_rows,"
+                            "binding_rows,pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault,state");
+            for (int a = 0; a < d->n_arms; a++) {
+                for (int j = 0; j < d->dof[a]; j++) {
+                    fprintf(d->csv, ",qdot%d_%d", a, j);
+                }
+            }
+            fprintf(d->csv, "\n");
+        }
+    }
+    if (rc != MCA_OK) {
+        mca_daemon_close(d);
+        return rc;
+    }
+    atomic_store(&d->state, MCA_DAEMON_READY);
+    *out = d;
+    return MCA_OK;
+}
+
+/* ---------------------------------------------------------------- the tick (rt) */
+
+static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, double t)
+{
+    if (d->fault != MCA_DAEMON_FAULT_NONE) {
+        return;
+    }
+    d->fault = fault;
+    d->fault_code = code;
+    d->fault_t = t;
+    size_t i = 0;
+    for (; text && text[i] && i + 1 < sizeof d->fault_text; i++) {
+        d->fault_text[i] = text[i];
+    }
+    d->fault_text[i] = 0;
+    d->stop_pending = 0;
+    atomic_store(&d->state, MCA_DAEMON_BRAKING);
+    LOGN(d, MCA_LOG_ERR, "fault at t = %.3f s: braking both arms: %s", 1, t, 0, 0, 0, d->fault_text);
+}
+
+static int ctrl_fault_code(int f)
+{
+    switch (f) {
+    case MCA_CTRL_FAULT_NAN:
+    case MCA_CTRL_FAULT_INPUT:
+        return MCA_EINVAL;
+    case MCA_CTRL_FAULT_NOT_CONVERGED:
+        return MCA_ENOTCONV;
+    case MCA_CTRL_FAULT_INFEASIBLE:
+    case MCA_CTRL_FAULT_FAKE_ATTRACTOR:
+        return MCA_EINFEASIBLE;
+    default:
+        return MCA_EFAULT;
+    }
+}
+
+/* Read every arm's feedback; counts lost cycles and latches arm/link faults. */
+static void read_feedback(mca_daemon_t *d, double t)
+{
+    const int running = atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING;
+    for (int a = 0; a < d->n_arms; a++) {
+        mca_arm_feedback_t fb;
+        const int rc = mca_arm_read(d->arm[a], &fb);
+        if (rc == MCA_OK || rc == MCA_EFAULT) {
+            d->fb[a] = fb;
+            d->have_fb[a] = 1;
+            d->lost[a] = 0;
+            for (int j = 0; j < d->dof[a]; j++) {
+                d->q[a][j] = fb.position[j];
+            }
+            if (running && (fb.state == MCA_ARM_FAULT || fb.state == MCA_ARM_BRAKING)) {
+                char txt[96];
+                /* constant strings only: no formatting on the rt path */
+                const char *name = d->cell.scn.arm[a].name;
+                size_t k = 0;
+                const char *pre = "arm ";
+                for (const char *s = pre; *s && k < sizeof txt - 1; s++) {
+                    txt[k++] = *s;
+                }
+                for (const char *s = name; *s && k < sizeof txt - 1; s++) {
+                    txt[k++] = *s;
+                }
+                const char *mid = fb.state == MCA_ARM_FAULT ? " reports FAULT " : " brakes on its own: ";
+                for (const char *s = mid; *s && k < sizeof txt - 1; s++) {
+                    txt[k++] = *s;
+                }
+                for (const char *s = mca_arm_fault_name(fb.fault_code); *s && k < sizeof txt - 1; s++) {
+                    txt[k++] = *s;
+                }
+                txt[k] = 0;
+                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t);
+            }
+        } else if (rc == MCA_EIO) {
+            /* error frame or bus-off: counts as a lost cycle (a burst becomes a lost-feedback fault) */
+            d->lost[a]++;
+            if (d->bus_errors[a]++ == 0) {
+                LOGN(d, MCA_LOG_WARNING, "arm %g: bus error on its link", 1, a, 0, 0, 0, NULL);
+            }
+        } else {
+            d->lost[a]++;
+        }
+        if (running && d->lost[a] >= d->cell.rt.lost_feedback_cycles) {
+            LOGN(d, MCA_LOG_ERR, "arm %g: no feedback for %g cycles", 2, a, d->lost[a], 0, 0, NULL);
+            latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t);
+        }
+    }
+}
+
+/* Ramp every commanded velocity towards 0 at the arm's deceleration limit. @return 1 when all are 0. */
+static int brake_ramp(mca_daemon_t *d)
+{
+    const double dt = (double)d->cell.rt.period_ns * 1e-9;
+    int all_zero = 1;
+    for (int a = 0; a < d->n_arms; a++) {
+        for (int j = 0; j < d->dof[a]; j++) {
+            const double step = d->cell.arm[a].dec_limit[j] * dt;
+            double v = d->vcmd[a][j];
+            if (!isfinite(v) || fabs(v) <= step) {
+                v = 0.0;
+            } else {
+                v -= v > 0 ? step : -step;
+                all_zero = 0;
+            }
+            d->qdot[a][j] = v;
+        }
+    }
+    return all_zero;
+}
+
+static void send_commands(mca_daemon_t *d, int servo)
+{
+    const double dt = (double)d->cell.rt.period_ns * 1e-9;
+    d->frame_id++;
+    for (int a = 0; a < d->n_arms; a++) {
+        mca_arm_command_t *c = &d->cmd[a];
+        c->frame_id = d->frame_id;
+        c->n = d->dof[a];
+        for (int j = 0; j < c->n; j++) {
+            const double v = servo ? d->qdot[a][j] : 0.0;
+            c->velocity[j] = v;
+            c->position_ref[j] = d->q[a][j] + v * dt;
+            c->flags[j] = servo ? (MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE) : 0;
+            d->vcmd[a][j] = v;
+        }
+        const int rc = mca_arm_write(d->arm[a], c);
+        if (rc != MCA_OK && rc != MCA_EAGAIN) {
+            LOGN(d, MCA_LOG_WARNING, "arm %g: command not sent (%g)", 2, a, rc, 0, 0, NULL);
+        }
+    }
+}
+
+static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state)
+{
+    mca_dds_snapshot_t *s = &d->snap;
+    const mca_tick_info_t *in = &d->info;
+    s->tick = atomic_load_explicit(&d->ticks, memory_order_relaxed);
+    s->stamp_ns = stamp_ns;
+    s->n_arms = (uint32_t)d->n_arms;
+    for (int a = 0; a < d->n_arms; a++) {
+        mca_dds_arm_snapshot_t *as = &s->arm[a];
+        as->n_dof = (uint32_t)d->dof[a];
+        for (int j = 0; j < d->dof[a]; j++) {
+            as->position[j] = d->fb[a].position[j];
+            as->velocity[j] = d->fb[a].velocity[j];
+            as->effort[j] = d->fb[a].torque[j];
+            as->velocity_setpoint[j] = d->cmd[a].velocity[j];
+            as->position_reference[j] = d->cmd[a].position_ref[j];
+        }
+    }
+    int np = 0;
+    for (int a = 0; a < d->n_arms; a++) {
+        for (int b = a + 1; b < d->n_arms && np < MCA_MAX_PAIRS; b++) {
+            const mca_arm_distances_t *ad = &d->ctrl.dist[a][b];
+            mca_dds_pair_snapshot_t *p = &s->pair[np++];
+            p->arm_a = (uint8_t)a;
+            p->arm_b = (uint8_t)b;
+            p->link_a = (int16_t)ad->min.link;
+            p->link_b = (int16_t)ad->min.other_link;
+            p->n_links_a = (uint32_t)ad->n_links_a;
+            p->n_links_b = (uint32_t)ad->n_links_b;
+            p->min_distance = ad->min.d;
+            for (int k = 0; k < 3; k++) {
+                p->p[k] = ad->min.p[k];
+                p->e[k] = ad->min.e[k];
+            }
+            p->d1 = d->ccfg.sp.d1;
+            p->d2 = d->ccfg.sp.d2;
+            p->brake_factor = mca_brake_s(ad->min.d, p->d1, p->d2);
+            for (int k = 0; k < MCA_MAX_LINKS; k++) {
+                p->link_distance_a[k] = k < ad->n_links_a ? ad->a_to_b[k].d : 0.0;
+                p->link_distance_b[k] = k < ad->n_links_b ? ad->b_to_a[k].d : 0.0;
+            }
+        }
+    }
+    s->n_pairs = (uint32_t)np;
+    mca_dds_status_snapshot_t *st = &s->status;
+    st->state = (mca_dds_state_t)state;
+    st->fault_code = d->fault ? d->fault_code : 0;
+    size_t i = 0;
+    for (; i < MCA_DDS_FAULT_TEXT_MAX && d->fault_text[i]; i++) {
+        st->fault_text[i] = d->fault_text[i];
+    }
+    st->fault_text[i] = 0;
+    st->ticks = s->tick;
+    st->overruns = d->overruns;
+    st->compute_p50_ns = d->pct_cache[0];
+    st->compute_p99_ns = d->pct_cache[1];
+    st->compute_max_ns = d->compute.max_ns;
+    st->jitter_p50_ns = d->pct_cache[3];
+    st->jitter_p99_ns = d->pct_cache[4];
+    st->jitter_max_ns = d->jitter.max_ns;
+    st->pdnn_steps = (uint32_t)(in->pdnn_steps > 0 ? in->pdnn_steps : 0);
+    st->pdnn_residual = in->pdnn_residual;
+    st->min_distance_so_far = isfinite(d->min_d) ? d->min_d : -1.0;
+    st->min_distance_stamp_ns = d->min_d_stamp;
+}
+
+static void push_csv(mca_daemon_t *d, double t, int state)
+{
+    if (!d->csv) {
+        return;
+    }
+    mca_daemon_csv_rec_t *r = &d->csv_rec;
+    r->t = t;
+    r->state = state;
+    memcpy(r->q, d->q, sizeof r->q);
+    for (int a = 0; a < d->n_arms; a++) {
+        for (int j = 0; j < d->dof[a]; j++) {
+            r->qdot_cmd[a][j] = d->cmd[a].velocity[j];
+        }
+    }
+    r->info = d->info;
+    mca_ring_push(&d->csv_ring, r);
+}
+
+int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns)
+{
+    int state = atomic_load_explicit(&d->state, memory_order_relaxed);
+    if (state == MCA_DAEMON_READY) {
+        state = MCA_DAEMON_RUNNING;
+        atomic_store(&d->state, state);
+        LOGN(d, MCA_LOG_INFO, "running: %g arms, period %g us", 2, d->n_arms, (double)d->cell.rt.period_ns / 1e3,
+             0, 0, NULL);
+    }
+    if (state == MCA_DAEMON_RUNNING && atomic_load_explicit(&d->stop_request, memory_order_relaxed)) {
+        d->stop_pending = 1;
+        state = MCA_DAEMON_BRAKING;
+        atomic_store(&d->state, state);
+        LOGN(d, MCA_LOG_NOTICE, "stop requested at t = %.3f s: braking to zero", 1, t, 0, 0, 0, NULL);
+    }
+    read_feedback(d, t);
+    state = atomic_load_explicit(&d->state, memory_order_relaxed);
+
+    if (state == MCA_DAEMON_RUNNING) {
+        const double *qp[MCA_MAX_ARMS];
+        double *qdp[MCA_MAX_ARMS];
+        for (int a = 0; a < MCA_MAX_ARMS; a++) {
+            qp[a] = d->q[a];
+            qdp[a] = d->qdot[a];
+        }
+        const int rc = mca_controller_tick(&d->ctrl, t, qp, qdp, &d->info);
+        mca_hist_record(&d->ctrl_time, d->info.compute_ns);
+        if (isfinite(d->info.min_distance) && d->info.min_distance < d->min_d) {
+            d->min_d = d->info.min_distance;
+            d->min_d_t = t;
+            d->min_d_stamp = stamp_ns;
+        }
+        if (rc != MCA_OK) {
+            d->ctrl_fault = d->info.fault;
+            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), d->info.fault_text, t);
+            state = MCA_DAEMON_BRAKING;
+        } else {
+            send_commands(d, 1);
+        }
+    }
+    if (state == MCA_DAEMON_BRAKING) {
+        const int done = brake_ramp(d);
+        send_commands(d, 1);
+        if (done) {
+            state = d->stop_pending && d->fault == MCA_DAEMON_FAULT_NONE ? MCA_DAEMON_STOPPED : MCA_DAEMON_FAULT;
+            atomic_store(&d->state, state);
+            LOGN(d, state == MCA_DAEMON_FAULT ? MCA_LOG_ERR : MCA_LOG_NOTICE,
+                 "all joints commanded to zero at t = %.3f s: state %s", 1, t, 0, 0, 0, mca_daemon_state_name(state));
+        }
+    } else if (state == MCA_DAEMON_STOPPED || state == MCA_DAEMON_FAULT) {
+        /* zero velocity, servo released: the arms' brakes hold */
+        for (int a = 0; a < d->n_arms; a++) {
+            for (int j = 0; j < d->dof[a]; j++) {
+                d->qdot[a][j] = 0.0;
+            }
+        }
+        send_commands(d, 0);
+    }
+    const uint64_t n = atomic_load_explicit(&d->ticks, memory_order_relaxed);
+    if (n % 1000 == 0) {
+        d->pct_cache[0] = mca_hist_percentile(&d->compute, 0.5);
+        d->pct_cache[1] = mca_hist_percentile(&d->compute, 0.99);
+        d->pct_cache[3] = mca_hist_percentile(&d->jitter, 0.5);
+        d->pct_cache[4] = mca_hist_percentile(&d->jitter, 0.99);
+    }
+    if (d->dds) {
+        fill_snapshot(d, stamp_ns, state);
+        mca_dds_bridge_push(d->dds, &d->snap);
+    }
+    push_csv(d, t, state);
+    atomic_store_explicit(&d->ticks, n + 1, memory_order_release);
+    return state;
+}
+
+/* ---------------------------------------------------------------- the real-time loop */
+
+static void prefault_stack(void)
+{
+    volatile unsigned char buf[256 * 1024];
+    for (size_t i = 0; i < sizeof buf; i += 4096) {
+        buf[i] = 0;
+    }
+}
+
+static void *rt_main(void *arg)
+{
+    mca_daemon_t *d = arg;
+    prefault_stack();
+    if (d->cell.rt.cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(d->cell.rt.cpu, &set);
+        if (pthread_setaffinity_np(pthread_self(), sizeof set, &set) != 0) {
+            LOGN(d, MCA_LOG_WARNING, "cannot pin the loop to CPU %g", 1, d->cell.rt.cpu, 0, 0, 0, NULL);
+        }
+    }
+    const int64_t period = d->cell.rt.period_ns;
+    const double stop_after = d->opts.stop_after > 0 ? d->opts.stop_after : d->cell.stop_after;
+    int64_t next = now_ns() + period;
+    const int64_t t0 = next;
+    int stalled_logged = 0;
+    for (;;) {
+        struct timespec ts = {(time_t)(next / NS_PER_S), (long)(next % NS_PER_S)};
+        while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+        }
+        const int64_t wake = now_ns();
+        const uint64_t ticks = atomic_load_explicit(&d->ticks, memory_order_relaxed);
+        if (atomic_load_explicit(&d->stall_request, memory_order_relaxed) ||
+            (d->cell.debug_stall_after_ticks && ticks >= d->cell.debug_stall_after_ticks)) {
+            /* test hook: stop ticking (the supervisor must notice and stop the watchdog pings) */
+            if (!stalled_logged) {
+                LOGN(d, MCA_LOG_WARNING, "debug stall after %g ticks: the loop stops ticking", 1, (double)ticks, 0,
+                     0, 0, NULL);
+                stalled_logged = 1;
+            }
+            if (atomic_load(&d->stop_request)) {
+                break;
+            }
+            next = wake + 10 * 1000000LL;
+            continue;
+        }
+        mca_hist_record(&d->jitter, wake - next);
+        const double t = (double)(next - t0) * 1e-9;
+        if (stop_after > 0 && t >= stop_after) {
+            atomic_store(&d->stop_request, 1);
+        }
+        const int state = mca_daemon_step(d, t, wake);
+        const int64_t end = now_ns();
+        mca_hist_record(&d->compute, end - wake);
+        next += period;
+        if (end > next) {
+            d->overruns++;
+            d->consecutive_overruns++;
+            while (next <= end) {
+                next += period;
+                d->skipped++;
+            }
+            if (d->consecutive_overruns >= d->cell.rt.overrun_limit &&
+                atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING) {
+                latch_fault(d, MCA_DAEMON_FAULT_OVERRUN, MCA_ETIMEDOUT, "consecutive overruns", t);
+            }
+        } else {
+            d->consecutive_overruns = 0;
+        }
+        if (state == MCA_DAEMON_STOPPED || (state == MCA_DAEMON_FAULT && atomic_load(&d->stop_request))) {
+            /* one more zero command so the arms see the servo released, then leave */
+            mca_daemon_step(d, t + (double)period * 1e-9, now_ns());
+            break;
+        }
+    }
+    atomic_store(&d->finished, 1);
+    return NULL;
+}
+
+int mca_daemon_start(mca_daemon_t *d)
+{
+    FILE *log = d->opts.log;
+    if (!d->opts.no_rt && d->cell.rt.lock_memory) {
+        /* keep freed memory in the process, never use mmap for malloc: no page faults after start-up */
+        mallopt(M_TRIM_THRESHOLD, -1);
+        mallopt(M_MMAP_MAX, 0);
+        if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+            d->mem_locked = 1;
+            void *p = malloc(4 << 20);
+            if (p) {
+                memset(p, 0, 4 << 20);
+                free(p);
+            }
+        } else {
+            fprintf(log, "<4>mcad: mlockall failed (%s): page faults may delay the loop (raise LimitMEMLOCK)\n",
+                    strerror(errno));
+        }
+    }
+    if (!d->opts.no_rt && d->cell.rt.dma_latency) {
+        d->dma_fd = open("/dev/cpu_dma_latency", O_WRONLY);
+        const int32_t zero = 0;
+        if (d->dma_fd < 0 || write(d->dma_fd, &zero, sizeof zero) != (ssize_t)sizeof zero) {
+            fprintf(log, "<4>mcad: cannot hold /dev/cpu_dma_latency at 0 (%s): deep C-states may add wake-up "
+                         "latency\n",
+                    strerror(errno));
+            if (d->dma_fd >= 0) {
+                close(d->dma_fd);
+            }
+            d->dma_fd = -1;
+        }
+    }
+    pthread_attr_t attr;
+    pthread_attr_init(&attr);
+    pthread_attr_setstacksize(&attr, 1 << 20);
+    int rc = -1;
+    if (!d->opts.no_rt && d->cell.rt.priority > 0) {
+        struct sched_param sp = {.sched_priority = d->cell.rt.priority};
+        pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+        pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
+        pthread_attr_setschedparam(&attr, &sp);
+        rc = pthread_create(&d->thread, &attr, rt_main, d);
+        if (rc == 0) {
+            d->sched_fifo = 1;
+        } else {
+            fprintf(log, "<4>mcad: SCHED_FIFO priority %d not permitted (%s): running SCHED_OTHER, expect "
+                         "jitter (run as root or with CPUSchedulingPolicy=fifo / LimitRTPRIO)\n",
+                    d->cell.rt.priority, strerror(rc));
+        }
+    }
+    if (rc != 0) {
+        pthread_attr_setinheritsched(&attr, PTHREAD_INHERIT_SCHED);
+        rc = pthread_create(&d->thread, &attr, rt_main, d);
+    }
+    pthread_attr_destroy(&attr);
+    if (rc != 0) {
+        fprintf(log, "<3>mcad: cannot start the loop thread: %s\n", strerror(rc));
+        return MCA_ENOMEM;
+    }
+    d->thread_started = 1;
+    return MCA_OK;
+}
+
+void mca_daemon_request_stop(mca_daemon_t *d)
+{
+    atomic_store(&d->stop_request, 1);
+}
+
+void mca_daemon_request_stall(mca_daemon_t *d)
+{
+    atomic_store(&d->stall_request, 1);
+}
+
+int mca_daemon_finished(const mca_daemon_t *d)
+{
+    return atomic_load(&((mca_daemon_t *)d)->finished);
+}
+
+uint64_t mca_daemon_ticks(const mca_daemon_t *d)
+{
+    return atomic_load_explicit(&((mca_daemon_t *)d)->ticks, memory_order_acquire);
+}
+
+int mca_daemon_state(const mca_daemon_t *d)
+{
+    return atomic_load(&((mca_daemon_t *)d)->state);
+}
+
+static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r)
+{
+    FILE *f = d->csv;
+    const mca_tick_info_t *in = &r->info;
+    fprintf(f, "%.4f", r->t);
+    for (int a = 0; a < d->n_arms; a++) {
+        for (int j = 0; j < d->dof[a]; j++) {
+            fprintf(f, ",%.9g", r->q[a][j]);
+        }
+    }
+    for (int a = 0; a < d->n_arms; a++) {
+        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1], in->ee[a][2],
+                in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
+                in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
+                in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
+    }
+    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d,%d",
+            in->min_distance, in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0],
+            in->min_p[1], in->min_p[2], in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows,
+            in->binding_rows, in->pdnn_steps, in->pdnn_residual, in->eq_residual, (long long)in->compute_ns,
+            in->fault, r->state);
+    for (int a = 0; a < d->n_arms; a++) {
+        for (int j = 0; j < d->dof[a]; j++) {
+            fprintf(f, ",%.6g", r->qdot_cmd[a][j]);
+        }
+    }
+    fputc('\n', f);
+}
+
+int mca_daemon_service(mca_daemon_t *d)
+{
+    int n = mca_rtlog_drain(&d->log, d->opts.log);
+    if (d->csv) {
+        while (mca_ring_pop(&d->csv_ring, &d->csv_out) == MCA_OK) {
+            csv_write(d, &d->csv_out);
+            n++;
+        }
+    }
+    return n;
+}
+
+int mca_daemon_join(mca_daemon_t *d)
+{
+    if (d->thread_started) {
+        pthread_join(d->thread, NULL);
+        d->thread_started = 0;
+    }
+    if (d->dma_fd >= 0) {
+        close(d->dma_fd);
+        d->dma_fd = -1;
+    }
+    mca_daemon_service(d);
+    return MCA_OK;
+}
+
+void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s)
+{
+    memset(s, 0, sizeof *s);
+    s->state = mca_daemon_state(d);
+    s->ticks = mca_daemon_ticks(d);
+    s->overruns = d->overruns;
+    s->skipped_periods = d->skipped;
+    s->jitter_p50_ns = mca_hist_percentile(&d->jitter, 0.5);
+    s->jitter_p99_ns = mca_hist_percentile(&d->jitter, 0.99);
+    s->jitter_p999_ns = mca_hist_percentile(&d->jitter, 0.999);
+    s->jitter_max_ns = d->jitter.max_ns;
+    s->compute_p50_ns = mca_hist_percentile(&d->compute, 0.5);
+    s->compute_p99_ns = mca_hist_percentile(&d->compute, 0.99);
+    s->compute_max_ns = d->compute.max_ns;
+    s->ctrl_p50_ns = mca_hist_percentile(&d->ctrl_time, 0.5);
+    s->ctrl_p99_ns = mca_hist_percentile(&d->ctrl_time, 0.99);
+    s->ctrl_max_ns = d->ctrl_time.max_ns;
+    s->min_distance = d->min_d;
+    s->min_distance_t = d->min_d_t;
+    s->fault = d->fault;
+    s->ctrl_fault = d->ctrl_fault;
+    snprintf(s->fault_text, sizeof s->fault_text, "%s", d->fault_text);
+    s->fault_t = d->fault_t;
+    s->log_dropped = mca_rtlog_dropped(&d->log);
+    if (d->csv) {
+        mca_ring_stats_t rs;
+        mca_ring_stats(&d->csv_ring, &rs);
+        s->csv_dropped = rs.dropped;
+    }
+    s->sched_fifo = d->sched_fifo;
+    s->mem_locked = d->mem_locked;
+    s->dma_latency_held = d->dma_fd >= 0 || (d->sched_fifo && d->cell.rt.dma_latency && !d->opts.no_rt);
+}
+
+void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f)
+{
+    fprintf(f, "<6>mcad: summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "
+               "memory locked %s\n",
+            mca_daemon_state_name(s->state), (unsigned long long)s->ticks, (unsigned long long)s->overruns,
+            (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no", s->mem_locked ? "yes" : "no");
+    fprintf(f, "<6>mcad: summary: wake-up jitter p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
+            (double)s->jitter_p50_ns / 1e3, (double)s->jitter_p99_ns / 1e3, (double)s->jitter_p999_ns / 1e3,
+            (double)s->jitter_max_ns / 1e3);
+    fprintf(f, "<6>mcad: summary: compute time (whole tick) p50 %.1f us, p99 %.1f us, max %.1f us; controller "
+               "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
+            (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3, (double)s->compute_max_ns / 1e3,
+            (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3, (double)s->ctrl_max_ns / 1e3);
+    if (isfinite(s->min_distance)) {
+        fprintf(f, "<6>mcad: summary: minimum distance %.4f m at t = %.3f s\n", s->min_distance, s->min_distance_t);
+    } else {
+        fprintf(f, "<6>mcad: summary: minimum distance n/a\n");
+    }
+    if (s->fault) {
+        fprintf(f, "<3>mcad: summary: faults: 1 (at t = %.3f s: %s)\n", s->fault_t, s->fault_text);
+    } else {
+        fprintf(f, "<6>mcad: summary: faults: none\n");
+    }
+    if (s->log_dropped || s->csv_dropped) {
+        fprintf(f, "<4>mcad: summary: dropped log records %llu, CSV rows %llu\n", (unsigned long long)s->log_dropped,
+                (unsigned long long)s->csv_dropped);
+    }
+}
+
+void mca_daemon_close(mca_daemon_t *d)
+{
+    if (!d) {
+        return;
+    }
+    if (d->thread_started) {
+        mca_daemon_request_stop(d);
+        mca_daemon_join(d);
+    }
+    if (d->dds) {
+        /* final status with the run's figures */
+        mca_daemon_summary_t s;
+        mca_daemon_summary(d, &s);
+        const int state = mca_daemon_state(d);
+        fill_snapshot(d, now_ns(), state);
+        mca_dds_status_snapshot_t *st = &d->snap.status;
+        st->compute_p50_ns = s.compute_p50_ns;
+        st->compute_p99_ns = s.compute_p99_ns;
+        st->compute_max_ns = s.compute_max_ns;
+        st->jitter_p50_ns = s.jitter_p50_ns;
+        st->jitter_p99_ns = s.jitter_p99_ns;
+        st->jitter_max_ns = s.jitter_max_ns;
+        d->snap.tick = s.ticks;
+        st->ticks = s.ticks;
+        mca_dds_bridge_push(d->dds, &d->snap);
+        mca_dds_bridge_destroy(d->dds, NULL);
+        d->dds = NULL;
+    }
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        mca_arm_close(d->arm[a]);
+        d->arm[a] = NULL;
+    }
+    mca_daemon_service(d);
+    if (d->csv) {
+        fclose(d->csv);
+    }
+    free(d->csv_storage);
+    if (d->dma_fd >= 0) {
+        close(d->dma_fd);
+    }
+    free(d);
+}
+
+const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a)
+{
+    return a >= 0 && a < d->n_arms ? &d->cmd[a] : NULL;
+}
+
+mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a)
+{
+    return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
+}

@@ -1,0 +1,226 @@
+/* SPDX-License-Identifier: MIT */
+/* mcad: the controller daemon. Loads a cell, opens the arms and DDS, runs the 1 kHz loop in a real-time
+ * thread and supervises it from the main thread (signals, systemd notification and watchdog, log and CSV
+ * draining). See docs/daemon.md. */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <systemd/sd-daemon.h>
+#include <time.h>
+
+#include "mca/cell.h"
+#include "mca/daemon.h"
+#include "mca/err.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: mcad [options] CELL.yaml\n"
+               "  --check            load and check the cell file, print what it configures, exit\n"
+               "  --csv FILE         write one CSV row per tick (from a non-real-time thread)\n"
+               "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
+               "  --no-dds           do not publish on DDS\n"
+               "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
+               "  -h, --help\n"
+               "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
+               "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
+               "4 ended while stalled.\n");
+}
+
+static double mono_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static void print_cell(const mca_cell_t *c)
+{
+    static const char *schemes[] = {"mca", "mvn", "apf"};
+    printf("cell %s (%s): scheme %s, task '%s' %.3g s, d1 %.3g m, d2 %.3g m\n", c->name, c->source,
+           schemes[c->scheme], c->scn.name, c->scn.duration, c->scn.params.d1, c->scn.params.d2);
+    for (int a = 0; a < c->scn.n_arms; a++) {
+        const mca_scenario_arm_t *sa = &c->scn.arm[a];
+        printf("  arm %d '%s': %s, %d joints, base [%g %g %g], backend %s", a, sa->name, sa->urdf, sa->n_q0,
+               sa->base_xyz[0], sa->base_xyz[1], sa->base_xyz[2], mca_cell_backend_name(c->arm[a].backend));
+        if (c->arm[a].backend == MCA_CELL_BACKEND_SOCKETCAN) {
+            printf(" %s id_base 0x%x", c->arm[a].interface, c->arm[a].id_base);
+        }
+        printf("\n");
+    }
+    printf("  rt: period %lld us, priority %d, cpu %d, overrun limit %d, lost feedback %d cycles\n",
+           (long long)(c->rt.period_ns / 1000), c->rt.priority, c->rt.cpu, c->rt.overrun_limit,
+           c->rt.lost_feedback_cycles);
+    printf("  dds: %s, domain %u, config %s, publish every %u ticks\n", c->dds.enabled ? "on" : "off", c->dds.domain,
+           c->dds.config[0] ? c->dds.config : "(default)", c->dds.publish_divisor);
+}
+
+int main(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"check", no_argument, NULL, 'k'},      {"csv", required_argument, NULL, 'c'},
+        {"stop-after", required_argument, NULL, 's'}, {"no-dds", no_argument, NULL, 'D'},
+        {"no-rt", no_argument, NULL, 'R'},      {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0},
+    };
+    mca_daemon_opts_t opts = {.log = stderr};
+    int check = 0;
+    for (;;) {
+        const int o = getopt_long(argc, argv, "h", longopts, NULL);
+        if (o < 0) {
+            break;
+        }
+        switch (o) {
+        case 'k':
+            check = 1;
+            break;
+        case 'c':
+            opts.csv_path = optarg;
+            break;
+        case 's': {
+            char *end;
+            opts.stop_after = strtod(optarg, &end);
+            if (*end || !(opts.stop_after > 0) || !isfinite(opts.stop_after)) {
+                fprintf(stderr, "<3>mcad: --stop-after: need a positive number of seconds, got '%s'\n", optarg);
+                return 2;
+            }
+            break;
+        }
+        case 'D':
+            opts.no_dds = 1;
+            break;
+        case 'R':
+            opts.no_rt = 1;
+            break;
+        case 'h':
+            usage(stdout);
+            return 0;
+        default:
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (optind != argc - 1) {
+        usage(stderr);
+        return 2;
+    }
+    const char *cell_path = argv[optind];
+    setvbuf(stderr, NULL, _IOLBF, 0);
+
+    /* Signals are taken synchronously by this (supervising) thread; block them before any thread
+     * (DDS, the loop) exists so they all inherit the mask. */
+    sigset_t sigs;
+    sigemptyset(&sigs);
+    sigaddset(&sigs, SIGTERM);
+    sigaddset(&sigs, SIGINT);
+    sigaddset(&sigs, SIGUSR1);
+    sigaddset(&sigs, SIGHUP);
+    pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    if (!cell) {
+        return 1;
+    }
+    char err[1024];
+    int rc = mca_cell_load(cell_path, cell, err, sizeof err);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "<3>mcad: bad cell file: %s\n", err);
+        sd_notifyf(0, "STATUS=bad cell file: %s", err);
+        free(cell);
+        return 2;
+    }
+    if (check) {
+        print_cell(cell);
+        free(cell);
+        return 0;
+    }
+    fprintf(stderr, "<6>mcad: cell '%s' (%s): %d arms, task '%s'\n", cell->name, cell_path, cell->scn.n_arms,
+            cell->scn.name);
+    sd_notify(0, "STATUS=opening arms and DDS");
+
+    mca_daemon_t *d = NULL;
+    rc = mca_daemon_open(&d, cell, &opts, err, sizeof err);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "<3>mcad: start-up failed: %s\n", err);
+        sd_notifyf(0, "STATUS=start-up failed: %s", err);
+        free(cell);
+        return 1;
+    }
+    uint64_t wd_usec = 0;
+    const int wd = sd_watchdog_enabled(0, &wd_usec) > 0 && wd_usec > 0;
+    rc = mca_daemon_start(d);
+    if (rc != MCA_OK) {
+        mca_daemon_close(d);
+        free(cell);
+        return 1;
+    }
+    sd_notifyf(0, "READY=1\nSTATUS=running cell %s", cell->name);
+    fprintf(stderr, "<6>mcad: ready%s\n", wd ? " (systemd watchdog on)" : "");
+
+    /* Supervision: the watchdog is pinged only while the loop's tick counter advances. */
+    const double wd_interval = wd ? (double)wd_usec * 1e-6 / 4.0 : 0.0;
+    double next_wd = mono_s(), next_status = mono_s() + 1.0;
+    uint64_t last_ticks = mca_daemon_ticks(d);
+    int stopping = 0, stalled = 0;
+    while (!mca_daemon_finished(d)) {
+        const struct timespec to = {0, 5 * 1000000L};
+        const int sig = sigtimedwait(&sigs, NULL, &to);
+        if (sig == SIGTERM || sig == SIGINT) {
+            if (!stopping) {
+                fprintf(stderr, "<5>mcad: %s: braking to zero and stopping\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+                sd_notify(0, "STOPPING=1\nSTATUS=braking to zero");
+                stopping = 1;
+            }
+            mca_daemon_request_stop(d);
+        } else if (sig == SIGUSR1) {
+            fprintf(stderr, "<4>mcad: SIGUSR1: stalling the loop (test hook)\n");
+            mca_daemon_request_stall(d);
+            stalled = 1;
+        }
+        mca_daemon_service(d);
+        const double now = mono_s();
+        if (wd && now >= next_wd) {
+            const uint64_t t = mca_daemon_ticks(d);
+            if (t != last_ticks) {
+                sd_notify(0, "WATCHDOG=1");
+                last_ticks = t;
+            } else if (!stopping) {
+                fprintf(stderr, "<3>mcad: the loop has not ticked for %.0f ms: withholding the watchdog ping\n",
+                        wd_interval * 1e3);
+            }
+            next_wd = now + wd_interval;
+        }
+        if (now >= next_status) {
+            mca_daemon_summary_t s;
+            mca_daemon_summary(d, &s);
+            sd_notifyf(0, "STATUS=%s: ticks %llu, overruns %llu, min distance %.4f m%s%s",
+                       mca_daemon_state_name(s.state), (unsigned long long)s.ticks, (unsigned long long)s.overruns,
+                       isfinite(s.min_distance) ? s.min_distance : -1.0, s.fault ? ", fault: " : "",
+                       s.fault ? s.fault_text : "");
+            next_status = now + 1.0;
+        }
+        (void)errno;
+    }
+    if (!stopping) {
+        sd_notify(0, "STOPPING=1");
+    }
+    mca_daemon_join(d);
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    mca_daemon_print_summary(&s, stderr);
+    sd_notifyf(0, "STATUS=%s: ticks %llu, overruns %llu%s%s", mca_daemon_state_name(s.state),
+               (unsigned long long)s.ticks, (unsigned long long)s.overruns, s.fault ? ", fault: " : "",
+               s.fault ? s.fault_text : "");
+    mca_daemon_close(d); /* publishes the final status on DDS */
+    free(cell);
+    if (s.fault) {
+        return 3;
+    }
+    if (stalled || s.state != MCA_DAEMON_STOPPED) {
+        return 4;
+    }
+    return 0;
+}
