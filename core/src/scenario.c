@@ -19,6 +19,14 @@
 void mca_path_anchor(mca_path_t *path, const double ee_start[3])
 {
     mca_v3_set(path->anchor, ee_start);
+    if (path->kind == MCA_PATH_WAYPOINTS && path->n_points > 0) {
+        /* p[0] is the start: the anchor itself (offset 0 for relative paths) */
+        if (path->relative) {
+            path->p[0][0] = path->p[0][1] = path->p[0][2] = 0.0;
+        } else {
+            mca_v3_set(path->p[0], ee_start);
+        }
+    }
 }
 
 static void path_point(const mca_path_t *path, int i, double out[3])
@@ -490,27 +498,31 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             break;
         case RAW_WAYPOINTS:
             pp->kind = MCA_PATH_WAYPOINTS;
+            /* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then
+             * visits the file's points; one duration per point. */
             if (!rp->points || rp->points_count < 1) {
                 FAIL_AT("kind", ai, "arms[%d].path.points: waypoints need points", ai);
             }
-            if (rp->points_count > 1 && (!rp->durations || rp->durations_count + 1 != rp->points_count)) {
-                FAIL_AT("points", ai, "arms[%d].path.durations: need one duration per segment (%u points, %u "
-                        "durations)", ai, rp->points_count, rp->durations ? rp->durations_count : 0u);
+            if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
+                FAIL_AT("points", ai, "arms[%d].path.points: at most %d points", ai, MCA_PATH_MAX_POINTS - 1);
             }
-            pp->n_points = (int)rp->points_count;
+            if (!rp->durations || rp->durations_count != rp->points_count) {
+                FAIL_AT("points", ai,
+                        "arms[%d].path.durations: need one duration per point (%u points, %u durations)", ai,
+                        rp->points_count, rp->durations ? rp->durations_count : 0u);
+            }
+            pp->n_points = (int)rp->points_count + 1;
             for (unsigned i = 0; i < rp->points_count; i++) {
                 for (int k = 0; k < 3; k++) {
-                    pp->p[i][k] = rp->points[i][k];
-                    if (!isfinite(pp->p[i][k])) {
+                    pp->p[i + 1][k] = rp->points[i][k];
+                    if (!isfinite(pp->p[i + 1][k])) {
                         FAIL_AT("points", ai, "arms[%d].path.points[%u]: not finite", ai, i);
                     }
                 }
-                if (i + 1 < rp->points_count) {
-                    if (!positive(&rp->durations[i])) {
-                        FAIL_AT("durations", ai, "arms[%d].path.durations[%u]: must be > 0", ai, i);
-                    }
-                    pp->dur[i] = rp->durations[i];
+                if (!positive(&rp->durations[i])) {
+                    FAIL_AT("durations", ai, "arms[%d].path.durations[%u]: must be > 0", ai, i);
                 }
+                pp->dur[i] = rp->durations[i];
             }
             break;
         }

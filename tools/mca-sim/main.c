@@ -17,7 +17,8 @@ static void usage(FILE *f)
 {
     fprintf(f, "usage: mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
                "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
-               "               [--duration S] [--summary FILE.json]\n"
+               "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
+               "               [--pdnn-max-steps N]\n"
                "  --csv OUT      per-tick CSV (with several schemes: OUT gets -<scheme> before .csv)\n"
                "  --dump-qp DIR  write QPs (mca_qp_dump_json with the PDNN's phi) for tools/qp-check\n"
                "  --euler        integrate qdot directly instead of the in-process sim backend\n"
@@ -104,6 +105,18 @@ int main(int argc, char **argv)
             if (parse_int(v, &o.pdnn_max_steps)) {
                 fprintf(stderr, "mca-sim: --pdnn-max-steps: bad value '%s'\n", v);
                 return 2;
+            }
+        } else if (!strcmp(a, "--v-normal") || !strcmp(a, "--v-floor")) {
+            char *end;
+            const double x = strtod(v, &end);
+            if (*end || !(x >= 0.0) || !isfinite(x)) {
+                fprintf(stderr, "mca-sim: %s: bad value '%s'\n", a, v);
+                return 2;
+            }
+            if (a[4] == 'n') {
+                o.v_normal = x;
+            } else {
+                o.v_floor = x;
             }
         } else if (!strcmp(a, "--duration")) {
             char *end;

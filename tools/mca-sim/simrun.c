@@ -32,6 +32,7 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o)
     o->use_backend = 1;
     o->dump_every = 10;
     o->settle = 0.2;
+    o->v_floor = -1.0;
 }
 
 static int cmp_i64(const void *a, const void *b)
@@ -97,6 +98,12 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     }
     if (o->form >= 0) {
         cfg->sp.form = (mca_collision_form_t)o->form;
+    }
+    if (o->v_normal > 0.0) {
+        cfg->sp.v_normal = o->v_normal;
+    }
+    if (o->v_floor >= 0.0) {
+        cfg->sp.v_floor = o->v_floor;
     }
     if (o->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = o->pdnn_max_steps;
@@ -195,6 +202,14 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             }
         }
         if (info.fault && !r->fault) {
+            if (o->dump_dir && o->scheme != MCA_SCHEME_APF &&
+                (info.fault == MCA_CTRL_FAULT_NOT_CONVERGED || info.fault == MCA_CTRL_FAULT_FAKE_ATTRACTOR)) {
+                /* the QP that failed, for a look with OSQP (phi is zeroed after a fault: none written) */
+                char path[1024];
+                snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json", o->dump_dir, scn->name, r->scheme, k);
+                mca_qp_dump_json(mca_controller_last_qp(ctrl, NULL), NULL, info.pdnn_steps, info.pdnn_residual,
+                                 "fault", path);
+            }
             r->fault = info.fault;
             r->fault_t = t;
             r->fault_distance = info.min_distance;

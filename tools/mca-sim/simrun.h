@@ -28,6 +28,8 @@ typedef struct mca_simrun_opts {
     double duration;      /**< <= 0: the scenario's */
     double settle;        /**< seconds to run on after the arms stopped following a fault */
     int pdnn_max_steps;   /**< > 0: override */
+    double v_normal;      /**< > 0: override the scenario's */
+    double v_floor;       /**< >= 0: override the scenario's (< 0: keep) */
 } mca_simrun_opts_t;
 
 typedef struct mca_simrun_result {

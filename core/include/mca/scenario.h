@@ -41,7 +41,9 @@ typedef struct mca_path {
     double v[3];     /**< unit, in-plane, orthogonal to u */
     double period;   /**< T [s] */
     double turns;    /**< full turns in T (1) */
-    /* waypoints: p[0] reached at t0 (relative: p[0] usually 0), segment i from p[i] to p[i+1] lasts dur[i] */
+    /* waypoints: p[0] is the start (the anchor, set by mca_path_anchor: offset 0 when relative), then the
+     * file's points p[1..n_points-1]; segment i from p[i] to p[i+1] lasts dur[i]; a segment back to the
+     * same point is a dwell */
     int n_points;
     double p[MCA_PATH_MAX_POINTS][3];
     double dur[MCA_PATH_MAX_POINTS]; /**< dur[i]: duration of segment i -> i+1 [s] (> 0) */
