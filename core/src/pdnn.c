@@ -23,7 +23,7 @@ void mca_pdnn_default_params(mca_pdnn_params_t *params)
     params->big = 1e10;
     params->step_rule = MCA_PDNN_STEP_ADAPTIVE;
     params->gamma = PDNN_DEFAULT_GAMMA;
-    params->no_row_scaling = 0;
+    params->precond = MCA_PDNN_PRECOND_ORTH;
 }
 
 void mca_pdnn_init(mca_pdnn_t *s)
@@ -76,7 +76,8 @@ static int check_params(const mca_pdnn_params_t *p)
 {
     if (!isfinite(p->kappa) || !(p->tol > 0.0) || !isfinite(p->tol) || p->max_steps < 0 || !(p->big > 0.0) ||
         !isfinite(p->big) || !(p->gamma < 2.0) || (p->step_rule != MCA_PDNN_STEP_ADAPTIVE &&
-                                                    p->step_rule != MCA_PDNN_STEP_BOUND)) {
+                                                    p->step_rule != MCA_PDNN_STEP_BOUND) ||
+        p->precond < MCA_PDNN_PRECOND_ORTH || p->precond > MCA_PDNN_PRECOND_NONE) {
         return MCA_EINVAL;
     }
     return MCA_OK;
@@ -87,33 +88,217 @@ static double clampd(double x, double lo, double hi)
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
-/* Build N = D [G; -U], q = D [-alpha; beta] and Omega in the workspace. Rows scaled to unit 2-norm give
- * the same phi (D G phi = D alpha has the same solutions) and only rescale the duals (v = D v_scaled). */
-static void setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm)
+/* The constraint rows in the iteration's form: row i of N x + q >= 0 (inequality) or = 0 (equality),
+ * N = [G; -U], q = [-alpha; beta]. */
+static const double *orig_row(const mca_qp_t *qp, int i, double *sign, double *qi)
 {
-    const int n = qp->n, m = qp->n_eq + qp->n_ineq;
+    if (i < qp->n_eq) {
+        *sign = 1.0;
+        *qi = -qp->alpha[i];
+        return qp->G[i];
+    }
+    *sign = -1.0;
+    *qi = qp->beta[i - qp->n_eq];
+    return qp->U[i - qp->n_eq];
+}
+
+static double dot(const double *a, const double *b, int n)
+{
+    double s = 0.0;
+    for (int j = 0; j < n; j++) {
+        s += a[j] * b[j];
+    }
+    return s;
+}
+
+/* Modified Gram-Schmidt (two passes) on the equality rows of ws_N: G = R^T Q, alpha' = R^-T alpha.
+ * Returns 0 when G is numerically rank deficient (then ws_N/ws_q are left for a rebuild). */
+static int orth_equalities(mca_pdnn_t *s, int n, int ne)
+{
+    double *R = s->ws_R;
+    memset(R, 0, sizeof(double) * (size_t)(ne * ne));
+    for (int i = 0; i < ne; i++) {
+        double *gi = &s->ws_N[i * n];
+        const double norm0 = sqrt(dot(gi, gi, n));
+        for (int pass = 0; pass < 2; pass++) {
+            for (int k = 0; k < i; k++) {
+                const double *qk = &s->ws_N[k * n];
+                const double c = dot(qk, gi, n);
+                for (int j = 0; j < n; j++) {
+                    gi[j] -= c * qk[j];
+                }
+                s->ws_q[i] -= c * s->ws_q[k];
+                R[k * ne + i] += c;
+            }
+        }
+        const double rii = sqrt(dot(gi, gi, n));
+        if (!(rii > 1e-7 * norm0) || !(norm0 > 0.0)) {
+            return 0;
+        }
+        for (int j = 0; j < n; j++) {
+            gi[j] /= rii;
+        }
+        s->ws_q[i] /= rii;
+        R[i * ne + i] = rii;
+    }
+    return 1;
+}
+
+/* Build N, q and Omega in the workspace for the chosen rewriting (enum mca_pdnn_precond). Each rewriting
+ * keeps the feasible set, hence phi: row scaling trivially; R^-T G phi = R^-T alpha iff G phi = alpha;
+ * adding multiples of equality rows to an inequality row changes nothing where G phi = alpha. */
+static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm)
+{
+    const int n = qp->n, ne = qp->n_eq, m = qp->n_eq + qp->n_ineq;
+    int pre = prm->precond;
     for (int i = 0; i < m; i++) {
-        const int eq = i < qp->n_eq;
-        const double *row = eq ? qp->G[i] : qp->U[i - qp->n_eq];
-        const double sign = eq ? 1.0 : -1.0;
-        double nrm2 = 0.0;
+        double sign, qi;
+        const double *row = orig_row(qp, i, &sign, &qi);
         for (int j = 0; j < n; j++) {
-            nrm2 += row[j] * row[j];
+            s->ws_N[i * n + j] = sign * row[j];
         }
-        const double di = (prm->no_row_scaling || !(nrm2 > 0.0)) ? 1.0 : 1.0 / sqrt(nrm2);
-        double *Ni = &s->ws_N[i * n];
-        for (int j = 0; j < n; j++) {
-            Ni[j] = sign * di * row[j];
-        }
-        s->ws_q[i] = di * (eq ? -qp->alpha[i] : qp->beta[i - qp->n_eq]);
-        s->ws_d[i] = di;
-        s->ws_lo[n + i] = eq ? -prm->big : 0.0;
+        s->ws_q[i] = qi;
+        s->ws_d[i] = 1.0;
+        s->ws_lo[n + i] = i < ne ? -prm->big : 0.0;
         s->ws_hi[n + i] = prm->big;
+    }
+    if (pre == MCA_PDNN_PRECOND_ORTH && ne > 0 && !orth_equalities(s, n, ne)) {
+        pre = MCA_PDNN_PRECOND_SCALE;
+        for (int i = 0; i < ne; i++) { /* undo the partial orthogonalisation */
+            for (int j = 0; j < n; j++) {
+                s->ws_N[i * n + j] = qp->G[i][j];
+            }
+            s->ws_q[i] = -qp->alpha[i];
+        }
+    }
+    for (int i = (pre == MCA_PDNN_PRECOND_ORTH ? ne : 0); i < m; i++) {
+        double *Ni = &s->ws_N[i * n];
+        const double norm0 = sqrt(dot(Ni, Ni, n));
+        if (pre == MCA_PDNN_PRECOND_ORTH) {
+            for (int k = 0; k < ne; k++) {
+                const double *qk = &s->ws_N[k * n];
+                const double c = dot(qk, Ni, n);
+                for (int j = 0; j < n; j++) {
+                    Ni[j] -= c * qk[j];
+                }
+                s->ws_q[i] -= c * s->ws_q[k];
+            }
+        }
+        if (pre == MCA_PDNN_PRECOND_NONE) {
+            continue;
+        }
+        const double nrm = sqrt(dot(Ni, Ni, n));
+        if (nrm > 1e-9 * norm0 && nrm > 0.0) {
+            s->ws_d[i] = 1.0 / nrm;
+            for (int j = 0; j < n; j++) {
+                Ni[j] *= s->ws_d[i];
+            }
+            s->ws_q[i] *= s->ws_d[i];
+        } else if (pre == MCA_PDNN_PRECOND_ORTH) {
+            /* the row lies in the span of G: on G phi = alpha it is the constant test q_i >= 0 */
+            for (int j = 0; j < n; j++) {
+                Ni[j] = 0.0;
+            }
+        }
     }
     for (int j = 0; j < n; j++) {
         s->ws_lo[j] = clampd(qp->lb[j], -prm->big, prm->big);
         s->ws_hi[j] = clampd(qp->ub[j], -prm->big, prm->big);
     }
+    return pre;
+}
+
+/* out[j] = sum_i (-U)_ij v_i: the inequality rows' share of the stationarity point. */
+static void ineq_sum(const mca_qp_t *qp, const double *vi, double *out)
+{
+    for (int j = 0; j < qp->n; j++) {
+        out[j] = 0.0;
+    }
+    for (int i = 0; i < qp->n_ineq; i++) {
+        if (vi[i] != 0.0) {
+            for (int j = 0; j < qp->n; j++) {
+                out[j] -= qp->U[i][j] * vi[i];
+            }
+        }
+    }
+}
+
+/* Duals of the QP as given (yt) -> duals of the rewritten rows (yw). Inequalities: v_i = d_i w_i.
+ * Equalities (ORTH): G^T v_e + N0_I^T v_i = Q^T w_e + N'_I^T w_i and Q N'_I^T = 0, so w_e = R v_e +
+ * Q N0_I^T v_i; otherwise v_e = d_e w_e. */
+static void duals_to_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const double *yt, double *yw)
+{
+    const int n = qp->n, ne = qp->n_eq, m = ne + qp->n_ineq;
+    for (int i = 0; i < n; i++) {
+        yw[i] = yt[i];
+    }
+    for (int i = ne; i < m; i++) {
+        yw[n + i] = yt[n + i] / s->ws_d[i];
+    }
+    if (pre != MCA_PDNN_PRECOND_ORTH) {
+        for (int i = 0; i < ne; i++) {
+            yw[n + i] = yt[n + i] / s->ws_d[i];
+        }
+        return;
+    }
+    double a[MCA_QP_MAX_VARS];
+    ineq_sum(qp, yt + n + ne, a);
+    for (int i = 0; i < ne; i++) {
+        double r = dot(&s->ws_N[i * n], a, n);
+        for (int k = i; k < ne; k++) {
+            r += s->ws_R[i * ne + k] * yt[n + k];
+        }
+        yw[n + i] = r;
+    }
+}
+
+static void duals_from_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const double *yw, double *yt)
+{
+    const int n = qp->n, ne = qp->n_eq, m = ne + qp->n_ineq;
+    for (int i = 0; i < n; i++) {
+        yt[i] = yw[i];
+    }
+    for (int i = ne; i < m; i++) {
+        yt[n + i] = yw[n + i] * s->ws_d[i];
+    }
+    if (pre != MCA_PDNN_PRECOND_ORTH) {
+        for (int i = 0; i < ne; i++) {
+            yt[n + i] = yw[n + i] * s->ws_d[i];
+        }
+        return;
+    }
+    double a[MCA_QP_MAX_VARS];
+    ineq_sum(qp, yt + n + ne, a);
+    for (int i = ne - 1; i >= 0; i--) { /* R v_e = w_e - Q N0_I^T v_i, R upper triangular */
+        double r = yw[n + i] - dot(&s->ws_N[i * n], a, n);
+        for (int k = i + 1; k < ne; k++) {
+            r -= s->ws_R[i * ne + k] * yt[n + k];
+        }
+        yt[n + i] = r / s->ws_R[i * ne + i];
+    }
+}
+
+/* ||P_Omega(y - (M y + q)) - y||_inf for the QP as given (the reported residual and the stop test). */
+static double true_residual(const mca_qp_t *qp, const mca_pdnn_t *s, double big, const double *y)
+{
+    const int n = qp->n, ne = qp->n_eq;
+    double a[MCA_QP_MAX_VARS], r = 0.0;
+    ineq_sum(qp, y + n + ne, a);
+    for (int i = 0; i < ne; i++) {
+        for (int j = 0; j < n; j++) {
+            a[j] += qp->G[i][j] * y[n + i];
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        r = fmax(r, fabs(clampd(a[j], s->ws_lo[j], s->ws_hi[j]) - y[j]));
+    }
+    for (int i = 0; i < ne + qp->n_ineq; i++) {
+        double sign, qi;
+        const double *row = orig_row(qp, i, &sign, &qi);
+        const double b = sign * dot(row, y, n) + qi, v = y[n + i];
+        r = fmax(r, fabs(clampd(v - b, i < ne ? -big : 0.0, big) - v));
+    }
+    return r;
 }
 
 int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *params, double *phi,
@@ -132,7 +317,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         prm.gamma = PDNN_DEFAULT_GAMMA;
     }
     const int n = qp->n, m = qp->n_eq + qp->n_ineq, h = n + m;
-    setup(s, qp, &prm);
+    const int pre = setup(s, qp, &prm);
 
     /* Warm start: reuse what still means the same thing. A state left non-finite is dropped. */
     int warm = 0;
@@ -140,35 +325,54 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         warm = (s->n_ineq == qp->n_ineq) ? 2 : 1;
     }
     for (int i = 0; i < h; i++) {
-        double yi = 0.0;
-        if (i < n + qp->n_eq ? warm >= 1 : warm == 2) {
-            yi = s->y[i];
-        }
-        s->ws_y[i] = i < n ? yi : yi / s->ws_d[i - n];
+        const int keep = i < n + qp->n_eq ? warm >= 1 : warm == 2;
+        s->ws_t[i] = keep ? s->y[i] : 0.0;
     }
+    duals_to_iter(s, qp, pre, s->ws_t, s->ws_y);
 
-    const mca_pdnn__problem_t p = {n, m, qp->n_eq, s->ws_N, s->ws_q, s->ws_d, s->ws_lo, s->ws_hi};
+    const mca_pdnn__problem_t p = {n, m, s->ws_N, s->ws_q, s->ws_lo, s->ws_hi};
     mca_pdnn_result_t res = {0};
-    res.warm = warm;
     double kappa_fixed = prm.kappa;
     if (kappa_fixed > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
         /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in s. */
         const double s2 = mca_pdnn__norm_sq_bound(&p);
-        const double L2 = 0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2));
-        res.kappa_bound = prm.gamma / L2;
+        res.kappa_bound = prm.gamma / (0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2)));
         if (kappa_fixed <= 0.0) {
             kappa_fixed = res.kappa_bound;
         }
     }
-    mca_pdnn__iterate(&p, s->ws_y, kappa_fixed, prm.gamma, prm.tol, prm.max_steps, &res);
+
+    /* The iteration stops on its own residual; the answer must meet tol on the QP as given, which the
+     * rewriting changes by bounded factors: check, and tighten the inner tolerance if needed. */
+    double tol_it = prm.tol, r_true = INFINITY;
+    int steps = 0;
+    for (int pass = 0; pass < 8; pass++) {
+        mca_pdnn_result_t it;
+        mca_pdnn__iterate(&p, s->ws_y, kappa_fixed, prm.gamma, tol_it, prm.max_steps - steps, &it);
+        steps += it.steps;
+        res.kappa = it.kappa;
+        if (!isfinite(it.residual)) {
+            r_true = it.residual;
+            break;
+        }
+        duals_from_iter(s, qp, pre, s->ws_y, s->ws_t);
+        r_true = true_residual(qp, s, prm.big, s->ws_t);
+        if (r_true <= prm.tol || steps >= prm.max_steps) {
+            break;
+        }
+        tol_it *= fmax(1e-3, 0.5 * prm.tol / r_true);
+    }
+    res.steps = steps;
+    res.residual = r_true;
+    res.converged = r_true <= prm.tol;
+    res.warm = warm;
+    res.precond = pre;
 
     for (int j = 0; j < n; j++) {
         phi[j] = s->ws_y[j];
     }
-    if (isfinite(res.residual)) {
-        for (int i = 0; i < h; i++) {
-            s->y[i] = i < n ? s->ws_y[i] : s->ws_y[i] * s->ws_d[i - n];
-        }
+    if (isfinite(r_true)) {
+        memcpy(s->y, s->ws_t, sizeof(double) * (size_t)h);
         s->h = h;
         s->n = n;
         s->n_eq = qp->n_eq;

@@ -11,10 +11,9 @@ extern "C" {
 
 /** What the iteration needs; all arrays belong to the caller (the mca_pdnn_t workspace). */
 typedef struct mca_pdnn__problem {
-    int n, m, n_eq;   /**< primal size, dual size (n_eq + n_ineq), leading equality rows */
-    const double *N;  /**< m x n row-major, [G; -U] (row-scaled) */
-    const double *q;  /**< m, [-alpha; beta] (row-scaled) */
-    const double *d;  /**< m, row scale factors: true dual = d * iterated dual */
+    int n, m;         /**< primal size, dual size (n_eq + n_ineq) */
+    const double *N;  /**< m x n row-major, [G; -U] (possibly rewritten, pdnn.c) */
+    const double *q;  /**< m, [-alpha; beta] (likewise) */
     const double *lo; /**< n + m, Omega lower bounds */
     const double *hi; /**< n + m, Omega upper bounds */
 } mca_pdnn__problem_t;
@@ -23,8 +22,8 @@ typedef struct mca_pdnn__problem {
 double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p);
 
 /**
- * Explicit Euler steps y += kappa_k (I + M^T) e(y) from y (n + m values, updated in place) until the
- * residual of the UNSCALED problem is <= tol or max_steps updates were made. kappa_fixed > 0: constant
+ * Explicit Euler steps y += kappa_k (I + M^T) e(y) from y (n + m values, updated in place) until
+ * ||e(y)||_inf <= tol for this (N, q) or max_steps updates were made; stops early on a non-finite residual. kappa_fixed > 0: constant
  * step; else kappa_k = gamma ||e||^2 / ||(I + M^T) e||^2. Fills steps, residual, converged, kappa.
  * No allocation.
  */

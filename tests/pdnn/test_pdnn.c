@@ -145,12 +145,13 @@ static int solve(const mca_qp_t *qp, const mca_pdnn_params_t *prm, double *phi, 
     return mca_pdnn_solve(&solver, qp, prm, phi, res);
 }
 
-/* Every variant of the solver: adaptive / bound step, with / without row scaling. */
+/* Every variant of the solver: adaptive / bound step x ORTH / SCALE / NONE rewriting. */
+#define N_VARIANTS 6
 static void variant(mca_pdnn_params_t *prm, int v)
 {
     mca_pdnn_default_params(prm);
     prm->step_rule = (v & 1) ? MCA_PDNN_STEP_BOUND : MCA_PDNN_STEP_ADAPTIVE;
-    prm->no_row_scaling = (v & 2) != 0;
+    prm->precond = v >> 1;
     prm->max_steps = 200000;
     prm->tol = 1e-12; /* the hand-solved answers are checked to 1e-9 */
 }
@@ -188,7 +189,7 @@ static void test_equality_closed_form(void **state)
                 truth[j] += qp.G[i][j] * lam[i];
             }
         }
-        for (int v = 0; v < 4; v++) {
+        for (int v = 0; v < N_VARIANTS; v++) {
             mca_pdnn_params_t prm;
             variant(&prm, v);
             double phi[16];
@@ -216,7 +217,7 @@ static void test_box_only(void **state)
     const double lb[3] = {0.5, -2.0, -INFINITY}, ub[3] = {1.0, -1.0, INFINITY};
     memcpy(qp.lb, lb, sizeof(lb));
     memcpy(qp.ub, ub, sizeof(ub));
-    for (int v = 0; v < 4; v++) {
+    for (int v = 0; v < N_VARIANTS; v++) {
         mca_pdnn_params_t prm;
         variant(&prm, v);
         double phi[3];
@@ -242,7 +243,7 @@ static void test_box_and_equality(void **state)
     qp.ub[0] = 0.5;
     qp.lb[1] = -INFINITY;
     qp.ub[1] = INFINITY;
-    for (int v = 0; v < 4; v++) {
+    for (int v = 0; v < N_VARIANTS; v++) {
         mca_pdnn_params_t prm;
         variant(&prm, v);
         double phi[2];
@@ -269,7 +270,7 @@ static void test_active_inequality(void **state)
     /* and an inactive row: phi3 <= 5 */
     qp.U[1][2] = 1.0;
     qp.beta[1] = 5.0;
-    for (int v = 0; v < 4; v++) {
+    for (int v = 0; v < N_VARIANTS; v++) {
         mca_pdnn_params_t prm;
         variant(&prm, v);
         double phi[3];
@@ -339,8 +340,9 @@ static void test_warm_start(void **state)
         assert_int_equal(res.warm, 2);
         assert_int_equal(res.steps, 0);
         assert_memory_equal(phi, phi2, sizeof(phi));
-        /* a small move: warm takes fewer steps than the same QP cold */
-        qpgen_scene_perturb(&sc, &rng, 1e-5);
+        /* a small move: warm takes fewer steps than the same QP cold. The convergence is linear, so the
+         * gain is log(distance): measured ~0.48 of cold at 1e-6, ~0.65 at 1e-5, ~0.9 at 1e-3 (docs). */
+        qpgen_scene_perturb(&sc, &rng, 1e-6);
         qpgen_build(&sc, &qp);
         assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
         const int warm = res.steps;
@@ -353,7 +355,7 @@ static void test_warm_start(void **state)
             assert_near(phi[j], phi2[j], 1e-7);
         }
     }
-    assert_true(3 * pert_sum < 2 * cold_sum);
+    assert_true(5 * pert_sum < 3 * cold_sum);
 }
 
 static void test_partial_warm_start(void **state)
@@ -404,7 +406,7 @@ static void test_no_malloc(void **state)
     double phi[16];
     mca_pdnn_result_t res;
     mca_pdnn_init(&solver);
-    for (int v = 0; v < 4; v++) {
+    for (int v = 0; v < N_VARIANTS; v++) {
         mca_pdnn_params_t prm;
         variant(&prm, v);
         prm.max_steps = 2000;

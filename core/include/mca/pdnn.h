@@ -26,6 +26,19 @@ enum mca_pdnn_step {
     MCA_PDNN_STEP_BOUND = 1,
 };
 
+/** Equivalent rewriting of the constraints before integrating (32); phi and the reported duals are those
+ *  of the QP as given in every case (docs/pdnn.md). */
+enum mca_pdnn_precond {
+    /** Rows of G orthonormalised (G -> R^-T G, alpha -> R^-T alpha), the G-components taken out of the
+     *  rows of U (U_i -> U_i - c_i G, beta_i -> beta_i - c_i alpha: same set where G phi = alpha), then
+     *  every row scaled to unit norm. Falls back to SCALE when G is (near) rank deficient. Default. */
+    MCA_PDNN_PRECOND_ORTH = 0,
+    /** Rows of G and U scaled to unit norm only. */
+    MCA_PDNN_PRECOND_SCALE = 1,
+    /** G, U as given: the paper's network verbatim. */
+    MCA_PDNN_PRECOND_NONE = 2,
+};
+
 typedef struct mca_pdnn_params {
     double kappa;  /**< Euler step (lambda * dt); <= 0: chosen each solve from the stability bound */
     double tol;    /**< residual tolerance ||P_Omega(y - (My+q)) - y||_inf */
@@ -34,8 +47,7 @@ typedef struct mca_pdnn_params {
     /* Added fields; a zeroed value means the default. */
     int step_rule; /**< enum mca_pdnn_step, used when kappa <= 0 */
     double gamma;  /**< step factor in (0, 2) for the bound/adaptive rules; <= 0: 1.9 */
-    int no_row_scaling; /**< 1: iterate on G, U as given (plain); 0: rows of G, U scaled to unit norm
-                             (same phi, better conditioned dynamics) */
+    int precond;   /**< enum mca_pdnn_precond */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
@@ -45,7 +57,9 @@ typedef struct mca_pdnn_result {
     double kappa;       /**< step size used (adaptive rule: the last step taken) */
     /* Added fields. */
     int warm;           /**< 2: whole y reused, 1: phi and v_e reused (n_ineq changed), 0: cold */
-    double kappa_bound; /**< gamma / ||I+M||_2^2 (upper-bounded norm) of the iterated (scaled) problem */
+    double kappa_bound; /**< gamma / ||I+M||_2^2 (upper-bounded norm) of the iterated problem; 0 when not
+                             needed (adaptive rule) */
+    int precond;        /**< enum mca_pdnn_precond actually used */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
@@ -55,11 +69,13 @@ typedef struct mca_pdnn {
     /* Added fields: sizes of the last solve (partial warm start) and the solver's private workspace, kept
      * here so that a solve needs no allocation and little stack. */
     int n, n_eq, n_ineq;
-    double ws_N[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< [G; -U] row-scaled, m x n */
-    double ws_q[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                     /**< [-alpha; beta] row-scaled */
+    double ws_N[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< [G; -U] rewritten, m x n */
+    double ws_q[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                     /**< [-alpha; beta] rewritten */
     double ws_d[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                     /**< row scale factors */
+    double ws_R[MCA_QP_MAX_EQ * MCA_QP_MAX_EQ];                       /**< G = R^T Q (ORTH) */
     double ws_lo[MCA_QP_MAX_H], ws_hi[MCA_QP_MAX_H];                  /**< Omega */
-    double ws_y[MCA_QP_MAX_H];                                        /**< iterate (scaled duals) */
+    double ws_y[MCA_QP_MAX_H];                                        /**< iterate (rewritten duals) */
+    double ws_t[MCA_QP_MAX_H];                                        /**< scratch */
 } mca_pdnn_t;
 
 /** Defaults: kappa from the bound, tol 1e-9, max_steps, big 1e10. */
