@@ -150,6 +150,26 @@ check(rc == 2 and "/nonexistent/robot.urdf" in err, "fk missing file: exit 2")
 rc, _, err = run(["fk", "0", "0"])
 check(rc == 2, "fk without --robot: exit 2")
 
+# --- armdist ---
+# two PA10+ straight up, 1 m apart (B yawed about its own vertical axis): the axes are parallel vertical
+# lines 1 m apart; the closest capsules are the two base spheres (radius 0.08 in the URDF): 1 - 0.16
+zero8 = ",".join(["0"] * 8)
+rc, out, err = run(["armdist", "--robot-a", pa10, "--qa", zero8, "--robot-b", pa10, "--base-b", "1,0,0,0,0,2",
+                    "--qb", zero8])
+lines = {ln.split()[0]: ln.split() for ln in out.splitlines()}
+m = [float(x) for x in lines.get("min", ["min"] + ["nan"] * 10)[1:]]
+check(rc == 0 and abs(m[2] - 0.84) < 1e-12 and abs(m[3] - 1.0) < 1e-12 and abs(m[7] - m[4] - 1.0) < 1e-12,
+      f"armdist two PA10+ 1 m apart: min 0.84, axis 1, E - P = +x [{err.strip()}] {m}")
+check(sum(1 for ln in out.splitlines() if ln.startswith("a_to_b")) == 9, "armdist: 9 a_to_b rows for 8 DOF")
+rc, out2, _ = run(["armdist", "--robot-a", pa10, "--qa", zero8, "--robot-b", pa10, "--base-b", "1,0,0,0,0,2",
+                   "--qb", zero8, "--method", "lsdm"])
+check(rc == 0 and out2.splitlines()[0] == out.splitlines()[0] and int(out2.split()[-1]) > 0,
+      "armdist --method lsdm: same minimum here (parallel axes, endpoint answers), counts iterations")
+rc, _, err = run(["armdist", "--robot-a", pa10, "--qa", "0,0,0", "--robot-b", pa10, "--qb", zero8])
+check(rc == 2 and "8 joints" in err, f"armdist wrong q count: exit 2 [{err.strip()}]")
+rc, _, err = run(["armdist", "--robot-a", pa10, "--qa", zero8, "--robot-b", pa10, "--qb", zero8, "--base-b", "1,2"])
+check(rc == 2 and "base-b" in err, f"armdist bad base: exit 2 [{err.strip()}]")
+
 # --- help / usage ---
 rc, out, _ = run(["--help"])
 check(rc == 0 and "segdist" in out and "fk --robot" in out, "--help: exit 0, lists commands")

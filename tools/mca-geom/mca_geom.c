@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mca/armdist.h"
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/segdist.h"
@@ -34,6 +35,13 @@ static void usage(FILE *f) {
           "        root x y z / joint i NAME x y z (each joint origin) / ee x y z   (world frame, m).\n"
           "      Bad URDF, unknown tip link, wrong number of q or non-numeric q: exit code 2.\n"
           "      LINK defaults to the URDF's single leaf link (tool_tip in config/robots/).\n"
+          "\n"
+          "  armdist --robot-a A.urdf [--base-a x,y,z,roll,pitch,yaw] --qa q1,...,qn\n"
+          "          --robot-b B.urdf [--base-b x,y,z,roll,pitch,yaw] --qb q1,...,qm [--method closed|lsdm]\n"
+          "      Arm-to-arm link distances (capsules: axis distance minus both radii). Prints\n"
+          "        min LINK_A LINK_B d d_axis px py pz ex ey ez   (global minimum, P on A, E on B)\n"
+          "        a_to_b I J ... (per link of A)  /  b_to_a J I ... (per link of B)  /  iterations N\n"
+          "      Bad URDF, bad base or wrong number of q: exit code 2.\n"
           "\n"
           "  --help   this text\n",
           f);
@@ -216,6 +224,119 @@ static int cmd_fk(int argc, char **argv) {
     return 0;
 }
 
+/* Comma-separated finite numbers into v[0..max-1]; returns the count or -1 (bad field, too many). */
+static int parse_list(const char *text, double *v, int max) {
+    char buf[1024], *tok, *save = NULL;
+    int n = 0;
+    if (strlen(text) >= sizeof buf) {
+        return -1;
+    }
+    strcpy(buf, text);
+    for (tok = strtok_r(buf, ", \t", &save); tok != NULL; tok = strtok_r(NULL, ", \t", &save)) {
+        if (n >= max || parse_finite(tok, &v[n]) != 0) {
+            return -1;
+        }
+        n++;
+    }
+    return n;
+}
+
+typedef struct arm_arg {
+    const char *robot, *base, *q;
+} arm_arg_t;
+
+static int load_arm(const char *label, const arm_arg_t *arg, mca_chain_t *chain, mca_kin_t *kin) {
+    char err[512] = "";
+    double base[6] = {0, 0, 0, 0, 0, 0}, q[MCA_MAX_DOF];
+    int rc, n;
+    if (arg->robot == NULL || arg->q == NULL) {
+        fprintf(stderr, "mca-geom armdist: --robot-%s and --q%s are required\n", label, label);
+        return EXIT_BAD_INPUT;
+    }
+    rc = mca_chain_load_urdf(chain, arg->robot, NULL, err, sizeof err);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "mca-geom armdist: arm %s: %s: %s\n", label, mca_strerror(rc),
+                err[0] ? err : arg->robot);
+        return EXIT_BAD_INPUT;
+    }
+    if (arg->base != NULL && parse_list(arg->base, base, 6) != 6) {
+        fprintf(stderr, "mca-geom armdist: --base-%s '%s': expected 6 numbers x,y,z,roll,pitch,yaw\n", label,
+                arg->base);
+        return EXIT_BAD_INPUT;
+    }
+    n = parse_list(arg->q, q, MCA_MAX_DOF);
+    if (n != chain->dof) {
+        fprintf(stderr, "mca-geom armdist: --q%s '%s': %s has %d joints (numbers, comma-separated)\n", label,
+                arg->q, arg->robot, chain->dof);
+        return EXIT_BAD_INPUT;
+    }
+    mca_chain_set_base(chain, &base[0], &base[3]);
+    if (mca_fk(chain, q, kin) != MCA_OK) {
+        fprintf(stderr, "mca-geom armdist: arm %s: forward kinematics failed\n", label);
+        return EXIT_BAD_INPUT;
+    }
+    return 0;
+}
+
+static void print_pair(const char *tag, const mca_link_pair_t *lp) {
+    printf("%s %d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", tag, lp->link, lp->other_link, lp->d,
+           lp->d_axis, lp->p[0], lp->p[1], lp->p[2], lp->e[0], lp->e[1], lp->e[2]);
+}
+
+static int cmd_armdist(int argc, char **argv) {
+    arm_arg_t arm[2] = {{NULL, NULL, NULL}, {NULL, NULL, NULL}};
+    mca_dist_method_t method = MCA_DIST_CLOSED;
+    static mca_chain_t chain[2];
+    static mca_kin_t kin[2];
+    mca_arm_distances_t out;
+    int rc;
+
+    for (int i = 0; i < argc; i++) {
+        const char *o = argv[i];
+        if (i + 1 >= argc) {
+            fprintf(stderr, "mca-geom armdist: option '%s' needs a value (see --help)\n", o);
+            return EXIT_BAD_INPUT;
+        }
+        const char *v = argv[++i];
+        if (strcmp(o, "--robot-a") == 0) {
+            arm[0].robot = v;
+        } else if (strcmp(o, "--robot-b") == 0) {
+            arm[1].robot = v;
+        } else if (strcmp(o, "--base-a") == 0) {
+            arm[0].base = v;
+        } else if (strcmp(o, "--base-b") == 0) {
+            arm[1].base = v;
+        } else if (strcmp(o, "--qa") == 0) {
+            arm[0].q = v;
+        } else if (strcmp(o, "--qb") == 0) {
+            arm[1].q = v;
+        } else if (strcmp(o, "--method") == 0 && (strcmp(v, "closed") == 0 || strcmp(v, "lsdm") == 0)) {
+            method = strcmp(v, "closed") == 0 ? MCA_DIST_CLOSED : MCA_DIST_LSDM;
+        } else {
+            fprintf(stderr, "mca-geom armdist: unknown option or value '%s %s' (see --help)\n", o, v);
+            return EXIT_BAD_INPUT;
+        }
+    }
+    if ((rc = load_arm("a", &arm[0], &chain[0], &kin[0])) != 0 ||
+        (rc = load_arm("b", &arm[1], &chain[1], &kin[1])) != 0) {
+        return rc;
+    }
+    rc = mca_arm_distances(&chain[0], &kin[0], &chain[1], &kin[1], method, &out);
+    if (rc != MCA_OK) {
+        fprintf(stderr, "mca-geom armdist: %s\n", mca_strerror(rc));
+        return EXIT_BAD_INPUT;
+    }
+    print_pair("min", &out.min);
+    for (int i = 0; i < out.n_links_a; i++) {
+        print_pair("a_to_b", &out.a_to_b[i]);
+    }
+    for (int j = 0; j < out.n_links_b; j++) {
+        print_pair("b_to_a", &out.b_to_a[j]);
+    }
+    printf("iterations %d\n", out.iterations);
+    return 0;
+}
+
 int main(int argc, char **argv) {
     if (argc < 2) {
         usage(stderr);
@@ -230,6 +351,9 @@ int main(int argc, char **argv) {
     }
     if (strcmp(argv[1], "fk") == 0) {
         return cmd_fk(argc - 2, argv + 2);
+    }
+    if (strcmp(argv[1], "armdist") == 0) {
+        return cmd_armdist(argc - 2, argv + 2);
     }
     fprintf(stderr, "mca-geom: unknown command '%s' (see mca-geom --help)\n", argv[1]);
     return EXIT_BAD_INPUT;
