@@ -632,6 +632,105 @@ static void test_inject_now(void **state) {
     assert_fb_equal(&fb, &frozen);
 }
 
+/* Random command streams (flags, stale ids, wrong n, NaN, gaps, huge velocities, injections):
+ * the invariants hold in every cycle. */
+static uint64_t t_rng = 12345;
+static uint64_t t_next(void) {
+    t_rng ^= t_rng << 13;
+    t_rng ^= t_rng >> 7;
+    t_rng ^= t_rng << 17;
+    return t_rng;
+}
+static double t_unit(void) {
+    return (double)(t_next() >> 11) / 9007199254740992.0;
+}
+
+static void test_random_invariants(void **state) {
+    (void)state;
+    const int n = 5;
+    mca_sim_arm_config_t cfg;
+    mca_sim_arm_config_default(&cfg, n);
+    for (int j = 0; j < n; j++) {
+        cfg.lower[j] = -0.5 - 0.1 * j;
+        cfg.upper[j] = 0.4 + 0.1 * j;
+        cfg.vel_limit[j] = 0.5 + 0.2 * j;
+        cfg.acc_limit[j] = 3.0 + j;
+        cfg.dec_limit[j] = 6.0 - j;
+    }
+    cfg.lag_tau = 0.004;
+    cfg.latency_cycles = 2;
+    cfg.watchdog_cycles = 4;
+    cfg.noise_pos = 1e-3;
+    cfg.n_inject = 2;
+    cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_ACTUATOR, .at_cycle = 30000, .joint = 2};
+    cfg.inject[1] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_DROP_RX, .at_cycle = 50000, .duration = 100};
+    init_arm(&g_arm, &cfg);
+    uint32_t id = 1;
+    int seen[5] = {0};
+    for (int k = 0; k < 100000; k++) {
+        mca_arm_command_t c = cmd_all(id, n, ON, 0);
+        uint64_t r = t_next();
+        for (int j = 0; j < n; j++) {
+            c.velocity[j] = (t_unit() * 2 - 1) * 1.5 * cfg.vel_limit[j] * sin(1e-3 * k + j);
+        }
+        if (r % 97 == 0) {
+            c.flags[r % n] = 0; /* requested stop */
+        }
+        if (r % 89 == 0) {
+            c.flags[0] |= MCA_ACT_CLEAR_FAULT;
+        }
+        if (r % 83 == 0) {
+            c.frame_id = id - 3; /* stale */
+        }
+        if (r % 79 == 0) {
+            c.n = n + 1;
+        }
+        if (r % 73 == 0) {
+            c.velocity[1] = NAN;
+        }
+        if (r % 211 == 0) {
+            c.velocity[0] = 1e6;
+        }
+        if (k % 5000 < 3000 || r % 500 == 0) { /* all flags clear-fault once FAULT is reached */
+            if (g_arm.state == MCA_ARM_FAULT) {
+                c.flags[0] |= MCA_ACT_CLEAR_FAULT;
+            }
+        }
+        int gap = (k % 7000) > 6990; /* controller stalls: the watchdog trips */
+        double v_prev[MCA_MAX_DOF];
+        memcpy(v_prev, g_arm.v, sizeof(v_prev));
+        mca_arm_feedback_t fb;
+        assert_int_equal(mca_sim_arm_cycle(&g_arm, gap ? NULL : &c, DT, &fb), MCA_OK);
+        id++;
+        seen[fb.state]++;
+        for (int j = 0; j < n; j++) {
+            double v = g_arm.v[j], q = g_arm.q[j];
+            assert_true(isfinite(v) && isfinite(q) && isfinite(fb.position[j]) && isfinite(fb.torque[j]));
+            assert_true(fabs(v) <= cfg.vel_limit[j] * (1 + 1e-12));
+            assert_true(q >= cfg.lower[j] && q <= cfg.upper[j]);
+            /* the only velocity jump beyond acc/dec is a joint stopped by its position limit */
+            int at_limit = q == cfg.lower[j] || q == cfg.upper[j];
+            double amax = fmax(cfg.acc_limit[j], cfg.dec_limit[j]) * DT * (1 + 1e-9);
+            assert_true(fabs(v - v_prev[j]) <= amax || (at_limit && v == 0.0));
+            if (fb.state == MCA_ARM_READY || fb.state == MCA_ARM_FAULT) {
+                assert_double_equal(v, 0.0, 0);
+            }
+        }
+        assert_true(fb.state >= MCA_ARM_READY && fb.state <= MCA_ARM_FAULT);
+        assert_true((fb.fault_code != MCA_ARM_FAULT_NONE) == (fb.state == MCA_ARM_FAULT) ||
+                    fb.state == MCA_ARM_BRAKING);
+    }
+    print_message(
+        "cycles per state READY %d SERVOING %d BRAKING %d FAULT %d; trips %lu stale %lu invalid %lu\n",
+        seen[1], seen[2], seen[3], seen[4], (unsigned long)g_arm.cnt.watchdog_trips,
+        (unsigned long)g_arm.cnt.cmd_stale, (unsigned long)g_arm.cnt.cmd_invalid);
+    /* the stream visits every state except INIT (init_cycles = 0) */
+    for (int s = MCA_ARM_READY; s <= MCA_ARM_FAULT; s++) {
+        assert_true(seen[s] > 0);
+    }
+    assert_true(g_arm.cnt.watchdog_trips > 0 && g_arm.cnt.cmd_stale > 0 && g_arm.cnt.cmd_invalid > 0);
+}
+
 static void test_config_errors(void **state) {
     (void)state;
     mca_sim_arm_config_t cfg;
@@ -731,6 +830,7 @@ int main(void) {
         cmocka_unit_test(test_torque_model),
         cmocka_unit_test(test_fault_injection),
         cmocka_unit_test(test_inject_now),
+        cmocka_unit_test(test_random_invariants),
         cmocka_unit_test(test_config_errors),
         cmocka_unit_test(test_config_from_chain),
     };
