@@ -210,15 +210,20 @@ static const cyaml_schema_value_t cell_schema = {
 /* ---------------------------------------------------------------- messages */
 
 /* libcyaml reports a load error as an error line ("Load: Invalid INT value: 'x'") followed by a backtrace,
- * innermost first ("  in mapping field 'priority' (line: 12, column: 13)"). Keep the first error text and
- * the innermost position and build the dotted field path from the backtrace. */
+ * innermost first: "in mapping field 'priority' (line: 12, column: 13)", "in sequence entry '1' (...)"
+ * (1-based entry count), "in mapping (...)". Lines/columns are 1-based and are those of the last event
+ * read. Keep the error text and the frames; cell_parse_error() turns them into "FILE:LINE:COL: field". */
+enum frame_kind { FR_FIELD, FR_ENTRY, FR_MAPPING };
 struct log_state {
     char what[256];
     int have_what;
-    int line, col;
-    char fields[8][48]; /* backtrace names, innermost first */
-    int n_fields;
-    int seq_index[8];   /* entry index when the frame is a sequence entry, else -1 */
+    int n;
+    struct {
+        enum frame_kind kind;
+        char name[48];
+        int entry; /* 0-based sequence index */
+        int line, col;
+    } fr[10]; /* innermost first */
 };
 
 static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args)
@@ -240,32 +245,119 @@ static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list a
     while (*p == ' ') {
         p++;
     }
-    int l = 0, c = 0;
+    int kind = -1;
     if (strncmp(p, "in mapping field '", 18) == 0) {
+        kind = FR_FIELD;
+    } else if (strncmp(p, "in sequence entry '", 19) == 0) {
+        kind = FR_ENTRY;
+    } else if (strncmp(p, "in mapping", 10) == 0) {
+        kind = FR_MAPPING;
+    } else if (strncmp(p, "in ", 3) == 0 || strncmp(p, "Backtrace:", 10) == 0) {
+        return;
+    } else {
+        if (!s->have_what && *p) {
+            snprintf(s->what, sizeof s->what, "%s", p);
+            s->have_what = 1;
+        }
+        return;
+    }
+    if (s->n >= 10) {
+        return;
+    }
+    s->fr[s->n].kind = (enum frame_kind)kind;
+    s->fr[s->n].name[0] = 0;
+    s->fr[s->n].entry = 0;
+    if (kind == FR_FIELD) {
         const char *name = p + 18;
         const char *q = strchr(name, '\'');
-        if (q && s->n_fields < 8) {
-            snprintf(s->fields[s->n_fields], sizeof s->fields[0], "%.*s", (int)(q - name), name);
-            s->seq_index[s->n_fields] = -1;
-            s->n_fields++;
-        }
-    } else if (strncmp(p, "in sequence entry '", 19) == 0) {
-        if (s->n_fields < 8) {
-            s->fields[s->n_fields][0] = 0;
-            s->seq_index[s->n_fields] = atoi(p + 19);
-            s->n_fields++;
-        }
-    } else if (strncmp(p, "Backtrace:", 10) == 0 || strncmp(p, "in mapping", 10) == 0 ||
-               strncmp(p, "in sequence", 11) == 0) {
-        /* other frames carry no name */
-    } else if (!s->have_what && *p) {
-        snprintf(s->what, sizeof s->what, "%s", p);
-        s->have_what = 1;
+        snprintf(s->fr[s->n].name, sizeof s->fr[0].name, "%.*s", q ? (int)(q - name) : 0, name);
+    } else if (kind == FR_ENTRY) {
+        s->fr[s->n].entry = atoi(p + 19) - 1;
     }
-    const char *lp = strstr(line, "(line: ");
-    if (lp && sscanf(lp, "(line: %d, column: %d)", &l, &c) == 2 && s->line == 0) {
-        s->line = l;
-        s->col = c;
+    s->fr[s->n].line = s->fr[s->n].col = 0;
+    const char *lp = strstr(p, "(line: ");
+    if (lp) {
+        sscanf(lp, "(line: %d, column: %d)", &s->fr[s->n].line, &s->fr[s->n].col);
+    }
+    s->n++;
+}
+
+/* First line >= from whose key (after indentation and "- ") is `key`; 0 if none. */
+static int find_key_from(const char *path, int from, const char *key)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        return 0;
+    }
+    char buf[1024];
+    int line = 0, found = 0;
+    const size_t kl = strlen(key);
+    while (fgets(buf, sizeof buf, f)) {
+        if (++line < from) {
+            continue;
+        }
+        const char *c = buf;
+        while (*c == ' ' || *c == '-') {
+            c++;
+        }
+        if (strncmp(c, key, kl) == 0 && c[kl] == ':') {
+            found = line;
+            break;
+        }
+    }
+    fclose(f);
+    return found;
+}
+
+/* Message for a libcyaml load failure. */
+static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t cerr, char *err, size_t errlen)
+{
+    int first = 0; /* innermost frame that belongs to the field path */
+    int line = ls->n ? ls->fr[0].line : 0, col = ls->n ? ls->fr[0].col : 0;
+    char extra[64] = "";
+    const char *missing = "Missing required mapping field: ";
+    const char *unexpected = "Unexpected key: ";
+    if (strncmp(ls->what, missing, strlen(missing)) == 0) {
+        /* the innermost named frame is the last field read, a sibling: the mapping is the next frame */
+        if (ls->n && ls->fr[0].kind == FR_FIELD) {
+            first = 1;
+        }
+        snprintf(extra, sizeof extra, "%s", ls->what + strlen(missing));
+        line = first < ls->n ? ls->fr[first].line : 0;
+        col = first < ls->n ? ls->fr[first].col : 0;
+    } else if (strncmp(ls->what, unexpected, strlen(unexpected)) == 0) {
+        if (ls->n && ls->fr[0].kind == FR_MAPPING) {
+            first = 1;
+        }
+        snprintf(extra, sizeof extra, "%s", ls->what + strlen(unexpected));
+        const int l = find_key_from(path, line, extra);
+        if (l) {
+            line = l;
+            col = 0;
+        }
+    }
+    char field[256] = "";
+    for (int i = ls->n - 1; i >= first; i--) {
+        const size_t fl = strlen(field);
+        if (ls->fr[i].kind == FR_ENTRY) {
+            snprintf(field + fl, sizeof field - fl, "[%d]", ls->fr[i].entry);
+        } else if (ls->fr[i].kind == FR_FIELD) {
+            snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", ls->fr[i].name);
+        }
+    }
+    if (extra[0]) {
+        const size_t fl = strlen(field);
+        snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", extra);
+    }
+    char pos[32];
+    if (col > 0) {
+        snprintf(pos, sizeof pos, "%d:%d", line, col);
+    } else {
+        snprintf(pos, sizeof pos, "%d", line);
+    }
+    if (err && errlen) {
+        snprintf(err, errlen, "%s:%s: %s: %s (%s)", path, pos, field[0] ? field : "(document)",
+                 ls->have_what ? ls->what : "invalid", cyaml_strerror(cerr));
     }
 }
 
@@ -518,25 +610,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
     struct raw_cell *raw = NULL;
     cyaml_err_t cerr = cyaml_load_file(path, &ccfg, &cell_schema, (cyaml_data_t **)&raw, NULL);
     if (cerr != CYAML_OK) {
-        /* field path, outermost first: arms[1].q0 */
-        char field[256] = "";
-        size_t fl = 0;
-        for (int i = ls.n_fields - 1; i >= 0 && fl < sizeof field - 1; i--) {
-            int w;
-            if (ls.seq_index[i] >= 0) {
-                w = snprintf(field + fl, sizeof field - fl, "[%d]", ls.seq_index[i]);
-            } else {
-                w = snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", ls.fields[i]);
-            }
-            if (w > 0) {
-                fl += (size_t)w;
-            }
-        }
-        if (fl >= sizeof field) {
-            field[sizeof field - 1] = 0;
-        }
-        set_err(err, errlen, "%s:%d:%d: %s: %s (%s)", path, ls.line, ls.col, field[0] ? field : "(document)",
-                ls.have_what ? ls.what : "invalid", cyaml_strerror(cerr));
+        cell_parse_error(path, &ls, cerr, err, errlen);
         return MCA_EPARSE;
     }
 
