@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* LSDM accuracy study: the paper's LSDM (several stopping rules) against the closed form on random
  * segment pairs of five classes. Prints markdown tables (docs/segdist.md quotes them).
- * usage: segdist_study [--n PAIRS_PER_CLASS] [--seed S] */
+ * usage: segdist_study [--n PAIRS_PER_CLASS] [--seed S] [--csv FILE]
+ * --csv writes one row per pair (class, tilt, then per rule: status, iterations, error) for plot_study.py. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -106,13 +107,20 @@ static double brute(const double a[3], const double b[3], const double c[3], con
 int main(int argc, char **argv) {
     long n = 40000;
     unsigned long long seed = 1;
+    FILE *csv = NULL;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--n") == 0 && i + 1 < argc) {
             n = atol(argv[++i]);
         } else if (strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
             seed = strtoull(argv[++i], NULL, 10);
+        } else if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
+            csv = fopen(argv[++i], "w");
+            if (csv == NULL) {
+                fprintf(stderr, "segdist_study: cannot write %s\n", argv[i]);
+                return 2;
+            }
         } else {
-            fprintf(stderr, "usage: %s [--n PAIRS_PER_CLASS] [--seed S]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--n PAIRS_PER_CLASS] [--seed S] [--csv FILE]\n", argv[0]);
             return 2;
         }
     }
@@ -121,6 +129,13 @@ int main(int argc, char **argv) {
         return 2;
     }
     pairs_seed(seed);
+    if (csv != NULL) {
+        fprintf(csv, "class,tilt");
+        for (int k = 0; k < N_RULES; k++) {
+            fprintf(csv, ",rc%d,iters%d,err%d", k, k, k);
+        }
+        fprintf(csv, "\n");
+    }
 
     static stats_t st[PC_N][N_RULES];
     double closed_vs_brute[PC_N] = {0};
@@ -155,6 +170,9 @@ int main(int argc, char **argv) {
                 dec = (int)floor(-log10(tilt)) - 1; /* tilt in (1e-(k+2), 1e-(k+1)] -> k */
                 dec = dec < 0 ? 0 : (dec > 8 ? 8 : dec);
             }
+            if (csv != NULL) {
+                fprintf(csv, "%s,%.6g", pair_class_name[c], tilt);
+            }
             for (int k = 0; k < N_RULES; k++) {
                 int rc = rules[k].certified ? mca_segdist_lsdm_certified(a, b, cc, d, &rules[k].params, &r)
                                             : mca_segdist_lsdm(a, b, cc, d, &rules[k].params, &r);
@@ -171,6 +189,9 @@ int main(int argc, char **argv) {
                     s->bad_point++;
                 }
                 s->iters[s->n++] = r.iterations;
+                if (csv != NULL) {
+                    fprintf(csv, ",%d,%d,%.6g", rc, r.iterations, err);
+                }
                 if (dec >= 0 && k < 2) {
                     np_err[k][dec] = fmax(np_err[k][dec], err);
                     np_it[k][dec][np_cnt[dec]] = r.iterations;
@@ -178,6 +199,9 @@ int main(int argc, char **argv) {
             }
             if (dec >= 0) {
                 np_cnt[dec]++;
+            }
+            if (csv != NULL) {
+                fprintf(csv, "\n");
             }
         }
     }
@@ -242,6 +266,9 @@ int main(int argc, char **argv) {
         printf("| 1e-%d .. 1e-%d | %ld | %.3g, %d | %.3g, %d / %d |\n", k + 2, k + 1, np_cnt[k], np_err[0][k],
                pct(np_it[0][k], np_cnt[k], 0.5), np_err[1][k], pct(np_it[1][k], np_cnt[k], 0.5),
                np_it[1][k][np_cnt[k] - 1]);
+    }
+    if (csv != NULL) {
+        fclose(csv);
     }
     for (int c = 0; c < PC_N; c++) {
         for (int r = 0; r < N_RULES; r++) {
