@@ -26,7 +26,8 @@ struct mca_dds_bridge {
 
     _Atomic uint64_t offered; /* written by the rt thread only */
     /* Written by the publisher thread only. */
-    _Atomic uint64_t published, samples, write_errors, invalid;
+    _Atomic uint64_t published, samples, write_errors, invalid, max_pending;
+    _Atomic int64_t max_publish_ns;
     _Atomic int stop;
 
     dds_entity_t domain, participant;
@@ -190,7 +191,19 @@ static void *publisher_main(void *arg) {
         /* Read stop BEFORE trying the ring: once stop is seen, one more empty pop means drained. */
         const int stop = atomic_load_explicit(&b->stop, memory_order_acquire);
         if (mca_ring_pop(&b->ring, &b->work) == MCA_OK) {
+            mca_ring_stats_t rs;
+            mca_ring_stats(&b->ring, &rs);
+            if (rs.pending + 1u > atomic_load_explicit(&b->max_pending, memory_order_relaxed)) {
+                atomic_store_explicit(&b->max_pending, rs.pending + 1u, memory_order_relaxed);
+            }
+            struct timespec t0, t1;
+            clock_gettime(CLOCK_MONOTONIC, &t0);
             publish(b, &b->work);
+            clock_gettime(CLOCK_MONOTONIC, &t1);
+            const int64_t dt = (t1.tv_sec - t0.tv_sec) * 1000000000LL + (t1.tv_nsec - t0.tv_nsec);
+            if (dt > atomic_load_explicit(&b->max_publish_ns, memory_order_relaxed)) {
+                atomic_store_explicit(&b->max_publish_ns, dt, memory_order_relaxed);
+            }
             continue;
         }
         if (stop) {
@@ -312,6 +325,8 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     out->samples = atomic_load_explicit(&bridge->samples, memory_order_relaxed);
     out->write_errors = atomic_load_explicit(&bridge->write_errors, memory_order_relaxed);
     out->invalid = atomic_load_explicit(&bridge->invalid, memory_order_relaxed);
+    out->max_pending = atomic_load_explicit(&bridge->max_pending, memory_order_relaxed);
+    out->max_publish_ns = atomic_load_explicit(&bridge->max_publish_ns, memory_order_relaxed);
     return MCA_OK;
 }
 

@@ -196,9 +196,10 @@ int main(int argc, char **argv) {
     mca_dds_stats_t st;
     mca_dds_bridge_destroy(bridge, &st); /* flushes first */
     printf("mca-dds-synth: ticks %llu offered %llu queued %llu published %llu dropped %llu "
-           "samples %llu write_errors %llu\n",
+           "samples %llu write_errors %llu max_pending %llu max_publish_us %lld\n",
            (unsigned long long)k, (unsigned long long)st.offered, (unsigned long long)st.queued,
            (unsigned long long)st.published, (unsigned long long)st.dropped, (unsigned long long)st.samples,
-           (unsigned long long)st.write_errors);
+           (unsigned long long)st.write_errors, (unsigned long long)st.max_pending,
+           (long long)(st.max_publish_ns / 1000));
     return st.write_errors == 0 ? 0 : 1;
 }

@@ -75,7 +75,7 @@ def main():
         mon = subprocess.Popen([a.monitor, "--csv", path, "--count", str(COUNT), "--no-color"] + dom,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         pub = subprocess.Popen([a.synth, "--ticks", str(COUNT + 1000), "--wait-readers", "1", "--wait-topic",
-                                "mca/distances", "--wait-timeout", "20000"] + dom,
+                                "mca/distances", "--wait-timeout", "20000", "--ring", "4096"] + dom,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         mout, merr = mon.communicate(timeout=60)
         pout, perr = pub.communicate(timeout=60)

@@ -38,7 +38,10 @@ def main():
     rs = DataReader(dp, Topic(dp, m.TOPIC_STATUS, m.ControllerStatus, qos=m.status_qos()), qos=m.status_qos())
 
     pub = subprocess.Popen([a.synth, "--domain", str(a.domain), "--config", a.config, "--ticks", str(a.ticks),
-                            "--wait-readers", "1", "--wait-timeout", "20000"],
+                            "--wait-readers", "1", "--wait-timeout", "20000",
+                            # 4 s of ring: a loaded CI machine may starve the publisher thread for
+                            # a few hundred ms (seen under ASan with make -j); drops would be counted
+                            "--ring", "4096"],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     dist, js, jc, status = [], [], [], []
     latency = []

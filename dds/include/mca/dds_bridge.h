@@ -114,6 +114,8 @@ typedef struct mca_dds_stats {
     uint64_t samples;      /**< DDS samples written (all topics) */
     uint64_t write_errors; /**< dds_write failures */
     uint64_t invalid;      /**< snapshots rejected (n_arms, n_dof, ... out of range) */
+    uint64_t max_pending;   /**< most snapshots seen waiting in the ring (high-water mark) */
+    int64_t max_publish_ns; /**< longest time spent writing one snapshot's samples */
 } mca_dds_stats_t;
 
 typedef struct mca_dds_bridge mca_dds_bridge_t;
