@@ -12,6 +12,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "mca/can_proto.h"
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/scheme.h"
@@ -806,9 +807,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
             snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);
         }
         if (ra->id_base) {
-            if (*ra->id_base < 0 || *ra->id_base > 0x7ff) {
-                FAIL(MCA_ERANGE, wa, "id_base", "arms[%d].id_base: must be in 0..0x7ff (got %lld)", ai,
-                     *ra->id_base);
+            if (*ra->id_base < 0 || *ra->id_base > (long long)MCA_CAN_ID_BASE_MAX ||
+                *ra->id_base % MCA_CAN_ID_BLOCK != 0) {
+                FAIL(MCA_ERANGE, wa, "id_base", "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)",
+                     ai, MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
             }
             ca->id_base = (uint32_t)*ra->id_base;
         }
