@@ -324,6 +324,90 @@ static void test_box_random_vs_brute(void **state) {
     assert_true(n > 1000);
 }
 
+/* independent point-cylinder distance (axis = pose z) */
+static double point_cyl(const mca_pose_t *pose, double rad, double hh, const double x[3]) {
+    double rel[3], l[3];
+    for (int i = 0; i < 3; i++) {
+        rel[i] = x[i] - pose->p[i];
+    }
+    for (int i = 0; i < 3; i++) {
+        l[i] = pose->R[0][i] * rel[0] + pose->R[1][i] * rel[1] + pose->R[2][i] * rel[2];
+    }
+    double er = fmax(0.0, hypot(l[0], l[1]) - rad), ez = fmax(0.0, fabs(l[2]) - hh);
+    return hypot(er, ez);
+}
+
+static double cyl_at(const mca_pose_t *pose, double rad, double hh, const double a[3], const double b[3],
+                     double s) {
+    double x[3];
+    for (int k = 0; k < 3; k++) {
+        x[k] = a[k] + s * (b[k] - a[k]);
+    }
+    return point_cyl(pose, rad, hh, x);
+}
+
+static double seg_cyl_brute(const mca_pose_t *pose, double rad, double hh, const double a[3],
+                            const double b[3]) {
+    const double g = (sqrt(5.0) - 1.0) / 2.0;
+    double lo = 0, hi = 1;
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = cyl_at(pose, rad, hh, a, b, x1), f2 = cyl_at(pose, rad, hh, a, b, x2);
+    for (int i = 0; i < 200; i++) {
+        if (f1 <= f2) {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = cyl_at(pose, rad, hh, a, b, x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = cyl_at(pose, rad, hh, a, b, x2);
+        }
+    }
+    double e0 = cyl_at(pose, rad, hh, a, b, 0.0), e1 = cyl_at(pose, rad, hh, a, b, 1.0);
+    return fmin(fmin(f1, f2), fmin(e0, e1));
+}
+
+/* Curved shape: GJK converges (not finitely) within its cap and tolerance on random cups. */
+static void test_cylinder_random_vs_brute(void **state) {
+    (void)state;
+    double worst = 0;
+    int max_it = 0, n = 0;
+    for (int i = 0; i < 3000; i++) {
+        mca_obstacle_t cup;
+        mca_pose_t pose;
+        mca_capsule_t c;
+        mca_obst_dist_t r;
+        double at[3] = {urand() - 0.5, urand() - 0.5, urand() - 0.5};
+        double rad = 0.02 + 0.3 * urand(), h = 0.05 + 0.6 * urand();
+        rpy_pose(&pose, at, 6 * urand(), 6 * urand(), 6 * urand());
+        assert_int_equal(mca_obstacle_cylinder(&cup, "cup", &pose, rad, h), MCA_OK);
+        capsule(&c, 3 * urand() - 1.5, 3 * urand() - 1.5, 3 * urand() - 1.5, 3 * urand() - 1.5,
+                3 * urand() - 1.5, 3 * urand() - 1.5, 0.03 * urand());
+        double ref = seg_cyl_brute(&pose, rad, 0.5 * h, c.a, c.b);
+        int rc = mca_capsule_obstacle_distance(&c, &cup, &r);
+        if (ref < 1e-6) {
+            assert_int_equal(rc, MCA_OK);
+            assert_true(r.d <= -c.radius + 1e-9);
+            continue;
+        }
+        n++;
+        assert_int_equal(rc, MCA_OK);
+        assert_true(fabs(r.d + c.radius - ref) < 1e-9);
+        assert_true(point_cyl(&pose, rad, 0.5 * h, r.q) < 1e-9); /* q on the solid */
+        check_witness(&c, &r, 1e-9);
+        worst = fmax(worst, fabs(r.d + c.radius - ref));
+        max_it = r.iterations > max_it ? r.iterations : max_it;
+    }
+    print_message(
+        "segment-cylinder GJK vs golden section: %d separated pairs, max |diff| %.3g, max iterations %d\n", n,
+        worst, max_it);
+    assert_true(n > 1000);
+}
+
 static void test_capsule_capsule_vs_closed(void **state) {
     (void)state;
     double worst = 0;
@@ -386,6 +470,7 @@ int main(void) {
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_box_penetration_vs_directions),
         cmocka_unit_test(test_capsule_axes_crossing),
+        cmocka_unit_test(test_cylinder_random_vs_brute),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
