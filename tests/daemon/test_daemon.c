@@ -1,0 +1,361 @@
+/* SPDX-License-Identifier: MIT */
+/* The daemon's tick in virtual time (mca_daemon_step, sim backend, no real-time loop), its braking ramp
+ * and faults; the latency histogram against sorted samples; the rt log ring. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "mca/cell.h"
+#include "mca/daemon.h"
+#include "mca/err.h"
+#include "mca/rtlog.h"
+#include "mca/rtstats.h"
+#include "mca/sim_backend.h"
+
+#ifndef MCA_SOURCE_DIR
+#error MCA_SOURCE_DIR must be defined
+#endif
+
+static char cell_path[512];
+
+/* Two PA10+ 1.2 m apart; the left arm draws a circle (moving at any time), the right one holds. */
+static void write_cell(const char *extra_left, const char *right_base)
+{
+    snprintf(cell_path, sizeof cell_path, "/tmp/mca-test-daemon-%d.yaml", (int)getpid());
+    FILE *f = fopen(cell_path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "name: vt\n"
+            "task: {duration: 4.0}\n"
+            "arms:\n"
+            "  - name: left\n"
+            "    backend: sim\n"
+            "    urdf: %s/config/robots/pa10plus.urdf\n"
+            "    base_xyz: [0.0, -0.6, 0.0]\n"
+            "    q0: [0.0, 0.5, 0.0, 1.0, 0.0, 0.6, 0.0, 0.0]\n"
+            "    dec_limit: 4.0\n"
+            "    path: {kind: circle, radius: 0.15, period: 4.0, u: [1, 0, 0], v: [0, 0, 1]}\n"
+            "%s"
+            "  - name: right\n"
+            "    backend: sim\n"
+            "    urdf: %s/config/robots/pa10plus.urdf\n"
+            "    base_xyz: %s\n"
+            "    q0: [0.0, 0.5, 0.0, 1.0, 0.0, 0.6, 0.0, 0.0]\n"
+            "    dec_limit: 2.5\n"
+            "dds: {enabled: false}\n"
+            "rt: {period_us: 1000, lost_feedback_cycles: 5}\n",
+            MCA_SOURCE_DIR, extra_left ? extra_left : "", MCA_SOURCE_DIR, right_base);
+    fclose(f);
+}
+
+static mca_daemon_t *open_daemon(mca_cell_t *cell)
+{
+    char err[1024] = "";
+    int rc = mca_cell_load(cell_path, cell, err, sizeof err);
+    if (rc != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = stderr};
+    mca_daemon_t *d = NULL;
+    rc = mca_daemon_open(&d, cell, &o, err, sizeof err);
+    if (rc != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    assert_int_equal(mca_daemon_state(d), MCA_DAEMON_READY);
+    return d;
+}
+
+/* Run ticks until the state leaves BRAKING, checking every command against the previous one:
+ * |v_k - v_{k-1}| <= dec_limit * dt per joint. Returns the ticks spent braking. */
+static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, int na)
+{
+    double prev[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double vmax = 0.0;
+    for (int a = 0; a < na; a++) {
+        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        for (int j = 0; j < c->n; j++) {
+            prev[a][j] = c->velocity[j];
+            vmax = fmax(vmax, fabs(c->velocity[j]) / cell->arm[a].dec_limit[j]);
+        }
+    }
+    int n = 0, st;
+    do {
+        *t += 0.001;
+        st = mca_daemon_step(d, *t, 0);
+        n++;
+        for (int a = 0; a < na; a++) {
+            const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+            for (int j = 0; j < c->n; j++) {
+                const double step = fabs(c->velocity[j] - prev[a][j]);
+                if (step > cell->arm[a].dec_limit[j] * 0.001 + 1e-12) {
+                    fail_msg("arm %d joint %d: velocity step %g > dec_limit*dt %g", a, j, step,
+                             cell->arm[a].dec_limit[j] * 0.001);
+                }
+                /* monotone towards zero, never past it */
+                assert_true(fabs(c->velocity[j]) <= fabs(prev[a][j]) + 1e-15);
+                assert_true(c->velocity[j] * prev[a][j] >= 0.0);
+                prev[a][j] = c->velocity[j];
+            }
+        }
+        assert_true(n < 100000);
+    } while (st == MCA_DAEMON_BRAKING);
+    /* the ramp takes ceil(max |v|/dec / dt) ticks: it does not stop abruptly, nor dawdle */
+    const int expect = (int)ceil(vmax / 0.001 - 1e-9);
+    print_message("  braking: %d ticks, slowest joint needs %d\n", n, expect);
+    assert_true(n >= expect && n <= expect + 1);
+    for (int a = 0; a < na; a++) {
+        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        for (int j = 0; j < c->n; j++) {
+            assert_true(c->velocity[j] == 0.0);
+        }
+    }
+    return n;
+}
+
+static void test_stop_brakes_within_limits(void **state)
+{
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    mca_daemon_t *d = open_daemon(cell);
+    double t = 0.0;
+    for (int k = 0; k < 1500; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+    }
+    /* the left arm is moving (circle at 3/8 of its period), the right one holds */
+    const mca_arm_command_t *c0 = mca_daemon_last_command(d, 0);
+    double vnorm = 0.0;
+    for (int j = 0; j < c0->n; j++) {
+        vnorm = fmax(vnorm, fabs(c0->velocity[j]));
+        assert_true(c0->flags[j] == (MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE));
+    }
+    assert_true(vnorm > 0.02);
+    mca_daemon_request_stop(d);
+    brake_and_check(d, cell, &t, 2);
+    assert_int_equal(mca_daemon_state(d), MCA_DAEMON_STOPPED);
+    /* stopped: zero velocity with the servo released */
+    t += 0.001;
+    assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_STOPPED);
+    for (int a = 0; a < 2; a++) {
+        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        for (int j = 0; j < c->n; j++) {
+            assert_true(c->velocity[j] == 0.0 && c->flags[j] == 0);
+        }
+    }
+    /* the simulated arms did follow and are at rest, in READY (brakes on) after a few cycles */
+    for (int k = 0; k < 400; k++) {
+        t += 0.001;
+        mca_daemon_step(d, t, 0);
+    }
+    for (int a = 0; a < 2; a++) {
+        mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, a));
+        assert_non_null(fw);
+        assert_int_equal(fw->state, MCA_ARM_READY);
+        for (int j = 0; j < fw->cfg.n; j++) {
+            assert_true(fw->v[j] == 0.0);
+        }
+    }
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_NONE);
+    assert_true(s.min_distance > 0.3 && s.min_distance < 2.0);
+    mca_daemon_close(d);
+    free(cell);
+}
+
+static void test_lost_feedback_faults_and_brakes(void **state)
+{
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    mca_daemon_t *d = open_daemon(cell);
+    double t = 0.0;
+    for (int k = 0; k < 1200; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+    }
+    /* the right arm's firmware goes silent from its next cycle on */
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, 1));
+    fw->cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_SILENT, .at_cycle = fw->cycle, .duration = 0};
+    fw->cfg.n_inject = 1;
+    int k = 0, st;
+    do {
+        t += 0.001;
+        st = mca_daemon_step(d, t, 0);
+        k++;
+    } while (st == MCA_DAEMON_RUNNING && k < 100);
+    /* lost_feedback_cycles = 5: the 5th tick without feedback is the fault (the first silent read is
+     * one tick after the first silent cycle) */
+    print_message("  fault after %d ticks\n", k);
+    assert_int_equal(st, MCA_DAEMON_BRAKING);
+    assert_true(k >= 5 && k <= 7);
+    brake_and_check(d, cell, &t, 2);
+    assert_int_equal(mca_daemon_state(d), MCA_DAEMON_FAULT);
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_LOST_FEEDBACK);
+    assert_non_null(strstr(s.fault_text, "lost feedback"));
+    /* a fault latches: still FAULT, zero commands, servo released */
+    t += 0.001;
+    assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_FAULT);
+    const mca_arm_command_t *c = mca_daemon_last_command(d, 0);
+    for (int j = 0; j < c->n; j++) {
+        assert_true(c->velocity[j] == 0.0 && c->flags[j] == 0);
+    }
+    mca_daemon_close(d);
+    free(cell);
+}
+
+static void test_arm_fault_is_a_fault(void **state)
+{
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    mca_daemon_t *d = open_daemon(cell);
+    double t = 0.0;
+    for (int k = 0; k < 500; k++, t += 0.001) {
+        mca_daemon_step(d, t, 0);
+    }
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, 0));
+    fw->cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_ACTUATOR, .at_cycle = fw->cycle, .joint = 1};
+    fw->cfg.n_inject = 1;
+    int st = MCA_DAEMON_RUNNING;
+    for (int k = 0; k < 10 && st == MCA_DAEMON_RUNNING; k++) {
+        t += 0.001;
+        st = mca_daemon_step(d, t, 0);
+    }
+    assert_int_equal(st, MCA_DAEMON_BRAKING);
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    print_message("  %s\n", s.fault_text);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_ARM);
+    assert_non_null(strstr(s.fault_text, "arm left"));
+    mca_daemon_close(d);
+    free(cell);
+}
+
+static void test_distance_fault(void **state)
+{
+    (void)state;
+    /* the right arm's base 0.1 m from the left one: the links overlap at once (distance < d1) */
+    write_cell(NULL, "[0.0, -0.5, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    mca_daemon_t *d = open_daemon(cell);
+    const int st = mca_daemon_step(d, 0.0, 0);
+    assert_true(st == MCA_DAEMON_BRAKING || st == MCA_DAEMON_FAULT);
+    double t = 0.0;
+    while (mca_daemon_step(d, t += 0.001, 0) == MCA_DAEMON_BRAKING) {
+    }
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    print_message("  %s (min distance %g)\n", s.fault_text, s.min_distance);
+    assert_int_equal(s.state, MCA_DAEMON_FAULT);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_CONTROLLER);
+    assert_int_equal(s.ctrl_fault, MCA_CTRL_FAULT_DISTANCE);
+    assert_true(s.min_distance < cell->scn.params.d1);
+    mca_daemon_close(d);
+    free(cell);
+}
+
+/* Histogram percentiles against the exact order statistics of the same samples. */
+static int cmp_i64(const void *a, const void *b)
+{
+    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static void test_histogram_vs_sorted(void **state)
+{
+    (void)state;
+    enum { N = 20000 };
+    static int64_t v[N];
+    static mca_hist_t h;
+    mca_hist_reset(&h);
+    uint64_t x = 12345;
+    for (int i = 0; i < N; i++) {
+        x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+        const double u = (double)(x >> 11) / 9007199254740992.0;
+        /* heavy tail: mostly tens of us, some ms, a few beyond the 100 ms range */
+        int64_t ns = (int64_t)(20000.0 * -log(1.0 - u));
+        if (i % 97 == 0) {
+            ns *= 100;
+        }
+        if (i % 4999 == 0) {
+            ns = 250000000 + i;
+        }
+        v[i] = ns;
+        mca_hist_record(&h, ns);
+    }
+    qsort(v, N, sizeof v[0], cmp_i64);
+    assert_true(h.count == N && h.min_ns == v[0] && h.max_ns == v[N - 1]);
+    const double ps[] = {0.001, 0.1, 0.5, 0.9, 0.99, 0.999, 0.9999};
+    for (size_t i = 0; i < sizeof ps / sizeof ps[0]; i++) {
+        const int64_t exact = v[(size_t)ceil(ps[i] * N) - 1];
+        const int64_t got = mca_hist_percentile(&h, ps[i]);
+        const int64_t width = exact < 2000000 ? 1000 : (exact < 100000000 ? 100000 : INT64_MAX);
+        print_message("  p%g: exact %lld ns, histogram %lld ns\n", ps[i] * 100, (long long)exact, (long long)got);
+        assert_true(got >= exact);                           /* never optimistic */
+        assert_true(got <= v[N - 1]);                        /* capped at the max */
+        assert_true(width == INT64_MAX || got - exact <= width); /* within one bin */
+    }
+    assert_true(mca_hist_percentile(&h, 1.0) == v[N - 1]);
+    double sum = 0;
+    for (int i = 0; i < N; i++) {
+        sum += (double)v[i];
+    }
+    assert_true(fabs(mca_hist_mean(&h) - sum / N) < 1e-6 * sum / N);
+    mca_hist_record(&h, -5); /* clock step backwards: counted as 0 */
+    assert_true(h.min_ns == 0);
+}
+
+static void test_rtlog(void **state)
+{
+    (void)state;
+    static mca_rtlog_t log;
+    assert_int_equal(mca_rtlog_init(&log, "mcad"), MCA_OK);
+    mca_rtlog(&log, MCA_LOG_ERR, "fault at t = %.3f s: %s", 1, 1.23456, 0, 0, 0, "distance below d1");
+    mca_rtlog(&log, MCA_LOG_INFO, "running: %g arms, period %g us", 2, 2, 1000, 0, 0, NULL);
+    FILE *f = tmpfile();
+    assert_non_null(f);
+    assert_int_equal(mca_rtlog_drain(&log, f), 2);
+    rewind(f);
+    char l1[256], l2[256];
+    assert_non_null(fgets(l1, sizeof l1, f));
+    assert_non_null(fgets(l2, sizeof l2, f));
+    assert_string_equal(l1, "<3>mcad: fault at t = 1.235 s: distance below d1\n");
+    assert_string_equal(l2, "<6>mcad: running: 2 arms, period 1000 us\n");
+    fclose(f);
+    /* overrun: the oldest records go, and are counted */
+    for (int i = 0; i < MCA_RTLOG_CAPACITY + 40; i++) {
+        mca_rtlog(&log, MCA_LOG_DEBUG, "n %g", 1, i, 0, 0, 0, NULL);
+    }
+    f = tmpfile();
+    assert_int_equal(mca_rtlog_drain(&log, f), MCA_RTLOG_CAPACITY);
+    assert_true(mca_rtlog_dropped(&log) == 40);
+    rewind(f);
+    assert_non_null(fgets(l1, sizeof l1, f));
+    assert_string_equal(l1, "<7>mcad: n 40\n");
+    fclose(f);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_stop_brakes_within_limits),
+        cmocka_unit_test(test_lost_feedback_faults_and_brakes),
+        cmocka_unit_test(test_arm_fault_is_a_fault),
+        cmocka_unit_test(test_distance_fault),
+        cmocka_unit_test(test_histogram_vs_sorted),
+        cmocka_unit_test(test_rtlog),
+    };
+    const int failed = cmocka_run_group_tests(tests, NULL, NULL);
+    remove(cell_path);
+    return failed;
+}
