@@ -10,6 +10,8 @@
 #include "pdnn__eigen.h"
 
 #define PDNN_DEFAULT_GAMMA 1.9
+#define PDNN_DEFAULT_FAR_WEIGHT 0.3
+#define PDNN_FAR_SLACK 0.02 /* rows are unit-norm: slack in phi units, relative to 1 + ||phi|| */
 
 void mca_pdnn_default_params(mca_pdnn_params_t *params)
 {
@@ -24,6 +26,7 @@ void mca_pdnn_default_params(mca_pdnn_params_t *params)
     params->step_rule = MCA_PDNN_STEP_ADAPTIVE;
     params->gamma = PDNN_DEFAULT_GAMMA;
     params->precond = MCA_PDNN_PRECOND_ORTH;
+    params->far_weight = PDNN_DEFAULT_FAR_WEIGHT;
 }
 
 void mca_pdnn_init(mca_pdnn_t *s)
@@ -77,7 +80,7 @@ static int check_params(const mca_pdnn_params_t *p)
     if (!isfinite(p->kappa) || !(p->tol > 0.0) || !isfinite(p->tol) || p->max_steps < 0 || !(p->big > 0.0) ||
         !isfinite(p->big) || !(p->gamma < 2.0) || (p->step_rule != MCA_PDNN_STEP_ADAPTIVE &&
                                                     p->step_rule != MCA_PDNN_STEP_BOUND) ||
-        p->precond < MCA_PDNN_PRECOND_ORTH || p->precond > MCA_PDNN_PRECOND_NONE) {
+        p->precond < MCA_PDNN_PRECOND_ORTH || p->precond > MCA_PDNN_PRECOND_NONE || !(p->far_weight <= 1.0)) {
         return MCA_EINVAL;
     }
     return MCA_OK;
@@ -147,7 +150,7 @@ static int orth_equalities(mca_pdnn_t *s, int n, int ne)
 /* Build N, q and Omega in the workspace for the chosen rewriting (enum mca_pdnn_precond). Each rewriting
  * keeps the feasible set, hence phi: row scaling trivially; R^-T G phi = R^-T alpha iff G phi = alpha;
  * adding multiples of equality rows to an inequality row changes nothing where G phi = alpha. */
-static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm)
+static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm, int warm)
 {
     const int n = qp->n, ne = qp->n_eq, m = qp->n_eq + qp->n_ineq;
     int pre = prm->precond;
@@ -204,6 +207,25 @@ static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm
     for (int j = 0; j < n; j++) {
         s->ws_lo[j] = clampd(qp->lb[j], -prm->big, prm->big);
         s->ws_hi[j] = clampd(qp->ub[j], -prm->big, prm->big);
+    }
+    /* Far rows: with a full warm start, an inequality row that was inactive (v_i = 0) with a clear slack at
+     * the previous answer will most likely stay inactive. Its coupling in (I + M^T) still inflates
+     * ||I + M|| and so shrinks every step; scaling the row down (a positive row scale, so phi is unchanged)
+     * removes most of that. A wrong guess costs speed, never correctness: the row still acts. */
+    const double w = prm->far_weight > 0.0 ? prm->far_weight : PDNN_DEFAULT_FAR_WEIGHT;
+    if (warm == 2 && pre != MCA_PDNN_PRECOND_NONE && w < 1.0) {
+        const double *x = s->y;
+        const double tau = PDNN_FAR_SLACK * (1.0 + sqrt(dot(x, x, n)));
+        for (int i = ne; i < m; i++) {
+            double *Ni = &s->ws_N[i * n];
+            if (s->y[n + i] < 1e-6 && dot(Ni, x, n) + s->ws_q[i] > tau) { /* v_i ~ 0 within the tolerance */
+                for (int j = 0; j < n; j++) {
+                    Ni[j] *= w;
+                }
+                s->ws_q[i] *= w;
+                s->ws_d[i] *= w;
+            }
+        }
     }
     return pre;
 }
@@ -317,13 +339,13 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         prm.gamma = PDNN_DEFAULT_GAMMA;
     }
     const int n = qp->n, m = qp->n_eq + qp->n_ineq, h = n + m;
-    const int pre = setup(s, qp, &prm);
 
     /* Warm start: reuse what still means the same thing. A state left non-finite is dropped. */
     int warm = 0;
     if (s->h > 0 && s->n == n && s->n_eq == qp->n_eq && all_finite(s->y, s->h)) {
         warm = (s->n_ineq == qp->n_ineq) ? 2 : 1;
     }
+    const int pre = setup(s, qp, &prm, warm);
     for (int i = 0; i < h; i++) {
         const int keep = i < n + qp->n_eq ? warm >= 1 : warm == 2;
         s->ws_t[i] = keep ? s->y[i] : 0.0;

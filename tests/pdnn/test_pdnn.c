@@ -340,8 +340,8 @@ static void test_warm_start(void **state)
         assert_int_equal(res.warm, 2);
         assert_int_equal(res.steps, 0);
         assert_memory_equal(phi, phi2, sizeof(phi));
-        /* a small move: warm takes fewer steps than the same QP cold. The convergence is linear, so the
-         * gain is log(distance): measured ~0.48 of cold at 1e-6, ~0.65 at 1e-5, ~0.9 at 1e-3 (docs). */
+        /* a small move: warm takes far fewer steps than the same QP cold (measured ~0.15 of cold here;
+         * without the far-row weighting it was ~0.5: the convergence is linear, docs/pdnn.md) */
         qpgen_scene_perturb(&sc, &rng, 1e-6);
         qpgen_build(&sc, &qp);
         assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
@@ -355,7 +355,7 @@ static void test_warm_start(void **state)
             assert_near(phi[j], phi2[j], 1e-7);
         }
     }
-    assert_true(5 * pert_sum < 3 * cold_sum);
+    assert_true(4 * pert_sum < cold_sum);
 }
 
 static void test_partial_warm_start(void **state)

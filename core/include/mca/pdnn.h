@@ -48,6 +48,8 @@ typedef struct mca_pdnn_params {
     int step_rule; /**< enum mca_pdnn_step, used when kappa <= 0 */
     double gamma;  /**< step factor in (0, 2) for the bound/adaptive rules; <= 0: 1.9 */
     int precond;   /**< enum mca_pdnn_precond */
+    double far_weight; /**< full warm start, ORTH/SCALE: extra scale (0, 1] for inequality rows that were
+                            inactive with a clear slack last solve (docs/pdnn.md); 1: off; <= 0: 0.3 */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
