@@ -30,6 +30,7 @@ static void usage(FILE *f) {
                "  --hz F             loop rate (default 1000)\n"
                "  --divisor N        publish every Nth tick (default 1)\n"
                "  --ring N           ring capacity, power of two (default 256)\n"
+               "  --poll-us N        publisher thread's sleep when the ring is empty (default 200)\n"
                "  --wait-readers N   before the first tick wait for N matched readers\n"
                "  --wait-topic NAME  ... on this topic only (default: on every topic)\n"
                "  --wait-timeout MS  give up waiting after MS ms (default 10000), exit 1\n"
@@ -72,6 +73,7 @@ int main(int argc, char **argv) {
         {"wait-timeout", required_argument, NULL, 't'},
         {"linger", required_argument, NULL, 'l'},
         {"wait-topic", required_argument, NULL, 'T'},
+        {"poll-us", required_argument, NULL, 'p'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -124,6 +126,13 @@ int main(int argc, char **argv) {
             if (parse_u64(optarg, "--wait-timeout", 3600000, &wait_timeout) != 0) {
                 return 2;
             }
+            break;
+        case 'p':
+            if (parse_u64(optarg, "--poll-us", 1000000, &v) != 0 || v == 0) {
+                fprintf(stderr, "mca-dds-synth: --poll-us must be in 1..1000000\n");
+                return 2;
+            }
+            cfg.poll_period_us = (uint32_t)v;
             break;
         case 'T':
             wait_topic = optarg;

@@ -106,14 +106,14 @@ typedef struct mca_dds_config {
 
 /** Bridge counters. */
 typedef struct mca_dds_stats {
-    uint64_t offered;      /**< mca_dds_bridge_push() calls */
-    uint64_t queued;       /**< snapshots put into the ring (offered / rate_divisor) */
-    uint64_t published;    /**< snapshots written to DDS */
-    uint64_t dropped;      /**< snapshots lost to ring overrun */
-    uint64_t pending;      /**< snapshots in the ring now */
-    uint64_t samples;      /**< DDS samples written (all topics) */
-    uint64_t write_errors; /**< dds_write failures */
-    uint64_t invalid;      /**< snapshots rejected (n_arms, n_dof, ... out of range) */
+    uint64_t offered;       /**< mca_dds_bridge_push() calls */
+    uint64_t queued;        /**< snapshots put into the ring (offered / rate_divisor) */
+    uint64_t published;     /**< snapshots written to DDS */
+    uint64_t dropped;       /**< snapshots lost to ring overrun */
+    uint64_t pending;       /**< snapshots in the ring now */
+    uint64_t samples;       /**< DDS samples written (all topics) */
+    uint64_t write_errors;  /**< dds_write failures */
+    uint64_t invalid;       /**< snapshots rejected (n_arms, n_dof, ... out of range) */
     uint64_t max_pending;   /**< most snapshots seen waiting in the ring (high-water mark) */
     int64_t max_publish_ns; /**< longest time spent writing one snapshot's samples */
 } mca_dds_stats_t;
