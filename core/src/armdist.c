@@ -13,6 +13,17 @@ static int kin_ok(const mca_chain_t *chain, const mca_kin_t *kin) {
            kin->dof == chain->dof && kin->n_points == chain->dof + 2;
 }
 
+static int points_ok(const mca_kin_t *kin) {
+    for (int i = 0; i < kin->n_points; i++) {
+        for (int k = 0; k < 3; k++) {
+            if (!(fabs(kin->point[i][k]) <= MCA_SEGDIST_MAX_COORD)) {
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
 static void set_pair(mca_link_pair_t *lp, int link, int other, double d, double d_axis, const double p[3],
                      const double e[3]) {
     lp->link = link;
@@ -36,16 +47,9 @@ int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const 
     }
     na = kin_a->dof + 1;
     nb = kin_b->dof + 1;
-    /* Validate every point first so an error leaves *out untouched. */
-    for (i = 0; i < kin_a->n_points; i++) {
-        if (!isfinite(kin_a->point[i][0]) || !isfinite(kin_a->point[i][1]) || !isfinite(kin_a->point[i][2])) {
-            return MCA_EINVAL;
-        }
-    }
-    for (i = 0; i < kin_b->n_points; i++) {
-        if (!isfinite(kin_b->point[i][0]) || !isfinite(kin_b->point[i][1]) || !isfinite(kin_b->point[i][2])) {
-            return MCA_EINVAL;
-        }
+    /* Validate every point first (the segdist range) so an error leaves *out untouched. */
+    if (!points_ok(kin_a) || !points_ok(kin_b)) {
+        return MCA_EINVAL;
     }
     out->n_links_a = na;
     out->n_links_b = nb;

@@ -9,6 +9,7 @@
 
 #include "mca/err.h"
 #include "mca/obstacle.h"
+#include "mca/segdist.h"
 #include "mca/vec3.h"
 
 /* One convex shape as libccd sees it (support + centre callbacks take a const void *). */
@@ -21,8 +22,10 @@ typedef struct shape {
     const mca_obstacle_t *obs; /* box / cylinder */
 } shape_t;
 
+/* Finite and small enough that squares cannot overflow (NaN fails the comparisons). */
 static int finite3(const double *v) {
-    return v != NULL && isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+    return v != NULL && fabs(v[0]) <= MCA_SEGDIST_MAX_COORD && fabs(v[1]) <= MCA_SEGDIST_MAX_COORD &&
+           fabs(v[2]) <= MCA_SEGDIST_MAX_COORD;
 }
 
 /* R^T x (world direction into the shape frame) */
@@ -489,17 +492,18 @@ static int obstacle_ok(const mca_obstacle_t *o) {
         return 0;
     }
     if (o->type == MCA_OBST_BOX) {
-        return o->half[0] > 0.0 && o->half[1] > 0.0 && o->half[2] > 0.0 && isfinite(o->half[0]) &&
-               isfinite(o->half[1]) && isfinite(o->half[2]);
+        return o->half[0] > 0.0 && o->half[1] > 0.0 && o->half[2] > 0.0 && finite3(o->half);
     }
     if (o->type == MCA_OBST_CYLINDER) {
-        return o->radius > 0.0 && o->half_height > 0.0 && isfinite(o->radius) && isfinite(o->half_height);
+        return o->radius > 0.0 && o->half_height > 0.0 && o->radius <= MCA_SEGDIST_MAX_COORD &&
+               o->half_height <= MCA_SEGDIST_MAX_COORD;
     }
     return 0;
 }
 
 static int capsule_ok(const mca_capsule_t *c) {
-    return c != NULL && finite3(c->a) && finite3(c->b) && c->radius >= 0.0 && isfinite(c->radius);
+    return c != NULL && finite3(c->a) && finite3(c->b) && c->radius >= 0.0 &&
+           c->radius <= MCA_SEGDIST_MAX_COORD;
 }
 
 static void set_name(mca_obstacle_t *obs, const char *name) {

@@ -8,8 +8,10 @@
 #include "mca/segdist.h"
 #include "mca/vec3.h"
 
+/* Finite and small enough that squared differences cannot overflow (MCA_SEGDIST_MAX_COORD). */
 static int finite3(const double *v) {
-    return v != NULL && isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+    return v != NULL && fabs(v[0]) <= MCA_SEGDIST_MAX_COORD && fabs(v[1]) <= MCA_SEGDIST_MAX_COORD &&
+           fabs(v[2]) <= MCA_SEGDIST_MAX_COORD;
 }
 
 /* NaN (e.g. 0/0 on a degenerate segment) maps to 0 so the result stays a feasible point. */

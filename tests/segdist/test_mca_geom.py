@@ -88,6 +88,7 @@ for bad, lineno, answered, what in (
     ("0 0 0 1 0 0 0 -1 0.3 0 1 inf\n", 1, 0, "inf"),
     ("0 0 0 1 0 0 0 -1 0.3 0 1 1e999\n", 1, 0, "overflow"),
     ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3x\n", 1, 0, "trailing junk"),
+    ("0 0 0 1 0 0 0 -1 0.3 0 1 0.3\n1e200 0 0 -1e200 0 0 0 -1 0.3 0 1 0.3\n", 2, 1, "beyond 1e100"),
 ):
     rc, out, err = run(["segdist"], bad)
     r = rows(out)

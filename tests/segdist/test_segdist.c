@@ -232,6 +232,9 @@ static void test_closed_rejects_bad_input(void **state) {
     mca_segdist_t before = r;
     assert_int_equal(mca_segdist_closed(a, b, c, bad, &r), MCA_EINVAL);
     assert_int_equal(mca_segdist_closed(inf, b, c, c, &r), MCA_EINVAL);
+    double huge[3] = {0, 0, 1e101};
+    assert_int_equal(mca_segdist_closed(a, b, c, huge, &r), MCA_EINVAL);
+    assert_int_equal(mca_segdist_lsdm(huge, b, c, c, NULL, &r), MCA_EINVAL);
     assert_int_equal(mca_segdist_closed(NULL, b, c, c, &r), MCA_EINVAL);
     assert_int_equal(mca_segdist_closed(a, b, c, c, NULL), MCA_EINVAL);
     assert_int_equal(mca_segdist_lsdm(a, b, c, bad, NULL, &r), MCA_EINVAL);

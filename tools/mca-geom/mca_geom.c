@@ -143,7 +143,8 @@ static int cmd_segdist(int argc, char **argv) {
         }
         if (rc != MCA_OK && rc != MCA_ENOTCONV) {
             fflush(stdout);
-            fprintf(stderr, "mca-geom segdist: stdin line %ld: %s\n", lineno, mca_strerror(rc));
+            fprintf(stderr, "mca-geom segdist: stdin line %ld: %s (coordinates must be within +-%g m)\n",
+                    lineno, mca_strerror(rc), MCA_SEGDIST_MAX_COORD);
             status = EXIT_BAD_INPUT;
             goto out;
         }

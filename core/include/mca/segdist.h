@@ -34,14 +34,18 @@ typedef struct mca_lsdm_params {
 #define MCA_LSDM_DEFAULT_MAX_ITER 200
 #define MCA_LSDM_PAPER_TOL 1e-5
 
-/** Closed-form segment-segment distance. @retval MCA_OK, MCA_EINVAL (NULL or non-finite input) */
+/** Largest accepted |coordinate| [m]: beyond it squared differences could overflow (MCA_EINVAL). */
+#define MCA_SEGDIST_MAX_COORD 1e100
+
+/** Closed-form segment-segment distance.
+ *  @retval MCA_OK, MCA_EINVAL (NULL, non-finite input or |coordinate| > MCA_SEGDIST_MAX_COORD) */
 int mca_segdist_closed(const double a[3], const double b[3], const double c[3], const double d[3],
                        mca_segdist_t *out);
 
 /** The paper's LSDM, started at endpoint B (Step 3); each point-segment projection (Step 1) is one
  *  iteration; stops when the distance declined by less than params->tol. params NULL = the defaults.
  *  NOT accurate to 1e-9 m in general (docs/segdist.md): the controller uses mca_segdist_closed().
- *  @retval MCA_OK, MCA_EINVAL (NULL point/out, non-finite input, tol < 0, max_iter < 2),
+ *  @retval MCA_OK, MCA_EINVAL (NULL point/out, non-finite or too large input, tol < 0, max_iter < 2),
  *  MCA_ENOTCONV (cap hit; out still holds the best pair found) */
 int mca_segdist_lsdm(const double a[3], const double b[3], const double c[3], const double d[3],
                      const mca_lsdm_params_t *params, mca_segdist_t *out);
