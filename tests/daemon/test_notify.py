@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Plays systemd's side of the sd_notify protocol against mcad (sd_notify(3), sd_watchdog_enabled(3)).
+
+A unix datagram socket stands in for systemd: NOTIFY_SOCKET points at it and WATCHDOG_USEC asks for
+keep-alives. Three runs of a short sim cell (two PA10+, hold task, DDS on the loopback config):
+  1. READY=1 arrives, WATCHDOG=1 keep-alives arrive at about WATCHDOG_USEC/4, SIGTERM gives STOPPING=1,
+     the summary, exit 0.
+  2. debug_stall_after_ticks: the loop stalls after 400 ticks; the keep-alives must STOP (none later than
+     one check interval after the stall), while the process still runs; SIGTERM ends it (exit 4).
+  3. same with SIGUSR1 as the stall trigger.
+usage: test_notify.py MCAD SOURCE_DIR [--no-rt]
+"""
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+MCAD, SRC = sys.argv[1], sys.argv[2]
+EXTRA = sys.argv[3:]
+WATCHDOG_USEC = 200000  # 200 ms: pings every 50 ms while healthy
+
+CELL = """name: notify-test
+task: {{duration: 30.0}}
+arms:
+  - name: left
+    backend: sim
+    urdf: {src}/config/robots/pa10plus.urdf
+    base_xyz: [0.0, -0.6, 0.0]
+    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]
+  - name: right
+    backend: sim
+    urdf: {src}/config/robots/pa10plus.urdf
+    base_xyz: [0.0, 0.6, 0.0]
+    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]
+dds: {{enabled: true, domain: {domain}, config: {src}/config/dds/loopback.xml, publish_divisor: 10}}
+rt: {{period_us: 1000, priority: 60, overrun_limit: 1000}}
+{extra}
+"""
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def run(tmp, name, extra_yaml, stall_by_signal):
+    cell = os.path.join(tmp, name + ".yaml")
+    with open(cell, "w") as f:
+        f.write(CELL.format(src=SRC, extra=extra_yaml, domain=100 + os.getpid() % 100))
+    sock_path = os.path.join(tmp, name + ".sock")
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    sock.bind(sock_path)
+    sock.settimeout(0.05)
+    env = dict(os.environ, NOTIFY_SOCKET=sock_path, WATCHDOG_USEC=str(WATCHDOG_USEC))
+    env.pop("WATCHDOG_PID", None)
+    t0 = time.monotonic()
+    proc = subprocess.Popen([MCAD] + EXTRA + [cell], env=env, stderr=subprocess.PIPE, text=True)
+    msgs = []  # (time since start, field)
+
+    def pump(until):
+        while time.monotonic() < until:
+            try:
+                data = sock.recv(4096).decode()
+            except socket.timeout:
+                if proc.poll() is not None:
+                    return
+                continue
+            for field in data.split("\n"):
+                if field:
+                    msgs.append((time.monotonic() - t0, field))
+
+    def first(field):
+        return next((t for t, m in msgs if m == field), None)
+
+    # wait for READY=1 (arms answered, DDS up)
+    deadline = time.monotonic() + 15
+    while first("READY=1") is None and time.monotonic() < deadline and proc.poll() is None:
+        pump(time.monotonic() + 0.1)
+    t_ready = first("READY=1")
+    check(t_ready is not None, f"{name}: READY=1 received ({t_ready and round(t_ready, 2)} s after start)")
+    if t_ready is None:
+        proc.kill()
+        print(proc.stderr.read())
+        return
+    check(any(m.startswith("STATUS=") for _, m in msgs), f"{name}: STATUS= line before READY")
+    t_stall = None
+    if stall_by_signal:
+        pump(time.monotonic() + 0.6)
+        t_stall = time.monotonic() - t0
+        proc.send_signal(signal.SIGUSR1)
+        pump(time.monotonic() + 1.5)
+    elif extra_yaml:
+        pump(time.monotonic() + 2.0)
+    else:
+        pump(time.monotonic() + 1.5)
+    pings = [t for t, m in msgs if m == "WATCHDOG=1"]
+    if not extra_yaml and not stall_by_signal:
+        gaps = [b - a for a, b in zip(pings, pings[1:])]
+        check(len(pings) >= 15, f"{name}: {len(pings)} WATCHDOG=1 keep-alives in 1.5 s (>= 15)")
+        check(gaps and max(gaps) < WATCHDOG_USEC * 1e-6 / 2,
+              f"{name}: largest gap between keep-alives {max(gaps) if gaps else 0:.3f} s < WatchdogSec/2")
+    else:
+        if t_stall is None:
+            # debug_stall_after_ticks: 400 ticks = 0.4 s after the loop started (~READY)
+            t_stall = t_ready + 0.4
+        before = [t for t in pings if t < t_stall]
+        late = [t for t in pings if t > t_stall + WATCHDOG_USEC * 1e-6 / 2]
+        check(len(before) >= 3, f"{name}: keep-alives before the stall ({len(before)})")
+        check(not late, f"{name}: no WATCHDOG=1 after the stall (last ping {pings[-1] if pings else 0:.3f} s, "
+                        f"stall at {t_stall:.3f} s)")
+        check(proc.poll() is None, f"{name}: mcad still running while stalled (systemd would kill it)")
+    proc.send_signal(signal.SIGTERM)
+    t_term = time.monotonic() - t0
+    pump(time.monotonic() + 10)
+    try:
+        rc = proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        rc = None
+    err = proc.stderr.read()
+    t_stop = next((t for t, m in msgs if m == "STOPPING=1" and t >= t_term), None)
+    check(t_stop is not None, f"{name}: STOPPING=1 after SIGTERM")
+    want = 0 if not (extra_yaml or stall_by_signal) else 4
+    check(rc == want, f"{name}: exit status {rc} (want {want})")
+    check("summary: wake-up jitter p50" in err and "summary: compute time" in err, f"{name}: summary printed")
+    if want == 0:
+        check("state stopped" in err, f"{name}: ended in state stopped")
+    if rc != want:
+        print(err)
+    sock.close()
+
+
+with tempfile.TemporaryDirectory(prefix="mca-notify-") as tmp:
+    run(tmp, "healthy", "", False)
+    run(tmp, "stall-config", "debug_stall_after_ticks: 400", False)
+    run(tmp, "stall-signal", "", True)
+
+if failures:
+    print(f"{len(failures)} check(s) failed")
+    sys.exit(1)
+print("all checks passed")
