@@ -156,6 +156,13 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
                 st->in_band[a][l] = 0;
                 continue;
             }
+            if (l > 0 && crit[a][l - 1].valid && crit[a][l - 1].d < p->d2 &&
+                mca_v3_dist(crit[a][l - 1].p, c->p) < 1e-12 && mca_v3_dist(crit[a][l - 1].e, c->e) < 1e-12) {
+                /* same critical pair as the previous link (a zero-length link next to its neighbour):
+                 * a duplicate row adds nothing and makes the QP degenerate */
+                st->in_band[a][l] = 0;
+                continue;
+            }
             const double s = mca_brake_s(c->d, p->d1, p->d2);
             brake = fmin(brake, s);
             double Jp[3][MCA_MAX_DOF];
@@ -190,14 +197,18 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
                     }
                     st->in_band[a][l] = 1;
                 }
+                const double rn = mca_v3_norm(r_pe);
                 for (int i = 0; i < 3; i++) {
+                    if (!(fabs(r_pe[i]) > 1e-6 * rn)) {
+                        continue; /* no extent along this axis: a zero row, left inactive */
+                    }
                     for (int j = 0; j < dof; j++) {
                         qp->U[r0 + i][vo + j] = rows[i][j];
                     }
                     const double floor = p->v_floor * fabs(r_pe[i]);
                     qp->beta[r0 + i] = s * fmax(st->captured[a][l][i], floor);
+                    active++;
                 }
-                active += 3;
             }
         }
     }

@@ -232,6 +232,10 @@ int main(int argc, char **argv)
                    r->scheme, mca_ctrl_fault_name(r->fault), r->fault_t, r->fault_distance, r->fault_text,
                    r->stopped ? "arms stopped" : "arms NOT stopped", r->stop_t, r->min_distance_after_fault);
         }
+        if (r->pdnn_capped) {
+            printf("%s: %d ticks with the PDNN at its step cap (residual <= fault_residual, accepted)\n",
+                   r->scheme, r->pdnn_capped);
+        }
         if (dump) {
             printf("%s: %d QPs dumped to %s (%d with binding collision rows)\n", r->scheme, r->dumped, dump,
                    r->dumped_binding);
@@ -252,13 +256,13 @@ int main(int argc, char **argv)
                     "\"fault_name\":\"%s\",\"fault_t\":%.6g,\"fault_distance\":%.9g,\"stopped\":%d,"
                     "\"stop_t\":%.6g,\"min_distance_after_fault\":%.9g,\"pdnn_steps_max\":%d,"
                     "\"pdnn_steps_mean\":%.3f,\"pdnn_residual_max\":%.3g,\"eq_residual_max\":%.3g,"
-                    "\"binding_ticks\":%d,\"compute_p50_ns\":%lld,\"compute_p99_ns\":%lld,"
+                    "\"binding_ticks\":%d,\"pdnn_capped\":%d,\"compute_p50_ns\":%lld,\"compute_p99_ns\":%lld,"
                     "\"compute_max_ns\":%lld,\"dumped\":%d,\"dumped_binding\":%d,\"samples\":[",
                     s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
                     r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
                     isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
                     isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0, r->pdnn_steps_max,
-                    r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max, r->binding_ticks,
+                    r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max, r->binding_ticks, r->pdnn_capped,
                     (long long)r->compute_p50, (long long)r->compute_p99, (long long)r->compute_max, r->dumped,
                     r->dumped_binding);
             for (int i = 0; i < r->n_samples; i++) {

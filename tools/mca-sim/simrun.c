@@ -206,7 +206,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
                 (info.fault == MCA_CTRL_FAULT_NOT_CONVERGED || info.fault == MCA_CTRL_FAULT_FAKE_ATTRACTOR)) {
                 /* the QP that failed, for a look with OSQP (phi is zeroed after a fault: none written) */
                 char path[1024];
-                snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json", o->dump_dir, scn->name, r->scheme, k);
+                snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json.fault", o->dump_dir, scn->name, r->scheme, k);
                 mca_qp_dump_json(mca_controller_last_qp(ctrl, NULL), NULL, info.pdnn_steps, info.pdnn_residual,
                                  "fault", path);
             }
@@ -239,7 +239,12 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         if (csv) {
             csv_row(csv, cfg, t, q, &info);
         }
-        if (o->dump_dir && !info.fault && o->scheme != MCA_SCHEME_APF &&
+        if (!info.fault && o->scheme != MCA_SCHEME_APF && !info.pdnn_converged) {
+            r->pdnn_capped++;
+        }
+        /* only converged answers are dumped: at the step cap the controller accepts residuals up to
+         * fault_residual, whose phi may differ from the exact solution by more than the check's 1e-6 */
+        if (o->dump_dir && !info.fault && info.pdnn_converged && o->scheme != MCA_SCHEME_APF &&
             (o->dump_max <= 0 || r->dumped < o->dump_max)) {
             const int every = o->dump_every > 0 ? o->dump_every : 1;
             const int every_b = every / 5 > 0 ? every / 5 : 1;

@@ -52,6 +52,7 @@ typedef struct mca_simrun_result {
     double pdnn_residual_max;
     double eq_residual_max;
     int binding_ticks;       /**< ticks with at least one binding collision row */
+    int pdnn_capped;         /**< ticks where the PDNN hit its step cap but stayed below fault_residual */
     int64_t compute_p50, compute_p99, compute_max;
     int dumped, dumped_binding;
 } mca_simrun_result_t;

@@ -1,0 +1,601 @@
+/* SPDX-License-Identifier: MIT */
+/* Unit tests of the MCA scheme: S(d), diamond rows, joint bounds (19)-(20), collision rows vs finite
+ * differences of FK, the stable row layout, APF formulas, paths, scenario files and controller faults. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "mca/apf.h"
+#include "mca/chain.h"
+#include "mca/controller.h"
+#include "mca/err.h"
+#include "mca/scenario.h"
+#include "mca/scheme.h"
+#include "mca/vec3.h"
+
+#ifndef MCA_SOURCE_DIR
+#error MCA_SOURCE_DIR must be defined
+#endif
+#define PA10 MCA_SOURCE_DIR "/config/robots/pa10plus.urdf"
+#define SCN(x) MCA_SOURCE_DIR "/config/scenarios/" x
+
+/* ------------------------------------------------------------------ S(d) (13) */
+
+static void test_brake_values(void **state)
+{
+    (void)state;
+    const double d1 = 0.05, d2 = 0.12;
+    assert_true(mca_brake_s(0.2, d1, d2) == 1.0);
+    assert_true(mca_brake_s(d2, d1, d2) == 1.0);
+    assert_true(mca_brake_s(d1, d1, d2) == 0.0);
+    assert_true(mca_brake_s(0.0, d1, d2) == 0.0);
+    assert_true(mca_brake_s(-0.1, d1, d2) == 0.0);
+    /* midpoint: sin^2(pi/4) = 1/2 */
+    assert_true(fabs(mca_brake_s(0.5 * (d1 + d2), d1, d2) - 0.5) < 1e-15);
+    /* quarter: sin^2(pi/8) = (1 - cos(pi/4))/2 */
+    assert_true(fabs(mca_brake_s(d1 + 0.25 * (d2 - d1), d1, d2) - 0.5 * (1.0 - sqrt(0.5))) < 1e-15);
+    /* smooth and monotonic: continuous at both ends, derivative 0 at both ends */
+    double prev = 0.0;
+    for (int i = 0; i <= 1000; i++) {
+        const double d = d1 + (d2 - d1) * i / 1000.0;
+        const double s = mca_brake_s(d, d1, d2);
+        assert_true(s >= prev - 1e-15);
+        prev = s;
+    }
+    const double h = 1e-6;
+    assert_true(mca_brake_s(d1 + h, d1, d2) < 1e-8);
+    assert_true(1.0 - mca_brake_s(d2 - h, d1, d2) < 1e-8);
+}
+
+/* ------------------------------------------------------------------ diamond (10) */
+
+static void test_diamond_rows(void **state)
+{
+    (void)state;
+    double J[3][MCA_MAX_DOF], rows[3][MCA_MAX_DOF];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            J[i][j] = 10.0 * i + j + 1.0;
+        }
+    }
+    const double r[3] = {0.5, -2.0, 0.0};
+    mca_diamond_rows(r, J, 6, rows);
+    /* hand computation: row i = r_i * J_i for the first dof columns, zero beyond */
+    assert_true(rows[0][0] == 0.5 && rows[0][5] == 3.0 && rows[0][6] == 0.0);
+    assert_true(rows[1][0] == -22.0 && rows[1][3] == -28.0 && rows[1][7] == 0.0);
+    for (int j = 0; j < MCA_MAX_DOF; j++) {
+        assert_true(rows[2][j] == 0.0);
+    }
+    /* componentwise rows times qdot = r_i * (J qdot)_i */
+    const double qd[MCA_MAX_DOF] = {0.1, -0.2, 0.3, 0.05, 0.0, 1.0, 7.0, 7.0};
+    for (int i = 0; i < 3; i++) {
+        double a = 0.0, b = 0.0;
+        for (int j = 0; j < 6; j++) {
+            a += rows[i][j] * qd[j];
+            b += J[i][j] * qd[j];
+        }
+        assert_true(fabs(a - r[i] * b) < 1e-12);
+    }
+}
+
+/* ------------------------------------------------------------------ bounds (19)-(20) */
+
+static void make_chain(mca_chain_t *c)
+{
+    memset(c, 0, sizeof *c);
+    c->dof = 3;
+    for (int j = 0; j < 3; j++) {
+        c->joint[j].lower = -1.0;
+        c->joint[j].upper = 2.0;
+        c->joint[j].vel_limit = 0.5;
+        c->joint[j].axis[2] = 1.0;
+    }
+    c->joint[2].continuous = 1;
+    c->joint[2].lower = -INFINITY;
+    c->joint[2].upper = INFINITY;
+}
+
+static void test_joint_bounds(void **state)
+{
+    (void)state;
+    mca_chain_t c;
+    make_chain(&c);
+    double lb[3], ub[3];
+    /* joint 0 mid-range: velocity limits win; joint 1 near the upper limit: eps (q+ - q) wins */
+    const double q[3] = {0.5, 1.95, 100.0};
+    assert_int_equal(mca_joint_bounds(&c, q, 5.0, lb, ub), MCA_OK);
+    assert_true(lb[0] == -0.5 && ub[0] == 0.5);
+    assert_true(fabs(ub[1] - 5.0 * (2.0 - 1.95)) < 1e-15); /* 0.25 < 0.5 */
+    assert_true(lb[1] == -0.5);                              /* eps (q- - q) = -14.75 < -0.5 */
+    /* continuous joint: velocity only, whatever q is */
+    assert_true(lb[2] == -0.5 && ub[2] == 0.5);
+    /* near the lower limit */
+    const double q2[3] = {-0.98, 0.0, 0.0};
+    assert_int_equal(mca_joint_bounds(&c, q2, 5.0, lb, ub), MCA_OK);
+    assert_true(fabs(lb[0] - 5.0 * (-1.0 + 0.98)) < 1e-15);
+    /* beyond a limit by more than vel/eps: lb > ub, reported */
+    const double q3[3] = {2.2, 0.0, 0.0};
+    assert_int_equal(mca_joint_bounds(&c, q3, 5.0, lb, ub), MCA_EINFEASIBLE);
+    const double qn[3] = {NAN, 0.0, 0.0};
+    assert_int_equal(mca_joint_bounds(&c, qn, 5.0, lb, ub), MCA_EINVAL);
+}
+
+/* ------------------------------------------------------------------ collision rows vs FK */
+
+static void load_pa10(mca_chain_t *c)
+{
+    char err[256];
+    assert_int_equal(mca_chain_load_urdf(c, PA10, "tool_tip", err, sizeof err), MCA_OK);
+}
+
+/* World position of a point rigidly attached to link l at configuration q, given its position x at q0. */
+static void moved_point(const mca_chain_t *c, const double *q0, const double *q, int l, const double x[3],
+                        double out[3])
+{
+    mca_kin_t k0, k1;
+    assert_int_equal(mca_fk(c, q0, &k0), MCA_OK);
+    assert_int_equal(mca_fk(c, q, &k1), MCA_OK);
+    if (l == 0) {
+        mca_v3_set(out, x);
+        return;
+    }
+    /* link l is carried by joint frame l-1 (after its rotation): local = R^T (x - p), out = R1 local + p1 */
+    const mca_pose_t *f0 = &k0.frame[l - 1], *f1 = &k1.frame[l - 1];
+    double d[3], loc[3];
+    mca_v3_sub(d, x, f0->p);
+    for (int i = 0; i < 3; i++) {
+        loc[i] = f0->R[0][i] * d[0] + f0->R[1][i] * d[1] + f0->R[2][i] * d[2];
+    }
+    for (int i = 0; i < 3; i++) {
+        out[i] = f1->p[i] + f1->R[i][0] * loc[0] + f1->R[i][1] * loc[1] + f1->R[i][2] * loc[2];
+    }
+}
+
+static void test_collision_rows_fd(void **state)
+{
+    (void)state;
+    static mca_chain_t ch[2];
+    load_pa10(&ch[0]);
+    load_pa10(&ch[1]);
+    const double xyz[3] = {0.45, -0.5, 0.0}, rpy[3] = {0, 0, 0};
+    mca_chain_set_base(&ch[1], xyz, rpy);
+    const double q0[8] = {0.1, 0.7, 0.2, -1.4, 0.3, 0.6, -0.2, 0.7};
+    const double q1[8] = {-1.5, -0.8, 0.1, 1.5, 0.1, -0.7, 0.2, -0.8};
+    mca_kin_t kin[2];
+    assert_int_equal(mca_fk(&ch[0], q0, &kin[0]), MCA_OK);
+    assert_int_equal(mca_fk(&ch[1], q1, &kin[1]), MCA_OK);
+    /* critical points: a made-up P on link 5 of arm 0 (a point of its segment) and E nearby */
+    static mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    memset(crit, 0, sizeof crit);
+    const int L = 5;
+    double P[3], E[3];
+    mca_v3_axpy(P, kin[0].point[L], 0.3, (double[3]){kin[0].point[L + 1][0] - kin[0].point[L][0],
+                                                      kin[0].point[L + 1][1] - kin[0].point[L][1],
+                                                      kin[0].point[L + 1][2] - kin[0].point[L][2]});
+    const double off[3] = {0.05, -0.06, 0.02};
+    mca_v3_add(E, P, off);
+    crit[0][L].valid = 1;
+    crit[0][L].d = 0.08;
+    mca_v3_set(crit[0][L].p, P);
+    mca_v3_set(crit[0][L].e, E);
+    const mca_chain_t *chains[2] = {&ch[0], &ch[1]};
+    const double *qs[2] = {q0, q1};
+    double rd[2][3], rdd[2][3] = {{0, 0, 0}, {0, 0, 0}};
+    mca_v3_set(rd[0], kin[0].ee);
+    mca_v3_set(rd[1], kin[1].ee);
+    static mca_qp_t qp;
+    mca_scheme_state_t st;
+    mca_scheme_params_t sp;
+    mca_scheme_info_t si;
+    for (int form = 0; form < 2; form++) {
+        mca_scheme_default_params(&sp);
+        sp.form = form ? MCA_FORM_NORMAL : MCA_FORM_COMPONENTWISE;
+        sp.v_floor = 0.1;
+        mca_scheme_state_reset(&st);
+        assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd,
+                                             (const double(*)[3])rdd, (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit,
+                                             NULL, &st, &qp, &si),
+                         MCA_OK);
+        const int rpl = form ? 1 : 3;
+        assert_int_equal(si.rows_per_link, rpl);
+        assert_int_equal(qp.n, 16);
+        assert_int_equal(qp.n_eq, 6);
+        assert_int_equal(qp.n_ineq, rpl * 18); /* fixed: 9 links per arm, whatever is active */
+        assert_int_equal(si.active_rows, rpl);
+        const double s = mca_brake_s(0.08, sp.d1, sp.d2);
+        assert_true(fabs(si.brake - s) < 1e-15);
+        const int r0 = si.row_off[0] + rpl * L;
+        /* every other row inactive: zero row, bound = big */
+        for (int i = 0; i < qp.n_ineq; i++) {
+            if (i >= r0 && i < r0 + rpl) {
+                continue;
+            }
+            assert_true(qp.beta[i] == sp.big);
+            for (int j = 0; j < qp.n; j++) {
+                assert_true(qp.U[i][j] == 0.0);
+            }
+        }
+        /* row(s) vs central finite differences of the moved point P */
+        const double h = 1e-6;
+        double r_pe[3];
+        mca_v3_sub(r_pe, E, P);
+        const double nrm = mca_v3_norm(r_pe);
+        for (int j = 0; j < 8; j++) {
+            double qp_[8], qm[8], pp[3], pm[3], v[3];
+            memcpy(qp_, q0, sizeof qp_);
+            memcpy(qm, q0, sizeof qm);
+            qp_[j] += h;
+            qm[j] -= h;
+            moved_point(&ch[0], q0, qp_, L, P, pp);
+            moved_point(&ch[0], q0, qm, L, P, pm);
+            for (int i = 0; i < 3; i++) {
+                v[i] = (pp[i] - pm[i]) / (2 * h);
+            }
+            if (form) {
+                assert_true(fabs(qp.U[r0][j] - mca_v3_dot(r_pe, v) / nrm) < 1e-7);
+            } else {
+                for (int i = 0; i < 3; i++) {
+                    assert_true(fabs(qp.U[r0 + i][j] - r_pe[i] * v[i]) < 1e-7);
+                }
+            }
+            /* arm 1's columns untouched by arm 0's rows */
+            for (int i = 0; i < rpl; i++) {
+                assert_true(qp.U[r0 + i][8 + j] == 0.0);
+            }
+        }
+        if (form) {
+            assert_true(fabs(qp.beta[r0] - s * sp.v_normal) < 1e-15);
+        } else {
+            /* entered the band at rest (phi_prev NULL): captured 0, bound = S(d) v_floor |r_i| */
+            for (int i = 0; i < 3; i++) {
+                assert_true(fabs(qp.beta[r0 + i] - s * sp.v_floor * fabs(r_pe[i])) < 1e-15);
+            }
+        }
+        /* equality rows: J_ee and alpha = rdot + K (r_d - r) = 0 here */
+        double Je[3][MCA_MAX_DOF];
+        assert_int_equal(mca_jacobian_ee(&kin[1], Je), MCA_OK);
+        for (int i = 0; i < 3; i++) {
+            assert_true(fabs(qp.alpha[3 + i]) < 1e-15);
+            for (int j = 0; j < 8; j++) {
+                assert_true(qp.G[3 + i][8 + j] == Je[i][j]);
+                assert_true(qp.G[i][8 + j] == 0.0);
+            }
+        }
+    }
+    /* componentwise capture: entering the band with a velocity keeps max(r <> J qdot, 0), frozen */
+    mca_scheme_default_params(&sp);
+    sp.form = MCA_FORM_COMPONENTWISE;
+    mca_scheme_state_reset(&st);
+    double phi[16] = {0};
+    phi[1] = 0.3;
+    phi[3] = -0.2;
+    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
+                                         (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, phi, &st, &qp, &si),
+                     MCA_OK);
+    const int r0 = si.row_off[0] + 3 * L;
+    const double s = mca_brake_s(0.08, sp.d1, sp.d2);
+    double cap[3];
+    for (int i = 0; i < 3; i++) {
+        double v = 0.0;
+        for (int j = 0; j < 8; j++) {
+            v += qp.U[r0 + i][j] * phi[j];
+        }
+        cap[i] = fmax(v, 0.0);
+        assert_true(fabs(qp.beta[r0 + i] - s * cap[i]) < 1e-12);
+    }
+    assert_true(cap[0] + cap[1] + cap[2] > 0.0);
+    /* next tick, other velocity, still inside: same captured rates */
+    double phi2[16] = {0};
+    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
+                                         (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, phi2, &st, &qp, &si),
+                     MCA_OK);
+    for (int i = 0; i < 3; i++) {
+        assert_true(fabs(qp.beta[r0 + i] - s * cap[i]) < 1e-12);
+    }
+    /* MVN: no inequality rows at all */
+    sp.collision = 0;
+    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
+                                         NULL, NULL, &st, &qp, &si),
+                     MCA_OK);
+    assert_int_equal(qp.n_ineq, 0);
+}
+
+/* ------------------------------------------------------------------ APF (40)-(46) */
+
+static void test_apf(void **state)
+{
+    (void)state;
+    mca_apf_params_t p;
+    mca_apf_default_params(&p);
+    assert_true(p.k_pos == 100 && p.d_pos == 0.1 && p.k_vel == 5 && p.d_vel == 0.1 && p.rho == 0.8 &&
+                p.d == 0.12 && p.v_rep_max == 0.001 && p.theta == 1);
+    /* (43) */
+    assert_true(fabs(mca_apf_rep_speed(&p, 0.0) - 0.0005) < 1e-18);
+    assert_true(fabs(mca_apf_rep_speed(&p, 0.12) - 0.001 / (1.0 + exp(2.0))) < 1e-18);
+    /* attractive velocity satisfies V = rho (K_P e + D_P n.(S_G - V)) n + (1 - rho) K_V (S_G - V) */
+    const double ee[3] = {0.1, 0.2, 0.3}, goal[3] = {0.11, 0.19, 0.305}, gv[3] = {0.05, -0.1, 0.02};
+    double v[3], e[3];
+    mca_apf_attractive(&p, ee, goal, gv, v);
+    mca_v3_sub(e, goal, ee);
+    const double ep = mca_v3_norm(e);
+    double n[3] = {e[0] / ep, e[1] / ep, e[2] / ep}, sv[3];
+    mca_v3_sub(sv, gv, v);
+    const double dp = p.k_pos * ep + p.d_pos * mca_v3_dot(n, sv);
+    for (int i = 0; i < 3; i++) {
+        const double rhs = p.rho * dp * n[i] + (1.0 - p.rho) * p.k_vel * sv[i];
+        assert_true(fabs(v[i] - rhs) < 1e-12);
+    }
+    /* zero error, zero goal velocity: zero */
+    mca_apf_attractive(&p, ee, ee, (double[3]){0, 0, 0}, v);
+    assert_true(v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0);
+    /* pseudoinverse: J J^+ w = w, and J^+ w is the minimum-norm solution (in the row space of J) */
+    double J[3][MCA_MAX_DOF] = {{1, 2, 0, 1, 0, 0, 0, 0}, {0, 1, 1, 0, 2, 0, 0, 0}, {1, 0, 0, 1, 1, 3, 0, 0}};
+    const double w[3] = {0.3, -0.2, 0.5};
+    double qd[MCA_MAX_DOF];
+    assert_int_equal(mca_apf_pinv_apply(J, 6, 0.0, w, qd), MCA_OK);
+    for (int i = 0; i < 3; i++) {
+        double s = 0.0;
+        for (int j = 0; j < 6; j++) {
+            s += J[i][j] * qd[j];
+        }
+        assert_true(fabs(s - w[i]) < 1e-12);
+    }
+    double Js[3][MCA_MAX_DOF] = {{1, 0, 0, 0, 0, 0, 0, 0}, {2, 0, 0, 0, 0, 0, 0, 0}, {3, 0, 0, 0, 0, 0, 0, 0}};
+    assert_int_equal(mca_apf_pinv_apply(Js, 6, 0.0, w, qd), MCA_EINFEASIBLE);
+}
+
+/* ------------------------------------------------------------------ paths */
+
+static void test_paths(void **state)
+{
+    (void)state;
+    mca_path_t c;
+    memset(&c, 0, sizeof c);
+    c.kind = MCA_PATH_CIRCLE;
+    c.relative = 1;
+    c.radius = 0.2;
+    c.period = 10.0;
+    c.turns = 1.0;
+    c.u[0] = 1.0;
+    c.v[1] = 0.5;
+    c.v[2] = sqrt(0.75);
+    const double a[3] = {0.3, 0.1, 1.0};
+    mca_path_anchor(&c, a);
+    double r[3], rd[3], r1[3], r2[3], tmp[3];
+    mca_path_eval(&c, 0.0, r, rd);
+    assert_true(mca_v3_dist(r, a) < 1e-15 && mca_v3_norm(rd) == 0.0);
+    mca_path_eval(&c, 10.0, r, rd);
+    assert_true(mca_v3_dist(r, a) < 1e-12 && mca_v3_norm(rd) < 1e-12);
+    /* halfway: opposite side of the circle, 2R away */
+    mca_path_eval(&c, 5.0, r, rd);
+    assert_true(fabs(mca_v3_dist(r, a) - 0.4) < 1e-12);
+    /* radius stays 0.2 from the centre, velocity = finite difference */
+    const double ctr[3] = {a[0] - 0.2, a[1], a[2]};
+    for (double t = 0.3; t < 10.0; t += 0.77) {
+        mca_path_eval(&c, t, r, rd);
+        assert_true(fabs(mca_v3_dist(r, ctr) - 0.2) < 1e-12);
+        mca_path_eval(&c, t + 1e-6, r1, tmp);
+        mca_path_eval(&c, t - 1e-6, r2, tmp);
+        for (int i = 0; i < 3; i++) {
+            assert_true(fabs((r1[i] - r2[i]) / 2e-6 - rd[i]) < 1e-7);
+        }
+    }
+    /* waypoints: starts at the anchor, quintic per segment, ends at rest at the last point */
+    mca_path_t w;
+    memset(&w, 0, sizeof w);
+    w.kind = MCA_PATH_WAYPOINTS;
+    w.relative = 0;
+    w.n_points = 3;
+    w.p[1][0] = 1.0;
+    w.p[2][0] = 1.0;
+    w.p[2][1] = 2.0;
+    w.dur[0] = 2.0;
+    w.dur[1] = 4.0;
+    const double zero[3] = {0, 0, 0};
+    mca_path_anchor(&w, zero);
+    assert_true(fabs(mca_path_end_time(&w) - 6.0) < 1e-15);
+    mca_path_eval(&w, 1.0, r, rd); /* mid first segment: h(1/2) = 1/2, hdot = 30/16 / T */
+    assert_true(fabs(r[0] - 0.5) < 1e-15 && fabs(rd[0] - 1.875 / 2.0) < 1e-12);
+    mca_path_eval(&w, 2.0, r, rd);
+    assert_true(fabs(r[0] - 1.0) < 1e-15 && mca_v3_norm(rd) < 1e-15);
+    mca_path_eval(&w, 9.0, r, rd);
+    assert_true(r[0] == 1.0 && r[1] == 2.0 && mca_v3_norm(rd) == 0.0);
+    for (double t = 0.1; t < 6.0; t += 0.37) {
+        mca_path_eval(&w, t, r, rd);
+        mca_path_eval(&w, t + 1e-6, r1, tmp);
+        mca_path_eval(&w, t - 1e-6, r2, tmp);
+        for (int i = 0; i < 3; i++) {
+            assert_true(fabs((r1[i] - r2[i]) / 2e-6 - rd[i]) < 1e-7);
+        }
+    }
+    assert_int_equal(mca_path_eval(&w, NAN, r, rd), MCA_EINVAL);
+}
+
+/* ------------------------------------------------------------------ scenario files */
+
+static const char *write_tmp(const char *name, const char *text)
+{
+    static char path[256];
+    snprintf(path, sizeof path, "/tmp/mca_scheme_test_%d_%s.yaml", (int)getpid(), name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+    return path;
+}
+
+static void test_scenario_files(void **state)
+{
+    (void)state;
+    static mca_scenario_t s;
+    char err[1024];
+    const char *files[] = {"cross_circles.yaml", "hui.yaml", "cup_stacking.yaml", "negative.yaml"};
+    for (int i = 0; i < 4; i++) {
+        char p[512];
+        snprintf(p, sizeof p, SCN("%s"), files[i]);
+        assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_OK);
+        assert_int_equal(s.n_arms, 2);
+        assert_true(s.duration > 0.0);
+    }
+    snprintf(err, sizeof err, "%s", SCN("cross_circles.yaml"));
+    assert_int_equal(mca_scenario_load(err, &s, err, sizeof err), MCA_OK);
+    assert_true(s.params.d1 == 0.05 && s.params.d2 == 0.12 && s.arm[0].n_q0 == 8);
+    assert_true(fabs(s.arm[0].q0[1] - M_PI / 4) < 1e-15 && fabs(s.arm[1].q0[0] + M_PI / 2) < 1e-15);
+    assert_int_equal(s.arm[0].path.kind, MCA_PATH_CIRCLE);
+    assert_true(fabs(mca_v3_dot(s.arm[0].path.u, s.arm[0].path.v)) < 1e-15);
+    /* slope pi/3 to the xy plane: the circle plane's normal makes pi/3 with z */
+    double nrm[3];
+    mca_v3_cross(nrm, s.arm[0].path.u, s.arm[0].path.v);
+    assert_true(fabs(fabs(nrm[2]) - 0.5) < 1e-12);
+
+    /* missing file */
+    assert_int_equal(mca_scenario_load("/nonexistent/x.yaml", &s, err, sizeof err), MCA_ENOENT);
+    assert_non_null(strstr(err, "/nonexistent/x.yaml"));
+    /* unknown key: libcyaml names it with its line */
+    const char *base = "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n"
+                       "    q0: [0]\n    path:\n      kind: hold\n";
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s    bogus: 3\n", base);
+    const char *p = write_tmp("unknown", buf);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_EPARSE);
+    assert_non_null(strstr(err, p));
+    assert_non_null(strstr(err, "bogus"));
+    assert_non_null(strstr(err, "line"));
+    remove(p);
+    /* bad enum value */
+    snprintf(buf, sizeof buf, "%s", base);
+    char *k = strstr(buf, "kind: hold");
+    memcpy(k, "kind: oval", 10);
+    p = write_tmp("enum", buf);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_EPARSE);
+    assert_non_null(strstr(err, "oval"));
+    remove(p);
+    /* semantic error: d1 >= d2, message names file, line and field */
+    snprintf(buf, sizeof buf, "d1: 0.2\nd2: 0.1\n%s", base);
+    p = write_tmp("d1d2", buf);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
+    char want[300];
+    snprintf(want, sizeof want, "%s:2:", p);
+    assert_non_null(strstr(err, want));
+    assert_non_null(strstr(err, "d1/d2"));
+    remove(p);
+    /* waypoints without matching durations */
+    snprintf(buf, sizeof buf,
+             "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
+             "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n        - [1, 0, 0]\n"
+             "      durations: [1]\n");
+    p = write_tmp("dur", buf);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
+    assert_non_null(strstr(err, "durations"));
+    assert_non_null(strstr(err, ":10:")); /* the line of "points:" */
+    remove(p);
+    /* circle without a radius */
+    snprintf(buf, sizeof buf, "%s", base);
+    k = strstr(buf, "kind: hold");
+    snprintf(k, sizeof buf - (size_t)(k - buf), "kind: circle\n      period: 1\n");
+    p = write_tmp("circle", buf);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
+    assert_non_null(strstr(err, "radius"));
+    remove(p);
+    /* q0 count must match the URDF at config time */
+    static mca_controller_config_t cfg;
+    snprintf(buf, sizeof buf, "%s", SCN("cross_circles.yaml"));
+    assert_int_equal(mca_scenario_load(buf, &s, err, sizeof err), MCA_OK);
+    s.arm[1].n_q0 = 7;
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_EINVAL);
+    assert_non_null(strstr(err, "q0"));
+}
+
+/* ------------------------------------------------------------------ controller faults */
+
+static void test_controller_faults(void **state)
+{
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    char err[512];
+    assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
+    mca_controller_t *c = malloc(sizeof *c);
+    assert_non_null(c);
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    double q[2][MCA_MAX_DOF], qd[2][MCA_MAX_DOF];
+    memcpy(q[0], s.arm[0].q0, sizeof q[0]);
+    memcpy(q[1], s.arm[1].q0, sizeof q[1]);
+    const double *qs[MCA_MAX_ARMS] = {q[0], q[1]};
+    double *qds[MCA_MAX_ARMS] = {qd[0], qd[1]};
+    mca_tick_info_t info;
+    /* a normal tick */
+    assert_int_equal(mca_controller_tick(c, 0.0, qs, qds, &info), MCA_OK);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_NONE);
+    assert_true(info.min_distance > 0.05 && info.min_distance < 0.12);
+    assert_true(info.brake < 1.0 && info.active_rows > 0);
+    assert_true(info.eq_residual < 1e-6 && info.pdnn_converged);
+    assert_true(info.compute_ns > 0);
+    for (int i = 0; i < 20; i++) {
+        assert_int_equal(mca_controller_tick(c, 0.001 * (i + 1), qs, qds, &info), MCA_OK);
+    }
+    /* NaN joint: zero command, named fault, latched */
+    q[1][3] = NAN;
+    qd[0][0] = 123.0;
+    assert_int_equal(mca_controller_tick(c, 0.1, qs, qds, &info), MCA_EFAULT);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_NAN);
+    assert_string_equal(mca_ctrl_fault_name(info.fault), "nan");
+    assert_non_null(strstr(info.fault_text, "arm 1"));
+    for (int a = 0; a < 2; a++) {
+        for (int j = 0; j < 8; j++) {
+            assert_true(qd[a][j] == 0.0);
+        }
+    }
+    q[1][3] = s.arm[1].q0[3];
+    assert_int_equal(mca_controller_tick(c, 0.101, qs, qds, &info), MCA_EFAULT);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_NAN); /* latched */
+    assert_true(info.min_distance > 0.0 && info.min_distance < 1.0); /* distances still reported */
+    mca_controller_clear_fault(c);
+    assert_int_equal(mca_controller_tick(c, 0.102, qs, qds, &info), MCA_OK);
+    /* arms overlapping: distance below d1 -> fault, zero command */
+    static mca_controller_config_t cfg2;
+    cfg2 = cfg;
+    const double xyz[3] = {0.1, 0.0, 0.0}, rpy[3] = {0, 0, 0};
+    mca_chain_set_base(&cfg2.chain[1], xyz, rpy);
+    assert_int_equal(mca_controller_init(c, &cfg2), MCA_OK);
+    assert_int_equal(mca_controller_tick(c, 0.0, qs, qds, &info), MCA_EFAULT);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_DISTANCE);
+    assert_string_equal(mca_ctrl_fault_name(info.fault), "distance-below-d1");
+    /* the baselines never fault on distance (they are run to show the collision) */
+    cfg2.scheme = MCA_SCHEME_MVN;
+    cfg2.fault_distance = 0;
+    assert_int_equal(mca_controller_init(c, &cfg2), MCA_OK);
+    assert_int_equal(mca_controller_tick(c, 0.0, qs, qds, &info), MCA_OK);
+    assert_true(info.min_distance < 0.05);
+    /* a joint far beyond its limit: contradicting bounds */
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    q[0][1] = 3.0; /* S2 limit +-1.64 rad */
+    assert_int_equal(mca_controller_tick(c, 0.0, qs, qds, &info), MCA_EFAULT);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_INFEASIBLE);
+    /* bad config */
+    cfg2 = cfg;
+    cfg2.sp.d1 = 0.2;
+    assert_int_equal(mca_controller_init(c, &cfg2), MCA_EINVAL);
+    assert_int_equal(mca_controller_tick(c, 0.0, NULL, qds, &info), MCA_EINVAL);
+    free(c);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_brake_values),   cmocka_unit_test(test_diamond_rows),
+        cmocka_unit_test(test_joint_bounds),   cmocka_unit_test(test_collision_rows_fd),
+        cmocka_unit_test(test_apf),            cmocka_unit_test(test_paths),
+        cmocka_unit_test(test_scenario_files), cmocka_unit_test(test_controller_faults),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,80 @@
+#!/usr/bin/env python3
+"""The paper's four tasks through mca-sim (the controller tick the daemon runs, arms in the sim backend).
+
+usage: test_tasks.py MCA_SIM SCENARIO_DIR WORK_DIR
+ 1. cross circles: MVN goes below d1 (paper Table I), MCA stays above d1 at every tick, no fault;
+ 2. Hui, 3. cup stacking: MCA above d1 at every tick, no fault;
+    tasks 1-3: MCA's end-effector error <= 1e-4 m while no collision row binds, and overall;
+ 4. negative example: MCA ends in a braked stop with a named fault, no distance below d1 (MVN collides).
+Prints the figures (min distance, tracking errors, PDNN steps, tick compute time).
+"""
+import json
+import os
+import subprocess
+import sys
+
+FAILS = []
+
+
+def check(cond, msg):
+    print(("ok   " if cond else "FAIL ") + msg)
+    if not cond:
+        FAILS.append(msg)
+
+
+def run(sim, scn, work, schemes, extra=()):
+    os.makedirs(work, exist_ok=True)
+    base = os.path.splitext(os.path.basename(scn))[0]
+    summ = os.path.join(work, "%s-%s.json" % (base, schemes.replace(",", "-")))
+    cmd = [sim, "--scenario", scn, "--scheme", schemes, "--summary", summ] + list(extra)
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=500)
+    print(p.stdout)
+    if p.returncode != 0:
+        print(p.stderr)
+        FAILS.append("mca-sim failed on %s" % scn)
+        return None
+    s = json.load(open(summ))
+    return {r["scheme"]: r for r in s["runs"]}, s["d1"]
+
+
+def main():
+    sim, sdir, work = sys.argv[1:4]
+    tol = 1e-4
+    # 1. cross circles
+    r, d1 = run(sim, os.path.join(sdir, "cross_circles.yaml"), work, "mvn,mca")
+    mvn, mca = r["mvn"], r["mca"]
+    check(mvn["min_distance"] < d1, "task 1: MVN min distance %.5f m < d1 %.3f (at %.3f s)" %
+          (mvn["min_distance"], d1, mvn["min_distance_t"]))
+    check(mca["min_distance"] > d1, "task 1: MCA min distance %.5f m > d1" % mca["min_distance"])
+    check(mca["fault"] == 0, "task 1: MCA no fault (%s)" % mca["fault_name"])
+    check(mca["ticks"] >= 10000, "task 1: MCA ran the whole task (%d ticks)" % mca["ticks"])
+    for name in ("hui", "cup_stacking"):
+        r2, d1b = run(sim, os.path.join(sdir, name + ".yaml"), work, "mca")
+        m = r2["mca"]
+        check(m["min_distance"] > d1b, "%s: MCA min distance %.5f m > d1 %.3f" % (name, m["min_distance"], d1b))
+        check(m["fault"] == 0, "%s: MCA no fault (%s)" % (name, m["fault_name"]))
+        check(m["max_err_free"] <= tol and m["max_err"] <= tol,
+              "%s: MCA max tracking error %.3e m (free of binding rows %.3e m) <= %.0e" %
+              (name, m["max_err"], m["max_err_free"], tol))
+    check(mca["max_err_free"] <= tol and mca["max_err"] <= tol,
+          "task 1: MCA max tracking error %.3e m (free of binding rows %.3e m) <= %.0e" %
+          (mca["max_err"], mca["max_err_free"], tol))
+    check(mca["binding_ticks"] > 0, "task 1: collision rows did bind (%d ticks)" % mca["binding_ticks"])
+    # 4. negative example
+    r4, d14 = run(sim, os.path.join(sdir, "negative.yaml"), work, "mvn,mca")
+    m = r4["mca"]
+    check(r4["mvn"]["min_distance"] < d14, "task 4: MVN collides (%.5f m)" % r4["mvn"]["min_distance"])
+    check(m["fault_name"] in ("fake-attractor", "pdnn-not-converged", "distance-below-d1"),
+          "task 4: MCA fault named: %s at %.3f s (distance %.5f m)" % (m["fault_name"], m["fault_t"],
+                                                                         m["fault_distance"]))
+    check(m["stopped"] == 1, "task 4: arms braked to a stop (at %.3f s)" % m["stop_t"])
+    check(m["min_distance"] > d14, "task 4: no distance below d1 in the whole run, braking included (%.5f m)" %
+          m["min_distance"])
+    if FAILS:
+        print("\n%d check(s) failed" % len(FAILS))
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
