@@ -619,3 +619,73 @@ double mca_obstacle_point_distance(const mca_obstacle_t *obs, const double x[3],
     local_to_world(closest, &obs->pose, cl);
     return mca_v3_dist(x, closest);
 }
+
+static void set_link_obstacle(mca_link_obstacle_t *lo, int link, int ob, const mca_obst_dist_t *r) {
+    lo->link = link;
+    lo->obstacle = ob;
+    lo->d = r->d;
+    mca_v3_set(lo->p, r->p);
+    mca_v3_set(lo->q, r->q);
+    mca_v3_set(lo->dir, r->dir);
+    lo->penetrating = r->penetrating;
+}
+
+int mca_arm_obstacle_distances(const mca_chain_t *chain, const mca_kin_t *kin, const mca_obstacle_t *obs,
+                               int n_obs, mca_arm_obstacles_t *out) {
+    mca_capsule_t cap;
+    mca_obst_dist_t r;
+    int nl, it = 0;
+
+    if (chain == NULL || kin == NULL || out == NULL || (obs == NULL && n_obs > 0) || n_obs < 0 ||
+        chain->dof < 1 || chain->dof > MCA_MAX_DOF || kin->dof != chain->dof ||
+        kin->n_points != chain->dof + 2) {
+        return MCA_EINVAL;
+    }
+    if (n_obs > MCA_MAX_OBSTACLES) {
+        return MCA_ERANGE;
+    }
+    nl = chain->dof + 1;
+    /* validate everything first so an error leaves *out untouched */
+    for (int k = 0; k < kin->n_points; k++) {
+        if (!finite3(kin->point[k])) {
+            return MCA_EINVAL;
+        }
+    }
+    for (int k = 0; k < nl; k++) {
+        if (!(chain->link_radius[k] >= 0.0 && chain->link_radius[k] <= MCA_SEGDIST_MAX_COORD)) {
+            return MCA_EINVAL;
+        }
+    }
+    for (int j = 0; j < n_obs; j++) {
+        if (!obstacle_ok(&obs[j])) {
+            return MCA_EINVAL;
+        }
+    }
+    out->n_links = nl;
+    memset(&out->min, 0, sizeof out->min);
+    out->min.link = -1;
+    out->min.obstacle = -1;
+    out->min.d = INFINITY;
+    for (int k = 0; k < nl; k++) {
+        mca_link_obstacle_t *lo = &out->per_link[k];
+        memset(lo, 0, sizeof *lo);
+        lo->link = k;
+        lo->obstacle = -1;
+        lo->d = INFINITY;
+        mca_v3_set(cap.a, kin->point[k]);
+        mca_v3_set(cap.b, kin->point[k + 1]);
+        cap.radius = chain->link_radius[k];
+        for (int j = 0; j < n_obs; j++) {
+            (void)mca_capsule_obstacle_distance(&cap, &obs[j], &r); /* OK or ENOTCONV (d still usable) */
+            it += r.iterations;
+            if (r.d < lo->d) {
+                set_link_obstacle(lo, k, j, &r);
+            }
+        }
+        if (lo->d < out->min.d) {
+            out->min = *lo;
+        }
+    }
+    out->iterations = it;
+    return MCA_OK;
+}

@@ -105,7 +105,11 @@ int main(void) {
     mca_capsule_obstacle_distance(&pen, &cup, &od); /* libccd MPR path */
     expect(od.penetrating == 1, "cup penetration took the MPR path");
     mca_capsule_capsule_distance_ccd(&sep, &pen, &od);
-    expect(n_alloc == before, "capsule-obstacle / capsule-capsule (GJK, SAT, libccd MPR) allocate nothing");
+    mca_obstacle_t both[2] = {box, cup};
+    mca_arm_obstacles_t ao;
+    int rc3 = mca_arm_obstacle_distances(&ca, &ka, both, 2, &ao);
+    expect(n_alloc == before && rc3 == MCA_OK,
+           "capsule-obstacle / capsule-capsule / arm-obstacles (GJK, SAT, libccd MPR) allocate nothing");
 
     /* --- libccd entry points on two overlapping boxes --- */
     box_t b1 = {0.5, {0, 0, 0}}, b2 = {0.5, {0.3, 0.2, 0.1}};

@@ -460,6 +460,55 @@ static void test_bad_input(void **state) {
     assert_int_equal(mca_obstacle_table(&box, "t", NAN, 0, 0, 1, 1, 1), MCA_EINVAL);
 }
 
+/* PA10+ (real URDF and FK) standing straight up among a table, a box and a cup: every link is a vertical
+ * capsule on the z axis, so each link-obstacle distance has a closed form. */
+static void test_arm_obstacles_pa10(void **state) {
+    (void)state;
+    mca_chain_t ch;
+    mca_kin_t kin;
+    mca_obstacle_t obs[3];
+    mca_arm_obstacles_t out;
+    mca_pose_t pose;
+    char err[256];
+    double q[MCA_MAX_DOF] = {0};
+    const double box_half[3] = {0.1, 0.1, 2.0};
+    assert_int_equal(mca_chain_load_urdf(&ch, MCA_ROBOTS_DIR "/pa10plus.urdf", NULL, err, sizeof err),
+                     MCA_OK);
+    assert_int_equal(mca_fk(&ch, q, &kin), MCA_OK);
+    assert_int_equal(mca_obstacle_table(&obs[0], "table", -0.1, 0, 0, 3, 3, 1), MCA_OK);
+    identity_pose(&pose, 0.5, 0, 0);
+    assert_int_equal(mca_obstacle_box(&obs[1], "box", &pose, box_half), MCA_OK);
+    identity_pose(&pose, 0, 0.3, 1.6);
+    assert_int_equal(mca_obstacle_cylinder(&obs[2], "cup", &pose, 0.04, 0.1), MCA_OK);
+    assert_int_equal(mca_arm_obstacle_distances(&ch, &kin, obs, 3, &out), MCA_OK);
+    assert_int_equal(out.n_links, ch.dof + 1);
+    double gmin = INFINITY;
+    for (int k = 0; k <= ch.dof; k++) {
+        double zlo = fmin(kin.point[k][2], kin.point[k + 1][2]),
+               zhi = fmax(kin.point[k][2], kin.point[k + 1][2]);
+        double r = ch.link_radius[k];
+        double dk[3] = {zlo + 0.1 - r, 0.4 - r, hypot(0.26, fmax(0.0, fmax(1.55 - zhi, zlo - 1.65))) - r};
+        int best = 0;
+        for (int j = 1; j < 3; j++) {
+            best = dk[j] < dk[best] ? j : best;
+        }
+        assert_int_equal(out.per_link[k].link, k);
+        assert_int_equal(out.per_link[k].obstacle, best);
+        assert_true(fabs(out.per_link[k].d - dk[best]) < 1e-9);
+        gmin = fmin(gmin, dk[best]);
+    }
+    assert_true(fabs(out.min.d - gmin) < 1e-9);
+    /* the tool link (last) is closest to the cup */
+    assert_int_equal(out.per_link[ch.dof].obstacle, 2);
+    assert_true(out.iterations > 0);
+    /* no obstacles: every link at +inf, obstacle -1 */
+    assert_int_equal(mca_arm_obstacle_distances(&ch, &kin, NULL, 0, &out), MCA_OK);
+    assert_true(isinf(out.min.d) && out.per_link[0].obstacle == -1);
+    assert_int_equal(mca_arm_obstacle_distances(&ch, &kin, obs, MCA_MAX_OBSTACLES + 1, &out), MCA_ERANGE);
+    kin.dof = 3;
+    assert_int_equal(mca_arm_obstacle_distances(&ch, &kin, obs, 3, &out), MCA_EINVAL);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_axis_aligned),
@@ -471,6 +520,7 @@ int main(void) {
         cmocka_unit_test(test_box_penetration_vs_directions),
         cmocka_unit_test(test_capsule_axes_crossing),
         cmocka_unit_test(test_cylinder_random_vs_brute),
+        cmocka_unit_test(test_arm_obstacles_pa10),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -80,6 +80,36 @@ int mca_capsule_obstacle_distance(const mca_capsule_t *cap, const mca_obstacle_t
  */
 int mca_capsule_capsule_distance_ccd(const mca_capsule_t *c1, const mca_capsule_t *c2, mca_obst_dist_t *out);
 
+/** Most obstacles one arm is checked against per cycle (fixed arrays, no allocation). */
+#define MCA_MAX_OBSTACLES 16
+
+/** One link's closest obstacle. */
+typedef struct mca_link_obstacle {
+    int link;     /**< link index (capsule point[link] -> point[link + 1], radius chain->link_radius[link]) */
+    int obstacle; /**< index into the obstacle array; -1 when there are no obstacles */
+    double d;     /**< surface distance (negative = penetration) [m] */
+    double p[3];  /**< on the link axis */
+    double q[3];  /**< on the obstacle */
+    double dir[3]; /**< unit escape direction for the link */
+    int penetrating;
+} mca_link_obstacle_t;
+
+typedef struct mca_arm_obstacles {
+    int n_links;                                 /**< dof + 1 */
+    mca_link_obstacle_t per_link[MCA_MAX_LINKS]; /**< closest obstacle of each link */
+    mca_link_obstacle_t min;                     /**< the overall closest link-obstacle pair */
+    int iterations;                              /**< total GJK iterations */
+} mca_arm_obstacles_t;
+
+/**
+ * Every link of an arm against every obstacle (real-time safe). Ties keep the lower obstacle index.
+ * @retval MCA_OK, MCA_EINVAL (NULL, kin of another chain, bad obstacle), MCA_ERANGE (n_obs >
+ * MCA_MAX_OBSTACLES) (a GJK cap hit is not an error here: that pair's d is an upper bound within the GJK
+ * tolerance)
+ */
+int mca_arm_obstacle_distances(const mca_chain_t *chain, const mca_kin_t *kin, const mca_obstacle_t *obs,
+                               int n_obs, mca_arm_obstacles_t *out);
+
 /** Closest point of an obstacle's solid to a world point x (exact; inside points map to themselves).
  *  @return distance (0 inside), or -1 on bad input */
 double mca_obstacle_point_distance(const mca_obstacle_t *obs, const double x[3], double closest[3]);
