@@ -1,0 +1,307 @@
+/* SPDX-License-Identifier: MIT */
+/* LVI-PDNN benchmark on dual-arm-sized QPs (n = 16, n_eq = 6, n_ineq = 54; tests/pdnn/qpgen.h).
+ *
+ *   bench_pdnn time [OPTIONS]        ns and steps per solve (p50/p99/max), cold and warm, over runs of
+ *                                    ticks: a fresh scene solved cold, then --ticks-1 moves of --eps solved
+ *                                    warm (a 1 kHz controller's view)
+ *   bench_pdnn dump DIR [OPTIONS]    the same QPs written for bench/pdnn/osqp_vs_pdnn.py, with
+ *                                    DIR/pdnn_times.csv (file, ns, steps, warm)
+ *   bench_pdnn edge [OPTIONS]        fixed Euler step kappa = f * kappa_bound for a range of f on cold
+ *                                    solves: steps to converge, or diverged, or capped (the stability edge)
+ * OPTIONS: --runs R (100) --ticks T (10) --eps E (1e-3) --tol X (1e-9) --precond orth|scale|none
+ *          --rule adaptive|bound --far W (0.3; 1 = off) --max-steps S (20000) --seed K (1) --tight P (0.15)
+ *          --gamma G (1.9)
+ * Not a test: numbers depend on the machine. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "mca/err.h"
+#include "mca/pdnn.h"
+#include "qpgen.h"
+
+typedef struct opts {
+    int runs, ticks, max_steps;
+    double eps, tol, far, tight, gamma;
+    int precond, rule;
+    unsigned long long seed;
+    const char *dir;
+} opts_t;
+
+static mca_pdnn_t solver;
+
+static double now_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
+}
+
+static int cmp_d(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double pct(double *v, int n, double p)
+{
+    if (n == 0) {
+        return NAN;
+    }
+    qsort(v, (size_t)n, sizeof(double), cmp_d);
+    int i = (int)ceil(p / 100.0 * n) - 1;
+    return v[i < 0 ? 0 : (i >= n ? n - 1 : i)];
+}
+
+static void usage(const char *argv0)
+{
+    fprintf(stderr,
+            "usage: %s time|dump DIR|edge [--runs R] [--ticks T] [--eps E] [--tol X] [--precond orth|scale|none]\n"
+            "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n",
+            argv0);
+}
+
+static int parse(int argc, char **argv, int first, opts_t *o)
+{
+    for (int i = first; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (v == NULL) {
+            fprintf(stderr, "option %s needs a value\n", a);
+            return -1;
+        }
+        char *end = NULL;
+        i++;
+        if (!strcmp(a, "--runs")) {
+            o->runs = (int)strtol(v, &end, 10);
+        } else if (!strcmp(a, "--ticks")) {
+            o->ticks = (int)strtol(v, &end, 10);
+        } else if (!strcmp(a, "--max-steps")) {
+            o->max_steps = (int)strtol(v, &end, 10);
+        } else if (!strcmp(a, "--seed")) {
+            o->seed = strtoull(v, &end, 10);
+        } else if (!strcmp(a, "--eps")) {
+            o->eps = strtod(v, &end);
+        } else if (!strcmp(a, "--tol")) {
+            o->tol = strtod(v, &end);
+        } else if (!strcmp(a, "--far")) {
+            o->far = strtod(v, &end);
+        } else if (!strcmp(a, "--gamma")) {
+            o->gamma = strtod(v, &end);
+        } else if (!strcmp(a, "--tight")) {
+            o->tight = strtod(v, &end);
+        } else if (!strcmp(a, "--precond")) {
+            o->precond = !strcmp(v, "orth") ? MCA_PDNN_PRECOND_ORTH
+                         : !strcmp(v, "scale") ? MCA_PDNN_PRECOND_SCALE
+                         : !strcmp(v, "none")  ? MCA_PDNN_PRECOND_NONE
+                                               : -1;
+            end = o->precond < 0 ? (char *)v : (char *)v + strlen(v);
+        } else if (!strcmp(a, "--rule")) {
+            o->rule = !strcmp(v, "adaptive") ? MCA_PDNN_STEP_ADAPTIVE : !strcmp(v, "bound") ? MCA_PDNN_STEP_BOUND : -1;
+            end = o->rule < 0 ? (char *)v : (char *)v + strlen(v);
+        } else {
+            fprintf(stderr, "unknown option %s\n", a);
+            return -1;
+        }
+        if (end == NULL || *end != '\0') {
+            fprintf(stderr, "bad value '%s' for %s\n", v, a);
+            return -1;
+        }
+    }
+    if (o->runs < 1 || o->ticks < 1 || o->max_steps < 1 || !(o->eps >= 0) || !(o->tol > 0) ||
+        !(o->far > 0 && o->far <= 1) || !(o->tight >= 0 && o->tight <= 1) || !(o->gamma > 0 && o->gamma < 2)) {
+        fprintf(stderr, "option out of range\n");
+        return -1;
+    }
+    return 0;
+}
+
+static void params_of(const opts_t *o, mca_pdnn_params_t *prm)
+{
+    mca_pdnn_default_params(prm);
+    prm->tol = o->tol;
+    prm->max_steps = o->max_steps;
+    prm->precond = o->precond;
+    prm->step_rule = o->rule;
+    prm->far_weight = o->far;
+    prm->gamma = o->gamma;
+}
+
+/* time and dump: runs of ticks */
+static int run_ticks(const opts_t *o)
+{
+    const int total = o->runs * o->ticks;
+    double *ns_c = calloc((size_t)total, sizeof(double)), *ns_w = calloc((size_t)total, sizeof(double));
+    double *st_c = calloc((size_t)total, sizeof(double)), *st_w = calloc((size_t)total, sizeof(double));
+    double *nsps = calloc((size_t)total, sizeof(double));
+    if (!ns_c || !ns_w || !st_c || !st_w || !nsps) {
+        fprintf(stderr, "out of memory\n");
+        return 2;
+    }
+    FILE *csv = NULL;
+    if (o->dir != NULL) {
+        char path[4096];
+        if (mkdir(o->dir, 0777) != 0 && errno != EEXIST) {
+            fprintf(stderr, "cannot create %s: %s\n", o->dir, strerror(errno));
+            return 2;
+        }
+        snprintf(path, sizeof(path), "%s/pdnn_times.csv", o->dir);
+        csv = fopen(path, "w");
+        if (csv == NULL) {
+            fprintf(stderr, "cannot write %s\n", path);
+            return 2;
+        }
+        fprintf(csv, "file,ns,steps,warm,residual\n");
+    }
+    mca_pdnn_params_t prm;
+    params_of(o, &prm);
+    qpgen_rng_t rng = {o->seed};
+    qpgen_scene_t sc;
+    mca_qp_t qp;
+    double phi[MCA_QP_MAX_VARS];
+    int nc = 0, nw = 0, nsp = 0, fails = 0;
+    for (int k = 0; k < total; k++) {
+        if (k % o->ticks == 0) {
+            qpgen_scene_random(&sc, &rng, o->tight);
+            mca_pdnn_init(&solver);
+        } else {
+            qpgen_scene_perturb(&sc, &rng, o->eps);
+        }
+        qpgen_build(&sc, &qp);
+        mca_pdnn_result_t res;
+        const double t0 = now_ns();
+        const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+        const double dt = now_ns() - t0;
+        fails += rc != MCA_OK;
+        if (res.warm) {
+            ns_w[nw] = dt;
+            st_w[nw++] = res.steps;
+        } else {
+            ns_c[nc] = dt;
+            st_c[nc++] = res.steps;
+        }
+        if (res.steps >= 100) {
+            nsps[nsp++] = dt / res.steps;
+        }
+        if (csv != NULL) {
+            char path[4096], name[64];
+            snprintf(name, sizeof(name), "qp_%06d.json", k);
+            snprintf(path, sizeof(path), "%s/%s", o->dir, name);
+            if (mca_qp_dump_json(&qp, phi, res.steps, res.residual, res.warm ? "warm" : "cold", path) != MCA_OK) {
+                fprintf(stderr, "cannot write %s\n", path);
+                return 2;
+            }
+            fprintf(csv, "%s,%.0f,%d,%d,%.3g\n", name, dt, res.steps, res.warm, res.residual);
+        }
+    }
+    if (csv != NULL) {
+        fclose(csv);
+    }
+    printf("pdnn bench: %d solves (%d runs x %d ticks, eps %g), tol %g, precond %d, rule %d, far %g, cap %d: "
+           "%d not converged\n",
+           total, o->runs, o->ticks, o->eps, o->tol, o->precond, o->rule, o->far, o->max_steps, fails);
+    printf("  cold (%4d): us  p50 %8.1f p99 %8.1f max %8.1f | steps p50 %6.0f p99 %6.0f max %6.0f\n", nc,
+           pct(ns_c, nc, 50) / 1e3, pct(ns_c, nc, 99) / 1e3, pct(ns_c, nc, 100) / 1e3, pct(st_c, nc, 50),
+           pct(st_c, nc, 99), pct(st_c, nc, 100));
+    if (nw > 0) {
+        printf("  warm (%4d): us  p50 %8.1f p99 %8.1f max %8.1f | steps p50 %6.0f p99 %6.0f max %6.0f\n", nw,
+               pct(ns_w, nw, 50) / 1e3, pct(ns_w, nw, 99) / 1e3, pct(ns_w, nw, 100) / 1e3, pct(st_w, nw, 50),
+               pct(st_w, nw, 99), pct(st_w, nw, 100));
+    }
+    printf("  ns per Euler step (solves >= 100 steps): p50 %.0f\n", pct(nsps, nsp, 50));
+    free(ns_c);
+    free(ns_w);
+    free(st_c);
+    free(st_w);
+    free(nsps);
+    return 0;
+}
+
+/* edge: fixed kappa = f * kappa_bound(gamma = 2, i.e. the bound 2/||I+M||^2 itself) */
+static int run_edge(const opts_t *o)
+{
+    static const double f[] = {0.25, 0.5, 0.75, 0.95, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.7, 2.0, 2.5, 3.0};
+    const int nf = (int)(sizeof(f) / sizeof(f[0]));
+    const int nqp = o->runs;
+    printf("pdnn edge: %d cold QPs, precond %d, tol %g, cap %d; kappa = f * 2/||I+M||^2 (upper-bounded norm)\n",
+           nqp, o->precond, o->tol, o->max_steps);
+    printf("  %5s %9s %9s %9s %12s %12s\n", "f", "converged", "capped", "diverged", "steps p50", "steps max");
+    double *st = calloc((size_t)nqp, sizeof(double));
+    if (st == NULL) {
+        return 2;
+    }
+    for (int a = 0; a < nf; a++) {
+        qpgen_rng_t rng = {o->seed};
+        int conv = 0, cap = 0, div = 0;
+        for (int k = 0; k < nqp; k++) {
+            qpgen_scene_t sc;
+            mca_qp_t qp;
+            double phi[MCA_QP_MAX_VARS];
+            qpgen_scene_random(&sc, &rng, o->tight);
+            qpgen_build(&sc, &qp);
+            mca_pdnn_params_t prm;
+            params_of(o, &prm);
+            mca_pdnn_result_t res;
+            /* the bound for this QP: kappa_bound at gamma -> 2 */
+            prm.step_rule = MCA_PDNN_STEP_BOUND;
+            prm.gamma = 1.0;
+            prm.max_steps = 0;
+            mca_pdnn_init(&solver);
+            mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+            prm.kappa = f[a] * 2.0 * res.kappa_bound;
+            prm.max_steps = o->max_steps;
+            mca_pdnn_init(&solver);
+            const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+            if (rc == MCA_OK) {
+                st[conv++] = res.steps;
+            } else if (!isfinite(res.residual) || res.residual > 1e3) {
+                div++;
+            } else {
+                cap++;
+            }
+        }
+        printf("  %5.2f %9d %9d %9d %12.0f %12.0f\n", f[a], conv, cap, div, pct(st, conv, 50), pct(st, conv, 100));
+    }
+    free(st);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    opts_t o = {.runs = 100,
+                .ticks = 10,
+                .max_steps = 20000,
+                .eps = 1e-3,
+                .tol = 1e-9,
+                .far = 0.3,
+                .tight = 0.15,
+                .gamma = 1.9,
+                .precond = MCA_PDNN_PRECOND_ORTH,
+                .rule = MCA_PDNN_STEP_ADAPTIVE,
+                .seed = 1,
+                .dir = NULL};
+    if (argc < 2) {
+        usage(argv[0]);
+        return 2;
+    }
+    int first = 2;
+    if (!strcmp(argv[1], "dump")) {
+        if (argc < 3) {
+            usage(argv[0]);
+            return 2;
+        }
+        o.dir = argv[2];
+        first = 3;
+    } else if (strcmp(argv[1], "time") && strcmp(argv[1], "edge")) {
+        usage(argv[0]);
+        return 2;
+    }
+    if (parse(argc, argv, first, &o) != 0) {
+        usage(argv[0]);
+        return 2;
+    }
+    return !strcmp(argv[1], "edge") ? run_edge(&o) : run_ticks(&o);
+}
