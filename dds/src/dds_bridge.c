@@ -2,6 +2,7 @@
 /* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher thread -> Cyclone DDS writers. */
 #include "mca/dds_bridge.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -62,6 +63,44 @@ void mca_dds_config_default(mca_dds_config_t *cfg) {
     cfg->poll_period_us = 200;
     cfg->controller_id = 0;
     cfg->frame_id = "world";
+}
+
+double mca_dds_brake_factor(double d, double d1, double d2) {
+    if (d >= d2) {
+        return 1.0;
+    }
+    if (d <= d1) {
+        return 0.0;
+    }
+    const double s = sin(M_PI / 2.0 * (d - d1) / (d2 - d1));
+    return s * s;
+}
+
+int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *dist, uint8_t arm_a,
+                      uint8_t arm_b, double d1, double d2) {
+    if (out == NULL || dist == NULL || dist->n_links_a < 0 || dist->n_links_a > MCA_MAX_LINKS ||
+        dist->n_links_b < 0 || dist->n_links_b > MCA_MAX_LINKS || !(d1 >= 0.0 && d1 < d2)) {
+        return MCA_EINVAL;
+    }
+    out->arm_a = arm_a;
+    out->arm_b = arm_b;
+    out->link_a = (int16_t)dist->min.link;
+    out->link_b = (int16_t)dist->min.other_link;
+    out->min_distance = dist->min.d;
+    memcpy(out->p, dist->min.p, sizeof out->p);
+    memcpy(out->e, dist->min.e, sizeof out->e);
+    out->d1 = d1;
+    out->d2 = d2;
+    out->brake_factor = mca_dds_brake_factor(dist->min.d, d1, d2);
+    out->n_links_a = (uint32_t)dist->n_links_a;
+    out->n_links_b = (uint32_t)dist->n_links_b;
+    for (int l = 0; l < dist->n_links_a; ++l) {
+        out->link_distance_a[l] = dist->a_to_b[l].d;
+    }
+    for (int l = 0; l < dist->n_links_b; ++l) {
+        out->link_distance_b[l] = dist->b_to_a[l].d;
+    }
+    return MCA_OK;
 }
 
 static dds_sequence_double seq_of(double *buf, uint32_t n) {

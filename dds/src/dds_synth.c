@@ -6,17 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-double mca_dds_brake_factor(double d, double d1, double d2) {
-    if (d >= d2) {
-        return 1.0;
-    }
-    if (d <= d1) {
-        return 0.0;
-    }
-    const double s = sin(M_PI / 2.0 * (d - d1) / (d2 - d1));
-    return s * s;
-}
-
 void mca_dds_synth_fill(mca_dds_snapshot_t *snap, uint64_t k, int64_t stamp_ns, double *min_so_far,
                         int64_t *min_stamp) {
     static const uint32_t dof[2] = {7, 6};

@@ -368,6 +368,39 @@ static void test_brake_factor_eq13(void **state) {
     assert_true(fabs(mca_dds_brake_factor(0.05 + 0.07 / 3.0, 0.05, 0.12) - 0.25) < 1e-15); /* sin^2(pi/6) */
 }
 
+static void test_pair_fill_from_armdist(void **state) {
+    (void)state;
+    mca_arm_distances_t d;
+    memset(&d, 0, sizeof d);
+    d.n_links_a = 3;
+    d.n_links_b = 2;
+    for (int l = 0; l < 3; ++l) {
+        d.a_to_b[l].d = 0.3 + 0.1 * l;
+    }
+    d.b_to_a[0].d = 0.5;
+    d.b_to_a[1].d = 0.085;
+    d.min = (mca_link_pair_t){.link = 2, .other_link = 1, .d = 0.085, .p = {1, 2, 3}, .e = {4, 5, 6}};
+    mca_dds_pair_snapshot_t p;
+    memset(&p, 0xff, sizeof p);
+    assert_int_equal(mca_dds_pair_fill(&p, &d, 1, 3, 0.05, 0.12), MCA_OK);
+    assert_int_equal(p.arm_a, 1);
+    assert_int_equal(p.arm_b, 3);
+    assert_int_equal(p.link_a, 2);
+    assert_int_equal(p.link_b, 1);
+    assert_true(p.min_distance == 0.085);
+    assert_true(p.p[0] == 1 && p.p[1] == 2 && p.p[2] == 3 && p.e[0] == 4 && p.e[1] == 5 && p.e[2] == 6);
+    assert_true(p.d1 == 0.05 && p.d2 == 0.12);
+    assert_true(fabs(p.brake_factor - 0.5) < 1e-15); /* midpoint of d1..d2 */
+    assert_int_equal(p.n_links_a, 3);
+    assert_int_equal(p.n_links_b, 2);
+    assert_true(p.link_distance_a[2] == 0.3 + 0.1 * 2);
+    assert_true(p.link_distance_b[1] == 0.085);
+    assert_int_equal(mca_dds_pair_fill(&p, &d, 0, 1, 0.12, 0.05), MCA_EINVAL); /* d1 >= d2 */
+    d.n_links_a = MCA_MAX_LINKS + 1;
+    assert_int_equal(mca_dds_pair_fill(&p, &d, 0, 1, 0.05, 0.12), MCA_EINVAL);
+    assert_int_equal(mca_dds_pair_fill(NULL, &d, 0, 1, 0.05, 0.12), MCA_EINVAL);
+}
+
 int main(int argc, char **argv) {
     if (argc != 3) {
         fprintf(stderr, "usage: test_dds_bridge LOOPBACK_XML DOMAIN\n");
@@ -383,6 +416,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(test_overrun_drops_oldest_and_counts),
         cmocka_unit_test(test_invalid_snapshot_rejected),
         cmocka_unit_test(test_brake_factor_eq13),
+        cmocka_unit_test(test_pair_fill_from_armdist),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -21,6 +21,7 @@
 
 #include <stdint.h>
 
+#include "mca/armdist.h" /* mca_arm_distances_t */
 #include "mca/limits.h"
 
 #ifdef __cplusplus
@@ -162,6 +163,20 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
  *                          invalid == queued)
  */
 void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats);
+
+/** Brake factor S(d) of the paper's eq. (13): 1 at or above d2, 0 at or below d1, sin^2 ramp between.
+ *  Context: any. */
+double mca_dds_brake_factor(double d, double d1, double d2);
+
+/**
+ * Fill one pair of a snapshot from the arm-to-arm distances of mca/armdist.h: global minimum with its
+ * critical points and links, per-link closest distances of both arms, the thresholds and S(d) of
+ * eq. (13). Context: rt (no allocation, bounded time).
+ * @retval MCA_OK
+ * @retval MCA_EINVAL NULL pointer, link counts outside 0..MCA_MAX_LINKS, or not 0 <= d1 < d2
+ */
+int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *dist, uint8_t arm_a,
+                      uint8_t arm_b, double d1, double d2);
 
 /** Topic names (also in docs/dds.md). */
 #define MCA_DDS_TOPIC_JOINT_STATE "mca/joint_state"

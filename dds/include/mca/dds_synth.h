@@ -29,9 +29,6 @@
 extern "C" {
 #endif
 
-/** Brake factor S(d) of the paper's eq. (13): 1 above d2, 0 at or below d1, sin^2 ramp between. */
-double mca_dds_brake_factor(double d, double d1, double d2);
-
 /** Fill snap with the pattern above for tick k. min_so_far/min_stamp carry the running minimum
  *  between calls (start with min_so_far = INFINITY). */
 void mca_dds_synth_fill(mca_dds_snapshot_t *snap, uint64_t k, int64_t stamp_ns, double *min_so_far,
