@@ -1,0 +1,580 @@
+/* SPDX-License-Identifier: MIT */
+/* Controller tick cost: mca_controller_tick driven over a real task, or over synthetic cells of 2-4 arms with
+ * 4-8 joints, in virtual time (joint velocities integrated by Euler steps, no sleeping between ticks).
+ *
+ *   bench_tick task --scenario FILE [--ticks N] [--out JSON] [--qp-dir DIR] [--qp-every E] [--qp-block L]
+ *   bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick]
+ *   common: [--fifo PRIO] (SCHED_FIFO + mlockall for the measuring thread; fewer preemptions on a busy host)
+ *
+ * Per tick it records the tick's own compute_ns (CLOCK_MONOTONIC inside mca_controller_tick), then, OUTSIDE
+ * the tick, re-runs each stage on the same data to split the time: forward kinematics of every arm, all
+ * arm-pair link distances, the QP assembly (Jacobians at the critical points + rows), and the PDNN solve of
+ * the controller's very QP from a copy of the solver state the tick started from (same warm start: its step
+ * count must equal the tick's; mismatches are counted). --qp-dir writes blocks of L consecutive converged
+ * QPs (mca_qp_dump_json) every E ticks with DIR/pdnn.csv: file, block, idx, warm ns, steps, and for the first
+ * QP of a block the COLD solve time (fresh solver state) for the OSQP comparison in bench/report.py.
+ * Output: one JSON document (--out, default stdout). Not a test: the figures depend on the machine. */
+#include <errno.h>
+#include <math.h>
+#include <sched.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "mca/armdist.h"
+#include "mca/controller.h"
+#include "mca/err.h"
+#include "mca/pdnn.h"
+#include "mca/scenario.h"
+#include "mca/scheme.h"
+
+enum { ST_TICK, ST_FK, ST_DIST, ST_ASM, ST_PDNN, ST_N };
+static const char *const st_name[ST_N] = {"tick", "fk", "distances", "assembly", "pdnn"};
+
+typedef struct run_stats {
+    int64_t *v[ST_N];
+    int *steps, *active;
+    int n, cap;
+    int faults, resets, step_mismatch, capped;
+} run_stats_t;
+
+static int64_t now_ns(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static int cmp_i64(const void *a, const void *b) {
+    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int cmp_int(const void *a, const void *b) {
+    const int x = *(const int *)a, y = *(const int *)b;
+    return (x > y) - (x < y);
+}
+
+static int stats_alloc(run_stats_t *s, int cap) {
+    memset(s, 0, sizeof *s);
+    s->cap = cap;
+    for (int k = 0; k < ST_N; k++) {
+        s->v[k] = calloc((size_t)cap, sizeof(int64_t));
+        if (!s->v[k]) {
+            return MCA_ENOMEM;
+        }
+    }
+    s->steps = calloc((size_t)cap, sizeof(int));
+    s->active = calloc((size_t)cap, sizeof(int));
+    return s->steps && s->active ? MCA_OK : MCA_ENOMEM;
+}
+
+static void stats_free(run_stats_t *s) {
+    for (int k = 0; k < ST_N; k++) {
+        free(s->v[k]);
+    }
+    free(s->steps);
+    free(s->active);
+}
+
+/* percentile p in [0, 1] of a sorted array: nearest rank */
+static int64_t pct_i64(const int64_t *v, int n, double p) {
+    if (n <= 0) {
+        return 0;
+    }
+    int i = (int)ceil(p * n) - 1;
+    return v[i < 0 ? 0 : (i >= n ? n - 1 : i)];
+}
+
+static int pct_int(const int *v, int n, double p) {
+    if (n <= 0) {
+        return 0;
+    }
+    int i = (int)ceil(p * n) - 1;
+    return v[i < 0 ? 0 : (i >= n ? n - 1 : i)];
+}
+
+/* Print the stats of one run as a JSON object (sorts the arrays). */
+static void stats_json(FILE *f, run_stats_t *s, const char *name, const mca_controller_config_t *cfg,
+                       const mca_qp_t *qp) {
+    fprintf(f, "{\"name\": \"%s\", \"n_arms\": %d, \"dof\": [", name, cfg->n_arms);
+    int links = 0;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        fprintf(f, "%s%d", a ? ", " : "", cfg->chain[a].dof);
+        links += cfg->chain[a].dof + 1;
+    }
+    fprintf(f, "], \"links\": %d, \"d2\": %g, \"n_vars\": %d, \"n_eq\": %d, \"n_ineq\": %d, ", links,
+            cfg->sp.d2, qp->n, qp->n_eq, qp->n_ineq);
+    fprintf(f, "\"ticks\": %d, \"faults\": %d, \"resets\": %d, \"step_mismatch\": %d, \"capped\": %d", s->n,
+            s->faults, s->resets, s->step_mismatch, s->capped);
+    for (int k = 0; k < ST_N; k++) {
+        double mean = 0.0;
+        for (int i = 0; i < s->n; i++) {
+            mean += (double)s->v[k][i];
+        }
+        mean = s->n ? mean / s->n : 0.0;
+        qsort(s->v[k], (size_t)s->n, sizeof(int64_t), cmp_i64);
+        fprintf(f,
+                ", \"%s_ns\": {\"p50\": %lld, \"p99\": %lld, \"p999\": %lld, \"max\": %lld, \"mean\": %.1f, "
+                "\"min\": %lld}",
+                st_name[k], (long long)pct_i64(s->v[k], s->n, 0.5), (long long)pct_i64(s->v[k], s->n, 0.99),
+                (long long)pct_i64(s->v[k], s->n, 0.999), (long long)(s->n ? s->v[k][s->n - 1] : 0), mean,
+                (long long)(s->n ? s->v[k][0] : 0));
+    }
+    double ms = 0.0, ma = 0.0;
+    for (int i = 0; i < s->n; i++) {
+        ms += s->steps[i];
+        ma += s->active[i];
+    }
+    qsort(s->steps, (size_t)s->n, sizeof(int), cmp_int);
+    qsort(s->active, (size_t)s->n, sizeof(int), cmp_int);
+    fprintf(f,
+            ", \"steps\": {\"p50\": %d, \"p99\": %d, \"max\": %d, \"mean\": %.2f}, \"active_rows\": "
+            "{\"p50\": %d, "
+            "\"max\": %d, \"mean\": %.3f}}",
+            pct_int(s->steps, s->n, 0.5), pct_int(s->steps, s->n, 0.99), s->n ? s->steps[s->n - 1] : 0,
+            s->n ? ms / s->n : 0.0, pct_int(s->active, s->n, 0.5), s->n ? s->active[s->n - 1] : 0,
+            s->n ? ma / s->n : 0.0);
+}
+
+/* Scratch outside the controller (static: large). */
+static mca_pdnn_t shadow;
+static mca_pdnn_t cold;
+static mca_scheme_state_t sstate_copy;
+static mca_qp_t qp_scratch;
+static mca_kin_t kin_scratch[MCA_MAX_ARMS];
+static mca_arm_distances_t dist_scratch;
+
+typedef struct qp_dump {
+    const char *dir;
+    FILE *csv;
+    int every, block_len;
+    int block, idx; /* current block, index inside it (-1: none open) */
+    int written;
+} qp_dump_t;
+
+/* Run `ticks` ticks of ctrl from q0 (integrating qdot by Euler steps); on a fault the task restarts from q0.
+ */
+static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_DOF], int ticks,
+                 run_stats_t *s, qp_dump_t *dump) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const int na = cfg->n_arms;
+    const double dt = cfg->dt;
+    static double q[MCA_MAX_ARMS][MCA_MAX_DOF], qd[MCA_MAX_ARMS][MCA_MAX_DOF];
+    const double *qp_[MCA_MAX_ARMS];
+    double *qdp[MCA_MAX_ARMS];
+    memcpy(q, q0, sizeof q);
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qp_[a] = q[a];
+        qdp[a] = qd[a];
+    }
+    const mca_chain_t *chains[MCA_MAX_ARMS];
+    for (int a = 0; a < na; a++) {
+        chains[a] = &cfg->chain[a];
+    }
+    static double phi_prev[MCA_QP_MAX_VARS], phi[MCA_QP_MAX_VARS];
+    mca_tick_info_t info;
+    double t = 0.0;
+    int since_reset = 0;
+    for (int k = 0; k < ticks; k++, t += dt) {
+        /* the state the tick starts from, for the out-of-tick re-runs */
+        memcpy(&shadow, &ctrl->pdnn, sizeof shadow);
+        memcpy(&sstate_copy, &ctrl->sstate, sizeof sstate_copy);
+        const int has_prev = ctrl->has_prev;
+        memcpy(phi_prev, ctrl->phi_prev, sizeof phi_prev);
+
+        const int rc = mca_controller_tick(ctrl, t, qp_, qdp, &info);
+        if (rc != MCA_OK && rc != MCA_EFAULT) {
+            fprintf(stderr, "bench_tick: tick failed: %s\n", mca_strerror(rc));
+            return rc;
+        }
+        if (info.fault) {
+            /* a faulted tick stops early: not a representative cost; restart the task from q0 */
+            s->faults++;
+            s->resets++;
+            mca_controller_reset(ctrl);
+            memcpy(q, q0, sizeof q);
+            t = -dt;
+            since_reset = 0;
+            if (dump && dump->idx >= 0) {
+                dump->idx = -1;
+            }
+            continue;
+        }
+        since_reset++;
+        const int i = s->n;
+        if (i < s->cap) {
+            s->v[ST_TICK][i] = info.compute_ns;
+            s->steps[i] = info.pdnn_steps;
+            s->active[i] = info.active_rows;
+            s->capped += !info.pdnn_converged;
+
+            int64_t t0 = now_ns();
+            for (int a = 0; a < na; a++) {
+                mca_fk(&cfg->chain[a], q[a], &kin_scratch[a]);
+            }
+            int64_t t1 = now_ns();
+            for (int a = 0; a < na; a++) {
+                for (int b = a + 1; b < na; b++) {
+                    mca_arm_distances(&cfg->chain[a], &ctrl->kin[a], &cfg->chain[b], &ctrl->kin[b],
+                                      cfg->dist_method, &dist_scratch);
+                }
+            }
+            int64_t t2 = now_ns();
+            double rdot0[MCA_MAX_ARMS][3] = {{0}};
+            mca_scheme_assemble(&cfg->sp, na, chains, ctrl->kin, qp_, (const double(*)[3])info.ee_desired,
+                                (const double(*)[3])rdot0,
+                                (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
+                                has_prev ? phi_prev : NULL, &sstate_copy, &qp_scratch, NULL);
+            int64_t t3 = now_ns();
+            mca_pdnn_result_t pr;
+            mca_pdnn_solve(&shadow, &ctrl->qp, &cfg->pdnn, phi, &pr);
+            int64_t t4 = now_ns();
+            s->v[ST_FK][i] = t1 - t0;
+            s->v[ST_DIST][i] = t2 - t1;
+            s->v[ST_ASM][i] = t3 - t2;
+            s->v[ST_PDNN][i] = t4 - t3;
+            s->step_mismatch += pr.steps != info.pdnn_steps;
+            s->n++;
+
+            if (dump && dump->dir) {
+                if (dump->idx < 0 && since_reset > 1 && k % dump->every == 0) {
+                    dump->idx = 0;
+                    dump->block++;
+                }
+                if (dump->idx >= 0 && !info.pdnn_converged) {
+                    dump->idx = -1; /* only converged answers are compared */
+                }
+                if (dump->idx >= 0) {
+                    char path[1024], file[64], tag[96];
+                    snprintf(file, sizeof file, "qp_%04d_%02d.json", dump->block, dump->idx);
+                    snprintf(path, sizeof path, "%s/%s", dump->dir, file);
+                    snprintf(tag, sizeof tag, "tick %d active %d", k, info.active_rows);
+                    const double *cphi;
+                    const mca_qp_t *cqp = mca_controller_last_qp(ctrl, &cphi);
+                    long long cold_ns = -1;
+                    int cold_steps = -1;
+                    if (dump->idx == 0) {
+                        mca_pdnn_init(&cold);
+                        const int64_t c0 = now_ns();
+                        mca_pdnn_solve(&cold, cqp, &cfg->pdnn, phi, &pr);
+                        cold_ns = now_ns() - c0;
+                        cold_steps = pr.steps;
+                    }
+                    if (mca_qp_dump_json(cqp, cphi, info.pdnn_steps, info.pdnn_residual, tag, path) ==
+                        MCA_OK) {
+                        fprintf(dump->csv, "%s,%d,%d,%lld,%d,%lld,%d,%d\n", file, dump->block, dump->idx,
+                                (long long)s->v[ST_PDNN][i], info.pdnn_steps, cold_ns, cold_steps,
+                                info.active_rows);
+                        dump->written++;
+                    }
+                    if (++dump->idx >= dump->block_len) {
+                        dump->idx = -1;
+                    }
+                }
+            }
+        }
+        for (int a = 0; a < na; a++) {
+            for (int j = 0; j < cfg->chain[a].dof; j++) {
+                q[a][j] += qd[a][j] * dt;
+            }
+        }
+    }
+    return MCA_OK;
+}
+
+/* ---- synthetic cells ------------------------------------------------------------------------------------
+ */
+
+/* Keep the first k joints of a chain; the others are frozen at 0 and folded into the tool pose. */
+static void truncate_chain(mca_chain_t *c, int k) {
+    if (k >= c->dof) {
+        return;
+    }
+    mca_pose_t tool = c->tool, tmp;
+    double rmax = 0.0;
+    for (int j = c->dof - 1; j >= k; j--) {
+        mca_pose_mul(&tmp, &c->joint[j].origin, &tool);
+        tool = tmp;
+    }
+    for (int l = k; l <= c->dof; l++) {
+        rmax = fmax(rmax, c->link_radius[l]);
+    }
+    c->tool = tool;
+    c->link_radius[k] = rmax;
+    for (int l = k + 1; l < MCA_MAX_LINKS; l++) {
+        c->link_radius[l] = 0.0;
+    }
+    c->dof = k;
+}
+
+/* n arms on a circle around the origin, each facing the centre, q0 reaching inwards; small circles as
+ * paths (relative to the start) with phases spread so that neighbours approach each other. */
+static int synth_config(mca_controller_config_t *cfg, double q0[MCA_MAX_ARMS][MCA_MAX_DOF],
+                        const mca_chain_t *base, int n_arms, int dof, double gap, double d2) {
+    mca_controller_default_config(cfg);
+    cfg->n_arms = n_arms;
+    cfg->sp.d2 = d2;
+    mca_chain_t c = *base;
+    truncate_chain(&c, dof);
+    /* the PA10+ reference pose of task 1, truncated */
+    static const double qref[8] = {0.0, 0.7853981633974483, 0.0, -1.5707963267948966,
+                                   0.0, 0.7853981633974483, 0.0, 0.7853981633974483};
+    double q[MCA_MAX_DOF] = {0};
+    for (int j = 0; j < dof; j++) {
+        q[j] = qref[j];
+    }
+    mca_kin_t kin;
+    const double zero[3] = {0, 0, 0};
+    mca_chain_set_base(&c, zero, zero);
+    if (mca_fk(&c, q, &kin) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    const double reach = hypot(kin.ee[0], kin.ee[1]);
+    const double face = atan2(kin.ee[1], kin.ee[0]); /* direction of the reach in the arm's base frame */
+    const double rb = reach + gap;
+    for (int a = 0; a < n_arms; a++) {
+        const double th = 2.0 * M_PI * a / n_arms;
+        const double xyz[3] = {rb * cos(th), rb * sin(th), 0.0};
+        const double rpy[3] = {0.0, 0.0, th + M_PI - face};
+        cfg->chain[a] = c;
+        mca_chain_set_base(&cfg->chain[a], xyz, rpy);
+        memcpy(q0[a], q, sizeof q);
+        mca_path_t *p = &cfg->path[a];
+        memset(p, 0, sizeof *p);
+        p->kind = MCA_PATH_CIRCLE;
+        p->relative = 1;
+        p->radius = 0.08;
+        p->period = 2.0;
+        p->turns = 1.0;
+        /* in the plane spanned by the radial direction and z; u points to the centre */
+        p->u[0] = -cos(th);
+        p->u[1] = -sin(th);
+        p->v[2] = 1.0;
+    }
+    return MCA_OK;
+}
+
+static int set_fifo(int prio) {
+    if (prio <= 0) {
+        return 0;
+    }
+    struct sched_param sp = {.sched_priority = prio};
+    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+        fprintf(stderr, "bench_tick: SCHED_FIFO %d refused (%s): running SCHED_OTHER\n", prio,
+                strerror(errno));
+        return 0;
+    }
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+        fprintf(stderr, "bench_tick: mlockall failed (%s)\n", strerror(errno));
+    }
+    return 1;
+}
+
+static void usage(FILE *f) {
+    fprintf(f,
+            "usage: bench_tick task --scenario FILE [--ticks N] [--out JSON] [--qp-dir DIR] [--qp-every E]\n"
+            "                       [--qp-block L] [--fifo PRIO]\n"
+            "       bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--fifo PRIO]\n");
+}
+
+static int parse_pos(const char *opt, const char *v, int *out) {
+    char *end;
+    errno = 0;
+    const long x = v ? strtol(v, &end, 10) : 0;
+    if (!v || errno || *end || x < 1 || x > 10000000) {
+        fprintf(stderr, "bench_tick: %s: bad value '%s'\n", opt, v ? v : "(none)");
+        return -1;
+    }
+    *out = (int)x;
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    const char *mode = argv[1];
+    if (strcmp(mode, "task") && strcmp(mode, "scaling")) {
+        fprintf(stderr, "bench_tick: unknown mode '%s'\n", mode);
+        usage(stderr);
+        return 2;
+    }
+    const char *scenario = NULL, *out = NULL, *urdf_dir = NULL;
+    int ticks = 0, fifo = 0, quick = 0;
+    qp_dump_t dump = {.dir = NULL, .every = 1000, .block_len = 10, .block = -1, .idx = -1};
+    for (int i = 2; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--quick")) {
+            quick = 1;
+            continue;
+        }
+        i++;
+        if (!strcmp(a, "--scenario") && v) {
+            scenario = v;
+        } else if (!strcmp(a, "--out") && v) {
+            out = v;
+        } else if (!strcmp(a, "--urdf-dir") && v) {
+            urdf_dir = v;
+        } else if (!strcmp(a, "--qp-dir") && v) {
+            dump.dir = v;
+        } else if (!strcmp(a, "--ticks")) {
+            if (parse_pos(a, v, &ticks)) {
+                return 2;
+            }
+        } else if (!strcmp(a, "--fifo")) {
+            if (parse_pos(a, v, &fifo)) {
+                return 2;
+            }
+        } else if (!strcmp(a, "--qp-every")) {
+            if (parse_pos(a, v, &dump.every)) {
+                return 2;
+            }
+        } else if (!strcmp(a, "--qp-block")) {
+            if (parse_pos(a, v, &dump.block_len)) {
+                return 2;
+            }
+        } else {
+            fprintf(stderr, "bench_tick: unknown option or missing value: '%s'\n", a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    FILE *of = stdout;
+    if (out && !(of = fopen(out, "w"))) {
+        fprintf(stderr, "bench_tick: %s: %s\n", out, strerror(errno));
+        return 1;
+    }
+    const int rt = set_fifo(fifo);
+    mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
+    mca_controller_t *ctrl = calloc(1, sizeof *ctrl);
+    static double q0[MCA_MAX_ARMS][MCA_MAX_DOF];
+    char err[1024] = "";
+    int rc = MCA_OK;
+    if (!cfg || !ctrl) {
+        return 1;
+    }
+    if (!strcmp(mode, "task")) {
+        static mca_scenario_t scn;
+        if (!scenario) {
+            fprintf(stderr, "bench_tick: task needs --scenario FILE\n");
+            return 2;
+        }
+        if ((rc = mca_scenario_load(scenario, &scn, err, sizeof err)) != MCA_OK ||
+            (rc = mca_controller_config_from_scenario(cfg, &scn, MCA_SCHEME_MCA, err, sizeof err)) !=
+                MCA_OK) {
+            fprintf(stderr, "bench_tick: %s\n", err);
+            return 1;
+        }
+        for (int a = 0; a < scn.n_arms; a++) {
+            memcpy(q0[a], scn.arm[a].q0, sizeof q0[a]);
+        }
+        if (ticks <= 0) {
+            ticks = (int)llround(scn.duration / cfg->dt);
+        }
+        if ((rc = mca_controller_init(ctrl, cfg)) != MCA_OK) {
+            fprintf(stderr, "bench_tick: controller init: %s\n", mca_strerror(rc));
+            return 1;
+        }
+        if (dump.dir) {
+            char p[1024];
+            if (mkdir(dump.dir, 0755) != 0 && errno != EEXIST) {
+                fprintf(stderr, "bench_tick: --qp-dir %s: %s\n", dump.dir, strerror(errno));
+                return 1;
+            }
+            snprintf(p, sizeof p, "%s/pdnn.csv", dump.dir);
+            if (!(dump.csv = fopen(p, "w"))) {
+                fprintf(stderr, "bench_tick: %s: %s\n", p, strerror(errno));
+                return 1;
+            }
+            fprintf(dump.csv, "file,block,idx,warm_ns,steps,cold_ns,cold_steps,active_rows\n");
+        }
+        run_stats_t s;
+        if (stats_alloc(&s, ticks) != MCA_OK) {
+            return 1;
+        }
+        rc = drive(ctrl, (const double(*)[MCA_MAX_DOF])q0, ticks, &s, dump.dir ? &dump : NULL);
+        fprintf(of,
+                "{\"mode\": \"task\", \"scenario\": \"%s\", \"sched_fifo\": %d, \"qp_dumped\": %d, \"run\": ",
+                scn.name, rt, dump.written);
+        stats_json(of, &s, scn.name, &ctrl->cfg, &ctrl->qp);
+        fprintf(of, "}\n");
+        stats_free(&s);
+        if (dump.csv) {
+            fclose(dump.csv);
+        }
+    } else {
+        if (!urdf_dir) {
+            fprintf(stderr, "bench_tick: scaling needs --urdf-dir DIR (config/robots)\n");
+            return 2;
+        }
+        static mca_chain_t pa10;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/pa10plus.urdf", urdf_dir);
+        if ((rc = mca_chain_load_urdf(&pa10, path, "tool_tip", err, sizeof err)) != MCA_OK) {
+            fprintf(stderr, "bench_tick: %s\n", err);
+            return 1;
+        }
+        if (ticks <= 0) {
+            ticks = quick ? 300 : 2000;
+        }
+        /* sweeps: arms x dof at d2 0.12; then d2 (more critical points inside the band) at 2 x 8 */
+        typedef struct cfgdef {
+            const char *sweep;
+            int arms, dof;
+            double d2;
+        } cfgdef_t;
+        cfgdef_t defs[64];
+        int nd = 0;
+        for (int arms = 2; arms <= MCA_MAX_ARMS; arms++) {
+            for (int dof = 4; dof <= 8; dof++) {
+                if (!quick || dof == 4 || dof == 8) {
+                    defs[nd++] = (cfgdef_t){"arms_dof", arms, dof, 0.12};
+                }
+            }
+        }
+        static const double d2s[] = {0.2, 0.3, 0.45, 0.7, 1.0};
+        for (int k = 0; k < (int)(sizeof d2s / sizeof d2s[0]); k++) {
+            if (!quick || k == 4) {
+                defs[nd++] = (cfgdef_t){"d2", 2, 8, d2s[k]};
+            }
+        }
+        fprintf(of, "{\"mode\": \"scaling\", \"sched_fifo\": %d, \"ticks_per_config\": %d, \"runs\": [\n", rt,
+                ticks);
+        for (int c = 0; c < nd; c++) {
+            /* gap chosen so that neighbouring arms pass inside d2 = 0.12 but (mostly) not below d1 */
+            if ((rc = synth_config(cfg, q0, &pa10, defs[c].arms, defs[c].dof, 0.16, defs[c].d2)) != MCA_OK ||
+                (rc = mca_controller_init(ctrl, cfg)) != MCA_OK) {
+                fprintf(stderr, "bench_tick: config %d arms %d dof: %s\n", defs[c].arms, defs[c].dof,
+                        mca_strerror(rc));
+                return 1;
+            }
+            run_stats_t s;
+            if (stats_alloc(&s, ticks) != MCA_OK) {
+                return 1;
+            }
+            rc = drive(ctrl, (const double(*)[MCA_MAX_DOF])q0, ticks, &s, NULL);
+            if (rc != MCA_OK) {
+                return 1;
+            }
+            char name[64];
+            snprintf(name, sizeof name, "%s:%dx%d:d2=%g", defs[c].sweep, defs[c].arms, defs[c].dof,
+                     defs[c].d2);
+            stats_json(of, &s, name, &ctrl->cfg, &ctrl->qp);
+            fprintf(of, "%s\n", c + 1 < nd ? "," : "");
+            fflush(of);
+            stats_free(&s);
+        }
+        fprintf(of, "]}\n");
+    }
+    if (of != stdout) {
+        fclose(of);
+    }
+    free(ctrl);
+    free(cfg);
+    return rc == MCA_OK ? 0 : 1;
+}
