@@ -6,6 +6,20 @@
 
 #include "mca/err.h"
 
+#ifdef MCA_RING_TEST_HOOK
+/* Test builds only (tests/ring): called by mca_ring_pop() halfway through copying a payload, so a
+ * single-threaded test can play the producer at the worst moment and check torn-read detection. */
+void (*mca_ring_test_hook)(mca_ring_t *ring);
+#define RING_TEST_HOOK(r)                                                                                    \
+    do {                                                                                                     \
+        if (mca_ring_test_hook != NULL) {                                                                    \
+            mca_ring_test_hook(r);                                                                           \
+        }                                                                                                    \
+    } while (0)
+#else
+#define RING_TEST_HOOK(r) ((void)0)
+#endif
+
 /* Slot layout: [seq word][payload words...]; everything is an _Atomic uint64_t. */
 static inline _Atomic uint64_t *slot_at(const mca_ring_t *ring, uint64_t n) {
     return (_Atomic uint64_t *)(void *)(ring->slots + (size_t)(n & ring->mask) * ring->slot_size);
@@ -100,6 +114,9 @@ int mca_ring_pop(mca_ring_t *ring, void *out) {
             continue;
         }
         for (size_t w = 0; w < full; ++w) { /* R4 */
+            if (w == full / 2) {
+                RING_TEST_HOOK(ring);
+            }
             const uint64_t v = atomic_load_explicit(&payload[w], memory_order_relaxed);
             memcpy(dst + 8u * w, &v, 8u);
         }

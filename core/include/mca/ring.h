@@ -23,6 +23,7 @@
  *   W5 head  = n+1           (release)        R5 fence(acquire)
  *                                             R6 s2 = seq             (relaxed)
  *                                             valid iff s1 == s2 == 2t+2
+ *   (R3 is an early exit that saves a useless copy; R1 and R6 alone make the read safe.)
  *
  * Memory-ordering argument:
  * - Publication: W4 (release) is read by R3 (acquire) with s1 == 2t+2, so every payload store W3 of
