@@ -49,8 +49,12 @@ def main():
     check(mca["fault"] == 0, "task 1: MCA no fault (%s)" % mca["fault_name"])
     check(mca["ticks"] >= 10000, "task 1: MCA ran the whole task (%d ticks)" % mca["ticks"])
     for name in ("hui", "cup_stacking"):
-        r2, d1b = run(sim, os.path.join(sdir, name + ".yaml"), work, "mca")
+        r2, d1b = run(sim, os.path.join(sdir, name + ".yaml"), work, "mvn,mca")
         m = r2["mca"]
+        if name == "hui":
+            check(r2["mvn"]["min_distance"] < d1b, "hui: MVN min distance %.5f m < d1 (collision without MCA)" %
+                  r2["mvn"]["min_distance"])
+            check(m["binding_ticks"] > 0, "hui: collision rows did bind (%d ticks)" % m["binding_ticks"])
         check(m["min_distance"] > d1b, "%s: MCA min distance %.5f m > d1 %.3f" % (name, m["min_distance"], d1b))
         check(m["fault"] == 0, "%s: MCA no fault (%s)" % (name, m["fault_name"]))
         check(m["max_err_free"] <= tol and m["max_err"] <= tol,
