@@ -284,12 +284,12 @@ static void run_stress(size_t capacity, uint64_t n) {
 
 static void test_stress_two_threads_small_ring(void **state) {
     (void)state;
-    run_stress(4, 1000000); /* constant lapping and torn reads */
+    run_stress(4, 500000); /* constant lapping and torn reads */
 }
 
 static void test_stress_two_threads_large_ring(void **state) {
     (void)state;
-    run_stress(1024, 1000000);
+    run_stress(1024, 500000);
 }
 
 int main(void) {
