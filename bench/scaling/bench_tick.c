@@ -3,7 +3,7 @@
  * 4-8 joints, in virtual time (joint velocities integrated by Euler steps, no sleeping between ticks).
  *
  *   bench_tick task --scenario FILE [--ticks N] [--out JSON] [--qp-dir DIR] [--qp-every E] [--qp-block L]
- *   bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick]
+ *   bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--gap M]
  *   common: [--fifo PRIO] (SCHED_FIFO + mlockall for the measuring thread; fewer preemptions on a busy host)
  *
  * Per tick it records the tick's own compute_ns (CLOCK_MONOTONIC inside mca_controller_tick), then, OUTSIDE
@@ -193,7 +193,9 @@ static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_D
         }
         if (info.fault) {
             /* a faulted tick stops early: not a representative cost; restart the task from q0 */
-            s->faults++;
+            if (s->faults++ == 0) {
+                fprintf(stderr, "bench_tick: first fault at tick %d: %s\n", k, info.fault_text);
+            }
             s->resets++;
             mca_controller_reset(ctrl);
             memcpy(q, q0, sizeof q);
@@ -333,8 +335,14 @@ static int synth_config(mca_controller_config_t *cfg, double q0[MCA_MAX_ARMS][MC
     if (mca_fk(&c, q, &kin) != MCA_OK) {
         return MCA_EINVAL;
     }
-    const double reach = hypot(kin.ee[0], kin.ee[1]);
-    const double face = atan2(kin.ee[1], kin.ee[0]); /* direction of the reach in the arm's base frame */
+    /* face the centre with the end effector; the base sits `gap` beyond the arm's farthest capsule surface
+     * along that direction, so that no two arms overlap at q0 */
+    const double face = atan2(kin.ee[1], kin.ee[0]);
+    double reach = 0.0;
+    for (int k = 1; k < kin.n_points; k++) {
+        const double r = c.link_radius[k - 1 < MCA_MAX_LINKS ? k - 1 : 0];
+        reach = fmax(reach, kin.point[k][0] * cos(face) + kin.point[k][1] * sin(face) + r);
+    }
     const double rb = reach + gap;
     for (int a = 0; a < n_arms; a++) {
         const double th = 2.0 * M_PI * a / n_arms;
@@ -350,9 +358,10 @@ static int synth_config(mca_controller_config_t *cfg, double q0[MCA_MAX_ARMS][MC
         p->radius = 0.08;
         p->period = 2.0;
         p->turns = 1.0;
-        /* in the plane spanned by the radial direction and z; u points to the centre */
-        p->u[0] = -cos(th);
-        p->u[1] = -sin(th);
+        /* in the plane spanned by the radial direction and z; u points outwards, so the circle takes the end
+         * effector up to 2 R towards the centre (and the other arms) and back */
+        p->u[0] = cos(th);
+        p->u[1] = sin(th);
         p->v[2] = 1.0;
     }
     return MCA_OK;
@@ -378,7 +387,8 @@ static void usage(FILE *f) {
     fprintf(f,
             "usage: bench_tick task --scenario FILE [--ticks N] [--out JSON] [--qp-dir DIR] [--qp-every E]\n"
             "                       [--qp-block L] [--fifo PRIO]\n"
-            "       bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--fifo PRIO]\n");
+            "       bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--gap M]\n"
+            "                          [--fifo PRIO]\n");
 }
 
 static int parse_pos(const char *opt, const char *v, int *out) {
@@ -406,6 +416,7 @@ int main(int argc, char **argv) {
     }
     const char *scenario = NULL, *out = NULL, *urdf_dir = NULL;
     int ticks = 0, fifo = 0, quick = 0;
+    double gap = 0.22;
     qp_dump_t dump = {.dir = NULL, .every = 1000, .block_len = 10, .block = -1, .idx = -1};
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -422,6 +433,13 @@ int main(int argc, char **argv) {
             urdf_dir = v;
         } else if (!strcmp(a, "--qp-dir") && v) {
             dump.dir = v;
+        } else if (!strcmp(a, "--gap") && v) {
+            char *end;
+            gap = strtod(v, &end);
+            if (*end || !(gap > 0.0 && gap < 2.0)) {
+                fprintf(stderr, "bench_tick: --gap: bad value '%s'\n", v);
+                return 2;
+            }
         } else if (!strcmp(a, "--ticks")) {
             if (parse_pos(a, v, &ticks)) {
                 return 2;
@@ -546,8 +564,9 @@ int main(int argc, char **argv) {
         fprintf(of, "{\"mode\": \"scaling\", \"sched_fifo\": %d, \"ticks_per_config\": %d, \"runs\": [\n", rt,
                 ticks);
         for (int c = 0; c < nd; c++) {
-            /* gap chosen so that neighbouring arms pass inside d2 = 0.12 but (mostly) not below d1 */
-            if ((rc = synth_config(cfg, q0, &pa10, defs[c].arms, defs[c].dof, 0.16, defs[c].d2)) != MCA_OK ||
+            /* default gap 0.22 m: the circles (2 R = 0.16 m inwards) bring neighbouring arms inside d2 = 0.12
+             */
+            if ((rc = synth_config(cfg, q0, &pa10, defs[c].arms, defs[c].dof, gap, defs[c].d2)) != MCA_OK ||
                 (rc = mca_controller_init(ctrl, cfg)) != MCA_OK) {
                 fprintf(stderr, "bench_tick: config %d arms %d dof: %s\n", defs[c].arms, defs[c].dof,
                         mca_strerror(rc));

@@ -1,0 +1,182 @@
+#!/bin/bash
+# SPDX-License-Identifier: MIT
+# `make bench`: every benchmark of the project in one run, then ONE table (bench/report.py).
+# usage: bench/run.sh BUILD_DIR [--quick]
+#   env MCA_BENCH_OUT   output folder (default <repo>/out/bench): raw/ (each program's own output),
+#                       bench.json, table.md, scaling.png
+#   env MCA_BENCH_VCAN  cached (default): reuse OUT/vcan.json from an earlier guest boot if there is one,
+#                       else boot; boot: always boot the QEMU guest; skip: no vcan figure
+#   env MCA_BENCH_JITTER_S  seconds of mcad and of cyclictest each (default 20; --quick 3)
+# Takes about 2 minutes on 2 cores (plus a guest boot when no vcan figure is cached); needs root for
+# SCHED_FIFO / mlockall / cpu_dma_latency (without it the jitter rows say SCHED_OTHER).
+set -u
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+B=${1:?usage: bench/run.sh BUILD_DIR [--quick]}
+B=$(cd "$B" && pwd) || exit 1
+QUICK=0
+[ "${2:-}" = "--quick" ] && QUICK=1
+OUT=${MCA_BENCH_OUT:-$ROOT/out/bench}
+RAW=$OUT/raw
+PY=${PY:-$ROOT/.venv/bin/python3}
+[ -x "$PY" ] || PY=python3
+VCAN=${MCA_BENCH_VCAN:-cached}
+if [ $QUICK = 1 ]; then
+    JIT=${MCA_BENCH_JITTER_S:-3} DDS_TICKS=1000 LAT_N=1000 QP_EVERY=2000 SCALE="--quick" TICKS_CS="--ticks 8000"
+else
+    JIT=${MCA_BENCH_JITTER_S:-20} DDS_TICKS=3000 LAT_N=5000 QP_EVERY=1000 SCALE="" TICKS_CS=""
+fi
+# a DDS domain of our own so that other runs on this host do not mix in
+DOMAIN=${MCA_BENCH_DOMAIN:-97}
+FIFO=80
+rm -rf "$RAW"
+mkdir -p "$RAW"
+t_start=$(date +%s)
+step() { echo "bench: [$(($(date +%s) - t_start)) s] $*" >&2; }
+have() { [ -x "$1" ] || { echo "bench: $1 not built: row skipped" >&2; return 1; }; }
+
+{
+    echo "date: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
+    echo "git: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null)$(git -C "$ROOT" diff --quiet 2>/dev/null || echo +dirty)"
+    echo "kernel: $(uname -r)"
+    echo "mode: $([ $QUICK = 1 ] && echo quick || echo full)"
+    echo "uptime: $(uptime)"
+    lscpu
+} >"$RAW/machine.txt"
+
+# 1 + 2. controller tick over the tasks (virtual time), per-stage split, QP blocks for OSQP
+TICK=$B/bench/scaling/bench_tick
+if have "$TICK"; then
+    step "tick: task 1 (dual PA10+) and task 3 (JACO2 + MICO2), $FIFO SCHED_FIFO"
+    "$TICK" task --scenario "$ROOT/config/scenarios/cross_circles.yaml" --fifo $FIFO --qp-dir "$RAW/qp_cross_circles" \
+        --qp-every $QP_EVERY --qp-block 10 --out "$RAW/tick_cross_circles.json" 2>"$RAW/tick_cross_circles.err"
+    # shellcheck disable=SC2086
+    "$TICK" task --scenario "$ROOT/config/scenarios/cup_stacking.yaml" --fifo $FIFO --qp-dir "$RAW/qp_cup_stacking" \
+        --qp-every $((QP_EVERY * 4)) --qp-block 10 $TICKS_CS --out "$RAW/tick_cup_stacking.json" \
+        2>"$RAW/tick_cup_stacking.err"
+    step "scaling: 2-4 arms x 4-8 joints, d2 sweep"
+    # shellcheck disable=SC2086
+    "$TICK" scaling --urdf-dir "$ROOT/config/robots" --fifo $FIFO $SCALE --out "$RAW/scaling.json" \
+        2>"$RAW/scaling.err"
+    step "osqp: the same QPs, OSQP's own timers (SCHED_FIFO $FIFO like the PDNN's timing)"
+    for k in cross_circles cup_stacking; do
+        chrt -f $FIFO "$PY" "$ROOT/bench/report.py" osqp "$RAW/qp_$k" "$RAW/osqp_$k.json" 2>"$RAW/osqp_$k.err" ||
+            "$PY" "$ROOT/bench/report.py" osqp "$RAW/qp_$k" "$RAW/osqp_$k.json" 2>>"$RAW/osqp_$k.err"
+    done
+    if [ -f "$ROOT/tools/qp-check/osqp_check.py" ]; then
+        step "qp-check: PDNN answers against OSQP (tools/qp-check)"
+        "$PY" "$ROOT/tools/qp-check/osqp_check.py" "$RAW/qp_cross_circles" "$RAW/qp_cup_stacking" \
+            >"$RAW/qpcheck.txt" 2>&1
+        echo "exit $?" >>"$RAW/qpcheck.txt"
+    fi
+fi
+
+# 3. segment distances (bench/segdist of the dist engineer)
+SEG=$B/bench/segdist/segdist_bench
+if have "$SEG"; then
+    step "segdist: closed form, LSDM, libccd GJK"
+    "$SEG" $([ $QUICK = 1 ] && echo "--n 20000 --reps 3") >"$RAW/segdist.txt" 2>&1
+fi
+
+# 4. wake-up jitter: mcad's loop and cyclictest, same settings, one after the other
+MCAD=$B/daemon/mcad
+CELL=$ROOT/config/cells/cross_circles_sim.yaml
+if have "$MCAD"; then
+    step "jitter: mcad $JIT s (cell cross_circles_sim, no DDS: the loop alone)"
+    "$MCAD" --no-dds --stop-after "$JIT" "$CELL" >"$RAW/mcad_jitter.out" 2>"$RAW/mcad_jitter.log"
+    echo "exit $?" >>"$RAW/mcad_jitter.log"
+fi
+if command -v cyclictest >/dev/null; then
+    step "jitter: cyclictest $JIT s (-m -p $FIFO -i 1000, histogram 1 us bins)"
+    cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h 2000 >"$RAW/cyclictest.txt" 2>&1
+else
+    echo "cyclictest missing (apt-get install rt-tests)" >"$RAW/cyclictest.txt"
+fi
+
+# 5. DDS publishing on vs off
+MON=$B/tools/mca-monitor/mca-monitor
+if have "$MCAD" && have "$MON"; then
+    step "dds: mcad $JIT s with publishing (domain $DOMAIN, mca-monitor subscribed)"
+    cell_on=$RAW/cell_dds_on.yaml
+    sed -e "s#scenario: \.\./#scenario: $ROOT/config/#" -e "s#config: \.\./#config: $ROOT/config/#" \
+        -e "s#domain: .*#domain: $DOMAIN#" "$CELL" >"$cell_on"
+    "$MON" --domain $DOMAIN --config "$ROOT/config/dds/loopback.xml" --duration $((JIT + 6)) >/dev/null \
+        2>"$RAW/mcad_dds_on.monitor" &
+    mon=$!
+    sleep 1
+    "$MCAD" --stop-after "$JIT" "$cell_on" >"$RAW/mcad_dds_on.out" 2>"$RAW/mcad_dds_on.log"
+    echo "exit $?" >>"$RAW/mcad_dds_on.log"
+    kill -INT $mon 2>/dev/null
+    wait $mon 2>/dev/null
+fi
+BDDS=$B/bench/dds/bench_dds
+if have "$BDDS" && have "$MON"; then
+    step "dds: bench_dds ($DDS_TICKS ticks per mode)"
+    "$BDDS" --ticks $DDS_TICKS --config "$ROOT/config/dds/loopback.xml" --domain $((DOMAIN + 1)) --monitor "$MON" \
+        --fifo $FIFO >"$RAW/bench_dds.txt" 2>&1
+fi
+SYNTH=$B/dds/mca-dds-synth
+if have "$SYNTH" && have "$MON"; then
+    step "dds: latency, $LAT_N samples at 1 kHz"
+    "$SYNTH" --domain $((DOMAIN + 2)) --config "$ROOT/config/dds/loopback.xml" --ticks $LAT_N --wait-readers 1 \
+        --wait-topic mca/distances --linger 500 >"$RAW/dds_synth.txt" 2>&1 &
+    syn=$!
+    "$MON" --domain $((DOMAIN + 2)) --config "$ROOT/config/dds/loopback.xml" --count $LAT_N \
+        --duration $((LAT_N / 1000 + 15)) >/dev/null 2>"$RAW/dds_latency.txt"
+    wait $syn
+fi
+
+# 6. vcan round trip: SocketCAN lockstep between mca-can-ctl and mca-armsim (engineer "can"'s tools);
+#    this kernel has no vcan, so inside the QEMU guest of tools/vcan-guest
+ARMSIM=$B/sim_backend/armsim_can/mca-armsim
+CTL=$B/tests/can/mca-can-ctl
+vcan_from_log() { # guest log -> OUT/vcan.json
+    "$PY" - "$1" "$OUT/vcan.json" "$2" <<'PYEOF'
+import json, re, sys
+txt = open(sys.argv[1], encoding="utf-8", errors="replace").read().replace("\r", "")
+m = re.search(r"rtt_us p50=([0-9.]+) p99=([0-9.]+) max=([0-9.]+) n=(\d+)", txt)
+k = re.search(r"BENCH-VCAN kernel (\S+)", txt)
+d = {"source": sys.argv[3], "kernel": k.group(1) if k else None}
+if m:
+    d.update(p50_us=float(m.group(1)), p99_us=float(m.group(2)), max_us=float(m.group(3)), n=int(m.group(4)))
+else:
+    d["error"] = "the guest printed no rtt_us line (see " + sys.argv[1] + ")"
+json.dump(d, open(sys.argv[2], "w"))
+PYEOF
+}
+if [ "$VCAN" = skip ]; then
+    echo '{"error": "skipped (MCA_BENCH_VCAN=skip)"}' >"$OUT/vcan.json"
+elif [ "$VCAN" = cached ] && [ -s "$OUT/vcan.json" ] && grep -q p50_us "$OUT/vcan.json"; then
+    step "vcan: reusing the cached guest figure $OUT/vcan.json (MCA_BENCH_VCAN=boot to measure again)"
+    "$PY" - "$OUT/vcan.json" <<'PYEOF'
+import json, sys
+d = json.load(open(sys.argv[1]))
+if not d.get("source", "").startswith("cached"):
+    d["source"] = "cached figure from " + d.get("source", "an earlier run")
+json.dump(d, open(sys.argv[1], "w"))
+PYEOF
+elif [ $QUICK = 1 ]; then
+    echo '{"error": "no cached figure; --quick does not boot the guest"}' >"$OUT/vcan.json"
+elif have "$ARMSIM" && have "$CTL"; then
+    step "vcan: booting the QEMU guest (TCG; up to 240 s)"
+    mkdir -p "$RAW/vcan"
+    job=$RAW/vcan/job.sh
+    cat >"$job" <<JOB
+#!/bin/sh
+export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin HOME=/root
+ip link add dev vcan0 type vcan 2>/dev/null; ip link set vcan0 mtu 72; ip link set up vcan0
+echo "BENCH-VCAN kernel \$(uname -r)"
+"$ARMSIM" --iface vcan0 --robot "$ROOT/config/robots/jaco2.urdf" --q0 0,3.14,3.14,0,0,0 --lockstep 2>/dev/null & ARM=\$!
+sleep 0.3
+"$CTL" --iface vcan0 --joints 6 --mode lockstep --cycles 1000 | sed 's/^/BENCH-VCAN /'
+kill \$ARM; wait \$ARM
+JOB
+    MCA_GUEST_LOG=$RAW/vcan/console.log sh "$ROOT/tools/vcan-guest/run.sh" "$B/vcan-guest-cache" "$job" 240 \
+        >/dev/null 2>"$RAW/vcan/run.err"
+    vcan_from_log "$RAW/vcan/console.log" "measured $(date -u +%Y-%m-%dT%H:%MZ) by bench/run.sh in the guest"
+fi
+
+step "report"
+"$PY" "$ROOT/bench/report.py" "$OUT"
+rc=$?
+step "done: $OUT/table.md, $OUT/bench.json, $OUT/scaling.png"
+exit $rc
