@@ -45,12 +45,14 @@ struct mca_dds_bridge {
     uint64_t since_status;
 };
 
-static void bump(_Atomic uint64_t *c) {
+static void bump(_Atomic uint64_t *c)
+{
     /* Single writer per counter: load + store, no locked instruction. */
     atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + 1u, memory_order_relaxed);
 }
 
-void mca_dds_config_default(mca_dds_config_t *cfg) {
+void mca_dds_config_default(mca_dds_config_t *cfg)
+{
     if (cfg == NULL) {
         return;
     }
@@ -65,7 +67,8 @@ void mca_dds_config_default(mca_dds_config_t *cfg) {
     cfg->frame_id = "world";
 }
 
-double mca_dds_brake_factor(double d, double d1, double d2) {
+double mca_dds_brake_factor(double d, double d1, double d2)
+{
     if (d >= d2) {
         return 1.0;
     }
@@ -77,7 +80,8 @@ double mca_dds_brake_factor(double d, double d1, double d2) {
 }
 
 int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *dist, uint8_t arm_a,
-                      uint8_t arm_b, double d1, double d2) {
+                      uint8_t arm_b, double d1, double d2)
+{
     if (out == NULL || dist == NULL || dist->n_links_a < 0 || dist->n_links_a > MCA_MAX_LINKS ||
         dist->n_links_b < 0 || dist->n_links_b > MCA_MAX_LINKS || !(d1 >= 0.0 && d1 < d2)) {
         return MCA_EINVAL;
@@ -103,12 +107,14 @@ int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *d
     return MCA_OK;
 }
 
-static dds_sequence_double seq_of(double *buf, uint32_t n) {
+static dds_sequence_double seq_of(double *buf, uint32_t n)
+{
     dds_sequence_double s = {._maximum = n, ._length = n, ._buffer = buf, ._release = false};
     return s;
 }
 
-static int snapshot_valid(const mca_dds_snapshot_t *s) {
+static int snapshot_valid(const mca_dds_snapshot_t *s)
+{
     if (s->n_arms > MCA_MAX_ARMS || s->n_pairs > MCA_MAX_PAIRS) {
         return 0;
     }
@@ -125,7 +131,8 @@ static int snapshot_valid(const mca_dds_snapshot_t *s) {
     return 1;
 }
 
-static void write_one(mca_dds_bridge_t *b, int w, const void *sample) {
+static void write_one(mca_dds_bridge_t *b, int w, const void *sample)
+{
     if (dds_write(b->writer[w], sample) < 0) {
         bump(&b->write_errors);
     } else {
@@ -133,7 +140,8 @@ static void write_one(mca_dds_bridge_t *b, int w, const void *sample) {
     }
 }
 
-static void write_status(mca_dds_bridge_t *b) {
+static void write_status(mca_dds_bridge_t *b)
+{
     const mca_dds_status_snapshot_t *st = &b->last_status;
     mca_ring_stats_t rs;
     mca_ring_stats(&b->ring, &rs);
@@ -163,7 +171,8 @@ static void write_status(mca_dds_bridge_t *b) {
     b->since_status = 0;
 }
 
-static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
+static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s)
+{
     if (!snapshot_valid(s)) {
         bump(&b->invalid);
         return;
@@ -223,7 +232,8 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
     bump(&b->published);
 }
 
-static void *publisher_main(void *arg) {
+static void *publisher_main(void *arg)
+{
     mca_dds_bridge_t *b = arg;
     const struct timespec nap = {0, (long)b->cfg.poll_period_us * 1000L};
     for (;;) {
@@ -253,11 +263,13 @@ static void *publisher_main(void *arg) {
     return NULL;
 }
 
-static int is_pow2(uint32_t x) {
+static int is_pow2(uint32_t x)
+{
     return x >= 2 && (x & (x - 1u)) == 0;
 }
 
-static void delete_entities(mca_dds_bridge_t *b) {
+static void delete_entities(mca_dds_bridge_t *b)
+{
     if (b->participant > 0) {
         dds_delete(b->participant); /* deletes topics and writers too */
     }
@@ -266,7 +278,8 @@ static void delete_entities(mca_dds_bridge_t *b) {
     }
 }
 
-int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg)
+{
     if (out == NULL || cfg == NULL || cfg->rate_divisor == 0 || cfg->status_divisor == 0 ||
         !is_pow2(cfg->ring_capacity) || cfg->ring_capacity > MCA_RING_MAX_CAPACITY ||
         cfg->domain_id > MCA_DDS_MAX_DOMAIN || cfg->poll_period_us == 0 || cfg->poll_period_us > 1000000) {
@@ -342,7 +355,8 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
     return MCA_OK;
 }
 
-void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
+void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap)
+{
     const uint64_t n = atomic_load_explicit(&bridge->offered, memory_order_relaxed);
     atomic_store_explicit(&bridge->offered, n + 1u, memory_order_relaxed);
     if (bridge->cfg.rate_divisor == 1 || n % bridge->cfg.rate_divisor == 0) {
@@ -350,7 +364,8 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
     }
 }
 
-int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
+int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out)
+{
     if (bridge == NULL || out == NULL) {
         return MCA_EINVAL;
     }
@@ -369,8 +384,8 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     return MCA_OK;
 }
 
-int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n,
-                                uint32_t timeout_ms) {
+int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n, uint32_t timeout_ms)
+{
     if (bridge == NULL) {
         return MCA_EINVAL;
     }
@@ -410,7 +425,8 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
     }
 }
 
-void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats) {
+void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats)
+{
     if (bridge == NULL) {
         return;
     }

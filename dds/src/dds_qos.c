@@ -8,7 +8,8 @@
 
 #include "mca/err.h"
 
-dds_qos_t *mca_dds_qos_stream(void) {
+dds_qos_t *mca_dds_qos_stream(void)
+{
     dds_qos_t *q = dds_create_qos();
     if (q == NULL) {
         return NULL;
@@ -20,7 +21,8 @@ dds_qos_t *mca_dds_qos_stream(void) {
     return q;
 }
 
-dds_qos_t *mca_dds_qos_status(void) {
+dds_qos_t *mca_dds_qos_status(void)
+{
     dds_qos_t *q = dds_create_qos();
     if (q == NULL) {
         return NULL;
@@ -31,7 +33,8 @@ dds_qos_t *mca_dds_qos_status(void) {
     return q;
 }
 
-dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain) {
+dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain)
+{
     if (domain == NULL || domain_id > MCA_DDS_MAX_DOMAIN) {
         fprintf(stderr, "mca dds: domain id %u out of range 0..%d\n", domain_id, MCA_DDS_MAX_DOMAIN);
         return MCA_EINVAL;
