@@ -323,6 +323,137 @@ static double true_residual(const mca_qp_t *qp, const mca_pdnn_t *s, double big,
     return r;
 }
 
+static int uf_find(int *par, int j)
+{
+    while (par[j] != j) {
+        par[j] = par[par[j]];
+        j = par[j];
+    }
+    return j;
+}
+
+/* Independent blocks. Variables joined by a row of N belong together (union-find). The objective is
+ * separable, so the QP is one independent sub-QP per block, and (32) with M = [I -N^T; N 0] splits into
+ * one sub-network per block (M is block diagonal after permuting): integrating them separately, each
+ * with its own step, is still explicit Euler on (32) with a time scale lambda per block. Each block's
+ * N_b is stored compactly, which also skips the zero blocks of the paper's blkdiag(J_L, J_R). Rows of
+ * N that are all zero belong to no block (their dual has a closed form). */
+static void split(mca_pdnn_t *s, int n, int m, int no_split)
+{
+    int par[MCA_QP_MAX_VARS], blk_of[MCA_QP_MAX_VARS], row_blk[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];
+    for (int j = 0; j < n; j++) {
+        par[j] = no_split ? 0 : j;
+        blk_of[j] = -1;
+    }
+    for (int i = 0; i < m; i++) {
+        const double *Ni = &s->ws_N[i * n];
+        int first = -1;
+        for (int j = 0; j < n; j++) {
+            if (Ni[j] != 0.0) {
+                const int r = uf_find(par, j);
+                if (first < 0) {
+                    first = r;
+                } else if (r != first) {
+                    par[r] = first;
+                }
+            }
+        }
+        row_blk[i] = first; /* a root for now, -1 for a zero row */
+    }
+    int nb = 0;
+    for (int j = 0; j < n; j++) {
+        const int r = uf_find(par, j);
+        if (blk_of[r] < 0) {
+            blk_of[r] = nb++;
+        }
+    }
+    s->ws_nblk = nb;
+    for (int b = 0; b < nb; b++) {
+        for (int k = 0; k < 5; k++) {
+            s->ws_blk[b][k] = 0;
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        s->ws_blk[blk_of[uf_find(par, j)]][1]++;
+    }
+    int nzero = 0;
+    for (int i = 0; i < m; i++) {
+        if (row_blk[i] >= 0) {
+            row_blk[i] = blk_of[uf_find(par, row_blk[i])];
+            s->ws_blk[row_blk[i]][3]++;
+        } else {
+            nzero++;
+        }
+    }
+    s->ws_nzero = nzero;
+    int c0 = 0, r0 = 0, off = 0;
+    for (int b = 0; b < nb; b++) {
+        s->ws_blk[b][0] = c0;
+        s->ws_blk[b][2] = r0;
+        s->ws_blk[b][4] = off;
+        c0 += s->ws_blk[b][1];
+        r0 += s->ws_blk[b][3];
+        off += s->ws_blk[b][1] * s->ws_blk[b][3];
+    }
+    /* permutations: block order, original order inside a block; zero rows last */
+    int fill_c[MCA_QP_MAX_VARS], fill_r[MCA_QP_MAX_VARS];
+    for (int b = 0; b < nb; b++) {
+        fill_c[b] = s->ws_blk[b][0];
+        fill_r[b] = s->ws_blk[b][2];
+    }
+    for (int j = 0; j < n; j++) {
+        s->ws_pv[fill_c[blk_of[uf_find(par, j)]]++] = j;
+    }
+    int z = m - nzero;
+    for (int i = 0; i < m; i++) {
+        s->ws_pr[row_blk[i] >= 0 ? fill_r[row_blk[i]]++ : z++] = i;
+    }
+    /* compact N_b, q_b and Omega_b */
+    for (int b = 0; b < nb; b++) {
+        const int bc0 = s->ws_blk[b][0], nc = s->ws_blk[b][1], br0 = s->ws_blk[b][2], nr = s->ws_blk[b][3];
+        double *B = &s->ws_B[s->ws_blk[b][4]];
+        const int seg = bc0 + br0; /* start of block b in the [x_b; w_b] layout */
+        for (int k = 0; k < nc; k++) {
+            s->ws_Blo[seg + k] = s->ws_lo[s->ws_pv[bc0 + k]];
+            s->ws_Bhi[seg + k] = s->ws_hi[s->ws_pv[bc0 + k]];
+        }
+        for (int r = 0; r < nr; r++) {
+            const int i = s->ws_pr[br0 + r];
+            for (int k = 0; k < nc; k++) {
+                B[r * nc + k] = s->ws_N[i * n + s->ws_pv[bc0 + k]];
+            }
+            s->ws_Bq[br0 + r] = s->ws_q[i];
+            s->ws_Blo[seg + nc + r] = s->ws_lo[n + i];
+            s->ws_Bhi[seg + nc + r] = s->ws_hi[n + i];
+        }
+    }
+}
+
+/* ws_y (original order) <-> ws_By (block layout) */
+static void gather(mca_pdnn_t *s, int n, int to_blocks)
+{
+    for (int b = 0; b < s->ws_nblk; b++) {
+        const int bc0 = s->ws_blk[b][0], nc = s->ws_blk[b][1], br0 = s->ws_blk[b][2], nr = s->ws_blk[b][3];
+        double *yb = &s->ws_By[bc0 + br0];
+        for (int k = 0; k < nc; k++) {
+            double *y = &s->ws_y[s->ws_pv[bc0 + k]];
+            if (to_blocks) {
+                yb[k] = *y;
+            } else {
+                *y = yb[k];
+            }
+        }
+        for (int r = 0; r < nr; r++) {
+            double *y = &s->ws_y[n + s->ws_pr[br0 + r]];
+            if (to_blocks) {
+                yb[nc + r] = *y;
+            } else {
+                *y = yb[nc + r];
+            }
+        }
+    }
+}
+
 int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *params, double *phi,
                    mca_pdnn_result_t *result)
 {
@@ -351,39 +482,75 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         s->ws_t[i] = keep ? s->y[i] : 0.0;
     }
     duals_to_iter(s, qp, pre, s->ws_t, s->ws_y);
+    split(s, n, m, prm.no_split);
+    /* all-zero rows: the fixed point of w = P(w - q) is w = 0 when q >= 0 (inequality); otherwise there is
+     * none (infeasible row) and the true residual below reports it */
+    for (int k = m - s->ws_nzero; k < m; k++) {
+        const int i = s->ws_pr[k];
+        if (i >= qp->n_eq && s->ws_q[i] >= 0.0) {
+            s->ws_y[n + i] = 0.0;
+        }
+    }
+    gather(s, n, 1);
 
-    const mca_pdnn__problem_t p = {n, m, s->ws_N, s->ws_q, s->ws_lo, s->ws_hi};
     mca_pdnn_result_t res = {0};
-    double kappa_fixed = prm.kappa;
-    if (kappa_fixed > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
-        /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in s. */
-        const double s2 = mca_pdnn__norm_sq_bound(&p);
-        res.kappa_bound = prm.gamma / (0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2)));
-        if (kappa_fixed <= 0.0) {
-            kappa_fixed = res.kappa_bound;
+    double kfix[MCA_QP_MAX_VARS];
+    for (int b = 0; b < s->ws_nblk; b++) {
+        kfix[b] = prm.kappa;
+        if (prm.kappa > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
+            const int *bl = s->ws_blk[b];
+            const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
+                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]]};
+            /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in s */
+            const double s2 = mca_pdnn__norm_sq_bound(&p);
+            const double kb = prm.gamma / (0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2)));
+            res.kappa_bound = (b == 0 || kb < res.kappa_bound) ? kb : res.kappa_bound;
+            if (kfix[b] <= 0.0) {
+                kfix[b] = kb;
+            }
         }
     }
 
     /* The iteration stops on its own residual; the answer must meet tol on the QP as given, which the
      * rewriting changes by bounded factors: check, and tighten the inner tolerance if needed. */
-    double tol_it = prm.tol, r_true = INFINITY;
-    int steps = 0;
-    for (int pass = 0; pass < 8; pass++) {
-        mca_pdnn_result_t it;
-        mca_pdnn__iterate(&p, s->ws_y, kappa_fixed, prm.gamma, tol_it, prm.max_steps - steps, &it);
-        steps += it.steps;
-        res.kappa = it.kappa;
-        if (!isfinite(it.residual)) {
-            r_true = it.residual;
+    double tol_it = prm.tol, r_true = INFINITY, r_prev = INFINITY;
+    int bsteps[MCA_QP_MAX_VARS] = {0}, steps = 0, total = 0, diverged = 0;
+    for (int pass = 0; pass < 8 && !diverged; pass++) {
+        for (int b = 0; b < s->ws_nblk; b++) {
+            const int *bl = s->ws_blk[b];
+            const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
+                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]]};
+            mca_pdnn_result_t it;
+            mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm.gamma, tol_it, prm.max_steps - bsteps[b],
+                              &it);
+            bsteps[b] += it.steps;
+            total += it.steps;
+            if (bsteps[b] >= steps) {
+                steps = bsteps[b];
+                res.kappa = it.kappa;
+            }
+            if (!isfinite(it.residual)) {
+                diverged = 1;
+                r_true = it.residual;
+            }
+        }
+        if (diverged) {
             break;
         }
+        gather(s, n, 0);
         duals_from_iter(s, qp, pre, s->ws_y, s->ws_t);
         r_true = true_residual(qp, s, prm.big, s->ws_t);
-        if (r_true <= prm.tol || steps >= prm.max_steps) {
-            break;
+        if (r_true <= prm.tol || steps >= prm.max_steps || (pass >= 3 && r_true > 0.5 * r_prev)) {
+            break; /* done, out of steps, or no progress (a contradiction the blocks cannot see) */
         }
+        r_prev = r_true;
         tol_it *= fmax(1e-3, 0.5 * prm.tol / r_true);
     }
+    if (diverged) {
+        gather(s, n, 0);
+    }
+    res.blocks = s->ws_nblk;
+    res.steps_total = total;
     res.steps = steps;
     res.residual = r_true;
     res.converged = r_true <= prm.tol;

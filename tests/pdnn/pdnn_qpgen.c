@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* pdnn_qpgen OUTDIR COUNT [SEED]: make COUNT random feasible dual-arm-shaped QPs (tests/pdnn/qpgen.h) in
- * runs of 10 control ticks (a fresh scene solved cold, then 9 small moves solved warm), solve each with
+ * runs of 10 control ticks (a fresh scene solved cold, then 9 small moves solved warm; every third run has
+ * a row coupling the two arms, so both the split and the single-network paths are checked), solve each with
  * the LVI-PDNN at default parameters and dump it with its answer (mca_qp_dump_json) for
  * tools/qp-check/osqp_check.py. Exit 0 when every solve converged, 1 otherwise, 2 on bad arguments/I/O. */
 #include <errno.h>
@@ -49,6 +50,9 @@ int main(int argc, char **argv)
             qpgen_scene_perturb(&sc, &rng, 1e-3);
         }
         qpgen_build(&sc, &qp);
+        if ((k / 10) % 3 == 2) { /* every third run: one row couples the arms (one block, not two) */
+            qpgen_couple(&sc, &qp, QPGEN_NINEQ - 1);
+        }
         mca_pdnn_result_t res;
         const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
         if (rc != MCA_OK) {

@@ -107,3 +107,13 @@ void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp)
         qp->ub[j] = sc->ub[j];
     }
 }
+
+void qpgen_couple(const qpgen_scene_t *sc, mca_qp_t *qp, int row)
+{
+    double s = 0.0;
+    for (int j = 0; j < QPGEN_N; j++) {
+        qp->U[row][j] += 0.3 * (1.0 - 0.05 * j);
+        s += qp->U[row][j] * sc->phi0[j];
+    }
+    qp->beta[row] = s + sc->slack[row];
+}

@@ -43,4 +43,8 @@ void qpgen_scene_perturb(qpgen_scene_t *sc, qpgen_rng_t *r, double eps);
 /** The QP of the scene. */
 void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp);
 
+/** Make inequality row @p row couple the two arms (entries in both arms' columns), keeping the QP feasible
+ *  at phi0: the QP then no longer splits into one block per arm. */
+void qpgen_couple(const qpgen_scene_t *sc, mca_qp_t *qp, int row);
+
 #endif

@@ -2,6 +2,7 @@
 # SPDX-License-Identifier: MIT
 """The OSQP checker's exit status on known input: 0 for a right answer, 1 for a wrong one or an infeasible
 QP, 2 for malformed files, a missing answer and too few files. usage: test_osqp_check.py OSQP_CHECK_PY"""
+import importlib.util
 import json
 import os
 import subprocess
@@ -9,6 +10,11 @@ import sys
 import tempfile
 
 CHECK = sys.argv[1]
+# Most cases call main() in this process (one scipy/osqp import instead of one per case); two cases run
+# the command itself to see the exit status reach the shell.
+_spec = importlib.util.spec_from_file_location("osqp_check", CHECK)
+osqp_check = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(osqp_check)
 
 # min |phi|^2/2 s.t. phi1 + phi2 + phi3 = 3, 2 phi1 <= 0, phi3 <= 1.2 (box): by KKT phi = (0, 1.8, 1.2).
 GOOD = {"n": 3, "n_eq": 1, "n_ineq": 1, "G": [[1, 1, 1]], "alpha": [3], "U": [[2, 0, 0]], "beta": [0],
@@ -16,11 +22,13 @@ GOOD = {"n": 3, "n_eq": 1, "n_ineq": 1, "G": [[1, 1, 1]], "alpha": [3], "U": [[2
         "residual": 1e-10, "tag": "hand"}
 
 
-def run(files, *extra):
+def run(files, *extra, subprocess_run=False):
     with tempfile.TemporaryDirectory() as d:
         for name, content in files.items():
             with open(os.path.join(d, name), "w", encoding="utf-8") as f:
                 f.write(content if isinstance(content, str) else json.dumps(content))
+        if not subprocess_run:
+            return osqp_check.main([*extra, d])
         p = subprocess.run([sys.executable, CHECK, *extra, d], capture_output=True, text=True)
         sys.stdout.write(p.stdout + p.stderr)
         return p.returncode
@@ -42,6 +50,8 @@ def expect(name, rc, want):
         failures += 1
 
 
+expect("right answer (command)", run({"a.json": GOOD}, subprocess_run=True), 0)
+expect("wrong answer (command)", run({"a.json": variant(phi=[0, 1.8 + 1e-5, 1.2 - 1e-5])}, subprocess_run=True), 1)
 expect("right answer", run({"a.json": GOOD}), 0)
 expect("two right answers, --min-count 2", run({"a.json": GOOD, "b.json": GOOD}, "--min-count", "2"), 0)
 expect("wrong answer by 1e-5", run({"a.json": variant(phi=[0, 1.8 + 1e-5, 1.2 - 1e-5])}), 1)

@@ -300,10 +300,19 @@ static void test_infeasible(void **state)
     qp.alpha[0] = 1.0;
     qp.U[0][0] = 1.0;
     qp.beta[0] = 0.0;
-    assert_int_equal(solve(&qp, &prm, phi, &res), MCA_ENOTCONV);
-    assert_false(res.converged);
-    assert_int_equal(res.steps, 5000);
-    assert_true(res.residual > 1e-3);
+    for (int v = 0; v < N_VARIANTS; v++) {
+        variant(&prm, v);
+        prm.max_steps = 5000;
+        assert_int_equal(solve(&qp, &prm, phi, &res), MCA_ENOTCONV);
+        assert_false(res.converged);
+        assert_true(res.residual > 1e-3);
+        /* the default (ORTH, adaptive) sees at once that U's row is G's row with a contradicting bound
+         * (a zero row with beta' < 0) and stops when the residual makes no progress; the others may run
+         * into the step cap */
+        assert_true(v == 0 ? res.steps < 5000 : res.steps <= 5000);
+    }
+    mca_pdnn_default_params(&prm);
+    prm.max_steps = 5000;
     /* phi1 = 2 with phi1 <= 1 (box) */
     mca_qp_reset(&qp, 2, 1, 0);
     free_box(&qp);
@@ -507,6 +516,37 @@ static void test_divergence_reported(void **state)
     assert_int_equal(res.warm, 0);
 }
 
+static void test_split_blocks(void **state)
+{
+    (void)state;
+    /* The dual-arm QP splits into two blocks; one coupling row makes it one. Either way the split and the
+     * single-network solves agree (OSQP checks both kinds too: pdnn.osqp_check). */
+    qpgen_rng_t rng = {21};
+    for (int coupled = 0; coupled < 2; coupled++) {
+        qpgen_scene_t sc;
+        mca_qp_t qp;
+        qpgen_scene_random(&sc, &rng, 0.15);
+        qpgen_build(&sc, &qp);
+        if (coupled) {
+            qpgen_couple(&sc, &qp, QPGEN_NINEQ - 1);
+        }
+        mca_pdnn_params_t prm;
+        mca_pdnn_default_params(&prm);
+        prm.max_steps = 400000;
+        double phi1[16], phi2[16];
+        mca_pdnn_result_t r1, r2;
+        assert_int_equal(solve(&qp, &prm, phi1, &r1), MCA_OK);
+        assert_int_equal(r1.blocks, coupled ? 1 : 2);
+        assert_true(r1.steps_total >= r1.steps);
+        prm.no_split = 1;
+        assert_int_equal(solve(&qp, &prm, phi2, &r2), MCA_OK);
+        assert_int_equal(r2.blocks, 1);
+        for (int j = 0; j < 16; j++) {
+            assert_near(phi1[j], phi2[j], 1e-8);
+        }
+    }
+}
+
 static void test_bound_step_is_stable(void **state)
 {
     (void)state;
@@ -526,7 +566,9 @@ static void test_bound_step_is_stable(void **state)
         mca_pdnn_result_t res;
         mca_pdnn_init(&solver);
         assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
-        assert_true(res.kappa_bound > 0.0 && res.kappa == res.kappa_bound);
+        /* the QP splits into the two arms: each block steps at its own bound, the smaller one is reported */
+        assert_int_equal(res.blocks, 2);
+        assert_true(res.kappa_bound > 0.0 && res.kappa >= res.kappa_bound);
     }
 }
 
@@ -543,6 +585,7 @@ int main(void)
         cmocka_unit_test(test_no_malloc),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_divergence_reported),
+        cmocka_unit_test(test_split_blocks),
         cmocka_unit_test(test_bound_step_is_stable),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

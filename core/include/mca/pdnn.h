@@ -50,6 +50,9 @@ typedef struct mca_pdnn_params {
     int precond;   /**< enum mca_pdnn_precond */
     double far_weight; /**< full warm start, ORTH/SCALE: extra scale (0, 1] for inequality rows that were
                             inactive with a clear slack last solve (docs/pdnn.md); 1: off; <= 0: 0.3 */
+    int no_split;  /**< 1: one network for the whole QP; 0: independent blocks (variables that share no row,
+                        e.g. the two arms of the paper's block-diagonal G and U) are integrated as separate
+                        sub-networks, each with its own adaptive step */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
@@ -62,6 +65,8 @@ typedef struct mca_pdnn_result {
     double kappa_bound; /**< gamma / ||I+M||_2^2 (upper-bounded norm) of the iterated problem; 0 when not
                              needed (adaptive rule) */
     int precond;        /**< enum mca_pdnn_precond actually used */
+    int blocks;         /**< independent sub-networks integrated (steps: the most any of them took) */
+    int steps_total;    /**< Euler steps summed over the blocks (the work done) */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
@@ -78,6 +83,12 @@ typedef struct mca_pdnn {
     double ws_lo[MCA_QP_MAX_H], ws_hi[MCA_QP_MAX_H];                  /**< Omega */
     double ws_y[MCA_QP_MAX_H];                                        /**< iterate (rewritten duals) */
     double ws_t[MCA_QP_MAX_H];                                        /**< scratch */
+    double ws_B[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< per block N_b, compact */
+    double ws_Bq[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                    /**< per block q_b */
+    double ws_By[MCA_QP_MAX_H], ws_Blo[MCA_QP_MAX_H], ws_Bhi[MCA_QP_MAX_H]; /**< per block [x_b; w_b] */
+    int ws_pv[MCA_QP_MAX_VARS], ws_pr[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< block order of vars, rows */
+    int ws_nblk, ws_nzero;                                              /**< blocks, all-zero rows */
+    int ws_blk[MCA_QP_MAX_VARS][5];                                     /**< c0, nc, r0, nr, offset in B */
 } mca_pdnn_t;
 
 /** Defaults: kappa from the bound, tol 1e-9, max_steps, big 1e10. */
