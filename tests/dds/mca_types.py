@@ -105,10 +105,12 @@ class ControllerStatus(IdlStruct, typename="mca::dds::ControllerStatus"):
 
 
 def stream_qos():
+    """QoS of a READER of the 1 kHz streams. The writers are reliable keep-last 16 (docs/dds.md); a
+    reader may keep all (history is not part of QoS matching), so a Python process that falls seconds
+    behind on a loaded machine still loses nothing once the samples have reached it."""
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.util import duration
-    # Reader side may keep more than the writer's 16: history depth is not part of QoS matching.
-    return Qos(Policy.Reliability.Reliable(duration(milliseconds=100)), Policy.History.KeepLast(4096),
+    return Qos(Policy.Reliability.Reliable(duration(milliseconds=100)), Policy.History.KeepAll,
                Policy.Durability.Volatile)
 
 

@@ -252,8 +252,13 @@ int main(int argc, char **argv)
     }
     dds_qos_t *qs = mca_dds_qos_stream();
     dds_qos_t *qst = mca_dds_qos_status();
-    /* A deeper reader history than the writer's 16: a slow terminal must not cost CSV rows. */
-    dds_qset_history(qs, DDS_HISTORY_KEEP_LAST, 1024);
+    /* Reader history is not part of QoS matching: keep 1 s for the live view, and everything that
+     * reached this process when recording (--csv records every sample even if we fall behind). */
+    if (csv_path != NULL) {
+        dds_qset_history(qs, DDS_HISTORY_KEEP_ALL, 0);
+    } else {
+        dds_qset_history(qs, DDS_HISTORY_KEEP_LAST, 1024);
+    }
     const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
