@@ -60,7 +60,7 @@ void mca_dds_config_default(mca_dds_config_t *cfg)
     cfg->domain_id = 0;
     cfg->config_path = NULL;
     cfg->rate_divisor = 1;
-    cfg->ring_capacity = 256;
+    cfg->ring_capacity = 1024; /* 1 s of publisher stall at 1 kHz, 3 MB */
     cfg->status_divisor = 100;
     cfg->poll_period_us = 200;
     cfg->controller_id = 0;

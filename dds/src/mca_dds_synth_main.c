@@ -31,7 +31,7 @@ static void usage(FILE *f)
                "  --ticks N          ticks to run (default 10000; 0 = until Ctrl-C)\n"
                "  --hz F             loop rate (default 1000)\n"
                "  --divisor N        publish every Nth tick (default 1)\n"
-               "  --ring N           ring capacity, power of two (default 256)\n"
+               "  --ring N           ring capacity, power of two (default 1024)\n"
                "  --poll-us N        publisher thread's sleep when the ring is empty (default 200)\n"
                "  --wait-readers N   before the first tick wait for N matched readers\n"
                "  --wait-topic NAME  ... on this topic only (default: on every topic)\n"

@@ -98,7 +98,7 @@ typedef struct mca_dds_config {
     uint32_t domain_id;      /**< DDS domain (0..230) */
     const char *config_path; /**< Cyclone XML file, or NULL for CYCLONEDDS_URI / built-in defaults */
     uint32_t rate_divisor;   /**< publish every Nth pushed snapshot; 1 = every tick (default) */
-    uint32_t ring_capacity;  /**< snapshots in the ring, power of two (default 256) */
+    uint32_t ring_capacity;  /**< snapshots in the ring, power of two (default 1024) */
     uint32_t status_divisor; /**< status every Nth published snapshot (default 100) + on change */
     uint32_t poll_period_us; /**< publisher thread's sleep when the ring is empty (default 200) */
     uint8_t controller_id;   /**< key of ControllerStatus (default 0) */
@@ -121,7 +121,7 @@ typedef struct mca_dds_stats {
 
 typedef struct mca_dds_bridge mca_dds_bridge_t;
 
-/** Default settings (domain 0, no config file, every tick, 256 snapshots). Context: any. */
+/** Default settings (domain 0, no config file, every tick, 1024 snapshots = 1 s). Context: any. */
 void mca_dds_config_default(mca_dds_config_t *cfg);
 
 /**
