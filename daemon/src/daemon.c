@@ -597,7 +597,6 @@ static void *rt_main(void *arg)
     const int64_t period = d->cell.rt.period_ns;
     const double stop_after = d->opts.stop_after > 0 ? d->opts.stop_after : d->cell.stop_after;
     int64_t next = now_ns() + period;
-    const int64_t t0 = next;
     int stalled_logged = 0;
     for (;;) {
         struct timespec ts = {(time_t)(next / NS_PER_S), (long)(next % NS_PER_S)};
@@ -620,7 +619,9 @@ static void *rt_main(void *arg)
             continue;
         }
         mca_hist_record(&d->jitter, wake - next);
-        const double t = (double)(next - t0) * 1e-9;
+        /* task time advances one period per tick: a missed deadline delays the task instead of skipping
+         * path points (a sim or lockstep arm did not move meanwhile; real arms' drift is fed back) */
+        const double t = (double)ticks * (double)period * 1e-9;
         if (stop_after > 0 && t >= stop_after) {
             atomic_store(&d->stop_request, 1);
         }
@@ -629,11 +630,12 @@ static void *rt_main(void *arg)
         mca_hist_record(&d->compute, end - wake);
         next += period;
         if (end > next) {
+            /* every period missed counts: one 20 ms stall is 20 consecutive overruns */
             d->overruns++;
-            d->consecutive_overruns++;
             while (next <= end) {
                 next += period;
                 d->skipped++;
+                d->consecutive_overruns++;
             }
             if (d->consecutive_overruns >= d->cell.rt.overrun_limit &&
                 atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING) {

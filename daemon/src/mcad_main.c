@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -119,6 +120,17 @@ int main(int argc, char **argv)
     sigaddset(&sigs, SIGUSR1);
     sigaddset(&sigs, SIGHUP);
     pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+
+    /* Started with SCHED_FIFO for the whole process (systemd CPUSchedulingPolicy=fifo)? Only the loop
+     * thread should be real-time: put this thread (and so the DDS and supervisor threads created from it)
+     * back to SCHED_OTHER; the loop sets its own SCHED_FIFO priority (needs LimitRTPRIO or root). */
+    const int inherited_policy = sched_getscheduler(0);
+    if (inherited_policy == SCHED_FIFO || inherited_policy == SCHED_RR) {
+        const struct sched_param sp0 = {.sched_priority = 0};
+        if (sched_setscheduler(0, SCHED_OTHER, &sp0) == 0) {
+            fprintf(stderr, "<6>mcad: started real-time: non-loop threads reset to SCHED_OTHER\n");
+        }
+    }
 
     mca_cell_t *cell = calloc(1, sizeof *cell);
     if (!cell) {

@@ -1,0 +1,14 @@
+#!/bin/sh
+# Start mcad as a transient systemd service with the settings of mcad@.service (no unit file needed).
+# usage: config/systemd/mcad-run.sh MCAD CELL [UNIT]     e.g. build/daemon/mcad config/cells/cross_circles_sim.yaml
+# Stop (brakes to zero first): systemctl stop UNIT.   Status: systemctl status UNIT (STATUS= lines).
+set -eu
+MCAD=$(readlink -f "$1")
+CELL=$(readlink -f "$2")
+UNIT=${3:-mcad-$(basename "$CELL" .yaml | tr '_' '-')}
+exec systemd-run --unit="$UNIT" \
+    -p Type=notify -p NotifyAccess=main \
+    -p WatchdogSec=2s -p TimeoutStartSec=30s -p TimeoutStopSec=10s -p KillSignal=SIGTERM -p Restart=no \
+    -p CPUSchedulingPolicy=fifo -p CPUSchedulingPriority=1 -p LimitRTPRIO=99 \
+    -p LimitMEMLOCK=infinity \
+    "$MCAD" "$CELL"
