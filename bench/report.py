@@ -414,7 +414,9 @@ def main():
     head = (f"mca bench ({m.get('mode') or 'full'}), {m.get('date')}, git {m.get('git')}: {m.get('cpu')}, "
             f"{m.get('cores')} cores, kernel {m.get('kernel')}, load average before {m.get('load_before')}")
     sc_lines = R["scaling"].get("table", []) if isinstance(R["scaling"], dict) else []
-    text = head + "\n\n" + "\n".join(lines) + "\n"
+    legend = ("ratio = measured / against: below 1 we are faster (or lower) than the peer; rows 1 and 6 give the "
+              "fraction of the 1 ms period. Times in us unless marked.")
+    text = head + "\n\n" + "\n".join(lines) + "\n\n" + legend + "\n"
     if sc_lines:
         text += "\nHow the tick cost grows (bench_tick scaling; p50 us):\n\n" + "\n".join(sc_lines) + "\n"
         text += "\n" + R["scaling"].get("fits_text", "") + "\n"
@@ -474,6 +476,7 @@ def scaling_report(sc, out_dir):
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt  # noqa: PLC0415
+        import matplotlib.ticker  # noqa: PLC0415
 
         fig, axs = plt.subplots(1, 3, figsize=(15, 4.5))
         for dof in sorted({r["dof"][0] for r in ad}):
@@ -483,6 +486,8 @@ def scaling_report(sc, out_dir):
         axs[0].set_xlabel("arms")
         axs[0].set_ylabel("tick p50 [us]")
         axs[0].set_xticks([2, 3, 4], ["2", "3", "4"])
+        axs[0].yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        axs[0].yaxis.set_minor_formatter(matplotlib.ticker.ScalarFormatter())
         axs[0].legend(fontsize=8)
         axs[0].set_title("tick vs arms")
         for key, lab in (("tick_ns", "whole tick"), ("pdnn_ns", "PDNN"), ("distances_ns", "distances"),
