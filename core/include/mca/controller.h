@@ -7,7 +7,7 @@
  * Use (start-up, then every tick):
  *     mca_controller_config_t cfg;
  *     mca_controller_config_from_scenario(&cfg, &scenario, MCA_SCHEME_MCA, err, sizeof err); // or fill
- *     mca_controller_t *ctrl = malloc(sizeof *ctrl);      // large (~200 kB): do not put it on a stack
+ *     mca_controller_t *ctrl = malloc(sizeof *ctrl);      // ~160 kB: not on a stack
  *     mca_controller_init(ctrl, &cfg);
  *     loop: mca_controller_tick(ctrl, t, q, qdot, &info);  // q[a], qdot[a]: arm a's joints
  *
@@ -121,7 +121,7 @@ typedef struct mca_tick_info {
     int64_t compute_ns;                     /**< CLOCK_MONOTONIC time spent in the tick */
 } mca_tick_info_t;
 
-/** Controller state (large: keep it static or on the heap; allocated by the caller at start-up). */
+/** Controller state (~160 kB: keep it static or on the heap; allocated by the caller at start-up). */
 typedef struct mca_controller {
     mca_controller_config_t cfg;
     int started;                            /**< paths anchored */

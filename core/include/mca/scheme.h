@@ -41,7 +41,7 @@ typedef struct mca_scheme_params {
     double K;                   /**< position feedback gain [1/s] */
     double epsilon;             /**< joint-limit gain of (19) [1/s] */
     double v_normal;            /**< normal form: approach speed allowed at d >= d2 [m/s] */
-    double v_floor;             /**< componentwise: least captured rate per unit |r_PE,i| [1/s] */
+    double v_floor;             /**< componentwise: least allowed approach speed per axis [m/s] */
     double big;                 /**< bound of an inactive row (the PDNN's varpi or less) */
 } mca_scheme_params_t;
 
