@@ -884,7 +884,16 @@ void mca_daemon_close(mca_daemon_t *d)
         st->jitter_max_ns = s.jitter_max_ns;
         d->snap.tick = s.ticks;
         st->ticks = s.ticks;
-        mca_dds_bridge_push(d->dds, &d->snap);
+        /* the bridge queues every rate_divisor-th push: offer the final snapshot until it is queued */
+        mca_dds_stats_t bs;
+        uint64_t pushes = 1;
+        if (mca_dds_bridge_stats(d->dds, &bs) == MCA_OK && d->cell.dds.publish_divisor > 1) {
+            const uint64_t div = d->cell.dds.publish_divisor;
+            pushes = (div - bs.offered % div) % div + 1;
+        }
+        for (uint64_t i = 0; i < pushes; i++) {
+            mca_dds_bridge_push(d->dds, &d->snap);
+        }
         mca_dds_bridge_destroy(d->dds, NULL);
         d->dds = NULL;
     }
