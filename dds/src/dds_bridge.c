@@ -24,6 +24,7 @@ struct mca_dds_bridge {
     void *storage;
     mca_dds_config_t cfg;
     char frame_id[MCA_DDS_FRAME_ID_MAX + 1];
+    char partition[MCA_DDS_PARTITION_MAX + 1];
 
     _Atomic uint64_t offered; /* written by the rt thread only */
     /* Written by the publisher thread only. */
@@ -290,6 +291,11 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg)
         fprintf(stderr, "mca dds: frame id '%s' longer than %d bytes\n", frame, MCA_DDS_FRAME_ID_MAX);
         return MCA_EINVAL;
     }
+    if (cfg->partition != NULL && strlen(cfg->partition) > MCA_DDS_PARTITION_MAX) {
+        fprintf(stderr, "mca dds: partition '%s' longer than %d bytes\n", cfg->partition,
+                MCA_DDS_PARTITION_MAX);
+        return MCA_EINVAL;
+    }
     const size_t sz = (sizeof(mca_dds_bridge_t) + 63u) & ~(size_t)63u;
     mca_dds_bridge_t *b = aligned_alloc(64, sz);
     if (b == NULL) {
@@ -299,6 +305,10 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg)
     b->cfg = *cfg;
     snprintf(b->frame_id, sizeof b->frame_id, "%s", frame);
     b->cfg.frame_id = b->frame_id;
+    if (cfg->partition != NULL) {
+        snprintf(b->partition, sizeof b->partition, "%s", cfg->partition);
+        b->cfg.partition = b->partition;
+    }
     b->cfg.config_path = NULL; /* not kept: the caller's string may go away */
 
     const size_t bytes = MCA_RING_STORAGE_SIZE(sizeof(mca_dds_snapshot_t), cfg->ring_capacity);
@@ -328,10 +338,17 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg)
     dds_qos_t *qs = mca_dds_qos_stream();
     dds_qos_t *qst = mca_dds_qos_status();
     rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
+    dds_entity_t pub = p; /* writers hang off the participant, or a publisher with a partition */
+    if (rc == MCA_OK && b->cfg.partition != NULL) {
+        pub = mca_dds_create_publisher(p, b->cfg.partition);
+        if (pub < 0) {
+            rc = MCA_EIO;
+        }
+    }
     for (int w = 0; w < W_COUNT && rc == MCA_OK; ++w) {
         const dds_qos_t *q = w == W_STATUS ? qst : qs;
         b->topic[w] = dds_create_topic(p, descs[w], topic_names[w], q, NULL);
-        b->writer[w] = b->topic[w] > 0 ? dds_create_writer(p, b->topic[w], q, NULL) : b->topic[w];
+        b->writer[w] = b->topic[w] > 0 ? dds_create_writer(pub, b->topic[w], q, NULL) : b->topic[w];
         if (b->writer[w] < 0) {
             fprintf(stderr, "mca dds: cannot create topic/writer '%s': %s\n", topic_names[w],
                     dds_strretcode(b->writer[w]));

@@ -74,3 +74,35 @@ dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_pat
     }
     return p;
 }
+
+static dds_entity_t create_in_partition(dds_entity_t pp, const char *partition, int publisher)
+{
+    dds_qos_t *q = NULL;
+    if (partition != NULL) {
+        q = dds_create_qos();
+        if (q == NULL) {
+            return DDS_RETCODE_OUT_OF_RESOURCES;
+        }
+        dds_qset_partition1(q, partition);
+    }
+    const dds_entity_t e = publisher ? dds_create_publisher(pp, q, NULL) : dds_create_subscriber(pp, q, NULL);
+    if (q != NULL) {
+        dds_delete_qos(q);
+    }
+    if (e < 0) {
+        fprintf(stderr, "mca dds: cannot create %s in partition '%s': %s\n",
+                publisher ? "publisher" : "subscriber", partition != NULL ? partition : "",
+                dds_strretcode(e));
+    }
+    return e;
+}
+
+dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition)
+{
+    return create_in_partition(pp, partition, 1);
+}
+
+dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition)
+{
+    return create_in_partition(pp, partition, 0);
+}

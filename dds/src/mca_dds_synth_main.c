@@ -32,6 +32,7 @@ static void usage(FILE *f)
                "  --hz F             loop rate (default 1000)\n"
                "  --divisor N        publish every Nth tick (default 1)\n"
                "  --ring N           ring capacity, power of two (default 1024)\n"
+               "  --partition NAME   publish in DDS partition NAME (default: the default partition)\n"
                "  --poll-us N        publisher thread's sleep when the ring is empty (default 200)\n"
                "  --wait-readers N   before the first tick wait for N matched readers\n"
                "  --wait-topic NAME  ... on this topic only (default: on every topic)\n"
@@ -79,6 +80,7 @@ int main(int argc, char **argv)
         {"linger", required_argument, NULL, 'l'},
         {"wait-topic", required_argument, NULL, 'T'},
         {"poll-us", required_argument, NULL, 'p'},
+        {"partition", required_argument, NULL, 'P'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -131,6 +133,9 @@ int main(int argc, char **argv)
             if (parse_u64(optarg, "--wait-timeout", 3600000, &wait_timeout) != 0) {
                 return 2;
             }
+            break;
+        case 'P':
+            cfg.partition = optarg;
             break;
         case 'p':
             if (parse_u64(optarg, "--poll-us", 1000000, &v) != 0 || v == 0) {

@@ -23,6 +23,7 @@
 
 static const char *g_config;
 static uint32_t g_domain;
+static char g_partition[64]; /* per process: other tests' publishers may share the domain */
 
 static void test_create_rejects_bad_arguments(void **state)
 {
@@ -45,6 +46,9 @@ static void test_create_rejects_bad_arguments(void **state)
     cfg.frame_id = "a_frame_name_that_is_longer_than_32_bytes";
     assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
     cfg.frame_id = NULL;
+    cfg.partition = "a_partition_name_that_is_much_longer_than_the_sixty_three_bytes_allowed";
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    cfg.partition = NULL;
     cfg.config_path = "/nonexistent/mca/cyclone.xml";
     assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_ENOENT);
     assert_ptr_equal(b, (mca_dds_bridge_t *)0x1); /* untouched on error */
@@ -86,7 +90,7 @@ typedef struct readers {
     dds_entity_t pp, rd_dist, rd_js, rd_jc, rd_st;
 } readers_t;
 
-static void open_readers(readers_t *r)
+static void open_readers_in(readers_t *r, const char *partition)
 {
     dds_entity_t dom = 0;
     r->pp = mca_dds_open_participant(g_domain, NULL, &dom);
@@ -102,13 +106,20 @@ static void open_readers(readers_t *r)
         dds_create_topic(r->pp, &mca_dds_JointCommand_desc, MCA_DDS_TOPIC_JOINT_COMMAND, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(r->pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
-    r->rd_dist = dds_create_reader(r->pp, td, qs, NULL);
-    r->rd_js = dds_create_reader(r->pp, tj, qs, NULL);
-    r->rd_jc = dds_create_reader(r->pp, tc, qs, NULL);
-    r->rd_st = dds_create_reader(r->pp, ts, qst, NULL);
+    const dds_entity_t sub = mca_dds_create_subscriber(r->pp, partition);
+    assert_true(sub > 0);
+    r->rd_dist = dds_create_reader(sub, td, qs, NULL);
+    r->rd_js = dds_create_reader(sub, tj, qs, NULL);
+    r->rd_jc = dds_create_reader(sub, tc, qs, NULL);
+    r->rd_st = dds_create_reader(sub, ts, qst, NULL);
     dds_delete_qos(qs);
     dds_delete_qos(qst);
     assert_true(r->rd_dist > 0 && r->rd_js > 0 && r->rd_jc > 0 && r->rd_st > 0);
+}
+
+static void open_readers(readers_t *r)
+{
+    open_readers_in(r, g_partition);
 }
 
 static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32_t poll_us)
@@ -120,6 +131,7 @@ static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32
     cfg.ring_capacity = capacity;
     cfg.poll_period_us = poll_us;
     cfg.frame_id = "base_link";
+    cfg.partition = g_partition;
     mca_dds_bridge_t *b = NULL;
     assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
     assert_non_null(b);
@@ -345,6 +357,25 @@ static void test_overrun_drops_oldest_and_counts(void **state)
     dds_delete(r.pp);
 }
 
+static void test_partition_isolates(void **state)
+{
+    (void)state;
+    mca_dds_bridge_t *b = make_bridge(1, 16, 200);
+    readers_t other, same;
+    open_readers_in(&other, "mca-test-some-other-partition");
+    /* A reader in another partition of the same domain never matches and gets nothing. */
+    assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 300), MCA_ETIMEDOUT);
+    open_readers(&same);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 10000), MCA_OK);
+    push_range(b, 5);
+    mca_dds_bridge_destroy(b, NULL);
+    uint64_t ticks[8];
+    assert_int_equal(take_distances(other.rd_dist, ticks, 8), 0);
+    assert_int_equal(take_distances(same.rd_dist, ticks, 8), 5);
+    dds_delete(other.pp);
+    dds_delete(same.pp);
+}
+
 static void test_invalid_snapshot_rejected(void **state)
 {
     (void)state;
@@ -423,14 +454,12 @@ int main(int argc, char **argv)
     }
     g_config = argv[1];
     g_domain = (uint32_t)strtoul(argv[2], NULL, 10);
+    snprintf(g_partition, sizeof g_partition, "mca-test-bridge-%ld", (long)getpid());
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_create_rejects_bad_arguments),
-        cmocka_unit_test(test_create_rejects_bad_xml),
-        cmocka_unit_test(test_every_snapshot_arrives_intact),
-        cmocka_unit_test(test_rate_divisor),
-        cmocka_unit_test(test_overrun_drops_oldest_and_counts),
-        cmocka_unit_test(test_invalid_snapshot_rejected),
-        cmocka_unit_test(test_brake_factor_eq13),
+        cmocka_unit_test(test_create_rejects_bad_arguments),    cmocka_unit_test(test_create_rejects_bad_xml),
+        cmocka_unit_test(test_every_snapshot_arrives_intact),   cmocka_unit_test(test_rate_divisor),
+        cmocka_unit_test(test_overrun_drops_oldest_and_counts), cmocka_unit_test(test_partition_isolates),
+        cmocka_unit_test(test_invalid_snapshot_rejected),       cmocka_unit_test(test_brake_factor_eq13),
         cmocka_unit_test(test_pair_fill_from_armdist),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -7,11 +7,11 @@ usage: test_monitor_csv.py --synth PATH --monitor PATH --config XML --domain N""
 import argparse
 import csv
 import os
+import select
 import signal
 import subprocess
 import sys
 import tempfile
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mca_types as m  # noqa: E402
@@ -57,6 +57,8 @@ def main():
     ap.add_argument("--domain", type=int, required=True)
     a = ap.parse_args()
     dom = ["--domain", str(a.domain), "--config", a.config]
+    # A partition of our own: other tests' publishers (mcad, ...) may share the domain.
+    part = ["--partition", f"mca-test-monitor-{os.getpid()}"]
     errors = []
 
     # Command-line errors: clear message, non-zero exit, no crash.
@@ -72,10 +74,10 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "d.csv")
-        mon = subprocess.Popen([a.monitor, "--csv", path, "--count", str(COUNT), "--no-color"] + dom,
+        mon = subprocess.Popen([a.monitor, "--csv", path, "--count", str(COUNT), "--no-color"] + dom + part,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         pub = subprocess.Popen([a.synth, "--ticks", str(COUNT + 1000), "--wait-readers", "1", "--wait-topic",
-                                "mca/distances", "--wait-timeout", "20000", "--ring", "4096"] + dom,
+                                "mca/distances", "--wait-timeout", "20000", "--ring", "4096"] + dom + part,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         mout, merr = mon.communicate(timeout=60)
         pout, perr = pub.communicate(timeout=60)
@@ -98,7 +100,11 @@ def main():
         path2 = os.path.join(tmp, "e.csv")
         mon = subprocess.Popen([a.monitor, "--csv", path2] + dom, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
-        time.sleep(0.5)
+        # Signal only once it is up (its first status line is printed after the handler is set):
+        # on a loaded machine start-up can take longer than any fixed sleep.
+        ready, _, _ = select.select([mon.stdout], [], [], 30.0)
+        if not ready or not mon.stdout.readline():
+            errors.append("mca-monitor printed nothing within 30 s")
         mon.send_signal(signal.SIGINT)
         _, merr = mon.communicate(timeout=20)
         if mon.returncode != 0 or not open(path2).readline().startswith("rx_ns,tick,"):

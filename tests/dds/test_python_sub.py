@@ -30,15 +30,21 @@ def main():
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
+    from cyclonedds.qos import Policy, Qos
+    from cyclonedds.sub import Subscriber
+
+    # A partition of our own: other tests' publishers (mcad, ...) may share the domain.
+    partition = f"mca-test-pysub-{os.getpid()}"
     dp = DomainParticipant(a.domain)
-    rd = DataReader(dp, Topic(dp, m.TOPIC_DISTANCES, m.Distances, qos=m.stream_qos()), qos=m.stream_qos())
-    rj = DataReader(dp, Topic(dp, m.TOPIC_JOINT_STATE, m.JointState, qos=m.stream_qos()), qos=m.stream_qos())
-    rc = DataReader(dp, Topic(dp, m.TOPIC_JOINT_COMMAND, m.JointCommand, qos=m.stream_qos()),
+    sub = Subscriber(dp, qos=Qos(Policy.Partition(partitions=[partition])))
+    rd = DataReader(sub, Topic(dp, m.TOPIC_DISTANCES, m.Distances, qos=m.stream_qos()), qos=m.stream_qos())
+    rj = DataReader(sub, Topic(dp, m.TOPIC_JOINT_STATE, m.JointState, qos=m.stream_qos()), qos=m.stream_qos())
+    rc = DataReader(sub, Topic(dp, m.TOPIC_JOINT_COMMAND, m.JointCommand, qos=m.stream_qos()),
                     qos=m.stream_qos())
-    rs = DataReader(dp, Topic(dp, m.TOPIC_STATUS, m.ControllerStatus, qos=m.status_qos()), qos=m.status_qos())
+    rs = DataReader(sub, Topic(dp, m.TOPIC_STATUS, m.ControllerStatus, qos=m.status_qos()), qos=m.status_qos())
 
     pub = subprocess.Popen([a.synth, "--domain", str(a.domain), "--config", a.config, "--ticks", str(a.ticks),
-                            "--wait-readers", "1", "--wait-timeout", "20000",
+                            "--wait-readers", "1", "--wait-timeout", "20000", "--partition", partition,
                             # 4 s of ring: a loaded CI machine may starve the publisher thread for
                             # a few hundred ms (seen under ASan with make -j); drops would be counted
                             "--ring", "4096"],

@@ -66,6 +66,7 @@ static void usage(FILE *f)
                "Live view of the mca distances and controller state published on DDS.\n"
                "  --domain N      DDS domain id (default 0)\n"
                "  --config FILE   Cyclone DDS XML (default: CYCLONEDDS_URI or built-in)\n"
+               "  --partition P   subscribe in DDS partition P (default: the default partition)\n"
                "  --csv FILE      write every Distances sample to FILE (CSV, header line first)\n"
                "  --count N       exit after N Distances samples\n"
                "  --duration S    exit after S seconds\n"
@@ -160,13 +161,18 @@ int main(int argc, char **argv)
 {
     unsigned long long domain = 0, count = 0;
     double duration = 0.0;
-    const char *config = NULL, *csv_path = NULL;
+    const char *config = NULL, *csv_path = NULL, *partition = NULL;
     int no_color = 0;
     static const struct option opts[] = {
-        {"domain", required_argument, NULL, 'd'},   {"config", required_argument, NULL, 'c'},
-        {"csv", required_argument, NULL, 'o'},      {"count", required_argument, NULL, 'n'},
-        {"duration", required_argument, NULL, 't'}, {"no-color", no_argument, NULL, 'C'},
-        {"help", no_argument, NULL, 'h'},           {NULL, 0, NULL, 0},
+        {"domain", required_argument, NULL, 'd'},
+        {"config", required_argument, NULL, 'c'},
+        {"csv", required_argument, NULL, 'o'},
+        {"count", required_argument, NULL, 'n'},
+        {"duration", required_argument, NULL, 't'},
+        {"no-color", no_argument, NULL, 'C'},
+        {"help", no_argument, NULL, 'h'},
+        {"partition", required_argument, NULL, 'P'},
+        {NULL, 0, NULL, 0},
     };
     int c;
     while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -199,6 +205,9 @@ int main(int argc, char **argv)
         }
         case 'C':
             no_color = 1;
+            break;
+        case 'P':
+            partition = optarg;
             break;
         case 'h':
             usage(stdout);
@@ -262,8 +271,9 @@ int main(int argc, char **argv)
     const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
-    const dds_entity_t rd = td > 0 ? dds_create_reader(pp, td, qs, NULL) : td;
-    const dds_entity_t rs = ts > 0 ? dds_create_reader(pp, ts, qst, NULL) : ts;
+    const dds_entity_t sub = mca_dds_create_subscriber(pp, partition);
+    const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, NULL) : (td > 0 ? sub : td);
+    const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, NULL) : (ts > 0 ? sub : ts);
     dds_delete_qos(qs);
     dds_delete_qos(qst);
     if (rd < 0 || rs < 0) {

@@ -32,6 +32,8 @@ extern "C" {
 #define MCA_MAX_PAIRS (MCA_MAX_ARMS * (MCA_MAX_ARMS - 1) / 2)
 /** Longest fault text (bytes, without the terminating NUL), = string<64> in the IDL. */
 #define MCA_DDS_FAULT_TEXT_MAX 64
+/** Longest partition name accepted (bytes, without NUL). */
+#define MCA_DDS_PARTITION_MAX 63
 /** Longest frame id (bytes, without NUL), = string<32> in the IDL. */
 #define MCA_DDS_FRAME_ID_MAX 32
 
@@ -103,6 +105,8 @@ typedef struct mca_dds_config {
     uint32_t poll_period_us; /**< publisher thread's sleep when the ring is empty (default 200) */
     uint8_t controller_id;   /**< key of ControllerStatus (default 0) */
     const char *frame_id;    /**< JointCommand.frame_id (default "world"); copied at create */
+    const char *partition;   /**< DDS partition of the writers, NULL = default partition; copied.
+                                  Separates controllers (or test runs) sharing a domain. */
 } mca_dds_config_t;
 
 /** Bridge counters. */
@@ -131,7 +135,7 @@ void mca_dds_config_default(mca_dds_config_t *cfg);
  * @param[in]  cfg  settings (copied)
  * @retval MCA_OK
  * @retval MCA_EINVAL  NULL argument, divisor 0, capacity not a power of two, domain id out of range,
- *                     frame id too long
+ *                     frame id or partition too long
  * @retval MCA_ENOENT  config_path names a file that cannot be read
  * @retval MCA_EIO     Cyclone DDS refused (bad XML, no usable network interface, ...); reason on stderr
  * @retval MCA_ENOMEM

@@ -32,6 +32,11 @@ dds_qos_t *mca_dds_qos_status(void);
  */
 dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain);
 
+/** Publisher / subscriber of participant pp in DDS partition name (NULL = default partition).
+ *  @return handle (> 0) or a negative DDS return code. */
+dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition);
+dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition);
+
 #ifdef __cplusplus
 }
 #endif
