@@ -227,8 +227,7 @@ struct log_state {
     } fr[10]; /* innermost first */
 };
 
-static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args)
-{
+static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args) {
     struct log_state *s = ctx;
     if (level < CYAML_LOG_ERROR) {
         return;
@@ -284,8 +283,7 @@ static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list a
 }
 
 /* First line >= from whose key (after indentation and "- ") is `key`; 0 if none. */
-static int find_key_from(const char *path, int from, const char *key)
-{
+static int find_key_from(const char *path, int from, const char *key) {
     FILE *f = fopen(path, "r");
     if (!f) {
         return 0;
@@ -311,8 +309,8 @@ static int find_key_from(const char *path, int from, const char *key)
 }
 
 /* Message for a libcyaml load failure. */
-static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t cerr, char *err, size_t errlen)
-{
+static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t cerr, char *err,
+                             size_t errlen) {
     int first = 0; /* innermost frame that belongs to the field path */
     int line = ls->n ? ls->fr[0].line : 0, col = ls->n ? ls->fr[0].col : 0;
     char extra[64] = "";
@@ -362,8 +360,7 @@ static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t
     }
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
+static void set_err(char *err, size_t errlen, const char *fmt, ...) {
     if (!err || !errlen) {
         return;
     }
@@ -373,8 +370,7 @@ static void set_err(char *err, size_t errlen, const char *fmt, ...)
     va_end(ap);
 }
 
-static int indent_of(const char *s)
-{
+static int indent_of(const char *s) {
     int i = 0;
     while (s[i] == ' ') {
         i++;
@@ -384,8 +380,7 @@ static int indent_of(const char *s)
 
 /* Does line s (after indentation and "- ") start with "key:"? Flow mappings on one line also match
  * ("rt: {period_us: 5}" for key period_us). */
-static int line_has_key(const char *s, const char *key)
-{
+static int line_has_key(const char *s, const char *key) {
     const size_t kl = strlen(key);
     const char *c = s;
     while (*c == ' ' || *c == '-') {
@@ -409,8 +404,7 @@ static int line_has_key(const char *s, const char *key)
 /* Line of a field after loading (libcyaml keeps no positions once loaded): top-level `key`
  * (sec NULL), `sec.key`, or `arms[idx].key` (sec "arms"). Falls back to the enclosing element's line;
  * 0 when nothing matches. Comments and blank lines are skipped. */
-static int locate(const char *path, const char *sec, int idx, const char *key)
-{
+static int locate(const char *path, const char *sec, int idx, const char *key) {
     FILE *f = fopen(path, "r");
     if (!f) {
         return 0;
@@ -479,8 +473,7 @@ struct where {
 };
 
 /* "FILE:LINE: message" into err (vsnprintf: messages are cut at errlen, never overflow). */
-static void fail_at(char *err, size_t errlen, const char *file, int line, const char *fmt, ...)
-{
+static void fail_at(char *err, size_t errlen, const char *file, int line, const char *fmt, ...) {
     if (!err || !errlen) {
         return;
     }
@@ -494,17 +487,16 @@ static void fail_at(char *err, size_t errlen, const char *file, int line, const 
     va_end(ap);
 }
 
-#define FAIL(code, w, key, ...)                                                                         \
-    do {                                                                                                \
-        fail_at(err, errlen, (w).file, locate((w).file, (w).sec, (w).idx, key), __VA_ARGS__);           \
-        rc = (code);                                                                                    \
-        goto out;                                                                                       \
+#define FAIL(code, w, key, ...)                                                                              \
+    do {                                                                                                     \
+        fail_at(err, errlen, (w).file, locate((w).file, (w).sec, (w).idx, key), __VA_ARGS__);                \
+        rc = (code);                                                                                         \
+        goto out;                                                                                            \
     } while (0)
 
 /* Resolve `rel` against the directory of `base_file` (made absolute, so paths do not depend on the
  * current directory later). */
-static void resolve(char *out, size_t outlen, const char *base_file, const char *rel)
-{
+static void resolve(char *out, size_t outlen, const char *base_file, const char *rel) {
     char abs_base[4096];
     if (realpath(base_file, abs_base)) {
         base_file = abs_base;
@@ -521,24 +513,20 @@ static void resolve(char *out, size_t outlen, const char *base_file, const char 
     }
 }
 
-static int readable(const char *p)
-{
+static int readable(const char *p) {
     return access(p, R_OK) == 0;
 }
 
-static int finite_pos(const double *v)
-{
+static int finite_pos(const double *v) {
     return v && isfinite(*v) && *v > 0.0;
 }
 
-const char *mca_cell_backend_name(mca_cell_backend_t b)
-{
+const char *mca_cell_backend_name(mca_cell_backend_t b) {
     return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : "sim";
 }
 
 /* Inline path of a cell arm (hold or circle; richer paths belong in a scenario file). */
-static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, size_t whylen)
-{
+static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, size_t whylen) {
     memset(pp, 0, sizeof *pp);
     pp->relative = 1;
     pp->t0 = rp->t0 ? *rp->t0 : 0.0;
@@ -586,8 +574,7 @@ static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, siz
 
 /* ---------------------------------------------------------------- load */
 
-int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
-{
+int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     if (!path || !out) {
         set_err(err, errlen, "cell: NULL argument");
         return MCA_EINVAL;
@@ -665,7 +652,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
         } else if (strcmp(raw->scheme, "apf") == 0) {
             cell->scheme = MCA_SCHEME_APF;
         } else {
-            FAIL(MCA_ERANGE, top, "scheme", "scheme: unknown scheme '%s' (known: mca, mvn, apf)", raw->scheme);
+            FAIL(MCA_ERANGE, top, "scheme", "scheme: unknown scheme '%s' (known: mca, mvn, apf)",
+                 raw->scheme);
         }
     }
     if (raw->d1) {
@@ -782,8 +770,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
             memset(sa, 0, sizeof *sa);
             snprintf(sa->name, sizeof sa->name, "%s", ra->name);
             if (!ra->urdf || !ra->base_xyz || !ra->q0) {
-                FAIL(MCA_EPARSE, wa, NULL, "arms[%d]: an inline task needs urdf, base_xyz and q0 for every arm",
-                     ai);
+                FAIL(MCA_EPARSE, wa, NULL,
+                     "arms[%d]: an inline task needs urdf, base_xyz and q0 for every arm", ai);
             }
             sa->path.kind = MCA_PATH_HOLD;
             sa->path.relative = 1;
@@ -800,8 +788,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
                 FAIL(MCA_EPARSE, wa, "backend", "arms[%d].id_base: required with backend socketcan", ai);
             }
         } else {
-            FAIL(MCA_ERANGE, wa, "backend", "arms[%d].backend: unknown backend '%s' (known: sim, socketcan)", ai,
-                 ra->backend);
+            FAIL(MCA_ERANGE, wa, "backend", "arms[%d].backend: unknown backend '%s' (known: sim, socketcan)",
+                 ai, ra->backend);
         }
         if (ra->interface) {
             snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);
@@ -809,8 +797,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
         if (ra->id_base) {
             if (*ra->id_base < 0 || *ra->id_base > (long long)MCA_CAN_ID_BASE_MAX ||
                 *ra->id_base % MCA_CAN_ID_BLOCK != 0) {
-                FAIL(MCA_ERANGE, wa, "id_base", "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)",
-                     ai, MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
+                FAIL(MCA_ERANGE, wa, "id_base",
+                     "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)", ai,
+                     MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
             }
             ca->id_base = (uint32_t)*ra->id_base;
         }
@@ -856,12 +845,13 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
             FAIL(crc, wa, "urdf", "arms[%d].urdf: %s", ai, cerrbuf);
         }
         if (sa->n_q0 != chain.dof) {
-            FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai, sa->n_q0,
-                 sa->urdf, chain.dof);
+            FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai,
+                 sa->n_q0, sa->urdf, chain.dof);
         }
         for (int j = 0; j < chain.dof; j++) {
             const mca_joint_model_t *jm = &chain.joint[j];
-            if (!isfinite(sa->q0[j]) || (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
+            if (!isfinite(sa->q0[j]) ||
+                (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
                 FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j,
                      sa->q0[j], jm->name, jm->lower, jm->upper);
             }
@@ -882,7 +872,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
             }
             if (ra->sim->latency_cycles) {
                 if (*ra->sim->latency_cycles < 0 || *ra->sim->latency_cycles > 64) {
-                    FAIL(MCA_ERANGE, wa, "latency_cycles", "arms[%d].sim.latency_cycles: must be in 0..64", ai);
+                    FAIL(MCA_ERANGE, wa, "latency_cycles", "arms[%d].sim.latency_cycles: must be in 0..64",
+                         ai);
                 }
                 ca->sim_latency_cycles = *ra->sim->latency_cycles;
             }
@@ -920,8 +911,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
         }
         if (d->publish_divisor) {
             if (*d->publish_divisor < 1 || *d->publish_divisor > 100000) {
-                FAIL(MCA_ERANGE, wd, "publish_divisor", "dds.publish_divisor: must be in 1..100000 (got %lld)",
-                     *d->publish_divisor);
+                FAIL(MCA_ERANGE, wd, "publish_divisor",
+                     "dds.publish_divisor: must be in 1..100000 (got %lld)", *d->publish_divisor);
             }
             cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
         }
@@ -956,13 +947,15 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen)
         if (r->cpu) {
             const long ncpu = sysconf(_SC_NPROCESSORS_CONF);
             if (*r->cpu < -1 || (ncpu > 0 && *r->cpu >= ncpu)) {
-                FAIL(MCA_ERANGE, wr, "cpu", "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1, *r->cpu);
+                FAIL(MCA_ERANGE, wr, "cpu", "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1,
+                     *r->cpu);
             }
             rt->cpu = *r->cpu;
         }
         if (r->overrun_limit) {
             if (*r->overrun_limit < 1) {
-                FAIL(MCA_ERANGE, wr, "overrun_limit", "rt.overrun_limit: must be >= 1 (got %d)", *r->overrun_limit);
+                FAIL(MCA_ERANGE, wr, "overrun_limit", "rt.overrun_limit: must be >= 1 (got %d)",
+                     *r->overrun_limit);
             }
             rt->overrun_limit = *r->overrun_limit;
         }
@@ -1002,8 +995,8 @@ out:
     return rc;
 }
 
-int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err, size_t errlen)
-{
+int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err,
+                               size_t errlen) {
     if (!cell || !cfg) {
         set_err(err, errlen, "cell: NULL argument");
         return MCA_EINVAL;

@@ -50,12 +50,12 @@ struct mca_daemon {
     double qdot[MCA_MAX_ARMS][MCA_MAX_DOF];
     double vcmd[MCA_MAX_ARMS][MCA_MAX_DOF]; /* velocity last commanded (the brake ramp starts here) */
     uint32_t frame_id;
-    int fault;          /* mca_daemon_fault_t; latched */
+    int fault; /* mca_daemon_fault_t; latched */
     int ctrl_fault;
-    int fault_code;     /* negative MCA_E* for DDS */
+    int fault_code; /* negative MCA_E* for DDS */
     char fault_text[160];
     double fault_t;
-    int stop_pending;   /* BRAKING towards STOPPED (not FAULT) */
+    int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
     int consecutive_overruns;
     uint64_t overruns, skipped;
     mca_hist_t jitter, compute, ctrl_time;
@@ -76,20 +76,17 @@ struct mca_daemon {
 
 static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
 
-const char *mca_daemon_state_name(int s)
-{
+const char *mca_daemon_state_name(int s) {
     return s >= 0 && s <= MCA_DAEMON_FAULT ? state_names[s] : "?";
 }
 
-static int64_t now_ns(void)
-{
+static int64_t now_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * NS_PER_S + ts.tv_nsec;
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, const char *a, const char *b)
-{
+static void set_err(char *err, size_t errlen, const char *fmt, const char *a, const char *b) {
     if (err && errlen) {
         snprintf(err, errlen, fmt, a, b);
     }
@@ -100,8 +97,7 @@ static void set_err(char *err, size_t errlen, const char *fmt, const char *a, co
 
 /* ---------------------------------------------------------------- start-up */
 
-static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen)
-{
+static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
     const mca_cell_arm_t *ca = &d->cell.arm[a];
     const mca_scenario_arm_t *sa = &d->cell.scn.arm[a];
     char berr[256] = "";
@@ -139,8 +135,7 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen)
 }
 
 /* Wait (start-up, up to 2 s) until arm a answers; a FAULT left over from an earlier run is cleared. */
-static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen)
-{
+static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
     const int64_t deadline = now_ns() + 2 * NS_PER_S;
     int cleared = 0;
     mca_arm_command_t c;
@@ -186,8 +181,7 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen)
 }
 
 int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
-                    size_t errlen)
-{
+                    size_t errlen) {
     if (!out || !cell || !opts) {
         return MCA_EINVAL;
     }
@@ -261,8 +255,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
                 }
             }
             for (int a = 0; a < d->n_arms; a++) {
-                fprintf(d->csv, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a, a, a,
-                        a, a, a, a, a, a, a);
+                fprintf(d->csv, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a,
+                        a, a, a, a, a, a, a, a, a);
             }
             fprintf(d->csv, ",min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,active_rows,"
                             "binding_rows,pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault,state");
@@ -285,8 +279,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
 
 /* ---------------------------------------------------------------- the tick (rt) */
 
-static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, double t)
-{
+static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, double t) {
     if (d->fault != MCA_DAEMON_FAULT_NONE) {
         return;
     }
@@ -303,8 +296,7 @@ static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, 
     LOGN(d, MCA_LOG_ERR, "fault at t = %.3f s: braking both arms: %s", 1, t, 0, 0, 0, d->fault_text);
 }
 
-static int ctrl_fault_code(int f)
-{
+static int ctrl_fault_code(int f) {
     switch (f) {
     case MCA_CTRL_FAULT_NAN:
     case MCA_CTRL_FAULT_INPUT:
@@ -320,8 +312,7 @@ static int ctrl_fault_code(int f)
 }
 
 /* Read every arm's feedback; counts lost cycles and latches arm/link faults. */
-static void read_feedback(mca_daemon_t *d, double t)
-{
+static void read_feedback(mca_daemon_t *d, double t) {
     const int running = atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING;
     for (int a = 0; a < d->n_arms; a++) {
         mca_arm_feedback_t fb;
@@ -372,8 +363,7 @@ static void read_feedback(mca_daemon_t *d, double t)
 }
 
 /* Ramp every commanded velocity towards 0 at the arm's deceleration limit. @return 1 when all are 0. */
-static int brake_ramp(mca_daemon_t *d)
-{
+static int brake_ramp(mca_daemon_t *d) {
     const double dt = (double)d->cell.rt.period_ns * 1e-9;
     int all_zero = 1;
     for (int a = 0; a < d->n_arms; a++) {
@@ -392,8 +382,7 @@ static int brake_ramp(mca_daemon_t *d)
     return all_zero;
 }
 
-static void send_commands(mca_daemon_t *d, int servo)
-{
+static void send_commands(mca_daemon_t *d, int servo) {
     const double dt = (double)d->cell.rt.period_ns * 1e-9;
     d->frame_id++;
     for (int a = 0; a < d->n_arms; a++) {
@@ -414,8 +403,7 @@ static void send_commands(mca_daemon_t *d, int servo)
     }
 }
 
-static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state)
-{
+static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     mca_dds_snapshot_t *s = &d->snap;
     const mca_tick_info_t *in = &d->info;
     s->tick = atomic_load_explicit(&d->ticks, memory_order_relaxed);
@@ -480,8 +468,7 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state)
     st->min_distance_stamp_ns = d->min_d_stamp;
 }
 
-static void push_csv(mca_daemon_t *d, double t, int state)
-{
+static void push_csv(mca_daemon_t *d, double t, int state) {
     if (!d->csv) {
         return;
     }
@@ -498,14 +485,13 @@ static void push_csv(mca_daemon_t *d, double t, int state)
     mca_ring_push(&d->csv_ring, r);
 }
 
-int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns)
-{
+int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
     if (state == MCA_DAEMON_READY) {
         state = MCA_DAEMON_RUNNING;
         atomic_store(&d->state, state);
-        LOGN(d, MCA_LOG_INFO, "running: %g arms, period %g us", 2, d->n_arms, (double)d->cell.rt.period_ns / 1e3,
-             0, 0, NULL);
+        LOGN(d, MCA_LOG_INFO, "running: %g arms, period %g us", 2, d->n_arms,
+             (double)d->cell.rt.period_ns / 1e3, 0, 0, NULL);
     }
     if (state == MCA_DAEMON_RUNNING && atomic_load_explicit(&d->stop_request, memory_order_relaxed)) {
         d->stop_pending = 1;
@@ -532,7 +518,8 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns)
         }
         if (rc != MCA_OK) {
             d->ctrl_fault = d->info.fault;
-            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), d->info.fault_text, t);
+            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), d->info.fault_text,
+                        t);
             state = MCA_DAEMON_BRAKING;
         } else {
             send_commands(d, 1);
@@ -542,10 +529,12 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns)
         const int done = brake_ramp(d);
         send_commands(d, 1);
         if (done) {
-            state = d->stop_pending && d->fault == MCA_DAEMON_FAULT_NONE ? MCA_DAEMON_STOPPED : MCA_DAEMON_FAULT;
+            state =
+                d->stop_pending && d->fault == MCA_DAEMON_FAULT_NONE ? MCA_DAEMON_STOPPED : MCA_DAEMON_FAULT;
             atomic_store(&d->state, state);
             LOGN(d, state == MCA_DAEMON_FAULT ? MCA_LOG_ERR : MCA_LOG_NOTICE,
-                 "all joints commanded to zero at t = %.3f s: state %s", 1, t, 0, 0, 0, mca_daemon_state_name(state));
+                 "all joints commanded to zero at t = %.3f s: state %s", 1, t, 0, 0, 0,
+                 mca_daemon_state_name(state));
         }
     } else if (state == MCA_DAEMON_STOPPED || state == MCA_DAEMON_FAULT) {
         /* zero velocity, servo released: the arms' brakes hold */
@@ -574,16 +563,14 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns)
 
 /* ---------------------------------------------------------------- the real-time loop */
 
-static void prefault_stack(void)
-{
+static void prefault_stack(void) {
     volatile unsigned char buf[256 * 1024];
     for (size_t i = 0; i < sizeof buf; i += 4096) {
         buf[i] = 0;
     }
 }
 
-static void *rt_main(void *arg)
-{
+static void *rt_main(void *arg) {
     mca_daemon_t *d = arg;
     prefault_stack();
     if (d->cell.rt.cpu >= 0) {
@@ -608,8 +595,8 @@ static void *rt_main(void *arg)
             (d->cell.debug_stall_after_ticks && ticks >= d->cell.debug_stall_after_ticks)) {
             /* test hook: stop ticking (the supervisor must notice and stop the watchdog pings) */
             if (!stalled_logged) {
-                LOGN(d, MCA_LOG_WARNING, "debug stall after %g ticks: the loop stops ticking", 1, (double)ticks, 0,
-                     0, 0, NULL);
+                LOGN(d, MCA_LOG_WARNING, "debug stall after %g ticks: the loop stops ticking", 1,
+                     (double)ticks, 0, 0, 0, NULL);
                 stalled_logged = 1;
             }
             if (atomic_load(&d->stop_request)) {
@@ -654,8 +641,7 @@ static void *rt_main(void *arg)
     return NULL;
 }
 
-int mca_daemon_start(mca_daemon_t *d)
-{
+int mca_daemon_start(mca_daemon_t *d) {
     FILE *log = d->opts.log;
     if (!d->opts.no_rt && d->cell.rt.lock_memory) {
         /* keep freed memory in the process, never use mmap for malloc: no page faults after start-up */
@@ -669,7 +655,8 @@ int mca_daemon_start(mca_daemon_t *d)
                 free(p);
             }
         } else {
-            fprintf(log, "<4>mcad: mlockall failed (%s): page faults may delay the loop (raise LimitMEMLOCK)\n",
+            fprintf(log,
+                    "<4>mcad: mlockall failed (%s): page faults may delay the loop (raise LimitMEMLOCK)\n",
                     strerror(errno));
         }
     }
@@ -677,8 +664,9 @@ int mca_daemon_start(mca_daemon_t *d)
         d->dma_fd = open("/dev/cpu_dma_latency", O_WRONLY);
         const int32_t zero = 0;
         if (d->dma_fd < 0 || write(d->dma_fd, &zero, sizeof zero) != (ssize_t)sizeof zero) {
-            fprintf(log, "<4>mcad: cannot hold /dev/cpu_dma_latency at 0 (%s): deep C-states may add wake-up "
-                         "latency\n",
+            fprintf(log,
+                    "<4>mcad: cannot hold /dev/cpu_dma_latency at 0 (%s): deep C-states may add wake-up "
+                    "latency\n",
                     strerror(errno));
             if (d->dma_fd >= 0) {
                 close(d->dma_fd);
@@ -699,8 +687,9 @@ int mca_daemon_start(mca_daemon_t *d)
         if (rc == 0) {
             d->sched_fifo = 1;
         } else {
-            fprintf(log, "<4>mcad: SCHED_FIFO priority %d not permitted (%s): running SCHED_OTHER, expect "
-                         "jitter (run as root or with CPUSchedulingPolicy=fifo / LimitRTPRIO)\n",
+            fprintf(log,
+                    "<4>mcad: SCHED_FIFO priority %d not permitted (%s): running SCHED_OTHER, expect "
+                    "jitter (run as root or with CPUSchedulingPolicy=fifo / LimitRTPRIO)\n",
                     d->cell.rt.priority, strerror(rc));
         }
     }
@@ -717,33 +706,27 @@ int mca_daemon_start(mca_daemon_t *d)
     return MCA_OK;
 }
 
-void mca_daemon_request_stop(mca_daemon_t *d)
-{
+void mca_daemon_request_stop(mca_daemon_t *d) {
     atomic_store(&d->stop_request, 1);
 }
 
-void mca_daemon_request_stall(mca_daemon_t *d)
-{
+void mca_daemon_request_stall(mca_daemon_t *d) {
     atomic_store(&d->stall_request, 1);
 }
 
-int mca_daemon_finished(const mca_daemon_t *d)
-{
+int mca_daemon_finished(const mca_daemon_t *d) {
     return atomic_load(&((mca_daemon_t *)d)->finished);
 }
 
-uint64_t mca_daemon_ticks(const mca_daemon_t *d)
-{
+uint64_t mca_daemon_ticks(const mca_daemon_t *d) {
     return atomic_load_explicit(&((mca_daemon_t *)d)->ticks, memory_order_acquire);
 }
 
-int mca_daemon_state(const mca_daemon_t *d)
-{
+int mca_daemon_state(const mca_daemon_t *d) {
     return atomic_load(&((mca_daemon_t *)d)->state);
 }
 
-static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r)
-{
+static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
     FILE *f = d->csv;
     const mca_tick_info_t *in = &r->info;
     fprintf(f, "%.4f", r->t);
@@ -753,8 +736,8 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r)
         }
     }
     for (int a = 0; a < d->n_arms; a++) {
-        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1], in->ee[a][2],
-                in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
+        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1],
+                in->ee[a][2], in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
                 in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
                 in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
     }
@@ -771,8 +754,7 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r)
     fputc('\n', f);
 }
 
-int mca_daemon_service(mca_daemon_t *d)
-{
+int mca_daemon_service(mca_daemon_t *d) {
     int n = mca_rtlog_drain(&d->log, d->opts.log);
     if (d->csv) {
         while (mca_ring_pop(&d->csv_ring, &d->csv_out) == MCA_OK) {
@@ -783,8 +765,7 @@ int mca_daemon_service(mca_daemon_t *d)
     return n;
 }
 
-int mca_daemon_join(mca_daemon_t *d)
-{
+int mca_daemon_join(mca_daemon_t *d) {
     if (d->thread_started) {
         pthread_join(d->thread, NULL);
         d->thread_started = 0;
@@ -797,8 +778,7 @@ int mca_daemon_join(mca_daemon_t *d)
     return MCA_OK;
 }
 
-void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s)
-{
+void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     memset(s, 0, sizeof *s);
     s->state = mca_daemon_state(d);
     s->ticks = mca_daemon_ticks(d);
@@ -831,21 +811,24 @@ void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s)
     s->dma_latency_held = d->dma_fd >= 0 || (d->sched_fifo && d->cell.rt.dma_latency && !d->opts.no_rt);
 }
 
-void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f)
-{
-    fprintf(f, "<6>mcad: summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "
-               "memory locked %s\n",
+void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
+    fprintf(f,
+            "<6>mcad: summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "
+            "memory locked %s\n",
             mca_daemon_state_name(s->state), (unsigned long long)s->ticks, (unsigned long long)s->overruns,
-            (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no", s->mem_locked ? "yes" : "no");
+            (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no",
+            s->mem_locked ? "yes" : "no");
     fprintf(f, "<6>mcad: summary: wake-up jitter p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
             (double)s->jitter_p50_ns / 1e3, (double)s->jitter_p99_ns / 1e3, (double)s->jitter_p999_ns / 1e3,
             (double)s->jitter_max_ns / 1e3);
-    fprintf(f, "<6>mcad: summary: compute time (whole tick) p50 %.1f us, p99 %.1f us, max %.1f us; controller "
-               "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
+    fprintf(f,
+            "<6>mcad: summary: compute time (whole tick) p50 %.1f us, p99 %.1f us, max %.1f us; controller "
+            "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
             (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3, (double)s->compute_max_ns / 1e3,
             (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3, (double)s->ctrl_max_ns / 1e3);
     if (isfinite(s->min_distance)) {
-        fprintf(f, "<6>mcad: summary: minimum distance %.4f m at t = %.3f s\n", s->min_distance, s->min_distance_t);
+        fprintf(f, "<6>mcad: summary: minimum distance %.4f m at t = %.3f s\n", s->min_distance,
+                s->min_distance_t);
     } else {
         fprintf(f, "<6>mcad: summary: minimum distance n/a\n");
     }
@@ -855,13 +838,12 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f)
         fprintf(f, "<6>mcad: summary: faults: none\n");
     }
     if (s->log_dropped || s->csv_dropped) {
-        fprintf(f, "<4>mcad: summary: dropped log records %llu, CSV rows %llu\n", (unsigned long long)s->log_dropped,
-                (unsigned long long)s->csv_dropped);
+        fprintf(f, "<4>mcad: summary: dropped log records %llu, CSV rows %llu\n",
+                (unsigned long long)s->log_dropped, (unsigned long long)s->csv_dropped);
     }
 }
 
-void mca_daemon_close(mca_daemon_t *d)
-{
+void mca_daemon_close(mca_daemon_t *d) {
     if (!d) {
         return;
     }
@@ -912,12 +894,10 @@ void mca_daemon_close(mca_daemon_t *d)
     free(d);
 }
 
-const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a)
-{
+const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? &d->cmd[a] : NULL;
 }
 
-mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a)
-{
+mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
 }

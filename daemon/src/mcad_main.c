@@ -17,29 +17,27 @@
 #include "mca/daemon.h"
 #include "mca/err.h"
 
-static void usage(FILE *f)
-{
-    fprintf(f, "usage: mcad [options] CELL.yaml\n"
-               "  --check            load and check the cell file, print what it configures, exit\n"
-               "  --csv FILE         write one CSV row per tick (from a non-real-time thread)\n"
-               "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
-               "  --no-dds           do not publish on DDS\n"
-               "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
-               "  -h, --help\n"
-               "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
-               "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
-               "4 ended while stalled.\n");
+static void usage(FILE *f) {
+    fprintf(f,
+            "usage: mcad [options] CELL.yaml\n"
+            "  --check            load and check the cell file, print what it configures, exit\n"
+            "  --csv FILE         write one CSV row per tick (from a non-real-time thread)\n"
+            "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
+            "  --no-dds           do not publish on DDS\n"
+            "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
+            "  -h, --help\n"
+            "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
+            "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
+            "4 ended while stalled.\n");
 }
 
-static double mono_s(void)
-{
+static double mono_s(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-static void print_cell(const mca_cell_t *c)
-{
+static void print_cell(const mca_cell_t *c) {
     static const char *schemes[] = {"mca", "mvn", "apf"};
     printf("cell %s (%s): scheme %s, task '%s' %.3g s, d1 %.3g m, d2 %.3g m\n", c->name, c->source,
            schemes[c->scheme], c->scn.name, c->scn.duration, c->scn.params.d1, c->scn.params.d2);
@@ -55,16 +53,18 @@ static void print_cell(const mca_cell_t *c)
     printf("  rt: period %lld us, priority %d, cpu %d, overrun limit %d, lost feedback %d cycles\n",
            (long long)(c->rt.period_ns / 1000), c->rt.priority, c->rt.cpu, c->rt.overrun_limit,
            c->rt.lost_feedback_cycles);
-    printf("  dds: %s, domain %u, config %s, publish every %u ticks\n", c->dds.enabled ? "on" : "off", c->dds.domain,
-           c->dds.config[0] ? c->dds.config : "(default)", c->dds.publish_divisor);
+    printf("  dds: %s, domain %u, config %s, publish every %u ticks\n", c->dds.enabled ? "on" : "off",
+           c->dds.domain, c->dds.config[0] ? c->dds.config : "(default)", c->dds.publish_divisor);
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     static const struct option longopts[] = {
-        {"check", no_argument, NULL, 'k'},      {"csv", required_argument, NULL, 'c'},
-        {"stop-after", required_argument, NULL, 's'}, {"no-dds", no_argument, NULL, 'D'},
-        {"no-rt", no_argument, NULL, 'R'},      {"help", no_argument, NULL, 'h'},
+        {"check", no_argument, NULL, 'k'},
+        {"csv", required_argument, NULL, 'c'},
+        {"stop-after", required_argument, NULL, 's'},
+        {"no-dds", no_argument, NULL, 'D'},
+        {"no-rt", no_argument, NULL, 'R'},
+        {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
     mca_daemon_opts_t opts = {.log = stderr};
@@ -85,7 +85,8 @@ int main(int argc, char **argv)
             char *end;
             opts.stop_after = strtod(optarg, &end);
             if (*end || !(opts.stop_after > 0) || !isfinite(opts.stop_after)) {
-                fprintf(stderr, "<3>mcad: --stop-after: need a positive number of seconds, got '%s'\n", optarg);
+                fprintf(stderr, "<3>mcad: --stop-after: need a positive number of seconds, got '%s'\n",
+                        optarg);
                 return 2;
             }
             break;
@@ -182,7 +183,8 @@ int main(int argc, char **argv)
         const int sig = sigtimedwait(&sigs, NULL, &to);
         if (sig == SIGTERM || sig == SIGINT) {
             if (!stopping) {
-                fprintf(stderr, "<5>mcad: %s: braking to zero and stopping\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+                fprintf(stderr, "<5>mcad: %s: braking to zero and stopping\n",
+                        sig == SIGTERM ? "SIGTERM" : "SIGINT");
                 sd_notify(0, "STOPPING=1\nSTATUS=braking to zero");
                 stopping = 1;
             }
@@ -200,7 +202,8 @@ int main(int argc, char **argv)
                 sd_notify(0, "WATCHDOG=1");
                 last_ticks = t;
             } else if (!stopping) {
-                fprintf(stderr, "<3>mcad: the loop has not ticked for %.0f ms: withholding the watchdog ping\n",
+                fprintf(stderr,
+                        "<3>mcad: the loop has not ticked for %.0f ms: withholding the watchdog ping\n",
                         wd_interval * 1e3);
             }
             next_wd = now + wd_interval;
@@ -209,9 +212,9 @@ int main(int argc, char **argv)
             mca_daemon_summary_t s;
             mca_daemon_summary(d, &s);
             sd_notifyf(0, "STATUS=%s: ticks %llu, overruns %llu, min distance %.4f m%s%s",
-                       mca_daemon_state_name(s.state), (unsigned long long)s.ticks, (unsigned long long)s.overruns,
-                       isfinite(s.min_distance) ? s.min_distance : -1.0, s.fault ? ", fault: " : "",
-                       s.fault ? s.fault_text : "");
+                       mca_daemon_state_name(s.state), (unsigned long long)s.ticks,
+                       (unsigned long long)s.overruns, isfinite(s.min_distance) ? s.min_distance : -1.0,
+                       s.fault ? ", fault: " : "", s.fault ? s.fault_text : "");
             next_status = now + 1.0;
         }
         (void)errno;

@@ -7,8 +7,7 @@
 
 #include "mca/err.h"
 
-int mca_rtlog_init(mca_rtlog_t *log, const char *tag)
-{
+int mca_rtlog_init(mca_rtlog_t *log, const char *tag) {
     if (!log) {
         return MCA_EINVAL;
     }
@@ -18,8 +17,7 @@ int mca_rtlog_init(mca_rtlog_t *log, const char *tag)
 }
 
 void mca_rtlog(mca_rtlog_t *log, int level, const char *fmt, int nargs, double a0, double a1, double a2,
-               double a3, const char *text)
-{
+               double a3, const char *text) {
     mca_rtlog_rec_t r;
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts); /* vDSO: no system call */
@@ -41,8 +39,7 @@ void mca_rtlog(mca_rtlog_t *log, int level, const char *fmt, int nargs, double a
     mca_ring_push(&log->ring, &r);
 }
 
-char *mca_rtlog_format(const mca_rtlog_t *log, const mca_rtlog_rec_t *r, char *buf, size_t len)
-{
+char *mca_rtlog_format(const mca_rtlog_t *log, const mca_rtlog_rec_t *r, char *buf, size_t len) {
     char msg[384];
     const double *a = r->arg;
     const char *t = r->text;
@@ -68,8 +65,7 @@ char *mca_rtlog_format(const mca_rtlog_t *log, const mca_rtlog_rec_t *r, char *b
     return buf;
 }
 
-int mca_rtlog_drain(mca_rtlog_t *log, FILE *f)
-{
+int mca_rtlog_drain(mca_rtlog_t *log, FILE *f) {
     mca_rtlog_rec_t r;
     int n = 0;
     char line[512];
@@ -83,8 +79,7 @@ int mca_rtlog_drain(mca_rtlog_t *log, FILE *f)
     return n;
 }
 
-uint64_t mca_rtlog_dropped(const mca_rtlog_t *log)
-{
+uint64_t mca_rtlog_dropped(const mca_rtlog_t *log) {
     mca_ring_stats_t st;
     mca_ring_stats(&log->ring, &st);
     return st.dropped;

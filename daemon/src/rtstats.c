@@ -5,13 +5,11 @@
 #include <math.h>
 #include <string.h>
 
-void mca_hist_reset(mca_hist_t *h)
-{
+void mca_hist_reset(mca_hist_t *h) {
     memset(h, 0, sizeof *h);
 }
 
-static int bin_of(int64_t ns)
-{
+static int bin_of(int64_t ns) {
     if (ns < MCA_HIST_FINE_NS * MCA_HIST_FINE_BINS) {
         return (int)(ns / MCA_HIST_FINE_NS);
     }
@@ -23,19 +21,18 @@ static int bin_of(int64_t ns)
 }
 
 /* Upper edge of bin b [ns] (the overflow bin has none: INT64_MAX). */
-static int64_t bin_upper(int b)
-{
+static int64_t bin_upper(int b) {
     if (b < MCA_HIST_FINE_BINS) {
         return (int64_t)(b + 1) * MCA_HIST_FINE_NS;
     }
     if (b < MCA_HIST_BINS - 1) {
-        return MCA_HIST_FINE_NS * MCA_HIST_FINE_BINS + (int64_t)(b - MCA_HIST_FINE_BINS + 1) * MCA_HIST_COARSE_NS;
+        return MCA_HIST_FINE_NS * MCA_HIST_FINE_BINS +
+               (int64_t)(b - MCA_HIST_FINE_BINS + 1) * MCA_HIST_COARSE_NS;
     }
     return INT64_MAX;
 }
 
-void mca_hist_record(mca_hist_t *h, int64_t ns)
-{
+void mca_hist_record(mca_hist_t *h, int64_t ns) {
     if (ns < 0) {
         ns = 0;
     }
@@ -50,8 +47,7 @@ void mca_hist_record(mca_hist_t *h, int64_t ns)
     h->sum_ns += (double)ns;
 }
 
-int64_t mca_hist_percentile(const mca_hist_t *h, double p)
-{
+int64_t mca_hist_percentile(const mca_hist_t *h, double p) {
     if (h->count == 0) {
         return 0;
     }
@@ -77,7 +73,6 @@ int64_t mca_hist_percentile(const mca_hist_t *h, double p)
     return h->max_ns;
 }
 
-double mca_hist_mean(const mca_hist_t *h)
-{
+double mca_hist_mean(const mca_hist_t *h) {
     return h->count ? h->sum_ns / (double)h->count : 0.0;
 }

@@ -24,8 +24,7 @@
 static char tmpdir[256];
 
 /* The good cell; bad variants replace one exact piece of it. */
-static const char *good_cell(void)
-{
+static const char *good_cell(void) {
     static char buf[4096];
     snprintf(buf, sizeof buf,
              "# test cell\n"
@@ -69,8 +68,7 @@ static const char *good_cell(void)
 }
 
 /* Write the good cell with `from` replaced by `to` (from must occur); returns the file name. */
-static const char *write_variant(const char *name, const char *from, const char *to)
-{
+static const char *write_variant(const char *name, const char *from, const char *to) {
     static char path[512];
     const char *g = good_cell();
     char text[4096];
@@ -90,8 +88,7 @@ static const char *write_variant(const char *name, const char *from, const char 
 }
 
 /* 1-based line of the first line containing `needle` in the file. */
-static int line_of(const char *path, const char *needle)
-{
+static int line_of(const char *path, const char *needle) {
     FILE *f = fopen(path, "r");
     assert_non_null(f);
     char buf[1024];
@@ -110,8 +107,7 @@ static int line_of(const char *path, const char *needle)
 static mca_cell_t cell;
 
 /* Load `path`, expect rc, and expect "path:LINE:" and every given piece in the message. */
-static void expect_error(const char *path, int rc_want, int line, ...)
-{
+static void expect_error(const char *path, int rc_want, int line, ...) {
     char err[1024] = "";
     const int rc = mca_cell_load(path, &cell, err, sizeof err);
     print_message("  %s\n", err);
@@ -131,8 +127,7 @@ static void expect_error(const char *path, int rc_want, int line, ...)
     va_end(ap);
 }
 
-static void test_good_cell(void **state)
-{
+static void test_good_cell(void **state) {
     (void)state;
     const char *p = write_variant("good", NULL, NULL);
     char err[1024] = "";
@@ -175,66 +170,60 @@ static void test_good_cell(void **state)
     assert_true(cell.debug_stall_after_ticks == 0);
 }
 
-static void test_missing_file(void **state)
-{
+static void test_missing_file(void **state) {
     (void)state;
     char p[512];
     snprintf(p, sizeof p, "%s/no-such-cell.yaml", tmpdir);
     expect_error(p, MCA_ENOENT, 0, "cannot open cell file", NULL);
 }
 
-static void test_yaml_syntax(void **state)
-{
+static void test_yaml_syntax(void **state) {
     (void)state;
     const char *p = write_variant("syntax", "[0.0, 0.6, 0.0]", "[0.0, 0.6, 0.0");
-    expect_error(p, MCA_EPARSE, line_of(p, "[0.0, 0.6, 0.0"), "arms[1].base_xyz", "did not find expected", NULL);
+    expect_error(p, MCA_EPARSE, line_of(p, "[0.0, 0.6, 0.0"), "arms[1].base_xyz", "did not find expected",
+                 NULL);
 }
 
-static void test_wrong_type(void **state)
-{
+static void test_wrong_type(void **state) {
     (void)state;
     const char *p = write_variant("type", "priority: 70", "priority: high");
-    expect_error(p, MCA_EPARSE, line_of(p, "priority: high"), "rt.priority", "Invalid INT value: 'high'", NULL);
+    expect_error(p, MCA_EPARSE, line_of(p, "priority: high"), "rt.priority", "Invalid INT value: 'high'",
+                 NULL);
 }
 
-static void test_wrong_type_in_arm(void **state)
-{
+static void test_wrong_type_in_arm(void **state) {
     (void)state;
     const char *p = write_variant("type2", "dec_limit: 4.0", "dec_limit: fast");
-    expect_error(p, MCA_EPARSE, line_of(p, "dec_limit: fast"), "arms[0].dec_limit", "Invalid FLOAT value", NULL);
+    expect_error(p, MCA_EPARSE, line_of(p, "dec_limit: fast"), "arms[0].dec_limit", "Invalid FLOAT value",
+                 NULL);
 }
 
-static void test_unknown_key(void **state)
-{
+static void test_unknown_key(void **state) {
     (void)state;
     const char *p = write_variant("unknown", "    dec_limit: 4.0\n", "    dec_limit: 4.0\n    colour: red\n");
     expect_error(p, MCA_EPARSE, line_of(p, "colour: red"), "arms[0].colour", "Unexpected key: colour", NULL);
 }
 
-static void test_unknown_top_key(void **state)
-{
+static void test_unknown_top_key(void **state) {
     (void)state;
     const char *p = write_variant("unknown_top", "stop_after: 1.5", "stop_afterwards: 1.5");
     expect_error(p, MCA_EPARSE, line_of(p, "stop_afterwards"), "stop_afterwards", "Unexpected key", NULL);
 }
 
-static void test_missing_required(void **state)
-{
+static void test_missing_required(void **state) {
     (void)state;
     const char *p = write_variant("missing", "  - name: left\n    backend: sim\n", "  - name: left\n");
-    expect_error(p, MCA_EPARSE, line_of(p, "- name: left"), "arms[0].backend", "Missing required mapping field",
-                 NULL);
+    expect_error(p, MCA_EPARSE, line_of(p, "- name: left"), "arms[0].backend",
+                 "Missing required mapping field", NULL);
 }
 
-static void test_d1_ge_d2(void **state)
-{
+static void test_d1_ge_d2(void **state) {
     (void)state;
     const char *p = write_variant("d1d2", "d1: 0.04", "d1: 0.15");
     expect_error(p, MCA_ERANGE, line_of(p, "d1: 0.15"), "d1/d2", "d1 < d2", "d1 = 0.15, d2 = 0.15", NULL);
 }
 
-static void test_missing_urdf(void **state)
-{
+static void test_missing_urdf(void **state) {
     (void)state;
     char from[512];
     snprintf(from, sizeof from, "%s/config/robots/pa10plus.urdf\n    base_xyz: [0.0, 0.6", MCA_SOURCE_DIR);
@@ -243,80 +232,72 @@ static void test_missing_urdf(void **state)
                  NULL);
 }
 
-static void test_unknown_backend(void **state)
-{
+static void test_unknown_backend(void **state) {
     (void)state;
     const char *p = write_variant("backend", "backend: socketcan", "backend: ethercat");
-    expect_error(p, MCA_ERANGE, line_of(p, "ethercat"), "arms[1].backend", "unknown backend 'ethercat'", NULL);
+    expect_error(p, MCA_ERANGE, line_of(p, "ethercat"), "arms[1].backend", "unknown backend 'ethercat'",
+                 NULL);
 }
 
-static void test_dof_mismatch(void **state)
-{
+static void test_dof_mismatch(void **state) {
     (void)state;
-    const char *p = write_variant("dof", "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]", "q0: [0.0, 0.3, 0.0]");
+    const char *p =
+        write_variant("dof", "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]", "q0: [0.0, 0.3, 0.0]");
     expect_error(p, MCA_ERANGE, line_of(p, "q0: [0.0, 0.3, 0.0]"), "arms[0].q0", "3 values", "has 8 joints",
                  "DOF mismatch", NULL);
 }
 
-static void test_q0_outside_limits(void **state)
-{
+static void test_q0_outside_limits(void **state) {
     (void)state;
     const char *p = write_variant("q0lim", "q0: [0.1, 0.3,", "q0: [9.0, 0.3,");
     expect_error(p, MCA_ERANGE, line_of(p, "q0: [9.0"), "arms[1].q0[0] = 9", "outside joint", NULL);
 }
 
-static void test_negative_period(void **state)
-{
+static void test_negative_period(void **state) {
     (void)state;
     const char *p = write_variant("period", "period_us: 2000", "period_us: -1000");
     expect_error(p, MCA_ERANGE, line_of(p, "period_us"), "rt.period_us", "got -1000", NULL);
 }
 
-static void test_bad_priority(void **state)
-{
+static void test_bad_priority(void **state) {
     (void)state;
     const char *p = write_variant("prio", "priority: 70", "priority: 150");
     expect_error(p, MCA_ERANGE, line_of(p, "priority: 150"), "rt.priority", "0..99", NULL);
 }
 
-static void test_scenario_missing(void **state)
-{
+static void test_scenario_missing(void **state) {
     (void)state;
     const char *p = write_variant("noscn", "  duration: 3.5\n", "  scenario: gone/cross.yaml\n");
-    expect_error(p, MCA_ENOENT, line_of(p, "scenario: gone"), "task.scenario", "gone/cross.yaml' not found", NULL);
+    expect_error(p, MCA_ENOENT, line_of(p, "scenario: gone"), "task.scenario", "gone/cross.yaml' not found",
+                 NULL);
 }
 
-static void test_socketcan_needs_interface(void **state)
-{
+static void test_socketcan_needs_interface(void **state) {
     (void)state;
     const char *p = write_variant("noif", "    interface: vcan1\n", "");
     expect_error(p, MCA_EPARSE, line_of(p, "backend: socketcan"), "arms[1].interface", "required", NULL);
 }
 
-static void test_dds_config_missing(void **state)
-{
+static void test_dds_config_missing(void **state) {
     (void)state;
     const char *p = write_variant("ddscfg", "  domain: 7\n", "  domain: 7\n  config: nowhere/cyclone.xml\n");
     expect_error(p, MCA_ENOENT, line_of(p, "config: nowhere"), "dds.config", "not found", NULL);
 }
 
-static void test_unknown_scheme(void **state)
-{
+static void test_unknown_scheme(void **state) {
     (void)state;
     const char *p = write_variant("scheme", "scheme: mvn", "scheme: magic");
     expect_error(p, MCA_ERANGE, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
 }
 
-static void test_duplicate_arm(void **state)
-{
+static void test_duplicate_arm(void **state) {
     (void)state;
     const char *p = write_variant("dup", "  - name: right", "  - name: left");
     expect_error(p, MCA_ERANGE, line_of(p, "backend: socketcan") - 1, "arms[1].name", "used twice", NULL);
 }
 
 /* Every shipped cell file loads (they reference the scheme's scenario files and the URDFs). */
-static void test_shipped_cells(void **state)
-{
+static void test_shipped_cells(void **state) {
     (void)state;
     glob_t g;
     char pat[512];
@@ -334,8 +315,7 @@ static void test_shipped_cells(void **state)
     globfree(&g);
 }
 
-int main(void)
-{
+int main(void) {
     snprintf(tmpdir, sizeof tmpdir, "/tmp/mca-test-cell-XXXXXX");
     if (!mkdtemp(tmpdir)) {
         return 1;

@@ -27,8 +27,7 @@
 static char cell_path[512];
 
 /* Two PA10+ 1.2 m apart; the left arm draws a circle (moving at any time), the right one holds. */
-static void write_cell(const char *extra_left, const char *right_base)
-{
+static void write_cell(const char *extra_left, const char *right_base) {
     snprintf(cell_path, sizeof cell_path, "/tmp/mca-test-daemon-%d.yaml", (int)getpid());
     FILE *f = fopen(cell_path, "w");
     assert_non_null(f);
@@ -56,8 +55,7 @@ static void write_cell(const char *extra_left, const char *right_base)
     fclose(f);
 }
 
-static mca_daemon_t *open_daemon(mca_cell_t *cell)
-{
+static mca_daemon_t *open_daemon(mca_cell_t *cell) {
     char err[1024] = "";
     int rc = mca_cell_load(cell_path, cell, err, sizeof err);
     if (rc != MCA_OK) {
@@ -75,8 +73,7 @@ static mca_daemon_t *open_daemon(mca_cell_t *cell)
 
 /* Run ticks until the state leaves BRAKING, checking every command against the previous one:
  * |v_k - v_{k-1}| <= dec_limit * dt per joint. Returns the ticks spent braking. */
-static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, int na)
-{
+static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, int na) {
     double prev[MCA_MAX_ARMS][MCA_MAX_DOF];
     double vmax = 0.0;
     for (int a = 0; a < na; a++) {
@@ -120,8 +117,7 @@ static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, i
     return n;
 }
 
-static void test_stop_brakes_within_limits(void **state)
-{
+static void test_stop_brakes_within_limits(void **state) {
     (void)state;
     write_cell(NULL, "[0.0, 0.6, 0.0]");
     mca_cell_t *cell = calloc(1, sizeof *cell);
@@ -171,8 +167,7 @@ static void test_stop_brakes_within_limits(void **state)
     free(cell);
 }
 
-static void test_lost_feedback_faults_and_brakes(void **state)
-{
+static void test_lost_feedback_faults_and_brakes(void **state) {
     (void)state;
     write_cell(NULL, "[0.0, 0.6, 0.0]");
     mca_cell_t *cell = calloc(1, sizeof *cell);
@@ -213,8 +208,7 @@ static void test_lost_feedback_faults_and_brakes(void **state)
     free(cell);
 }
 
-static void test_arm_fault_is_a_fault(void **state)
-{
+static void test_arm_fault_is_a_fault(void **state) {
     (void)state;
     write_cell(NULL, "[0.0, 0.6, 0.0]");
     mca_cell_t *cell = calloc(1, sizeof *cell);
@@ -241,8 +235,7 @@ static void test_arm_fault_is_a_fault(void **state)
     free(cell);
 }
 
-static void test_distance_fault(void **state)
-{
+static void test_distance_fault(void **state) {
     (void)state;
     /* the right arm's base 0.1 m from the left one: the links overlap at once (distance < d1) */
     write_cell(NULL, "[0.0, -0.5, 0.0]");
@@ -265,14 +258,12 @@ static void test_distance_fault(void **state)
 }
 
 /* Histogram percentiles against the exact order statistics of the same samples. */
-static int cmp_i64(const void *a, const void *b)
-{
+static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
 }
 
-static void test_histogram_vs_sorted(void **state)
-{
+static void test_histogram_vs_sorted(void **state) {
     (void)state;
     enum { N = 20000 };
     static int64_t v[N];
@@ -300,9 +291,10 @@ static void test_histogram_vs_sorted(void **state)
         const int64_t exact = v[(size_t)ceil(ps[i] * N) - 1];
         const int64_t got = mca_hist_percentile(&h, ps[i]);
         const int64_t width = exact < 2000000 ? 1000 : (exact < 100000000 ? 100000 : INT64_MAX);
-        print_message("  p%g: exact %lld ns, histogram %lld ns\n", ps[i] * 100, (long long)exact, (long long)got);
-        assert_true(got >= exact);                           /* never optimistic */
-        assert_true(got <= v[N - 1]);                        /* capped at the max */
+        print_message("  p%g: exact %lld ns, histogram %lld ns\n", ps[i] * 100, (long long)exact,
+                      (long long)got);
+        assert_true(got >= exact);                               /* never optimistic */
+        assert_true(got <= v[N - 1]);                            /* capped at the max */
         assert_true(width == INT64_MAX || got - exact <= width); /* within one bin */
     }
     assert_true(mca_hist_percentile(&h, 1.0) == v[N - 1]);
@@ -315,8 +307,7 @@ static void test_histogram_vs_sorted(void **state)
     assert_true(h.min_ns == 0);
 }
 
-static void test_rtlog(void **state)
-{
+static void test_rtlog(void **state) {
     (void)state;
     static mca_rtlog_t log;
     assert_int_equal(mca_rtlog_init(&log, "mcad"), MCA_OK);
@@ -345,8 +336,7 @@ static void test_rtlog(void **state)
     fclose(f);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stop_brakes_within_limits),
         cmocka_unit_test(test_lost_feedback_faults_and_brakes),

@@ -37,9 +37,9 @@ typedef struct mca_cell_arm {
     uint32_t id_base;              /**< socketcan: the arm's CAN id block */
     double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
     /* sim backend model */
-    double sim_lag_tau;            /**< first-order velocity lag [s] */
-    int sim_latency_cycles;        /**< command transport delay [cycles] */
-    double sim_noise_pos;          /**< measurement noise sigma [rad] */
+    double sim_lag_tau;     /**< first-order velocity lag [s] */
+    int sim_latency_cycles; /**< command transport delay [cycles] */
+    double sim_noise_pos;   /**< measurement noise sigma [rad] */
 } mca_cell_arm_t;
 
 /** DDS publishing. */
@@ -63,8 +63,8 @@ typedef struct mca_cell_rt {
 
 typedef struct mca_cell {
     char name[64];
-    char source[512];              /**< file it was loaded from */
-    mca_scenario_t scn;            /**< task: arms' models, placements, q0, paths, duration, d1, d2, ... */
+    char source[512];   /**< file it was loaded from */
+    mca_scenario_t scn; /**< task: arms' models, placements, q0, paths, duration, d1, d2, ... */
     mca_scheme_kind_t scheme;
     mca_cell_arm_t arm[MCA_MAX_ARMS];
     /* solver overrides (< 0 / 0: the controller's default) */
@@ -74,7 +74,7 @@ typedef struct mca_cell {
     double fault_residual;
     mca_cell_dds_t dds;
     mca_cell_rt_t rt;
-    double stop_after;             /**< [s] of running after which the daemon stops by itself; 0 = never */
+    double stop_after;                /**< [s] of running after which the daemon stops by itself; 0 = never */
     uint64_t debug_stall_after_ticks; /**< test hook: the loop stalls after this many ticks; 0 = never */
 } mca_cell_t;
 
@@ -94,7 +94,8 @@ int mca_cell_load(const char *path, mca_cell_t *cell, char *err, size_t errlen);
  * Controller configuration of a loaded cell (loads URDFs: start-up only).
  * @retval MCA_OK or the codes of mca_controller_config_from_scenario()
  */
-int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err, size_t errlen);
+int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err,
+                               size_t errlen);
 
 /** "sim" / "socketcan". */
 const char *mca_cell_backend_name(mca_cell_backend_t b);

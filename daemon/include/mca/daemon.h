@@ -59,11 +59,11 @@ const char *mca_daemon_state_name(int state);
 
 /** Options not in the cell file. */
 typedef struct mca_daemon_opts {
-    int no_dds;            /**< 1: do not publish (overrides the cell) */
-    int no_rt;             /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
-    const char *csv_path;  /**< per-tick CSV (written by a non-rt thread), NULL: none */
-    double stop_after;     /**< > 0: overrides the cell's stop_after [s] */
-    FILE *log;             /**< where log lines go (stderr) */
+    int no_dds;           /**< 1: do not publish (overrides the cell) */
+    int no_rt;            /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
+    const char *csv_path; /**< per-tick CSV (written by a non-rt thread), NULL: none */
+    double stop_after;    /**< > 0: overrides the cell's stop_after [s] */
+    FILE *log;            /**< where log lines go (stderr) */
 } mca_daemon_opts_t;
 
 /** One CSV row (rt -> writer ring). */
@@ -85,12 +85,12 @@ typedef struct mca_daemon_summary {
     int64_t compute_p50_ns, compute_p99_ns, compute_max_ns;
     int64_t ctrl_p50_ns, ctrl_p99_ns, ctrl_max_ns; /**< mca_controller_tick alone */
     double min_distance, min_distance_t;
-    int fault;          /**< mca_daemon_fault_t */
-    int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */
+    int fault;      /**< mca_daemon_fault_t */
+    int ctrl_fault; /**< mca_ctrl_fault_t when fault == CONTROLLER */
     char fault_text[160];
     double fault_t;
     uint64_t log_dropped, csv_dropped;
-    int sched_fifo;     /**< 1 when the loop ran SCHED_FIFO */
+    int sched_fifo; /**< 1 when the loop ran SCHED_FIFO */
     int mem_locked;
     int dma_latency_held;
 } mca_daemon_summary_t;

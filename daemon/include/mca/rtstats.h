@@ -19,10 +19,10 @@
 extern "C" {
 #endif
 
-#define MCA_HIST_FINE_NS 1000LL      /**< fine bin width [ns] */
-#define MCA_HIST_FINE_BINS 2000      /**< fine bins: 0 .. 2 ms */
-#define MCA_HIST_COARSE_NS 100000LL  /**< coarse bin width [ns] */
-#define MCA_HIST_COARSE_BINS 980     /**< coarse bins: 2 ms .. 100 ms */
+#define MCA_HIST_FINE_NS 1000LL     /**< fine bin width [ns] */
+#define MCA_HIST_FINE_BINS 2000     /**< fine bins: 0 .. 2 ms */
+#define MCA_HIST_COARSE_NS 100000LL /**< coarse bin width [ns] */
+#define MCA_HIST_COARSE_BINS 980    /**< coarse bins: 2 ms .. 100 ms */
 #define MCA_HIST_BINS (MCA_HIST_FINE_BINS + MCA_HIST_COARSE_BINS + 1)
 
 typedef struct mca_hist {
