@@ -4,6 +4,11 @@
  * (4 m*n multiply-adds) instead of an h*h product. Nothing here allocates: matrices are maps over the
  * caller's workspace, vectors have compile-time maximum sizes (storage on the stack), products are
  * evaluated with noalias() into them. */
+/* Unoptimised Eigen is ~20x slower (every coefficient access a call): keep this file optimised in Debug
+ * (and so ASan) builds too, or every test that runs the solver crawls there. Sanitizers still apply. */
+#if !defined(__OPTIMIZE__) && defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("O2")
+#endif
 #include <Eigen/Dense>
 #include <cmath>
 
