@@ -180,6 +180,12 @@ static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_D
     double t = 0.0;
     int since_reset = 0;
     for (int k = 0; k < ticks; k++, t += dt) {
+        if (k % 500 == 499) {
+            /* ~10 ms of busy work, then 2 ms asleep: a SCHED_FIFO thread busy for 950 ms of a second is
+             * throttled for the rest (sched_rt_runtime_us), which would show up as a 50 ms "tick" */
+            const struct timespec nap = {0, 2000000};
+            nanosleep(&nap, NULL);
+        }
         /* the state the tick starts from, for the out-of-tick re-runs */
         memcpy(&shadow, &ctrl->pdnn, sizeof shadow);
         memcpy(&sstate_copy, &ctrl->sstate, sizeof sstate_copy);
