@@ -8,8 +8,7 @@
 #include "mca/err.h"
 #include "mca/vec3.h"
 
-void mca_apf_default_params(mca_apf_params_t *p)
-{
+void mca_apf_default_params(mca_apf_params_t *p) {
     memset(p, 0, sizeof *p);
     p->k_pos = 100.0;
     p->d_pos = 0.1;
@@ -22,14 +21,12 @@ void mca_apf_default_params(mca_apf_params_t *p)
     p->damping = 0.0;
 }
 
-double mca_apf_rep_speed(const mca_apf_params_t *p, double d_min)
-{
+double mca_apf_rep_speed(const mca_apf_params_t *p, double d_min) {
     return p->v_rep_max / (1.0 + exp(2.0 * d_min * p->theta / p->d));
 }
 
 void mca_apf_attractive(const mca_apf_params_t *p, const double ee[3], const double goal[3],
-                        const double goal_vel[3], double v_att[3])
-{
+                        const double goal_vel[3], double v_att[3]) {
     double ep[3], n[3] = {0, 0, 0};
     mca_v3_sub(ep, goal, ee);
     const double e_p = mca_v3_norm(ep);
@@ -56,8 +53,7 @@ void mca_apf_attractive(const mca_apf_params_t *p, const double ee[3], const dou
 }
 
 int mca_apf_pinv_apply(const double J[3][MCA_MAX_DOF], int dof, double damping, const double v[3],
-                       double *qdot)
-{
+                       double *qdot) {
     /* A = J J^T + damping I (3 x 3, symmetric), x = A^-1 v, qdot = J^T x */
     double A[3][3];
     for (int i = 0; i < 3; i++) {

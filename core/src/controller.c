@@ -21,16 +21,14 @@ static const char *const fault_names[] = {
     [MCA_CTRL_FAULT_INPUT] = "bad-input",
 };
 
-const char *mca_ctrl_fault_name(int fault)
-{
+const char *mca_ctrl_fault_name(int fault) {
     if (fault < 0 || fault >= (int)(sizeof fault_names / sizeof fault_names[0])) {
         return "unknown";
     }
     return fault_names[fault];
 }
 
-void mca_controller_default_config(mca_controller_config_t *cfg)
-{
+void mca_controller_default_config(mca_controller_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->scheme = MCA_SCHEME_MCA;
     mca_scheme_default_params(&cfg->sp);
@@ -45,8 +43,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg)
 }
 
 int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
-                                        mca_scheme_kind_t scheme, char *err, size_t errlen)
-{
+                                        mca_scheme_kind_t scheme, char *err, size_t errlen) {
     if (!cfg || !scn || scn->n_arms < 1 || scn->n_arms > MCA_MAX_ARMS) {
         if (err && errlen) {
             snprintf(err, errlen, "controller: bad scenario");
@@ -58,8 +55,8 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
     cfg->scheme = scheme;
     for (int a = 0; a < scn->n_arms; a++) {
         const mca_scenario_arm_t *sa = &scn->arm[a];
-        int rc = mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err,
-                                     errlen);
+        int rc =
+            mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err, errlen);
         if (rc != MCA_OK) {
             return rc;
         }
@@ -87,8 +84,7 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
     return MCA_OK;
 }
 
-int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg)
-{
+int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg) {
     if (!ctrl || !cfg || cfg->n_arms < 1 || cfg->n_arms > MCA_MAX_ARMS || !(cfg->dt > 0.0) ||
         !(cfg->sp.d1 >= 0.0) || !(cfg->sp.d1 < cfg->sp.d2) || !(cfg->sp.epsilon > 0.0) ||
         !(cfg->sp.K >= 0.0) || !(cfg->sp.big > 0.0) || cfg->scheme < MCA_SCHEME_MCA ||
@@ -108,8 +104,7 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     return MCA_OK;
 }
 
-void mca_controller_reset(mca_controller_t *ctrl)
-{
+void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->started = 0;
     ctrl->t_start = 0.0;
     ctrl->fault = MCA_CTRL_FAULT_NONE;
@@ -122,8 +117,7 @@ void mca_controller_reset(mca_controller_t *ctrl)
     memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
 }
 
-void mca_controller_clear_fault(mca_controller_t *ctrl)
-{
+void mca_controller_clear_fault(mca_controller_t *ctrl) {
     ctrl->fault = MCA_CTRL_FAULT_NONE;
     ctrl->fault_text[0] = 0;
     ctrl->has_prev = 0;
@@ -132,24 +126,21 @@ void mca_controller_clear_fault(mca_controller_t *ctrl)
     memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
 }
 
-const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi)
-{
+const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi) {
     if (phi) {
         *phi = ctrl->phi;
     }
     return &ctrl->qp;
 }
 
-static int64_t now_ns(void)
-{
+static int64_t now_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
 /* Latch a fault (the first cause wins) with a message; snprintf into a fixed buffer does not allocate. */
-static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...)
-{
+static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...) {
     if (ctrl->fault != MCA_CTRL_FAULT_NONE) {
         return;
     }
@@ -161,8 +152,7 @@ static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...)
 }
 
 /* Per link of every arm: the closest link of any other arm, and the global minimum. */
-static int distances(mca_controller_t *ctrl, mca_tick_info_t *info)
-{
+static int distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     const int na = ctrl->cfg.n_arms;
     for (int a = 0; a < na; a++) {
         for (int l = 0; l < MCA_MAX_LINKS; l++) {
@@ -218,8 +208,7 @@ static int distances(mca_controller_t *ctrl, mca_tick_info_t *info)
 
 /* APF baseline (40)-(46) for every arm. */
 static int apf_tick(mca_controller_t *ctrl, const double r_d[][3], const double rdot_d[][3],
-                    double *const qdot[MCA_MAX_ARMS])
-{
+                    double *const qdot[MCA_MAX_ARMS]) {
     const mca_controller_config_t *cfg = &ctrl->cfg;
     int off = 0;
     for (int a = 0; a < cfg->n_arms; a++) {
@@ -279,8 +268,7 @@ static int apf_tick(mca_controller_t *ctrl, const double r_d[][3], const double 
     return MCA_OK;
 }
 
-static void zero_cmd(const mca_controller_t *ctrl, double *const qdot[MCA_MAX_ARMS])
-{
+static void zero_cmd(const mca_controller_t *ctrl, double *const qdot[MCA_MAX_ARMS]) {
     for (int a = 0; a < ctrl->cfg.n_arms; a++) {
         if (qdot[a]) {
             for (int j = 0; j < ctrl->cfg.chain[a].dof; j++) {
@@ -291,8 +279,7 @@ static void zero_cmd(const mca_controller_t *ctrl, double *const qdot[MCA_MAX_AR
 }
 
 int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
-                        double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info_out)
-{
+                        double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info_out) {
     const int64_t t_enter = now_ns();
     if (!ctrl || !q || !qdot) {
         return MCA_EINVAL;
@@ -369,9 +356,9 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     }
     const double d1 = cfg->sp.d1;
     if (cfg->fault_distance && info->min_distance < d1) {
-        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, "distance %.4f m < d1 %.4f m (arm %d link %d, arm %d link %d)",
-                    info->min_distance, d1, info->min_arm_a, info->min_link_a, info->min_arm_b,
-                    info->min_link_b);
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE,
+                    "distance %.4f m < d1 %.4f m (arm %d link %d, arm %d link %d)", info->min_distance, d1,
+                    info->min_arm_a, info->min_link_a, info->min_arm_b, info->min_link_b);
         goto fault;
     }
 
@@ -392,7 +379,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                                      (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
                                      ctrl->has_prev ? ctrl->phi_prev : NULL, &ctrl->sstate, &ctrl->qp, &si);
         if (rc == MCA_EINFEASIBLE) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_INFEASIBLE, "joint bounds contradict (a joint is beyond its limit)");
+            raise_fault(ctrl, MCA_CTRL_FAULT_INFEASIBLE,
+                        "joint bounds contradict (a joint is beyond its limit)");
             goto fault;
         }
         if (rc != MCA_OK) {
@@ -434,15 +422,17 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                             "||G phi - alpha|| = %.2e m/s, min distance %.4f m",
                             pr.residual, pr.steps, eq, info->min_distance);
             } else {
-                raise_fault(ctrl, MCA_CTRL_FAULT_NOT_CONVERGED, "PDNN residual %.2e after %d steps (fault > %.1e)",
-                            pr.residual, pr.steps, cfg->fault_residual);
+                raise_fault(ctrl, MCA_CTRL_FAULT_NOT_CONVERGED,
+                            "PDNN residual %.2e after %d steps (fault > %.1e)", pr.residual, pr.steps,
+                            cfg->fault_residual);
             }
             goto fault;
         }
         if (eq > cfg->eq_tol) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
-                        "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance",
-                        eq, cfg->eq_tol);
+            raise_fault(
+                ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
+                "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance", eq,
+                cfg->eq_tol);
             goto fault;
         }
         for (int i = 0; i < qp->n_ineq; i++) {

@@ -16,8 +16,7 @@
 
 /* ---------------------------------------------------------------- paths (real-time safe) */
 
-void mca_path_anchor(mca_path_t *path, const double ee_start[3])
-{
+void mca_path_anchor(mca_path_t *path, const double ee_start[3]) {
     mca_v3_set(path->anchor, ee_start);
     if (path->kind == MCA_PATH_WAYPOINTS && path->n_points > 0) {
         /* p[0] is the start: the anchor itself (offset 0 for relative paths) */
@@ -29,8 +28,7 @@ void mca_path_anchor(mca_path_t *path, const double ee_start[3])
     }
 }
 
-static void path_point(const mca_path_t *path, int i, double out[3])
-{
+static void path_point(const mca_path_t *path, int i, double out[3]) {
     if (path->relative) {
         mca_v3_add(out, path->anchor, path->p[i]);
     } else {
@@ -38,8 +36,7 @@ static void path_point(const mca_path_t *path, int i, double out[3])
     }
 }
 
-double mca_path_end_time(const mca_path_t *path)
-{
+double mca_path_end_time(const mca_path_t *path) {
     switch (path->kind) {
     case MCA_PATH_CIRCLE:
         return path->t0 + path->period;
@@ -55,8 +52,7 @@ double mca_path_end_time(const mca_path_t *path)
     }
 }
 
-int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
-{
+int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3]) {
     if (!path || !r || !rdot || !isfinite(t)) {
         return MCA_EINVAL;
     }
@@ -225,8 +221,8 @@ static const cyaml_schema_field_t scn_fields[] = {
     CYAML_FIELD_FLOAT_PTR("v_normal", OPT, struct raw_scn, v_normal),
     CYAML_FIELD_FLOAT_PTR("v_floor", OPT, struct raw_scn, v_floor),
     CYAML_FIELD_ENUM_PTR("form", OPT, struct raw_scn, form, form_strings, CYAML_ARRAY_LEN(form_strings)),
-    CYAML_FIELD_SEQUENCE("sample_times", OPT | CYAML_FLAG_FLOW, struct raw_scn, sample_times, &float_entry,
-                         1, 16),
+    CYAML_FIELD_SEQUENCE("sample_times", OPT | CYAML_FLAG_FLOW, struct raw_scn, sample_times, &float_entry, 1,
+                         16),
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_scn, arms, &arm_entry, 1, MCA_MAX_ARMS),
     CYAML_FIELD_END,
 };
@@ -242,8 +238,7 @@ struct log_buf {
     size_t len;
 };
 
-static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args)
-{
+static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args) {
     struct log_buf *b = ctx;
     if (level < CYAML_LOG_ERROR || b->len + 2 >= sizeof b->text) {
         return;
@@ -264,8 +259,7 @@ static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list a
     }
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
+static void set_err(char *err, size_t errlen, const char *fmt, ...) {
     if (!err || !errlen) {
         return;
     }
@@ -277,8 +271,7 @@ static void set_err(char *err, size_t errlen, const char *fmt, ...)
 
 /* Line of the (nth, 0-based) occurrence of "key:" in the file, for messages about values that parsed but
  * are out of range (libcyaml keeps no positions after loading). 0 when not found. */
-static int key_line(const char *path, const char *key, int nth)
-{
+static int key_line(const char *path, const char *key, int nth) {
     FILE *f = fopen(path, "r");
     if (!f) {
         return 0;
@@ -303,17 +296,16 @@ static int key_line(const char *path, const char *key, int nth)
     return found;
 }
 
-#define FAIL_AT(key, nth, ...)                                                                          \
-    do {                                                                                                \
-        char m_[256];                                                                                   \
-        snprintf(m_, sizeof m_, __VA_ARGS__);                                                           \
-        set_err(err, errlen, "%s:%d: %s", path, key_line(path, key, nth), m_);                          \
-        rc = MCA_ERANGE;                                                                                \
-        goto out;                                                                                       \
+#define FAIL_AT(key, nth, ...)                                                                               \
+    do {                                                                                                     \
+        char m_[256];                                                                                        \
+        snprintf(m_, sizeof m_, __VA_ARGS__);                                                                \
+        set_err(err, errlen, "%s:%d: %s", path, key_line(path, key, nth), m_);                               \
+        rc = MCA_ERANGE;                                                                                     \
+        goto out;                                                                                            \
     } while (0)
 
-void mca_scenario_defaults(mca_scenario_t *scn)
-{
+void mca_scenario_defaults(mca_scenario_t *scn) {
     memset(scn, 0, sizeof *scn);
     scn->params.d1 = 0.05;
     scn->params.d2 = 0.12;
@@ -325,8 +317,7 @@ void mca_scenario_defaults(mca_scenario_t *scn)
     scn->params.form = MCA_FORM_NORMAL;
 }
 
-static int unit3(double out[3], const double *in)
-{
+static int unit3(double out[3], const double *in) {
     const double n = mca_v3_norm(in);
     if (!(n > 1e-9) || !isfinite(n)) {
         return -1;
@@ -337,13 +328,11 @@ static int unit3(double out[3], const double *in)
     return 0;
 }
 
-static int positive(const double *v)
-{
+static int positive(const double *v) {
     return v && isfinite(*v) && *v > 0.0;
 }
 
-int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen)
-{
+int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
     if (!path || !scn_out) {
         set_err(err, errlen, "scenario: NULL argument");
         return MCA_EINVAL;

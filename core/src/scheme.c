@@ -8,8 +8,7 @@
 #include "mca/err.h"
 #include "mca/vec3.h"
 
-void mca_scheme_default_params(mca_scheme_params_t *p)
-{
+void mca_scheme_default_params(mca_scheme_params_t *p) {
     memset(p, 0, sizeof *p);
     p->collision = 1;
     p->form = MCA_FORM_NORMAL;
@@ -22,8 +21,7 @@ void mca_scheme_default_params(mca_scheme_params_t *p)
     p->big = 1e6;
 }
 
-double mca_brake_s(double d, double d1, double d2)
-{
+double mca_brake_s(double d, double d1, double d2) {
     if (d >= d2) {
         return 1.0;
     }
@@ -35,8 +33,7 @@ double mca_brake_s(double d, double d1, double d2)
 }
 
 void mca_diamond_rows(const double r[3], const double J[3][MCA_MAX_DOF], int dof,
-                      double rows[3][MCA_MAX_DOF])
-{
+                      double rows[3][MCA_MAX_DOF]) {
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < MCA_MAX_DOF; j++) {
             rows[i][j] = j < dof ? r[i] * J[i][j] : 0.0;
@@ -44,8 +41,7 @@ void mca_diamond_rows(const double r[3], const double J[3][MCA_MAX_DOF], int dof
     }
 }
 
-int mca_joint_bounds(const mca_chain_t *chain, const double *q, double epsilon, double *lb, double *ub)
-{
+int mca_joint_bounds(const mca_chain_t *chain, const double *q, double epsilon, double *lb, double *ub) {
     if (!chain || !q || !lb || !ub || !(epsilon > 0.0)) {
         return MCA_EINVAL;
     }
@@ -70,13 +66,11 @@ int mca_joint_bounds(const mca_chain_t *chain, const double *q, double epsilon, 
     return rc;
 }
 
-void mca_scheme_state_reset(mca_scheme_state_t *st)
-{
+void mca_scheme_state_reset(mca_scheme_state_t *st) {
     memset(st, 0, sizeof *st);
 }
 
-int mca_scheme_rows_per_link(const mca_scheme_params_t *p)
-{
+int mca_scheme_rows_per_link(const mca_scheme_params_t *p) {
     if (!p->collision) {
         return 0;
     }
@@ -84,8 +78,7 @@ int mca_scheme_rows_per_link(const mca_scheme_params_t *p)
 }
 
 /* Joint velocity of arm a from phi (NULL phi = 0). */
-static double phi_at(const double *phi, int off, int j)
-{
+static double phi_at(const double *phi, int off, int j) {
     return phi ? phi[off + j] : 0.0;
 }
 
@@ -93,10 +86,9 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
                         const mca_kin_t kin[], const double *const q[], const double r_d[][3],
                         const double rdot_d[][3], const mca_link_critical_t crit[][MCA_MAX_LINKS],
                         const double *phi_prev, mca_scheme_state_t *st, mca_qp_t *qp,
-                        mca_scheme_info_t *info)
-{
-    if (!p || !chain || !kin || !q || !r_d || !rdot_d || !st || !qp || n_arms < 1 ||
-        n_arms > MCA_MAX_ARMS || (p->collision && !crit)) {
+                        mca_scheme_info_t *info) {
+    if (!p || !chain || !kin || !q || !r_d || !rdot_d || !st || !qp || n_arms < 1 || n_arms > MCA_MAX_ARMS ||
+        (p->collision && !crit)) {
         return MCA_EINVAL;
     }
     const int rpl = mca_scheme_rows_per_link(p);

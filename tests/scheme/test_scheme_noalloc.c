@@ -27,69 +27,58 @@ void *__real__Znam(size_t n);
 void __real__ZdlPv(void *p);
 void __real__ZdaPv(void *p);
 
-void *__wrap_malloc(size_t n)
-{
+void *__wrap_malloc(size_t n) {
     allocs += counting;
     return __real_malloc(n);
 }
-void *__wrap_calloc(size_t a, size_t b)
-{
+void *__wrap_calloc(size_t a, size_t b) {
     allocs += counting;
     return __real_calloc(a, b);
 }
-void *__wrap_realloc(void *p, size_t n)
-{
+void *__wrap_realloc(void *p, size_t n) {
     allocs += counting;
     return __real_realloc(p, n);
 }
-void __wrap_free(void *p)
-{
+void __wrap_free(void *p) {
     allocs += counting && p;
     __real_free(p);
 }
-int __wrap_posix_memalign(void **p, size_t a, size_t n)
-{
+int __wrap_posix_memalign(void **p, size_t a, size_t n) {
     allocs += counting;
     return __real_posix_memalign(p, a, n);
 }
-void *__wrap_aligned_alloc(size_t a, size_t n)
-{
+void *__wrap_aligned_alloc(size_t a, size_t n) {
     allocs += counting;
     return __real_aligned_alloc(a, n);
 }
-void *__wrap__Znwm(size_t n)
-{
+void *__wrap__Znwm(size_t n) {
     allocs += counting;
     return __real__Znwm(n);
 }
-void *__wrap__Znam(size_t n)
-{
+void *__wrap__Znam(size_t n) {
     allocs += counting;
     return __real__Znam(n);
 }
-void __wrap__ZdlPv(void *p)
-{
+void __wrap__ZdlPv(void *p) {
     allocs += counting && p;
     __real__ZdlPv(p);
 }
-void __wrap__ZdaPv(void *p)
-{
+void __wrap__ZdaPv(void *p) {
     allocs += counting && p;
     __real__ZdaPv(p);
 }
 
 struct variant {
     mca_scheme_kind_t scheme;
-    int form;          /* -1: the scenario's */
-    double v_floor;    /* < 0: keep */
-    double eq_tol;     /* <= 0: keep (tiny: forces the fake-attractor branch) */
-    int max_steps;     /* <= 0: keep (1: forces the not-converged branch) */
-    int nan_at;        /* tick that gets a NaN joint (-1: none) */
+    int form;       /* -1: the scenario's */
+    double v_floor; /* < 0: keep */
+    double eq_tol;  /* <= 0: keep (tiny: forces the fake-attractor branch) */
+    int max_steps;  /* <= 0: keep (1: forces the not-converged branch) */
+    int nan_at;     /* tick that gets a NaN joint (-1: none) */
     int ticks;
 };
 
-static int run(const char *path, const struct variant *v, long *ticks_faulted, long *binding)
-{
+static int run(const char *path, const struct variant *v, long *ticks_faulted, long *binding) {
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
     char err[512];
@@ -151,8 +140,7 @@ static int run(const char *path, const struct variant *v, long *ticks_faulted, l
     return 0;
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     if (argc != 2) {
         fprintf(stderr, "usage: test_scheme_noalloc SCENARIO_DIR\n");
         return 2;
@@ -195,8 +183,8 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    printf("ticks with binding collision rows: %ld, faulted ticks: %ld, allocations during ticks: %ld\n", binding,
-           faulted, allocs);
+    printf("ticks with binding collision rows: %ld, faulted ticks: %ld, allocations during ticks: %ld\n",
+           binding, faulted, allocs);
     if (binding == 0) {
         fprintf(stderr, "FAIL: the runs did not reach binding rows\n");
         return 1;

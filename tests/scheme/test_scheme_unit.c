@@ -29,8 +29,7 @@
 
 /* ------------------------------------------------------------------ S(d) (13) */
 
-static void test_brake_values(void **state)
-{
+static void test_brake_values(void **state) {
     (void)state;
     const double d1 = 0.05, d2 = 0.12;
     assert_true(mca_brake_s(0.2, d1, d2) == 1.0);
@@ -57,8 +56,7 @@ static void test_brake_values(void **state)
 
 /* ------------------------------------------------------------------ diamond (10) */
 
-static void test_diamond_rows(void **state)
-{
+static void test_diamond_rows(void **state) {
     (void)state;
     double J[3][MCA_MAX_DOF], rows[3][MCA_MAX_DOF];
     for (int i = 0; i < 3; i++) {
@@ -88,8 +86,7 @@ static void test_diamond_rows(void **state)
 
 /* ------------------------------------------------------------------ bounds (19)-(20) */
 
-static void make_chain(mca_chain_t *c)
-{
+static void make_chain(mca_chain_t *c) {
     memset(c, 0, sizeof *c);
     c->dof = 3;
     for (int j = 0; j < 3; j++) {
@@ -103,8 +100,7 @@ static void make_chain(mca_chain_t *c)
     c->joint[2].upper = INFINITY;
 }
 
-static void test_joint_bounds(void **state)
-{
+static void test_joint_bounds(void **state) {
     (void)state;
     mca_chain_t c;
     make_chain(&c);
@@ -114,7 +110,7 @@ static void test_joint_bounds(void **state)
     assert_int_equal(mca_joint_bounds(&c, q, 5.0, lb, ub), MCA_OK);
     assert_true(lb[0] == -0.5 && ub[0] == 0.5);
     assert_true(fabs(ub[1] - 5.0 * (2.0 - 1.95)) < 1e-15); /* 0.25 < 0.5 */
-    assert_true(lb[1] == -0.5);                              /* eps (q- - q) = -14.75 < -0.5 */
+    assert_true(lb[1] == -0.5);                            /* eps (q- - q) = -14.75 < -0.5 */
     /* continuous joint: velocity only, whatever q is */
     assert_true(lb[2] == -0.5 && ub[2] == 0.5);
     /* near the lower limit */
@@ -130,16 +126,14 @@ static void test_joint_bounds(void **state)
 
 /* ------------------------------------------------------------------ collision rows vs FK */
 
-static void load_pa10(mca_chain_t *c)
-{
+static void load_pa10(mca_chain_t *c) {
     char err[256];
     assert_int_equal(mca_chain_load_urdf(c, PA10, "tool_tip", err, sizeof err), MCA_OK);
 }
 
 /* World position of a point rigidly attached to link l at configuration q, given its position x at q0. */
 static void moved_point(const mca_chain_t *c, const double *q0, const double *q, int l, const double x[3],
-                        double out[3])
-{
+                        double out[3]) {
     mca_kin_t k0, k1;
     assert_int_equal(mca_fk(c, q0, &k0), MCA_OK);
     assert_int_equal(mca_fk(c, q, &k1), MCA_OK);
@@ -159,8 +153,7 @@ static void moved_point(const mca_chain_t *c, const double *q0, const double *q,
     }
 }
 
-static void test_collision_rows_fd(void **state)
-{
+static void test_collision_rows_fd(void **state) {
     (void)state;
     static mca_chain_t ch[2];
     load_pa10(&ch[0]);
@@ -177,9 +170,10 @@ static void test_collision_rows_fd(void **state)
     memset(crit, 0, sizeof crit);
     const int L = 5;
     double P[3], E[3];
-    mca_v3_axpy(P, kin[0].point[L], 0.3, (double[3]){kin[0].point[L + 1][0] - kin[0].point[L][0],
-                                                      kin[0].point[L + 1][1] - kin[0].point[L][1],
-                                                      kin[0].point[L + 1][2] - kin[0].point[L][2]});
+    mca_v3_axpy(P, kin[0].point[L], 0.3,
+                (double[3]){kin[0].point[L + 1][0] - kin[0].point[L][0],
+                            kin[0].point[L + 1][1] - kin[0].point[L][1],
+                            kin[0].point[L + 1][2] - kin[0].point[L][2]});
     const double off[3] = {0.05, -0.06, 0.02};
     mca_v3_add(E, P, off);
     crit[0][L].valid = 1;
@@ -200,10 +194,10 @@ static void test_collision_rows_fd(void **state)
         sp.form = form ? MCA_FORM_NORMAL : MCA_FORM_COMPONENTWISE;
         sp.v_floor = 0.1;
         mca_scheme_state_reset(&st);
-        assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd,
-                                             (const double(*)[3])rdd, (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit,
-                                             NULL, &st, &qp, &si),
-                         MCA_OK);
+        assert_int_equal(
+            mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
+                                (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, NULL, &st, &qp, &si),
+            MCA_OK);
         const int rpl = form ? 1 : 3;
         assert_int_equal(si.rows_per_link, rpl);
         assert_int_equal(qp.n, 16);
@@ -277,9 +271,10 @@ static void test_collision_rows_fd(void **state)
     double phi[16] = {0};
     phi[1] = 0.3;
     phi[3] = -0.2;
-    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
-                                         (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, phi, &st, &qp, &si),
-                     MCA_OK);
+    assert_int_equal(
+        mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
+                            (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, phi, &st, &qp, &si),
+        MCA_OK);
     const int r0 = si.row_off[0] + 3 * L;
     const double s = mca_brake_s(0.08, sp.d1, sp.d2);
     double cap[3];
@@ -294,24 +289,24 @@ static void test_collision_rows_fd(void **state)
     assert_true(cap[0] + cap[1] + cap[2] > 0.0);
     /* next tick, other velocity, still inside: same captured rates */
     double phi2[16] = {0};
-    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
-                                         (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, phi2, &st, &qp, &si),
-                     MCA_OK);
+    assert_int_equal(
+        mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
+                            (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, phi2, &st, &qp, &si),
+        MCA_OK);
     for (int i = 0; i < 3; i++) {
         assert_true(fabs(qp.beta[r0 + i] - s * cap[i]) < 1e-12);
     }
     /* MVN: no inequality rows at all */
     sp.collision = 0;
-    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd, (const double(*)[3])rdd,
-                                         NULL, NULL, &st, &qp, &si),
+    assert_int_equal(mca_scheme_assemble(&sp, 2, chains, kin, qs, (const double(*)[3])rd,
+                                         (const double(*)[3])rdd, NULL, NULL, &st, &qp, &si),
                      MCA_OK);
     assert_int_equal(qp.n_ineq, 0);
 }
 
 /* ------------------------------------------------------------------ APF (40)-(46) */
 
-static void test_apf(void **state)
-{
+static void test_apf(void **state) {
     (void)state;
     mca_apf_params_t p;
     mca_apf_default_params(&p);
@@ -348,14 +343,14 @@ static void test_apf(void **state)
         }
         assert_true(fabs(s - w[i]) < 1e-12);
     }
-    double Js[3][MCA_MAX_DOF] = {{1, 0, 0, 0, 0, 0, 0, 0}, {2, 0, 0, 0, 0, 0, 0, 0}, {3, 0, 0, 0, 0, 0, 0, 0}};
+    double Js[3][MCA_MAX_DOF] = {
+        {1, 0, 0, 0, 0, 0, 0, 0}, {2, 0, 0, 0, 0, 0, 0, 0}, {3, 0, 0, 0, 0, 0, 0, 0}};
     assert_int_equal(mca_apf_pinv_apply(Js, 6, 0.0, w, qd), MCA_EINFEASIBLE);
 }
 
 /* ------------------------------------------------------------------ paths */
 
-static void test_paths(void **state)
-{
+static void test_paths(void **state) {
     (void)state;
     mca_path_t c;
     memset(&c, 0, sizeof c);
@@ -421,8 +416,7 @@ static void test_paths(void **state)
 
 /* ------------------------------------------------------------------ scenario files */
 
-static const char *write_tmp(const char *name, const char *text)
-{
+static const char *write_tmp(const char *name, const char *text) {
     static char path[256];
     snprintf(path, sizeof path, "/tmp/mca_scheme_test_%d_%s.yaml", (int)getpid(), name);
     FILE *f = fopen(path, "w");
@@ -432,8 +426,7 @@ static const char *write_tmp(const char *name, const char *text)
     return path;
 }
 
-static void test_scenario_files(void **state)
-{
+static void test_scenario_files(void **state) {
     (void)state;
     static mca_scenario_t s;
     char err[1024];
@@ -460,8 +453,9 @@ static void test_scenario_files(void **state)
     assert_int_equal(mca_scenario_load("/nonexistent/x.yaml", &s, err, sizeof err), MCA_ENOENT);
     assert_non_null(strstr(err, "/nonexistent/x.yaml"));
     /* unknown key: libcyaml names it with its line */
-    const char *base = "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n"
-                       "    q0: [0]\n    path:\n      kind: hold\n";
+    const char *base =
+        "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n"
+        "    q0: [0]\n    path:\n      kind: hold\n";
     char buf[1024];
     snprintf(buf, sizeof buf, "%s    bogus: 3\n", base);
     const char *p = write_tmp("unknown", buf);
@@ -488,10 +482,11 @@ static void test_scenario_files(void **state)
     assert_non_null(strstr(err, "d1/d2"));
     remove(p);
     /* waypoints without matching durations */
-    snprintf(buf, sizeof buf,
-             "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
-             "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n        - [1, 0, 0]\n"
-             "      durations: [1]\n");
+    snprintf(
+        buf, sizeof buf,
+        "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
+        "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n        - [1, 0, 0]\n"
+        "      durations: [1]\n");
     p = write_tmp("dur", buf);
     assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
     assert_non_null(strstr(err, "durations"));
@@ -510,14 +505,14 @@ static void test_scenario_files(void **state)
     snprintf(buf, sizeof buf, "%s", SCN("cross_circles.yaml"));
     assert_int_equal(mca_scenario_load(buf, &s, err, sizeof err), MCA_OK);
     s.arm[1].n_q0 = 7;
-    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_EINVAL);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err),
+                     MCA_EINVAL);
     assert_non_null(strstr(err, "q0"));
 }
 
 /* ------------------------------------------------------------------ controller faults */
 
-static void test_controller_faults(void **state)
-{
+static void test_controller_faults(void **state) {
     (void)state;
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
@@ -557,7 +552,7 @@ static void test_controller_faults(void **state)
     }
     q[1][3] = s.arm[1].q0[3];
     assert_int_equal(mca_controller_tick(c, 0.101, qs, qds, &info), MCA_EFAULT);
-    assert_int_equal(info.fault, MCA_CTRL_FAULT_NAN); /* latched */
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_NAN);                /* latched */
     assert_true(info.min_distance > 0.0 && info.min_distance < 1.0); /* distances still reported */
     mca_controller_clear_fault(c);
     assert_int_equal(mca_controller_tick(c, 0.102, qs, qds, &info), MCA_OK);
@@ -576,8 +571,8 @@ static void test_controller_faults(void **state)
     assert_int_equal(mca_controller_init(c, &cfg2), MCA_OK);
     const int rc_mvn = mca_controller_tick(c, 0.0, qs, qds, &info);
     if (rc_mvn != MCA_OK) {
-        print_message("MVN tick: %s (%s) steps %d residual %g\n", mca_ctrl_fault_name(info.fault), info.fault_text,
-                      info.pdnn_steps, info.pdnn_residual);
+        print_message("MVN tick: %s (%s) steps %d residual %g\n", mca_ctrl_fault_name(info.fault),
+                      info.fault_text, info.pdnn_steps, info.pdnn_residual);
     }
     assert_int_equal(rc_mvn, MCA_OK);
     assert_true(info.min_distance < 0.05);
@@ -594,13 +589,16 @@ static void test_controller_faults(void **state)
     free(c);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_brake_values),   cmocka_unit_test(test_diamond_rows),
-        cmocka_unit_test(test_joint_bounds),   cmocka_unit_test(test_collision_rows_fd),
-        cmocka_unit_test(test_apf),            cmocka_unit_test(test_paths),
-        cmocka_unit_test(test_scenario_files), cmocka_unit_test(test_controller_faults),
+        cmocka_unit_test(test_brake_values),
+        cmocka_unit_test(test_diamond_rows),
+        cmocka_unit_test(test_joint_bounds),
+        cmocka_unit_test(test_collision_rows_fd),
+        cmocka_unit_test(test_apf),
+        cmocka_unit_test(test_paths),
+        cmocka_unit_test(test_scenario_files),
+        cmocka_unit_test(test_controller_faults),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -13,8 +13,7 @@
 #include "mca/err.h"
 #include "simrun.h"
 
-static void usage(FILE *f)
-{
+static void usage(FILE *f) {
     fprintf(f, "usage: mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
                "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
                "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
@@ -25,8 +24,7 @@ static void usage(FILE *f)
                "  --summary F    JSON summary of every run (for tests)\n");
 }
 
-static int parse_int(const char *s, int *out)
-{
+static int parse_int(const char *s, int *out) {
     char *end;
     errno = 0;
     long v = strtol(s, &end, 10);
@@ -37,8 +35,7 @@ static int parse_int(const char *s, int *out)
     return 0;
 }
 
-static void csv_name(char *out, size_t len, const char *base, const char *scheme, int multi)
-{
+static void csv_name(char *out, size_t len, const char *base, const char *scheme, int multi) {
     if (!multi) {
         snprintf(out, len, "%s", base);
         return;
@@ -51,8 +48,7 @@ static void csv_name(char *out, size_t len, const char *base, const char *scheme
     }
 }
 
-static void print_dist(double d)
-{
+static void print_dist(double d) {
     if (isnan(d)) {
         printf(" %12s", "-");
     } else {
@@ -60,8 +56,7 @@ static void print_dist(double d)
     }
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     const char *scenario = NULL, *schemes = "mca", *csv = NULL, *dump = NULL, *summary = NULL;
     mca_simrun_opts_t o;
     mca_simrun_default_opts(&o);
@@ -194,7 +189,8 @@ int main(int argc, char **argv)
         }
     }
     const double d1 = scn.params.d1, d2 = scn.params.d2;
-    printf("scenario %s (%s), d1 %.3f m, d2 %.3f m, form %s, arms simulated by %s\n", scn.name, scenario, d1, d2,
+    printf("scenario %s (%s), d1 %.3f m, d2 %.3f m, form %s, arms simulated by %s\n", scn.name, scenario, d1,
+           d2,
            (o.form >= 0 ? o.form : scn.params.form) == MCA_FORM_COMPONENTWISE ? "componentwise" : "normal",
            o.use_backend ? "the sim backend" : "Euler integration");
     if (scn.n_sample_times > 0) {
@@ -213,7 +209,8 @@ int main(int argc, char **argv)
         }
     }
     printf("\n%-6s %12s %9s %12s %12s %12s %9s %9s %10s %10s %10s\n", "scheme", "min d [m]", "at [s]",
-           "max err [m]", "err free[m]", "eq res", "pdnn max", "pdnn avg", "tick p50", "tick p99", "tick max");
+           "max err [m]", "err free[m]", "eq res", "pdnn max", "pdnn avg", "tick p50", "tick p99",
+           "tick max");
     for (int s = 0; s < n_list; s++) {
         const mca_simrun_result_t *r = &res[s];
         printf("%-6s %12.5f %9.3f %12.3e %12.3e %12.3e %9d %9.1f %8.1fus %8.1fus %8.1fus\n", r->scheme,
@@ -224,7 +221,8 @@ int main(int argc, char **argv)
     for (int s = 0; s < n_list; s++) {
         const mca_simrun_result_t *r = &res[s];
         if (r->min_distance < d1) {
-            printf("%s: distance below d1 (%.5f m at %.3f s)\n", r->scheme, r->min_distance, r->min_distance_t);
+            printf("%s: distance below d1 (%.5f m at %.3f s)\n", r->scheme, r->min_distance,
+                   r->min_distance_t);
         }
         if (r->fault) {
             printf("%s: FAULT %s at t = %.3f s (distance %.5f m): %s; %s at %.3f s, min distance after the "
@@ -261,12 +259,13 @@ int main(int argc, char **argv)
                     s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
                     r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
                     isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
-                    isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0, r->pdnn_steps_max,
-                    r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max, r->binding_ticks, r->pdnn_capped,
-                    (long long)r->compute_p50, (long long)r->compute_p99, (long long)r->compute_max, r->dumped,
-                    r->dumped_binding);
+                    isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0,
+                    r->pdnn_steps_max, r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max,
+                    r->binding_ticks, r->pdnn_capped, (long long)r->compute_p50, (long long)r->compute_p99,
+                    (long long)r->compute_max, r->dumped, r->dumped_binding);
             for (int i = 0; i < r->n_samples; i++) {
-                fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i], isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);
+                fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
+                        isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);
             }
             fprintf(f, "]}");
         }

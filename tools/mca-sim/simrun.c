@@ -11,8 +11,7 @@
 #include "mca/err.h"
 #include "mca/sim_backend.h"
 
-const char *mca_simrun_scheme_name(mca_scheme_kind_t s)
-{
+const char *mca_simrun_scheme_name(mca_scheme_kind_t s) {
     switch (s) {
     case MCA_SCHEME_MCA:
         return "mca";
@@ -24,8 +23,7 @@ const char *mca_simrun_scheme_name(mca_scheme_kind_t s)
     return "?";
 }
 
-void mca_simrun_default_opts(mca_simrun_opts_t *o)
-{
+void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     memset(o, 0, sizeof *o);
     o->scheme = MCA_SCHEME_MCA;
     o->form = -1;
@@ -35,14 +33,12 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o)
     o->v_floor = -1.0;
 }
 
-static int cmp_i64(const void *a, const void *b)
-{
+static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
 }
 
-static void csv_header(FILE *f, const mca_controller_config_t *cfg)
-{
+static void csv_header(FILE *f, const mca_controller_config_t *cfg) {
     fprintf(f, "t");
     for (int a = 0; a < cfg->n_arms; a++) {
         for (int j = 0; j < cfg->chain[a].dof; j++) {
@@ -50,16 +46,15 @@ static void csv_header(FILE *f, const mca_controller_config_t *cfg)
         }
     }
     for (int a = 0; a < cfg->n_arms; a++) {
-        fprintf(f, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a, a, a, a, a, a, a,
-                a, a, a);
+        fprintf(f, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a, a, a, a, a,
+                a, a, a, a, a);
     }
     fprintf(f, ",min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,active_rows,binding_rows,"
                "pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault\n");
 }
 
 static void csv_row(FILE *f, const mca_controller_config_t *cfg, double t, double q[][MCA_MAX_DOF],
-                    const mca_tick_info_t *in)
-{
+                    const mca_tick_info_t *in) {
     fprintf(f, "%.4f", t);
     for (int a = 0; a < cfg->n_arms; a++) {
         for (int j = 0; j < cfg->chain[a].dof; j++) {
@@ -67,19 +62,20 @@ static void csv_row(FILE *f, const mca_controller_config_t *cfg, double t, doubl
         }
     }
     for (int a = 0; a < cfg->n_arms; a++) {
-        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1], in->ee[a][2],
-                in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2], in->ee_desired[a][0] - in->ee[a][0],
-                in->ee_desired[a][1] - in->ee[a][1], in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
+        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1],
+                in->ee[a][2], in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
+                in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
+                in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
     }
-    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d\n", in->min_distance,
-            in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0], in->min_p[1], in->min_p[2],
-            in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows, in->binding_rows, in->pdnn_steps,
-            in->pdnn_residual, in->eq_residual, (long long)in->compute_ns, in->fault);
+    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d\n",
+            in->min_distance, in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0],
+            in->min_p[1], in->min_p[2], in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows,
+            in->binding_rows, in->pdnn_steps, in->pdnn_residual, in->eq_residual, (long long)in->compute_ns,
+            in->fault);
 }
 
 int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
-               size_t errlen)
-{
+               size_t errlen) {
     memset(r, 0, sizeof *r);
     snprintf(r->scheme, sizeof r->scheme, "%s", mca_simrun_scheme_name(o->scheme));
     mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
@@ -206,9 +202,10 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
                 (info.fault == MCA_CTRL_FAULT_NOT_CONVERGED || info.fault == MCA_CTRL_FAULT_FAKE_ATTRACTOR)) {
                 /* the QP that failed, for a look with OSQP (phi is zeroed after a fault: none written) */
                 char path[1024];
-                snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json.fault", o->dump_dir, scn->name, r->scheme, k);
-                mca_qp_dump_json(mca_controller_last_qp(ctrl, NULL), NULL, info.pdnn_steps, info.pdnn_residual,
-                                 "fault", path);
+                snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json.fault", o->dump_dir, scn->name,
+                         r->scheme, k);
+                mca_qp_dump_json(mca_controller_last_qp(ctrl, NULL), NULL, info.pdnn_steps,
+                                 info.pdnn_residual, "fault", path);
             }
             r->fault = info.fault;
             r->fault_t = t;
@@ -251,7 +248,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             if (k % every == 0 || (info.binding_rows > 0 && k % every_b == 0)) {
                 char path[1024], tag[128];
                 snprintf(path, sizeof path, "%s/%s-%s-%06d.json", o->dump_dir, scn->name, r->scheme, k);
-                snprintf(tag, sizeof tag, "%s %s t=%.3f binding=%d", scn->name, r->scheme, t, info.binding_rows);
+                snprintf(tag, sizeof tag, "%s %s t=%.3f binding=%d", scn->name, r->scheme, t,
+                         info.binding_rows);
                 const double *phi;
                 const mca_qp_t *qpp = mca_controller_last_qp(ctrl, &phi);
                 if (mca_qp_dump_json(qpp, phi, info.pdnn_steps, info.pdnn_residual, tag, path) == MCA_OK) {

@@ -36,13 +36,13 @@ typedef struct mca_simrun_result {
     char scheme[8];
     int ticks;
     double min_distance, min_distance_t;
-    double max_err;          /**< max |r_d - r| over arms and ticks before any fault [m] */
-    double max_err_free;     /**< same, over ticks where no collision row binds */
-    double max_err_nobrake;  /**< same, over ticks with S(d) = 1 (no link inside d2) */
-    int fault;               /**< first fault (mca_ctrl_fault_t) */
+    double max_err;         /**< max |r_d - r| over arms and ticks before any fault [m] */
+    double max_err_free;    /**< same, over ticks where no collision row binds */
+    double max_err_nobrake; /**< same, over ticks with S(d) = 1 (no link inside d2) */
+    int fault;              /**< first fault (mca_ctrl_fault_t) */
     char fault_text[160];
     double fault_t, fault_distance;
-    int stopped;             /**< 1: all joints at rest after the fault */
+    int stopped; /**< 1: all joints at rest after the fault */
     double stop_t;
     double min_distance_after_fault;
     int n_samples;
@@ -51,8 +51,8 @@ typedef struct mca_simrun_result {
     double pdnn_steps_mean;
     double pdnn_residual_max;
     double eq_residual_max;
-    int binding_ticks;       /**< ticks with at least one binding collision row */
-    int pdnn_capped;         /**< ticks where the PDNN hit its step cap but stayed below fault_residual */
+    int binding_ticks; /**< ticks with at least one binding collision row */
+    int pdnn_capped;   /**< ticks where the PDNN hit its step cap but stayed below fault_residual */
     int64_t compute_p50, compute_p99, compute_max;
     int dumped, dumped_binding;
 } mca_simrun_result_t;

@@ -20,13 +20,13 @@ extern "C" {
 #endif
 
 typedef struct mca_apf_params {
-    double k_pos, d_pos;   /**< K_Pos, D_Pos */
-    double k_vel, d_vel;   /**< K_Vel, D_Vel */
-    double rho;            /**< weight of the position layer */
-    double d;              /**< influence distance [m] */
-    double v_rep_max;      /**< maximum repulsive speed */
-    double theta;          /**< rate factor */
-    double damping;        /**< damped pseudoinverse lambda^2 (0: plain) */
+    double k_pos, d_pos; /**< K_Pos, D_Pos */
+    double k_vel, d_vel; /**< K_Vel, D_Vel */
+    double rho;          /**< weight of the position layer */
+    double d;            /**< influence distance [m] */
+    double v_rep_max;    /**< maximum repulsive speed */
+    double theta;        /**< rate factor */
+    double damping;      /**< damped pseudoinverse lambda^2 (0: plain) */
 } mca_apf_params_t;
 
 /** Table III: K_Pos 100, D_Pos 0.1, K_Vel 5, D_Vel 0.1, rho 0.8, d 0.12, v_Rep-max 0.001, theta 1. */

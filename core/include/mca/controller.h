@@ -54,30 +54,30 @@ typedef enum mca_scheme_kind {
 /** Run-time fault codes (info->fault). */
 typedef enum mca_ctrl_fault {
     MCA_CTRL_FAULT_NONE = 0,
-    MCA_CTRL_FAULT_NAN = 1,           /**< non-finite joint input, QP data or solver output */
-    MCA_CTRL_FAULT_NOT_CONVERGED = 2, /**< PDNN residual above fault_residual at its step cap */
-    MCA_CTRL_FAULT_INFEASIBLE = 3,    /**< joint bounds contradict (arm beyond a limit) */
-    MCA_CTRL_FAULT_DISTANCE = 4,      /**< distance below d1, or predicted below d1 next tick */
-    MCA_CTRL_FAULT_FAKE_ATTRACTOR = 5,/**< equality residual above eq_tol: tracking contradicts avoidance */
-    MCA_CTRL_FAULT_INPUT = 6,         /**< bad call (NULL pointers, solver error) */
+    MCA_CTRL_FAULT_NAN = 1,            /**< non-finite joint input, QP data or solver output */
+    MCA_CTRL_FAULT_NOT_CONVERGED = 2,  /**< PDNN residual above fault_residual at its step cap */
+    MCA_CTRL_FAULT_INFEASIBLE = 3,     /**< joint bounds contradict (arm beyond a limit) */
+    MCA_CTRL_FAULT_DISTANCE = 4,       /**< distance below d1, or predicted below d1 next tick */
+    MCA_CTRL_FAULT_FAKE_ATTRACTOR = 5, /**< equality residual above eq_tol: tracking contradicts avoidance */
+    MCA_CTRL_FAULT_INPUT = 6,          /**< bad call (NULL pointers, solver error) */
 } mca_ctrl_fault_t;
 
 /** Short constant name of a fault code ("fake-attractor", ...). */
 const char *mca_ctrl_fault_name(int fault);
 
 typedef struct mca_controller_config {
-    int n_arms;                          /**< 1..MCA_MAX_ARMS */
-    mca_chain_t chain[MCA_MAX_ARMS];     /**< copied; base placement set */
-    mca_path_t path[MCA_MAX_ARMS];       /**< desired end-effector path of each arm (copied) */
+    int n_arms;                      /**< 1..MCA_MAX_ARMS */
+    mca_chain_t chain[MCA_MAX_ARMS]; /**< copied; base placement set */
+    mca_path_t path[MCA_MAX_ARMS];   /**< desired end-effector path of each arm (copied) */
     mca_scheme_kind_t scheme;
-    mca_scheme_params_t sp;              /**< d1, d2, K, epsilon, collision form, ... */
+    mca_scheme_params_t sp; /**< d1, d2, K, epsilon, collision form, ... */
     mca_pdnn_params_t pdnn;
     mca_apf_params_t apf;
-    mca_dist_method_t dist_method;       /**< MCA_DIST_CLOSED (default, exact) or MCA_DIST_LSDM */
-    double dt;                           /**< tick period [s] (prediction of the next distance, APF D terms) */
-    double fault_residual;               /**< PDNN residual that is a fault at the step cap (1e-6) */
-    double eq_tol;                       /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
-    int fault_distance;                  /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
+    mca_dist_method_t dist_method; /**< MCA_DIST_CLOSED (default, exact) or MCA_DIST_LSDM */
+    double dt;                     /**< tick period [s] (prediction of the next distance, APF D terms) */
+    double fault_residual;         /**< PDNN residual that is a fault at the step cap (1e-6) */
+    double eq_tol;                 /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
+    int fault_distance;            /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
 } mca_controller_config_t;
 
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
@@ -94,37 +94,37 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
 
 /** Report of one tick. */
 typedef struct mca_tick_info {
-    double t;                               /**< the tick's t */
-    double task_t;                          /**< t - t_start */
+    double t;      /**< the tick's t */
+    double task_t; /**< t - t_start */
     int n_arms;
     /* distances (all pairs of arms; the global minimum) */
-    double min_distance;                    /**< surface distance [m] (+INF with one arm) */
-    int min_arm_a, min_link_a;              /**< critical pair: arm/link with P */
-    int min_arm_b, min_link_b;              /**< arm/link with E */
+    double min_distance;       /**< surface distance [m] (+INF with one arm) */
+    int min_arm_a, min_link_a; /**< critical pair: arm/link with P */
+    int min_arm_b, min_link_b; /**< arm/link with E */
     double min_p[3], min_e[3];
     double link_distance[MCA_MAX_ARMS][MCA_MAX_LINKS]; /**< per link: closest link of any other arm */
-    double brake;                           /**< smallest S(d) over the links (1: free) */
-    int active_rows;                        /**< collision rows with a finite bound */
-    int binding_rows;                       /**< collision rows at their bound (U phi >= beta - 1e-9) */
+    double brake;                                      /**< smallest S(d) over the links (1: free) */
+    int active_rows;                                   /**< collision rows with a finite bound */
+    int binding_rows; /**< collision rows at their bound (U phi >= beta - 1e-9) */
     /* solver */
     int pdnn_steps;
     double pdnn_residual;
     int pdnn_converged;
-    double eq_residual;                     /**< ||G phi - alpha||_inf [m/s] */
+    double eq_residual; /**< ||G phi - alpha||_inf [m/s] */
     /* tracking */
-    double ee[MCA_MAX_ARMS][3];             /**< actual end effector */
+    double ee[MCA_MAX_ARMS][3]; /**< actual end effector */
     double ee_desired[MCA_MAX_ARMS][3];
-    double ee_error[MCA_MAX_ARMS];          /**< |r_d - r| [m] */
+    double ee_error[MCA_MAX_ARMS]; /**< |r_d - r| [m] */
     /* outcome */
-    int fault;                              /**< mca_ctrl_fault_t */
+    int fault; /**< mca_ctrl_fault_t */
     char fault_text[160];
-    int64_t compute_ns;                     /**< CLOCK_MONOTONIC time spent in the tick */
+    int64_t compute_ns; /**< CLOCK_MONOTONIC time spent in the tick */
 } mca_tick_info_t;
 
 /** Controller state (~160 kB: keep it static or on the heap; allocated by the caller at start-up). */
 typedef struct mca_controller {
     mca_controller_config_t cfg;
-    int started;                            /**< paths anchored */
+    int started; /**< paths anchored */
     double t_start;
     int fault;
     char fault_text[160];

@@ -32,15 +32,15 @@ typedef enum mca_path_kind {
 
 typedef struct mca_path {
     mca_path_kind_t kind;
-    int relative;    /**< 1: points/centre are offsets from the anchor (end effector at start) */
+    int relative;     /**< 1: points/centre are offsets from the anchor (end effector at start) */
     double anchor[3]; /**< set by mca_path_anchor() (zero until then) */
-    double t0;       /**< path time offset: the path starts at task time t0 (holds before) */
+    double t0;        /**< path time offset: the path starts at task time t0 (holds before) */
     /* circle: r(s) = anchor - R u + R (cos phi u + sin phi v), phi = turns * 2 pi sin^2(pi s / 2T) */
     double radius;
-    double u[3];     /**< unit, in-plane: anchor sits at centre + R u */
-    double v[3];     /**< unit, in-plane, orthogonal to u */
-    double period;   /**< T [s] */
-    double turns;    /**< full turns in T (1) */
+    double u[3];   /**< unit, in-plane: anchor sits at centre + R u */
+    double v[3];   /**< unit, in-plane, orthogonal to u */
+    double period; /**< T [s] */
+    double turns;  /**< full turns in T (1) */
     /* waypoints: p[0] is the start (the anchor, set by mca_path_anchor: offset 0 when relative), then the
      * file's points p[1..n_points-1]; segment i from p[i] to p[i+1] lasts dur[i]; a segment back to the
      * same point is a dwell */
@@ -65,35 +65,35 @@ double mca_path_end_time(const mca_path_t *path);
 /** One arm of a scenario. */
 typedef struct mca_scenario_arm {
     char name[32];
-    char urdf[512];      /**< absolute path (relative paths in the file are resolved against the file) */
-    char tip_link[64];   /**< "" = the single leaf link */
+    char urdf[512];    /**< absolute path (relative paths in the file are resolved against the file) */
+    char tip_link[64]; /**< "" = the single leaf link */
     double base_xyz[3];
     double base_rpy[3];
-    int n_q0;            /**< entries given for q0 (must equal the chain's dof once loaded) */
+    int n_q0; /**< entries given for q0 (must equal the chain's dof once loaded) */
     double q0[MCA_MAX_DOF];
     mca_path_t path;
 } mca_scenario_arm_t;
 
 /** Scheme and fault parameters a scenario may set (defaults in mca_scenario_defaults()). */
 typedef struct mca_scenario_params {
-    double d1, d2;          /**< inner/outer safety thresholds [m] */
-    double K;               /**< position feedback gain [1/s] */
-    double epsilon;         /**< joint-limit gain of (19) [1/s] */
-    double dt;              /**< tick period [s] (0.001) */
-    double v_normal;        /**< normal form: allowed approach speed S(d) * v_normal [m/s] */
-    double v_floor;         /**< componentwise form: least captured approach rate [m/s] */
-    int form;               /**< mca_collision_form_t (0 componentwise, 1 normal) */
+    double d1, d2;   /**< inner/outer safety thresholds [m] */
+    double K;        /**< position feedback gain [1/s] */
+    double epsilon;  /**< joint-limit gain of (19) [1/s] */
+    double dt;       /**< tick period [s] (0.001) */
+    double v_normal; /**< normal form: allowed approach speed S(d) * v_normal [m/s] */
+    double v_floor;  /**< componentwise form: least captured approach rate [m/s] */
+    int form;        /**< mca_collision_form_t (0 componentwise, 1 normal) */
 } mca_scenario_params_t;
 
 typedef struct mca_scenario {
     char name[64];
-    char source[512];     /**< file it was loaded from */
+    char source[512]; /**< file it was loaded from */
     int n_arms;
     mca_scenario_arm_t arm[MCA_MAX_ARMS];
-    double duration;      /**< task length [s] */
-    int has_form;         /**< 1 when the file set the collision form */
+    double duration; /**< task length [s] */
+    int has_form;    /**< 1 when the file set the collision form */
     mca_scenario_params_t params;
-    int n_sample_times;   /**< instants for the Table-I style report */
+    int n_sample_times; /**< instants for the Table-I style report */
     double sample_times[16];
 } mca_scenario_t;
 

@@ -35,24 +35,24 @@ typedef enum mca_collision_form {
 } mca_collision_form_t;
 
 typedef struct mca_scheme_params {
-    int collision;              /**< 1: collision rows (MCA), 0: none (MVN (25)-(27)) */
+    int collision; /**< 1: collision rows (MCA), 0: none (MVN (25)-(27)) */
     mca_collision_form_t form;
-    double d1, d2;              /**< safety thresholds [m], 0 <= d1 < d2 */
-    double K;                   /**< position feedback gain [1/s] */
-    double epsilon;             /**< joint-limit gain of (19) [1/s] */
-    double v_normal;            /**< normal form: approach speed allowed at d >= d2 [m/s] */
-    double v_floor;             /**< componentwise: least allowed approach speed per axis [m/s] */
-    double big;                 /**< bound of an inactive row (the PDNN's varpi or less) */
+    double d1, d2;   /**< safety thresholds [m], 0 <= d1 < d2 */
+    double K;        /**< position feedback gain [1/s] */
+    double epsilon;  /**< joint-limit gain of (19) [1/s] */
+    double v_normal; /**< normal form: approach speed allowed at d >= d2 [m/s] */
+    double v_floor;  /**< componentwise: least allowed approach speed per axis [m/s] */
+    double big;      /**< bound of an inactive row (the PDNN's varpi or less) */
 } mca_scheme_params_t;
 
 /** Critical point of one link against the closest link of the other arms. */
 typedef struct mca_link_critical {
-    int valid;        /**< 0: no other arm (row inactive) */
+    int valid; /**< 0: no other arm (row inactive) */
     int other_arm;
     int other_link;
-    double d;         /**< surface distance [m] */
-    double p[3];      /**< on this link's axis */
-    double e[3];      /**< on the other link's axis */
+    double d;    /**< surface distance [m] */
+    double p[3]; /**< on this link's axis */
+    double e[3]; /**< on the other link's axis */
 } mca_link_critical_t;
 
 /** Memory between ticks (componentwise capture). Zero it with mca_scheme_state_reset(). */
@@ -63,11 +63,11 @@ typedef struct mca_scheme_state {
 
 /** What one assembly found. */
 typedef struct mca_scheme_info {
-    int active_rows;     /**< collision rows with a finite bound */
-    double brake;        /**< smallest S(d) over the links with a critical point (1 when none) */
+    int active_rows; /**< collision rows with a finite bound */
+    double brake;    /**< smallest S(d) over the links with a critical point (1 when none) */
     int var_off[MCA_MAX_ARMS];
     int row_off[MCA_MAX_ARMS]; /**< first inequality row of each arm */
-    int rows_per_link;   /**< 3 componentwise, 1 normal, 0 MVN */
+    int rows_per_link;         /**< 3 componentwise, 1 normal, 0 MVN */
 } mca_scheme_info_t;
 
 /** Defaults: collision on, normal form, d1 0.05, d2 0.12, K 20, epsilon 5, v_normal 0.5, v_floor 0,
