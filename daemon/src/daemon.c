@@ -45,6 +45,7 @@ struct mca_daemon {
     int have_fb[MCA_MAX_ARMS];
     int lost[MCA_MAX_ARMS];
     uint64_t bus_errors[MCA_MAX_ARMS];
+    int not_servo[MCA_MAX_ARMS]; /* ticks RUNNING with the arm not servoing */
     mca_arm_command_t cmd[MCA_MAX_ARMS];
     double q[MCA_MAX_ARMS][MCA_MAX_DOF];
     double qdot[MCA_MAX_ARMS][MCA_MAX_DOF];
@@ -311,6 +312,18 @@ static int ctrl_fault_code(int f) {
     }
 }
 
+/* "arm NAME<mid><tail>" without formatting (rt path). */
+static void arm_text(char *txt, size_t len, const char *name, const char *mid, const char *tail) {
+    const char *parts[4] = {"arm ", name, mid, tail};
+    size_t k = 0;
+    for (int i = 0; i < 4; i++) {
+        for (const char *c = parts[i]; *c && k + 1 < len; c++) {
+            txt[k++] = *c;
+        }
+    }
+    txt[k] = 0;
+}
+
 /* Read every arm's feedback; counts lost cycles and latches arm/link faults. */
 static void read_feedback(mca_daemon_t *d, double t) {
     const int running = atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING;
@@ -326,24 +339,20 @@ static void read_feedback(mca_daemon_t *d, double t) {
             }
             if (running && (fb.state == MCA_ARM_FAULT || fb.state == MCA_ARM_BRAKING)) {
                 char txt[96];
-                /* constant strings only: no formatting on the rt path */
-                const char *name = d->cell.scn.arm[a].name;
-                size_t k = 0;
-                const char *pre = "arm ";
-                for (const char *s = pre; *s && k < sizeof txt - 1; s++) {
-                    txt[k++] = *s;
-                }
-                for (const char *s = name; *s && k < sizeof txt - 1; s++) {
-                    txt[k++] = *s;
-                }
-                const char *mid = fb.state == MCA_ARM_FAULT ? " reports FAULT " : " brakes on its own: ";
-                for (const char *s = mid; *s && k < sizeof txt - 1; s++) {
-                    txt[k++] = *s;
-                }
-                for (const char *s = mca_arm_fault_name(fb.fault_code); *s && k < sizeof txt - 1; s++) {
-                    txt[k++] = *s;
-                }
-                txt[k] = 0;
+                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name,
+                         fb.state == MCA_ARM_FAULT ? " reports FAULT " : " brakes on its own: ",
+                         mca_arm_fault_name(fb.fault_code));
+                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t);
+            }
+            /* an arm that keeps its brakes on while commanded (commands rejected) is a fault too */
+            d->not_servo[a] =
+                running && (fb.state == MCA_ARM_READY || fb.state == MCA_ARM_INIT) ? d->not_servo[a] + 1 : 0;
+            const int not_servo_limit =
+                2 * d->cell.rt.lost_feedback_cycles > 100 ? 2 * d->cell.rt.lost_feedback_cycles : 100;
+            if (d->not_servo[a] >= not_servo_limit) {
+                char txt[96];
+                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " does not servo: state ",
+                         mca_arm_state_name(fb.state));
                 latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t);
             }
         } else if (rc == MCA_EIO) {

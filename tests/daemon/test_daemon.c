@@ -235,6 +235,33 @@ static void test_arm_fault_is_a_fault(void **state) {
     free(cell);
 }
 
+static void test_arm_not_servoing_is_a_fault(void **state) {
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    mca_daemon_t *d = open_daemon(cell);
+    /* every command to the right arm is lost before its firmware: it stays READY, brakes on */
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, 1));
+    fw->cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_DROP_RX, .at_cycle = fw->cycle, .duration = 0};
+    fw->cfg.n_inject = 1;
+    double t = 0.0;
+    int k = 0, st;
+    do {
+        st = mca_daemon_step(d, t, 0);
+        t += 0.001;
+        k++;
+    } while (st == MCA_DAEMON_RUNNING && k < 1000);
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    print_message("  after %d ticks: %s\n", k, s.fault_text);
+    /* limit: max(100, 2 * lost_feedback_cycles = 10) ticks (the first read is the pre-start state) */
+    assert_true(k >= 100 && k <= 102);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_ARM);
+    assert_string_equal(s.fault_text, "arm right does not servo: state READY");
+    mca_daemon_close(d);
+    free(cell);
+}
+
 static void test_distance_fault(void **state) {
     (void)state;
     /* the right arm's base 0.1 m from the left one: the links overlap at once (distance < d1) */
@@ -341,6 +368,7 @@ int main(void) {
         cmocka_unit_test(test_stop_brakes_within_limits),
         cmocka_unit_test(test_lost_feedback_faults_and_brakes),
         cmocka_unit_test(test_arm_fault_is_a_fault),
+        cmocka_unit_test(test_arm_not_servoing_is_a_fault),
         cmocka_unit_test(test_distance_fault),
         cmocka_unit_test(test_histogram_vs_sorted),
         cmocka_unit_test(test_rtlog),
