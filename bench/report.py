@@ -68,6 +68,7 @@ def fmt(x, nd=1, unit=""):
 def tick_rows(raw):
     out = {}
     for key, label in (("cross_circles", "dual PA10+ (n=8), task 1 cross circles"),
+                       ("cup_stacking_dual_jaco2", "dual JACO2 (n=6), task 3 with a JACO2 in the MICO2's place"),
                        ("cup_stacking", "JACO2 + MICO2 (n=6), task 3 cup stacking")):
         d = load_json(os.path.join(raw, f"tick_{key}.json"))
         if not d or "run" not in d:
@@ -256,7 +257,7 @@ def main():
     # 1
     ticks = tick_rows(raw)
     R["tick"] = ticks
-    for key in ("cross_circles", "cup_stacking"):
+    for key in ("cross_circles", "cup_stacking_dual_jaco2", "cup_stacking"):
         t = ticks[key]
         if "error" in t:
             rows.append((f"1. tick compute, {t['label']}", "not measured", "1 ms period", "-", t["error"]))
@@ -349,6 +350,19 @@ def main():
                                                                             "max_us")),
             f"mcad/cyclictest; {jit_m['ticks']} vs {cyc['samples']} wake-ups, SCHED_FIFO 80, 1 ms, mlockall, "
             f"cpu_dma_latency 0; mcad overruns {jit_m['overruns']}"))
+        cyc2 = cyclictest_stats(read(os.path.join(raw, "cyclictest_concurrent.txt")))
+        jm2 = mcad_summary(read(os.path.join(raw, "mcad_concurrent.log")))
+        R["jitter"]["concurrent"] = {"mcad": jm2, "cyclictest": cyc2}
+        if cyc2 and jm2:
+            rows.append((
+                "4b. the same, mcad and cyclictest running at the same time",
+                f"p50 {fmt(jm2['p50_us'])} / p99 {fmt(jm2['p99_us'])} / p99.9 {fmt(jm2['p999_us'])} / max "
+                f"{fmt(jm2['max_us'])} us",
+                f"cyclictest p50 {fmt(cyc2['p50_us'])} / p99 {fmt(cyc2['p99_us'])} / p99.9 {fmt(cyc2['p999_us'])} / "
+                f"max {fmt(cyc2['max_us'])} us",
+                " / ".join(fmt(jm2[k] / cyc2[k] if cyc2[k] else None, 2) for k in ("p50_us", "p99_us", "p999_us",
+                                                                                "max_us")),
+                f"same host disturbances for both; mcad overruns {jm2['overruns']}"))
     else:
         rows.append(("4. wake-up jitter", "not measured", "cyclictest", "-",
                      "mcad or cyclictest output missing: see raw/mcad_jitter.log, raw/cyclictest.txt"))
@@ -370,18 +384,18 @@ def main():
                       "max": num(r"max ([0-9.]+) us \(n=", lat), "n": num(r"\(n=(\d+)\)", lat, cast=int)}
     dds["mcad_on"] = on
     R["dds"] = dds
+    if dds.get("ratio_p50") is not None:
+        rows.append(("5. DDS on vs off: bench/dds (100 us synthetic tick, every tick published, ON/OFF blocks interleaved)",
+                     f"on p50 {fmt(dds['on_p50'])} us, push {fmt(dds['push_p50'], 2)} us",
+                     f"off p50 {fmt(dds['off_p50'])} us", f"{dds['ratio_p50']:.3f} / {dds['ratio_p99']:.3f}",
+                     f"dropped {dds['dropped']} of {dds['offered']} snapshots"))
     if on and jit_m:
-        rows.append(("5. DDS on vs off: mcad whole tick (task 1, real loop)",
+        rows.append(("5b. DDS on vs off: mcad whole tick (task 1, real loop, two runs one after the other)",
                      f"on p50 {fmt(on['compute_p50_us'])} / p99 {fmt(on['compute_p99_us'])} us",
                      f"off p50 {fmt(jit_m['compute_p50_us'])} / p99 {fmt(jit_m['compute_p99_us'])} us",
                      f"{on['compute_p50_us'] / jit_m['compute_p50_us']:.2f} / "
                      f"{on['compute_p99_us'] / jit_m['compute_p99_us']:.2f}",
-                     "on/off at p50 / p99; cell publish_divisor 10 (100 Hz), mca-monitor subscribed"))
-    if dds.get("ratio_p50") is not None:
-        rows.append(("5b. DDS on vs off: bench/dds (100 us synthetic tick, every tick published)",
-                     f"on p50 {fmt(dds['on_p50'])} us, push {fmt(dds['push_p50'], 2)} us",
-                     f"off p50 {fmt(dds['off_p50'])} us", f"{dds['ratio_p50']:.3f} / {dds['ratio_p99']:.3f}",
-                     f"dropped {dds['dropped']} of {dds['offered']} snapshots"))
+                     "on/off at p50 / p99; cell publish_divisor 10 (100 Hz), mca-monitor subscribed; sequential runs: host load drift shows here, the push itself is < 1 us (row 5)"))
     if dds["latency"]["p50"] is not None:
         L = dds["latency"]
         rows.append(("5c. DDS latency tick stamp -> mca-monitor receipt", f"p50 {fmt(L['p50'])} / p99 "

@@ -46,13 +46,20 @@ have() { [ -x "$1" ] || { echo "bench: $1 not built: row skipped" >&2; return 1;
 # 1 + 2. controller tick over the tasks (virtual time), per-stage split, QP blocks for OSQP
 TICK=$B/bench/scaling/bench_tick
 if have "$TICK"; then
-    step "tick: task 1 (dual PA10+) and task 3 (JACO2 + MICO2), $FIFO SCHED_FIFO"
+    step "tick: task 1 (dual PA10+), task 3 (JACO2 + MICO2) and task 3 with two JACO2, SCHED_FIFO $FIFO"
     "$TICK" task --scenario "$ROOT/config/scenarios/cross_circles.yaml" --fifo $FIFO --qp-dir "$RAW/qp_cross_circles" \
         --qp-every $QP_EVERY --qp-block 10 --out "$RAW/tick_cross_circles.json" 2>"$RAW/tick_cross_circles.err"
     # shellcheck disable=SC2086
     "$TICK" task --scenario "$ROOT/config/scenarios/cup_stacking.yaml" --fifo $FIFO --qp-dir "$RAW/qp_cup_stacking" \
         --qp-every $((QP_EVERY * 4)) --qp-block 10 $TICKS_CS --out "$RAW/tick_cup_stacking.json" \
         2>"$RAW/tick_cup_stacking.err"
+    # dual JACO2: task 3 with the MICO2 replaced by a second JACO2 (same waypoints, bases, q0)
+    sed -e "s#urdf: \.\./robots/[a-z0-9]*\.urdf#urdf: $ROOT/config/robots/jaco2.urdf#" \
+        -e "s/^name: .*/name: cup_stacking_dual_jaco2/" "$ROOT/config/scenarios/cup_stacking.yaml" \
+        >"$RAW/cup_stacking_dual_jaco2.yaml"
+    # shellcheck disable=SC2086
+    "$TICK" task --scenario "$RAW/cup_stacking_dual_jaco2.yaml" --fifo $FIFO $TICKS_CS \
+        --out "$RAW/tick_cup_stacking_dual_jaco2.json" 2>"$RAW/tick_cup_stacking_dual_jaco2.err"
     step "scaling: 2-4 arms x 4-8 joints, d2 sweep"
     # shellcheck disable=SC2086
     "$TICK" scaling --urdf-dir "$ROOT/config/robots" --fifo $FIFO $SCALE --out "$RAW/scaling.json" \
@@ -92,6 +99,16 @@ if command -v cyclictest >/dev/null; then
     cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h 2000 >"$RAW/cyclictest.txt" 2>&1
 else
     echo "cyclictest missing (apt-get install rt-tests)" >"$RAW/cyclictest.txt"
+fi
+
+# 4b. both at once: the same host disturbances hit both (each wakes for < 50 us of a 1 ms period)
+if have "$MCAD" && command -v cyclictest >/dev/null; then
+    step "jitter: mcad and cyclictest at the same time, $JIT s"
+    cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h 2000 >"$RAW/cyclictest_concurrent.txt" 2>&1 &
+    cyc=$!
+    "$MCAD" --no-dds --stop-after "$JIT" "$CELL" >"$RAW/mcad_concurrent.out" 2>"$RAW/mcad_concurrent.log"
+    echo "exit $?" >>"$RAW/mcad_concurrent.log"
+    wait $cyc
 fi
 
 # 5. DDS publishing on vs off
