@@ -236,7 +236,8 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s)
 static void *publisher_main(void *arg)
 {
     mca_dds_bridge_t *b = arg;
-    const struct timespec nap = {0, (long)b->cfg.poll_period_us * 1000L};
+    const struct timespec nap = {(time_t)(b->cfg.poll_period_us / 1000000u),
+                                 (long)(b->cfg.poll_period_us % 1000000u) * 1000L};
     for (;;) {
         /* Read stop BEFORE trying the ring: once stop is seen, one more empty pop means drained. */
         const int stop = atomic_load_explicit(&b->stop, memory_order_acquire);

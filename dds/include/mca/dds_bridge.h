@@ -7,8 +7,8 @@
  * snapshots are dropped and counted, never the loop delayed.
  *
  * Topics (types in dds/mca_dds.idl, QoS in docs/dds.md), one sample per published snapshot:
- *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id)
- *   mca/joint_command    mca::dds::JointCommand     one per arm   (key arm_id)
+ *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id = index in arm[])
+ *   mca/joint_command    mca::dds::JointCommand     one per arm   (key arm_id = index in arm[])
  *   mca/distances        mca::dds::Distances        one per pair  (key pair_id = index in pair[])
  *   mca/controller_status mca::dds::ControllerStatus every status_divisor-th published snapshot,
  *                        on any change of state or fault code, and once more at destroy.
