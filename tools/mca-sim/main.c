@@ -220,6 +220,11 @@ int main(int argc, char **argv) {
     }
     for (int s = 0; s < n_list; s++) {
         const mca_simrun_result_t *r = &res[s];
+        printf("%s: tick thread CPU time p50 %.1f us, p99 %.1f us, max %.1f us\n", r->scheme,
+               r->cpu_p50 / 1e3, r->cpu_p99 / 1e3, r->cpu_max / 1e3);
+    }
+    for (int s = 0; s < n_list; s++) {
+        const mca_simrun_result_t *r = &res[s];
         if (r->min_distance < d1) {
             printf("%s: distance below d1 (%.5f m at %.3f s)\n", r->scheme, r->min_distance,
                    r->min_distance_t);
@@ -255,14 +260,16 @@ int main(int argc, char **argv) {
                     "\"stop_t\":%.6g,\"min_distance_after_fault\":%.9g,\"pdnn_steps_max\":%d,"
                     "\"pdnn_steps_mean\":%.3f,\"pdnn_residual_max\":%.3g,\"eq_residual_max\":%.3g,"
                     "\"binding_ticks\":%d,\"pdnn_capped\":%d,\"compute_p50_ns\":%lld,\"compute_p99_ns\":%lld,"
-                    "\"compute_max_ns\":%lld,\"dumped\":%d,\"dumped_binding\":%d,\"samples\":[",
+                    "\"compute_max_ns\":%lld,\"cpu_p50_ns\":%lld,\"cpu_p99_ns\":%lld,\"cpu_max_ns\":%lld,"
+                    "\"dumped\":%d,\"dumped_binding\":%d,\"samples\":[",
                     s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
                     r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
                     isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
                     isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0,
                     r->pdnn_steps_max, r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max,
                     r->binding_ticks, r->pdnn_capped, (long long)r->compute_p50, (long long)r->compute_p99,
-                    (long long)r->compute_max, r->dumped, r->dumped_binding);
+                    (long long)r->compute_max, (long long)r->cpu_p50, (long long)r->cpu_p99,
+                    (long long)r->cpu_max, r->dumped, r->dumped_binding);
             for (int i = 0; i < r->n_samples; i++) {
                 fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
                         isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "mca/arm.h"
 #include "mca/err.h"
@@ -81,7 +82,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
     mca_controller_t *ctrl = calloc(1, sizeof *ctrl);
     mca_arm_t *arm[MCA_MAX_ARMS] = {0};
-    int64_t *cns = NULL;
+    int64_t *cns = NULL, *cpu = NULL;
     FILE *csv = NULL;
     int rc = MCA_OK;
     if (!cfg || !ctrl) {
@@ -115,7 +116,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     const int n_ticks = (int)llround(duration / dt) + 1;
     const int max_ticks = n_ticks + (int)llround((o->settle + 5.0) / dt);
     cns = calloc((size_t)max_ticks, sizeof *cns);
-    if (!cns) {
+    cpu = calloc((size_t)max_ticks, sizeof *cpu);
+    if (!cns || !cpu) {
         rc = MCA_ENOMEM;
         goto out;
     }
@@ -181,7 +183,11 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         if (!r->fault && k >= n_ticks) {
             break;
         }
+        struct timespec c0, c1;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
         const int trc = mca_controller_tick(ctrl, t, qp_, qdp, &info);
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+        cpu[k] = (int64_t)(c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec);
         cns[k] = info.compute_ns;
         if (trc != MCA_OK && trc != MCA_EFAULT) {
             snprintf(err, errlen, "tick failed: %s", mca_strerror(trc));
@@ -301,6 +307,10 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         r->compute_p50 = cns[k / 2];
         r->compute_p99 = cns[(int)(0.99 * (k - 1))];
         r->compute_max = cns[k - 1];
+        qsort(cpu, (size_t)k, sizeof *cpu, cmp_i64);
+        r->cpu_p50 = cpu[k / 2];
+        r->cpu_p99 = cpu[(int)(0.99 * (k - 1))];
+        r->cpu_max = cpu[k - 1];
     }
 out:
     if (csv) {
@@ -310,6 +320,7 @@ out:
         mca_arm_close(arm[a]);
     }
     free(cns);
+    free(cpu);
     free(ctrl);
     free(cfg);
     return rc;

@@ -53,7 +53,8 @@ typedef struct mca_simrun_result {
     double eq_residual_max;
     int binding_ticks; /**< ticks with at least one binding collision row */
     int pdnn_capped;   /**< ticks where the PDNN hit its step cap but stayed below fault_residual */
-    int64_t compute_p50, compute_p99, compute_max;
+    int64_t compute_p50, compute_p99, compute_max; /**< info.compute_ns (CLOCK_MONOTONIC, wall) */
+    int64_t cpu_p50, cpu_p99, cpu_max;             /**< thread CPU time of the tick call (no preemption) */
     int dumped, dumped_binding;
 } mca_simrun_result_t;
 
