@@ -17,7 +17,7 @@ static void usage(FILE *f) {
     fprintf(f, "usage: mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
                "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
                "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
-               "               [--pdnn-max-steps N]\n"
+               "               [--pdnn-max-steps N] [--dist closed|lsdm]\n"
                "  --csv OUT      per-tick CSV (with several schemes: OUT gets -<scheme> before .csv)\n"
                "  --dump-qp DIR  write QPs (mca_qp_dump_json with the PDNN's phi) for tools/qp-check\n"
                "  --euler        integrate qdot directly instead of the in-process sim backend\n"
@@ -120,6 +120,15 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "mca-sim: --duration: bad value '%s'\n", v);
                 return 2;
             }
+        } else if (!strcmp(a, "--dist")) {
+            if (!strcmp(v, "lsdm")) {
+                o.dist_lsdm = 1;
+            } else if (!strcmp(v, "closed")) {
+                o.dist_lsdm = 0;
+            } else {
+                fprintf(stderr, "mca-sim: --dist: '%s' is not closed or lsdm\n", v);
+                return 2;
+            }
         } else if (!strcmp(a, "--form")) {
             if (!strcmp(v, "componentwise")) {
                 o.form = MCA_FORM_COMPONENTWISE;
@@ -189,10 +198,10 @@ int main(int argc, char **argv) {
         }
     }
     const double d1 = scn.params.d1, d2 = scn.params.d2;
-    printf("scenario %s (%s), d1 %.3f m, d2 %.3f m, form %s, arms simulated by %s\n", scn.name, scenario, d1,
-           d2,
+    printf("scenario %s (%s), d1 %.3f m, d2 %.3f m, form %s, distances %s, arms simulated by %s\n", scn.name,
+           scenario, d1, d2,
            (o.form >= 0 ? o.form : scn.params.form) == MCA_FORM_COMPONENTWISE ? "componentwise" : "normal",
-           o.use_backend ? "the sim backend" : "Euler integration");
+           o.dist_lsdm ? "LSDM" : "closed form", o.use_backend ? "the sim backend" : "Euler integration");
     if (scn.n_sample_times > 0) {
         printf("\nminimum distance at sampled instants (Table I style)\n%8s %8s %8s", "t", "d1", "d2");
         for (int s = 0; s < n_list; s++) {

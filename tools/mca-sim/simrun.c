@@ -102,6 +102,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     if (o->v_floor >= 0.0) {
         cfg->sp.v_floor = o->v_floor;
     }
+    if (o->dist_lsdm) {
+        cfg->dist_method = MCA_DIST_LSDM;
+    }
     if (o->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = o->pdnn_max_steps;
     }

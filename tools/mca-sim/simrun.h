@@ -30,6 +30,7 @@ typedef struct mca_simrun_opts {
     int pdnn_max_steps;   /**< > 0: override */
     double v_normal;      /**< > 0: override the scenario's */
     double v_floor;       /**< >= 0: override the scenario's (< 0: keep) */
+    int dist_lsdm;        /**< 1: the paper's LSDM for the distances instead of the closed form */
 } mca_simrun_opts_t;
 
 typedef struct mca_simrun_result {
