@@ -1,7 +1,8 @@
 #!/bin/sh
 # Boot the vcan guest once and run JOB (a shell script on the host tree, same path in the guest chroot).
 # The job's exit status comes back as this script's exit status (marker line on the serial console).
-# Usage: run.sh CACHE_DIR JOB [TIMEOUT_S]       env: MCA_GUEST_LOG=file (serial console copy)
+# Usage: run.sh CACHE_DIR JOB [TIMEOUT_S]
+#   env: MCA_GUEST_LOG=file (serial console copy), MCA_GUEST_SMP=vCPUs (default 2)
 set -eu
 cache=${1:?usage: run.sh CACHE_DIR JOB [TIMEOUT_S]}
 job=${2:?usage: run.sh CACHE_DIR JOB [TIMEOUT_S]}
@@ -14,7 +15,7 @@ case "$job" in /*) ;; *) job="$(pwd)/$job" ;; esac
 [ -r "$job" ] || { echo "vcan-guest: job $job not readable" >&2; exit 1; }
 log=${MCA_GUEST_LOG:-$cache/console.log}
 # TCG (KVM hangs on these hosts); 9p shares the host / so the guest runs the build tree in place.
-timeout -k 10 "$tmo" qemu-system-x86_64 -machine q35 -accel tcg -cpu max -m 1024 -smp 2 \
+timeout -k 10 "$tmo" qemu-system-x86_64 -machine q35 -accel tcg -cpu max -m 1024 -smp "${MCA_GUEST_SMP:-2}" \
     -nographic -no-reboot -nodefaults -serial stdio -net none \
     -kernel "$cache/vmlinuz" -initrd "$cache/initrd.gz" \
     -append "console=ttyS0 quiet loglevel=3 panic=-1 mcajob=$job" \
