@@ -29,7 +29,7 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     o->scheme = MCA_SCHEME_MCA;
     o->form = -1;
     o->use_backend = 1;
-    o->dump_every = 10;
+    o->dump_every = 1;
     o->settle = 0.2;
     o->v_floor = -1.0;
 }

@@ -23,14 +23,14 @@ typedef struct mca_simrun_opts {
     int use_backend;      /**< 1: sim backend (default), 0: Euler integration q += qdot dt */
     const char *csv_path; /**< per-tick CSV, NULL: none */
     const char *dump_dir; /**< QP dumps (mca_qp_dump_json), NULL: none */
-    int dump_every;       /**< dump every Nth tick (and every max(1, N/5)th tick with binding rows) */
-    int dump_max;         /**< most dumps per run (0: no limit) */
-    double duration;      /**< <= 0: the scenario's */
-    double settle;        /**< seconds to run on after the arms stopped following a fault */
-    int pdnn_max_steps;   /**< > 0: override */
-    double v_normal;      /**< > 0: override the scenario's */
-    double v_floor;       /**< >= 0: override the scenario's (< 0: keep) */
-    int dist_lsdm;        /**< 1: the paper's LSDM for the distances instead of the closed form */
+    int dump_every;  /**< dump every Nth tick (default 1; and every max(1, N/5)th tick with binding rows) */
+    int dump_max;    /**< most dumps per run (0: no limit) */
+    double duration; /**< <= 0: the scenario's */
+    double settle;   /**< seconds to run on after the arms stopped following a fault */
+    int pdnn_max_steps; /**< > 0: override */
+    double v_normal;    /**< > 0: override the scenario's */
+    double v_floor;     /**< >= 0: override the scenario's (< 0: keep) */
+    int dist_lsdm;      /**< 1: the paper's LSDM for the distances instead of the closed form */
 } mca_simrun_opts_t;
 
 typedef struct mca_simrun_result {
