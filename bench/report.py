@@ -54,11 +54,29 @@ def num(pattern, text, group=1, cast=float):
         return None
 
 
+def ratio(a, b):
+    ok = all(isinstance(x, (int, float)) and math.isfinite(x) for x in (a, b))
+    return f"{a / b:.2f}" if ok and b else "-"
+
+
+def clean(x):
+    """JSON has no infinity: write it as a string."""
+    if isinstance(x, dict):
+        return {k: clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [clean(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return str(x)
+    return x
+
+
 def us(ns):
     return None if ns is None else ns / 1e3
 
 
 def fmt(x, nd=1, unit=""):
+    if isinstance(x, float) and x == float("inf"):
+        return "> 2000 (histogram overflow)"
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-"
     return f"{x:.{nd}f}{unit}"
@@ -217,6 +235,8 @@ def cyclictest_stats(text):
         return None
     total = sum(c for _, c in bins) + ov
 
+    top = bins[-1][0] + 1  # histogram range [us]; beyond it cyclictest only counts overflows
+
     def pct(p):
         need = math.ceil(p * total)
         acc = 0
@@ -224,10 +244,10 @@ def cyclictest_stats(text):
             acc += c
             if acc >= need:
                 return float(min(v + 1, mx))
-        return float(mx)
+        return float("inf")  # in the overflow count: only "> top" is known
 
     return {"samples": total, "p50_us": pct(0.5), "p99_us": pct(0.99), "p999_us": pct(0.999), "max_us": float(mx),
-            "overflows": ov, "avg_us": num(r"# Avg Latencies:\s*(\d+)", text)}
+            "overflows": ov, "range_us": top, "avg_us": num(r"# Avg Latencies:\s*(\d+)", text)}
 
 
 # ---- table ------------------------------------------------------------------------------------------------------
@@ -346,7 +366,7 @@ def main():
             f"{fmt(jit_m['max_us'])} us",
             f"cyclictest p50 {fmt(cyc['p50_us'])} / p99 {fmt(cyc['p99_us'])} / p99.9 {fmt(cyc['p999_us'])} / max "
             f"{fmt(cyc['max_us'])} us",
-            " / ".join(fmt(jit_m[k] / cyc[k] if cyc[k] else None, 2) for k in ("p50_us", "p99_us", "p999_us",
+            " / ".join(ratio(jit_m[k], cyc[k]) for k in ("p50_us", "p99_us", "p999_us",
                                                                             "max_us")),
             f"mcad/cyclictest; {jit_m['ticks']} vs {cyc['samples']} wake-ups, SCHED_FIFO 80, 1 ms, mlockall, "
             f"cpu_dma_latency 0; mcad overruns {jit_m['overruns']}"))
@@ -360,7 +380,7 @@ def main():
                 f"{fmt(jm2['max_us'])} us",
                 f"cyclictest p50 {fmt(cyc2['p50_us'])} / p99 {fmt(cyc2['p99_us'])} / p99.9 {fmt(cyc2['p999_us'])} / "
                 f"max {fmt(cyc2['max_us'])} us",
-                " / ".join(fmt(jm2[k] / cyc2[k] if cyc2[k] else None, 2) for k in ("p50_us", "p99_us", "p999_us",
+                " / ".join(ratio(jm2[k], cyc2[k]) for k in ("p50_us", "p99_us", "p999_us",
                                                                                 "max_us")),
                 f"same host disturbances for both; mcad overruns {jm2['overruns']}"))
     else:
@@ -437,7 +457,7 @@ def main():
     with open(os.path.join(out_dir, "table.md"), "w", encoding="utf-8") as f:
         f.write(text)
     with open(os.path.join(out_dir, "bench.json"), "w", encoding="utf-8") as f:
-        json.dump(R, f, indent=1, default=str)
+        json.dump(clean(R), f, indent=1, default=str)
     print(text)
     return 0
 
