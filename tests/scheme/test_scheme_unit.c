@@ -589,6 +589,56 @@ static void test_controller_faults(void **state) {
     free(c);
 }
 
+/* One arm (no pairs: no distance, rows inactive) and three arms (per link the closest of the two others). */
+static void test_controller_n_arms(void **state) {
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    char err[512];
+    assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
+    mca_controller_t *c = malloc(sizeof *c);
+    assert_non_null(c);
+    double q[3][MCA_MAX_DOF], qd[3][MCA_MAX_DOF];
+    memcpy(q[0], s.arm[0].q0, sizeof q[0]);
+    memcpy(q[1], s.arm[1].q0, sizeof q[1]);
+    memcpy(q[2], s.arm[1].q0, sizeof q[2]);
+    const double *qs[MCA_MAX_ARMS] = {q[0], q[1], q[2]};
+    double *qds[MCA_MAX_ARMS] = {qd[0], qd[1], qd[2]};
+    mca_tick_info_t info;
+    cfg.n_arms = 1;
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    for (int k = 0; k < 10; k++) {
+        assert_int_equal(mca_controller_tick(c, 0.001 * k, qs, qds, &info), MCA_OK);
+    }
+    assert_true(isinf(info.min_distance) && info.active_rows == 0 && info.brake == 1.0);
+    assert_int_equal(c->qp.n, 8);
+    assert_int_equal(c->qp.n_ineq, 9);
+    /* three arms: the third a copy of the right arm 1.5 m further along -y (far from both) */
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
+    cfg.n_arms = 3;
+    cfg.chain[2] = cfg.chain[1];
+    cfg.path[2] = cfg.path[1];
+    const double xyz[3] = {0.45, -2.0, 0.0}, rpy[3] = {0, 0, 0};
+    mca_chain_set_base(&cfg.chain[2], xyz, rpy);
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    for (int k = 0; k < 10; k++) {
+        assert_int_equal(mca_controller_tick(c, 0.001 * k, qs, qds, &info), MCA_OK);
+    }
+    assert_int_equal(c->qp.n, 24);
+    assert_int_equal(c->qp.n_eq, 9);
+    assert_int_equal(c->qp.n_ineq, 27);
+    /* the global minimum is still between arms 0 and 1; every link of arm 2 sees arm 1 as its closest */
+    assert_true(info.min_distance > 0.05 && info.min_distance < 0.12);
+    assert_true(info.min_arm_a == 0 && info.min_arm_b == 1);
+    for (int l = 0; l < 9; l++) {
+        assert_true(c->crit[2][l].valid && c->crit[2][l].other_arm == 1);
+        assert_true(info.link_distance[2][l] > 0.5);
+    }
+    assert_true(info.eq_residual < 1e-6);
+    free(c);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_brake_values),
@@ -599,6 +649,7 @@ int main(void) {
         cmocka_unit_test(test_paths),
         cmocka_unit_test(test_scenario_files),
         cmocka_unit_test(test_controller_faults),
+        cmocka_unit_test(test_controller_n_arms),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
