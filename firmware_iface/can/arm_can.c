@@ -11,8 +11,7 @@
 
 #include "mca/err.h"
 
-int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n)
-{
+int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n) {
     if (!l || n < 1 || n > MCA_MAX_DOF || id_base % MCA_CAN_ID_BLOCK != 0 || id_base > MCA_CAN_ID_BASE_MAX) {
         return MCA_EINVAL;
     }
@@ -25,14 +24,12 @@ int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n)
     return MCA_OK;
 }
 
-static int ignored(uint64_t *counter)
-{
+static int ignored(uint64_t *counter) {
     (*counter)++;
     return MCA_EAGAIN;
 }
 
-int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f)
-{
+int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
     if (!l || !f) {
         return MCA_EINVAL;
     }
@@ -98,16 +95,15 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f)
     }
 }
 
-int mca_can_link_encode(const mca_can_link_t *l, const mca_arm_command_t *cmd, uint8_t out[MCA_CAN_LEN_COMMAND])
-{
+int mca_can_link_encode(const mca_can_link_t *l, const mca_arm_command_t *cmd,
+                        uint8_t out[MCA_CAN_LEN_COMMAND]) {
     if (!l || !cmd || cmd->n != l->n) {
         return MCA_EINVAL;
     }
     return mca_can_encode_command(cmd, l->tx_counter, out);
 }
 
-void mca_can_link_sent(mca_can_link_t *l, const mca_arm_command_t *cmd)
-{
+void mca_can_link_sent(mca_can_link_t *l, const mca_arm_command_t *cmd) {
     if (!l || !cmd) {
         return;
     }
@@ -116,8 +112,7 @@ void mca_can_link_sent(mca_can_link_t *l, const mca_arm_command_t *cmd)
     l->st.commands_sent++;
 }
 
-int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb)
-{
+int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb) {
     if (!l || !fb) {
         return MCA_EINVAL;
     }
@@ -133,8 +128,7 @@ int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb)
     return fresh ? MCA_OK : MCA_EAGAIN;
 }
 
-void mca_can_options_default(mca_can_options_t *opt)
-{
+void mca_can_options_default(mca_can_options_t *opt) {
     if (opt) {
         opt->brs = 1;
         opt->err_mask = CAN_ERR_MASK;
@@ -148,8 +142,7 @@ typedef struct can_backend {
     mca_can_link_t link;
 } can_backend_t;
 
-static int can_read(void *ctx, mca_arm_feedback_t *fb)
-{
+static int can_read(void *ctx, mca_arm_feedback_t *fb) {
     can_backend_t *b = ctx;
     mca_can_frame_t f;
     for (int i = 0; i < b->opt.rx_burst; i++) {
@@ -165,8 +158,7 @@ static int can_read(void *ctx, mca_arm_feedback_t *fb)
     return mca_can_link_take(&b->link, fb);
 }
 
-static int can_write(void *ctx, const mca_arm_command_t *cmd)
-{
+static int can_write(void *ctx, const mca_arm_command_t *cmd) {
     can_backend_t *b = ctx;
     uint8_t buf[MCA_CAN_LEN_COMMAND];
     int rc = mca_can_link_encode(&b->link, cmd, buf);
@@ -180,15 +172,13 @@ static int can_write(void *ctx, const mca_arm_command_t *cmd)
     return rc;
 }
 
-static int can_stats(void *ctx, mca_arm_stats_t *st)
-{
+static int can_stats(void *ctx, mca_arm_stats_t *st) {
     const can_backend_t *b = ctx;
     *st = b->link.st;
     return MCA_OK;
 }
 
-static void can_close(void *ctx)
-{
+static void can_close(void *ctx) {
     can_backend_t *b = ctx;
     if (b) {
         mca_can_sock_close(b->fd);
@@ -205,8 +195,7 @@ static const mca_arm_ops_t can_ops = {
 };
 
 int mca_can_backend_open(mca_arm_t **arm, const char *iface, uint32_t id_base, int n_joints,
-                         const mca_can_options_t *opt, char *err, size_t errlen)
-{
+                         const mca_can_options_t *opt, char *err, size_t errlen) {
     if (!arm || !iface) {
         return MCA_EINVAL;
     }
@@ -243,8 +232,7 @@ int mca_can_backend_open(mca_arm_t **arm, const char *iface, uint32_t id_base, i
     return rc;
 }
 
-int mca_can_backend_state(const mca_arm_t *arm, mca_can_state_msg_t *st)
-{
+int mca_can_backend_state(const mca_arm_t *arm, mca_can_state_msg_t *st) {
     const can_backend_t *b = mca_arm_backend_ctx(arm, &can_ops);
     if (!b || !st) {
         return MCA_EINVAL;
@@ -256,8 +244,7 @@ int mca_can_backend_state(const mca_arm_t *arm, mca_can_state_msg_t *st)
     return MCA_OK;
 }
 
-int mca_can_backend_fd(const mca_arm_t *arm)
-{
+int mca_can_backend_fd(const mca_arm_t *arm) {
     const can_backend_t *b = mca_arm_backend_ctx(arm, &can_ops);
     return b ? b->fd : MCA_EINVAL;
 }

@@ -16,16 +16,15 @@ enum {
     CMD_VEL = 8,      /* 8 x int32 */
     CMD_POS = 40,     /* 8 x int24 */
     FB_COUNTER = 0,
-    FB_STATE = 1,     /* state bits 0-3, fault code bits 4-7 */
-    FB_FRAME_ID = 2,  /* u16 */
-    FB_POS = 4,       /* 8 x int32 */
-    FB_VEL = 36,      /* 8 x int16 */
-    FB_TAU = 52,      /* 8 x int12 */
+    FB_STATE = 1,    /* state bits 0-3, fault code bits 4-7 */
+    FB_FRAME_ID = 2, /* u16 */
+    FB_POS = 4,      /* 8 x int32 */
+    FB_VEL = 36,     /* 8 x int16 */
+    FB_TAU = 52,     /* 8 x int12 */
 };
 
 /* Little-endian bit field of up to 32 bits at bit offset `bit` (Intel layout, as the DBC says). */
-static void put_bits(uint8_t *buf, unsigned bit, unsigned len, uint32_t v)
-{
+static void put_bits(uint8_t *buf, unsigned bit, unsigned len, uint32_t v) {
     for (unsigned i = 0; i < len; i++, bit++) {
         uint8_t m = (uint8_t)(1u << (bit & 7u));
         if ((v >> i) & 1u) {
@@ -36,8 +35,7 @@ static void put_bits(uint8_t *buf, unsigned bit, unsigned len, uint32_t v)
     }
 }
 
-static uint32_t get_bits(const uint8_t *buf, unsigned bit, unsigned len)
-{
+static uint32_t get_bits(const uint8_t *buf, unsigned bit, unsigned len) {
     uint32_t v = 0;
     for (unsigned i = 0; i < len; i++, bit++) {
         v |= (uint32_t)((buf[bit >> 3] >> (bit & 7u)) & 1u) << i;
@@ -45,8 +43,7 @@ static uint32_t get_bits(const uint8_t *buf, unsigned bit, unsigned len)
     return v;
 }
 
-static int32_t sign_extend(uint32_t v, unsigned len)
-{
+static int32_t sign_extend(uint32_t v, unsigned len) {
     if (len < 32 && (v & (1u << (len - 1)))) {
         v |= ~((1u << len) - 1u);
     }
@@ -54,8 +51,7 @@ static int32_t sign_extend(uint32_t v, unsigned len)
 }
 
 /* value / scale rounded to nearest and saturated to a signed len-bit integer. */
-static uint32_t to_fixed(double value, double scale, unsigned len)
-{
+static uint32_t to_fixed(double value, double scale, unsigned len) {
     const double hi = (double)((1ll << (len - 1)) - 1);
     const double lo = -(double)(1ll << (len - 1));
     double x = value / scale;
@@ -63,29 +59,24 @@ static uint32_t to_fixed(double value, double scale, unsigned len)
     return (uint32_t)(int32_t)llround(x);
 }
 
-static void put_fixed(uint8_t *buf, unsigned bit, unsigned len, double value, double scale)
-{
+static void put_fixed(uint8_t *buf, unsigned bit, unsigned len, double value, double scale) {
     put_bits(buf, bit, len, to_fixed(value, scale, len));
 }
 
-static double get_fixed(const uint8_t *buf, unsigned bit, unsigned len, double scale)
-{
+static double get_fixed(const uint8_t *buf, unsigned bit, unsigned len, double scale) {
     return (double)sign_extend(get_bits(buf, bit, len), len) * scale;
 }
 
-static void put_u16(uint8_t *buf, unsigned byte, uint16_t v)
-{
+static void put_u16(uint8_t *buf, unsigned byte, uint16_t v) {
     buf[byte] = (uint8_t)v;
     buf[byte + 1] = (uint8_t)(v >> 8);
 }
 
-static uint16_t get_u16(const uint8_t *buf, unsigned byte)
-{
+static uint16_t get_u16(const uint8_t *buf, unsigned byte) {
     return (uint16_t)(buf[byte] | (buf[byte + 1] << 8));
 }
 
-int mca_can_encode_command(const mca_arm_command_t *cmd, uint8_t counter, uint8_t out[MCA_CAN_LEN_COMMAND])
-{
+int mca_can_encode_command(const mca_arm_command_t *cmd, uint8_t counter, uint8_t out[MCA_CAN_LEN_COMMAND]) {
     if (!cmd || !out || cmd->n < 1 || cmd->n > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }
@@ -106,8 +97,7 @@ int mca_can_encode_command(const mca_arm_command_t *cmd, uint8_t counter, uint8_
     return MCA_OK;
 }
 
-int mca_can_decode_command(const uint8_t *data, size_t len, mca_arm_command_t *cmd, uint8_t *counter)
-{
+int mca_can_decode_command(const uint8_t *data, size_t len, mca_arm_command_t *cmd, uint8_t *counter) {
     if (!data || !cmd || len != MCA_CAN_LEN_COMMAND) {
         return MCA_EINVAL;
     }
@@ -129,8 +119,8 @@ int mca_can_decode_command(const uint8_t *data, size_t len, mca_arm_command_t *c
     return MCA_OK;
 }
 
-int mca_can_encode_feedback(const mca_arm_feedback_t *fb, uint8_t counter, uint8_t out[MCA_CAN_LEN_FEEDBACK])
-{
+int mca_can_encode_feedback(const mca_arm_feedback_t *fb, uint8_t counter,
+                            uint8_t out[MCA_CAN_LEN_FEEDBACK]) {
     if (!fb || !out || fb->n < 1 || fb->n > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }
@@ -152,8 +142,8 @@ int mca_can_encode_feedback(const mca_arm_feedback_t *fb, uint8_t counter, uint8
     return MCA_OK;
 }
 
-int mca_can_decode_feedback(const uint8_t *data, size_t len, int n, mca_arm_feedback_t *fb, uint8_t *counter)
-{
+int mca_can_decode_feedback(const uint8_t *data, size_t len, int n, mca_arm_feedback_t *fb,
+                            uint8_t *counter) {
     if (!data || !fb || len != MCA_CAN_LEN_FEEDBACK || n < 1 || n > MCA_MAX_DOF) {
         return MCA_EINVAL;
     }
@@ -167,9 +157,12 @@ int mca_can_decode_feedback(const uint8_t *data, size_t len, int n, mca_arm_feed
     fb->frame_id = get_u16(data, FB_FRAME_ID);
     for (int j = 0; j < MCA_MAX_DOF; j++) {
         int used = j < n;
-        fb->position[j] = used ? get_fixed(data, (FB_POS + 4u * (unsigned)j) * 8u, 32, MCA_CAN_FB_POS_SCALE) : 0.0;
-        fb->velocity[j] = used ? get_fixed(data, (FB_VEL + 2u * (unsigned)j) * 8u, 16, MCA_CAN_FB_VEL_SCALE) : 0.0;
-        fb->torque[j] = used ? get_fixed(data, FB_TAU * 8u + 12u * (unsigned)j, 12, MCA_CAN_FB_TAU_SCALE) : 0.0;
+        fb->position[j] =
+            used ? get_fixed(data, (FB_POS + 4u * (unsigned)j) * 8u, 32, MCA_CAN_FB_POS_SCALE) : 0.0;
+        fb->velocity[j] =
+            used ? get_fixed(data, (FB_VEL + 2u * (unsigned)j) * 8u, 16, MCA_CAN_FB_VEL_SCALE) : 0.0;
+        fb->torque[j] =
+            used ? get_fixed(data, FB_TAU * 8u + 12u * (unsigned)j, 12, MCA_CAN_FB_TAU_SCALE) : 0.0;
     }
     if (counter) {
         *counter = data[FB_COUNTER];
@@ -177,8 +170,7 @@ int mca_can_decode_feedback(const uint8_t *data, size_t len, int n, mca_arm_feed
     return MCA_OK;
 }
 
-int mca_can_encode_state(const mca_can_state_msg_t *m, uint8_t counter, uint8_t out[MCA_CAN_LEN_STATE])
-{
+int mca_can_encode_state(const mca_can_state_msg_t *m, uint8_t counter, uint8_t out[MCA_CAN_LEN_STATE]) {
     if (!m || !out) {
         return MCA_EINVAL;
     }
@@ -191,8 +183,7 @@ int mca_can_encode_state(const mca_can_state_msg_t *m, uint8_t counter, uint8_t 
     return MCA_OK;
 }
 
-int mca_can_decode_state(const uint8_t *data, size_t len, mca_can_state_msg_t *m, uint8_t *counter)
-{
+int mca_can_decode_state(const uint8_t *data, size_t len, mca_can_state_msg_t *m, uint8_t *counter) {
     if (!data || !m || len != MCA_CAN_LEN_STATE || data[1] > MCA_ARM_FAULT) {
         return MCA_EINVAL;
     }
@@ -207,8 +198,7 @@ int mca_can_decode_state(const uint8_t *data, size_t len, mca_can_state_msg_t *m
     return MCA_OK;
 }
 
-int mca_can_encode_fault(const mca_can_fault_msg_t *m, uint8_t counter, uint8_t out[MCA_CAN_LEN_FAULT])
-{
+int mca_can_encode_fault(const mca_can_fault_msg_t *m, uint8_t counter, uint8_t out[MCA_CAN_LEN_FAULT]) {
     if (!m || !out) {
         return MCA_EINVAL;
     }
@@ -221,8 +211,7 @@ int mca_can_encode_fault(const mca_can_fault_msg_t *m, uint8_t counter, uint8_t 
     return MCA_OK;
 }
 
-int mca_can_decode_fault(const uint8_t *data, size_t len, mca_can_fault_msg_t *m, uint8_t *counter)
-{
+int mca_can_decode_fault(const uint8_t *data, size_t len, mca_can_fault_msg_t *m, uint8_t *counter) {
     if (!data || !m || len != MCA_CAN_LEN_FAULT || data[1] > MCA_ARM_FAULT) {
         return MCA_EINVAL;
     }
@@ -237,19 +226,18 @@ int mca_can_decode_fault(const uint8_t *data, size_t len, mca_can_fault_msg_t *m
     return MCA_OK;
 }
 
-void mca_can_seq_reset(mca_can_seq_t *s)
-{
+void mca_can_seq_reset(mca_can_seq_t *s) {
     if (s) {
         memset(s, 0, sizeof(*s));
     }
 }
 
-int mca_can_seq_accept(mca_can_seq_t *s, uint8_t counter)
-{
+int mca_can_seq_accept(mca_can_seq_t *s, uint8_t counter) {
     if (!s) {
         return 0;
     }
-    if (!s->synced || counter == (uint8_t)(s->last + 1u) || (s->have_cand && counter == (uint8_t)(s->cand + 1u))) {
+    if (!s->synced || counter == (uint8_t)(s->last + 1u) ||
+        (s->have_cand && counter == (uint8_t)(s->cand + 1u))) {
         s->synced = 1;
         s->last = counter;
         s->have_cand = 0;
@@ -260,8 +248,7 @@ int mca_can_seq_accept(mca_can_seq_t *s, uint8_t counter)
     return 0;
 }
 
-uint32_t mca_can_unwrap16(uint32_t ref, uint16_t low)
-{
+uint32_t mca_can_unwrap16(uint32_t ref, uint16_t low) {
     /* Signed 16-bit difference gives the nearest candidate (serial-number arithmetic). */
     int16_t d = (int16_t)(uint16_t)(low - (uint16_t)ref);
     return ref + (uint32_t)(int32_t)d;

@@ -3,14 +3,14 @@
 #include "mca/can_sock.h"
 
 #include <errno.h>
-#include <fcntl.h>      /* fcntl, O_NONBLOCK */
-#include <net/if.h>     /* struct ifreq, if_nametoindex */
-#include <stdio.h>      /* snprintf */
-#include <string.h>     /* memset, memcpy, strerror */
-#include <sys/ioctl.h>  /* SIOCGIFMTU */
+#include <fcntl.h>     /* fcntl, O_NONBLOCK */
+#include <net/if.h>    /* struct ifreq, if_nametoindex */
+#include <stdio.h>     /* snprintf */
+#include <string.h>    /* memset, memcpy, strerror */
+#include <sys/ioctl.h> /* SIOCGIFMTU */
 #include <sys/socket.h>
-#include <time.h>       /* clock_gettime */
-#include <unistd.h>     /* close */
+#include <time.h>   /* clock_gettime */
+#include <unistd.h> /* close */
 
 #include <linux/can.h>
 #include <linux/can/raw.h>
@@ -18,8 +18,7 @@
 #include "mca/can_proto.h"
 #include "mca/err.h"
 
-static int fail(char *err, size_t errlen, int rc, const char *fmt, const char *iface, int e)
-{
+static int fail(char *err, size_t errlen, int rc, const char *fmt, const char *iface, int e) {
     if (err && errlen) {
         char what[160];
         snprintf(what, sizeof(what), fmt, iface);
@@ -28,8 +27,8 @@ static int fail(char *err, size_t errlen, int rc, const char *fmt, const char *i
     return rc;
 }
 
-int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err_mask, char *err, size_t errlen)
-{
+int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err_mask, char *err,
+                      size_t errlen) {
     if (!fd || !iface || !iface[0] || strlen(iface) >= IFNAMSIZ || id_base % MCA_CAN_ID_BLOCK != 0 ||
         id_base > MCA_CAN_ID_BASE_MAX) {
         if (err && errlen) {
@@ -60,7 +59,8 @@ int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err
     }
     if (ifr.ifr_mtu < (int)CANFD_MTU) {
         close(s);
-        return fail(err, errlen, MCA_ENOTSUP, "can: %s is not CAN FD capable (mtu < 72)", iface, EPROTONOSUPPORT);
+        return fail(err, errlen, MCA_ENOTSUP, "can: %s is not CAN FD capable (mtu < 72)", iface,
+                    EPROTONOSUPPORT);
     }
     int on = 1;
     if (setsockopt(s, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof(on)) < 0) {
@@ -108,13 +108,11 @@ int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err
     return MCA_OK;
 }
 
-static int64_t ts_ns(const struct timespec *t)
-{
+static int64_t ts_ns(const struct timespec *t) {
     return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
 }
 
-int mca_can_sock_recv(int fd, mca_can_frame_t *f)
-{
+int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
     if (fd < 0 || !f) {
         return MCA_EINVAL;
     }
@@ -156,8 +154,7 @@ int mca_can_sock_recv(int fd, mca_can_frame_t *f)
     return MCA_OK;
 }
 
-int mca_can_sock_send(int fd, uint32_t can_id, const uint8_t *data, size_t len, int fd_frame, int brs)
-{
+int mca_can_sock_send(int fd, uint32_t can_id, const uint8_t *data, size_t len, int fd_frame, int brs) {
     if (fd < 0 || (!data && len) || len > (fd_frame ? 64u : 8u)) {
         return MCA_EINVAL;
     }
@@ -183,8 +180,7 @@ int mca_can_sock_send(int fd, uint32_t can_id, const uint8_t *data, size_t len, 
     return nb == (ssize_t)mtu ? MCA_OK : MCA_EIO;
 }
 
-void mca_can_sock_close(int fd)
-{
+void mca_can_sock_close(int fd) {
     if (fd >= 0) {
         close(fd);
     }

@@ -29,8 +29,7 @@
 
 static volatile sig_atomic_t g_stop;
 
-static void on_signal(int sig)
-{
+static void on_signal(int sig) {
     (void)sig;
     g_stop = 1;
 }
@@ -56,15 +55,15 @@ typedef struct armsim {
     armsim_counters_t c;
 } armsim_t;
 
-static void usage(FILE *f)
-{
-    fprintf(f, "usage: mca-armsim --iface IF (--robot URDF | --joints N) [--id-base 0x100] [--watchdog-cycles 3]\n"
-               "                  [--period-us 1000] [--acc-limit A] [--dec-limit D] [--q0 a,b,...]\n"
-               "                  [--lockstep] [--duration S] [--stats FILE]\n");
+static void usage(FILE *f) {
+    fprintf(
+        f,
+        "usage: mca-armsim --iface IF (--robot URDF | --joints N) [--id-base 0x100] [--watchdog-cycles 3]\n"
+        "                  [--period-us 1000] [--acc-limit A] [--dec-limit D] [--q0 a,b,...]\n"
+        "                  [--lockstep] [--duration S] [--stats FILE]\n");
 }
 
-static int parse_long(const char *opt, const char *s, long lo, long hi, long *out)
-{
+static int parse_long(const char *opt, const char *s, long lo, long hi, long *out) {
     char *end = NULL;
     errno = 0;
     long v = strtol(s, &end, 0);
@@ -76,8 +75,7 @@ static int parse_long(const char *opt, const char *s, long lo, long hi, long *ou
     return 0;
 }
 
-static int parse_double(const char *opt, const char *s, double lo, double *out)
-{
+static int parse_double(const char *opt, const char *s, double lo, double *out) {
     char *end = NULL;
     errno = 0;
     double v = strtod(s, &end);
@@ -90,8 +88,7 @@ static int parse_double(const char *opt, const char *s, double lo, double *out)
 }
 
 /* Drain the socket: keep the newest valid command; count and drop everything else. */
-static void drain(armsim_t *s)
-{
+static void drain(armsim_t *s) {
     mca_can_frame_t f;
     while (mca_can_sock_recv(s->fd, &f) == MCA_OK) {
         s->c.frames_rx++;
@@ -126,8 +123,8 @@ static void drain(armsim_t *s)
     }
 }
 
-static void send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len, uint64_t *ok, uint8_t *ctr)
-{
+static void send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len, uint64_t *ok,
+                       uint8_t *ctr) {
     if (mca_can_sock_send(s->fd, s->base + off, buf, len, 1, 1) == MCA_OK) {
         (*ok)++;
         (*ctr)++;
@@ -137,8 +134,7 @@ static void send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len
 }
 
 /* One firmware cycle and its frames. */
-static void cycle(armsim_t *s, double dt)
-{
+static void cycle(armsim_t *s, double dt) {
     mca_arm_feedback_t fb;
     int rc = mca_sim_arm_cycle(&s->arm, s->have_cmd ? &s->cmd : NULL, dt, &fb);
     s->have_cmd = 0;
@@ -183,8 +179,7 @@ static void cycle(armsim_t *s, double dt)
     }
 }
 
-static void ts_add_ns(struct timespec *t, long ns)
-{
+static void ts_add_ns(struct timespec *t, long ns) {
     t->tv_nsec += ns;
     while (t->tv_nsec >= 1000000000L) {
         t->tv_nsec -= 1000000000L;
@@ -192,59 +187,91 @@ static void ts_add_ns(struct timespec *t, long ns)
     }
 }
 
-static int64_t ts_ns(const struct timespec *t)
-{
+static int64_t ts_ns(const struct timespec *t) {
     return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
 }
 
-static void print_counters(FILE *f, const armsim_t *s)
-{
+static void print_counters(FILE *f, const armsim_t *s) {
     const mca_sim_arm_counters_t *fw = &s->arm.cnt;
     fprintf(f,
             "cycles=%" PRIu64 " frames_rx=%" PRIu64 " cmd_accepted=%" PRIu64 " cmd_superseded=%" PRIu64
-            " rx_bad_length=%" PRIu64 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64 " bus_errors=%" PRIu64
-            " tx_feedback=%" PRIu64 " tx_state=%" PRIu64 " tx_fault=%" PRIu64 " tx_dropped=%" PRIu64
-            " overruns=%" PRIu64 " fw_cmd_accepted=%" PRIu64 " fw_cmd_stale=%" PRIu64 " watchdog_trips=%" PRIu64
-            " state=%s fault_code=%u\n",
+            " rx_bad_length=%" PRIu64 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64
+            " bus_errors=%" PRIu64 " tx_feedback=%" PRIu64 " tx_state=%" PRIu64 " tx_fault=%" PRIu64
+            " tx_dropped=%" PRIu64 " overruns=%" PRIu64 " fw_cmd_accepted=%" PRIu64 " fw_cmd_stale=%" PRIu64
+            " watchdog_trips=%" PRIu64 " state=%s fault_code=%u\n",
             fw->cycles, s->c.frames_rx, s->c.cmd_accepted, s->c.cmd_superseded, s->c.rx_bad_length,
             s->c.rx_bad_counter, s->c.rx_unknown_id, s->c.bus_errors, s->c.tx_feedback, s->c.tx_state,
-            s->c.tx_fault, s->c.tx_dropped, s->c.overruns, fw->cmd_accepted, fw->cmd_stale, fw->watchdog_trips,
-            mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code);
+            s->c.tx_fault, s->c.tx_dropped, s->c.overruns, fw->cmd_accepted, fw->cmd_stale,
+            fw->watchdog_trips, mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code);
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     const char *iface = NULL, *robot = NULL, *stats = NULL, *q0s = NULL;
     long base = 0x100, wd = 3, period_us = 1000, joints = 0;
     double acc = -1, dec = -1, duration = 0;
     int lockstep = 0;
     static const struct option opts[] = {
-        {"iface", required_argument, 0, 'i'},      {"robot", required_argument, 0, 'r'},
-        {"joints", required_argument, 0, 'n'},     {"id-base", required_argument, 0, 'b'},
-        {"watchdog-cycles", required_argument, 0, 'w'}, {"period-us", required_argument, 0, 'p'},
-        {"acc-limit", required_argument, 0, 'a'},  {"dec-limit", required_argument, 0, 'd'},
-        {"q0", required_argument, 0, 'q'},         {"lockstep", no_argument, 0, 'l'},
-        {"duration", required_argument, 0, 't'},   {"stats", required_argument, 0, 's'},
-        {"help", no_argument, 0, 'h'},             {0, 0, 0, 0},
+        {"iface", required_argument, 0, 'i'},
+        {"robot", required_argument, 0, 'r'},
+        {"joints", required_argument, 0, 'n'},
+        {"id-base", required_argument, 0, 'b'},
+        {"watchdog-cycles", required_argument, 0, 'w'},
+        {"period-us", required_argument, 0, 'p'},
+        {"acc-limit", required_argument, 0, 'a'},
+        {"dec-limit", required_argument, 0, 'd'},
+        {"q0", required_argument, 0, 'q'},
+        {"lockstep", no_argument, 0, 'l'},
+        {"duration", required_argument, 0, 't'},
+        {"stats", required_argument, 0, 's'},
+        {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0},
     };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
         int bad = 0;
         switch (o) {
-        case 'i': iface = optarg; break;
-        case 'r': robot = optarg; break;
-        case 'n': bad = parse_long("--joints", optarg, 1, MCA_MAX_DOF, &joints); break;
-        case 'b': bad = parse_long("--id-base", optarg, 0, MCA_CAN_ID_BASE_MAX, &base); break;
-        case 'w': bad = parse_long("--watchdog-cycles", optarg, 1, 100000, &wd); break;
-        case 'p': bad = parse_long("--period-us", optarg, 100, 1000000, &period_us); break;
-        case 'a': bad = parse_double("--acc-limit", optarg, 1e-9, &acc); break;
-        case 'd': bad = parse_double("--dec-limit", optarg, 1e-9, &dec); break;
-        case 'q': q0s = optarg; break;
-        case 'l': lockstep = 1; break;
-        case 't': bad = parse_double("--duration", optarg, 0, &duration); break;
-        case 's': stats = optarg; break;
-        case 'h': usage(stdout); return 0;
-        default: usage(stderr); return 2;
+        case 'i':
+            iface = optarg;
+            break;
+        case 'r':
+            robot = optarg;
+            break;
+        case 'n':
+            bad = parse_long("--joints", optarg, 1, MCA_MAX_DOF, &joints);
+            break;
+        case 'b':
+            bad = parse_long("--id-base", optarg, 0, MCA_CAN_ID_BASE_MAX, &base);
+            break;
+        case 'w':
+            bad = parse_long("--watchdog-cycles", optarg, 1, 100000, &wd);
+            break;
+        case 'p':
+            bad = parse_long("--period-us", optarg, 100, 1000000, &period_us);
+            break;
+        case 'a':
+            bad = parse_double("--acc-limit", optarg, 1e-9, &acc);
+            break;
+        case 'd':
+            bad = parse_double("--dec-limit", optarg, 1e-9, &dec);
+            break;
+        case 'q':
+            q0s = optarg;
+            break;
+        case 'l':
+            lockstep = 1;
+            break;
+        case 't':
+            bad = parse_double("--duration", optarg, 0, &duration);
+            break;
+        case 's':
+            stats = optarg;
+            break;
+        case 'h':
+            usage(stdout);
+            return 0;
+        default:
+            usage(stderr);
+            return 2;
         }
         if (bad) {
             return 2;
@@ -252,8 +279,9 @@ int main(int argc, char **argv)
     }
     if (optind != argc || !iface || (!robot == !joints)) {
         fprintf(stderr, "mca-armsim: %s\n",
-                optind != argc ? "unexpected argument"
-                               : (!iface ? "--iface is required" : "give exactly one of --robot and --joints"));
+                optind != argc
+                    ? "unexpected argument"
+                    : (!iface ? "--iface is required" : "give exactly one of --robot and --joints"));
         usage(stderr);
         return 2;
     }
@@ -292,7 +320,8 @@ int main(int argc, char **argv)
         for (int j = 0; j < cfg.n; j++) {
             char *end = NULL;
             cfg.q0[j] = strtod(p, &end);
-            if (end == p || !isfinite(cfg.q0[j]) || (*end != ',' && *end != 0) || (*end == 0 && j != cfg.n - 1)) {
+            if (end == p || !isfinite(cfg.q0[j]) || (*end != ',' && *end != 0) ||
+                (*end == 0 && j != cfg.n - 1)) {
                 fprintf(stderr, "mca-armsim: --q0 '%s': expected %d comma-separated numbers\n", q0s, cfg.n);
                 return 2;
             }
@@ -316,8 +345,8 @@ int main(int argc, char **argv)
     sa.sa_handler = on_signal;
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
-    fprintf(stderr, "mca-armsim: %s id base 0x%03lx, %d joints, watchdog %ld cycles, %s %ld us\n", iface, base, cfg.n,
-            wd, lockstep ? "lockstep, dt" : "period", period_us);
+    fprintf(stderr, "mca-armsim: %s id base 0x%03lx, %d joints, watchdog %ld cycles, %s %ld us\n", iface,
+            base, cfg.n, wd, lockstep ? "lockstep, dt" : "period", period_us);
 
     const long period_ns = period_us * 1000L;
     const double dt = cfg.dt;

@@ -38,8 +38,7 @@ typedef struct rec {
 
 static volatile sig_atomic_t g_stop;
 
-static void on_signal(int sig)
-{
+static void on_signal(int sig) {
     (void)sig;
     g_stop = 1;
 }
@@ -48,28 +47,24 @@ static rec_t *g_log;
 static size_t g_nlog, g_caplog;
 static int g_n;
 
-static void log_push(const rec_t *r)
-{
+static void log_push(const rec_t *r) {
     if (g_nlog < g_caplog) {
         g_log[g_nlog++] = *r;
     }
 }
 
-static int64_t now_ns(void)
-{
+static int64_t now_ns(void) {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (int64_t)t.tv_sec * 1000000000 + t.tv_nsec;
 }
 
-static int cmp_i64(const void *a, const void *b)
-{
+static int cmp_i64(const void *a, const void *b) {
     int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
 }
 
-static void write_log(const char *path)
-{
+static void write_log(const char *path) {
     FILE *f = fopen(path, "w");
     if (!f) {
         fprintf(stderr, "mca-can-ctl: --log %s: %s\n", path, strerror(errno));
@@ -96,44 +91,79 @@ static void write_log(const char *path)
     fclose(f);
 }
 
-static double quant(double v, double scale)
-{
+static double quant(double v, double scale) {
     return (double)llround(v / scale) * scale; /* what the wire carries, bit-exact (see can_proto.c) */
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     const char *iface = "vcan0", *mode = "sine", *logp = NULL, *statp = NULL, *robot = NULL, *q0s = NULL;
     long base = 0x100, n = 6, lost_cycles = 5, cycles = 2000, wd = 3;
     double duration = 2.0, amp = 0.3, freq = 0.5;
     static const struct option opts[] = {
-        {"iface", required_argument, 0, 'i'},     {"id-base", required_argument, 0, 'b'},
-        {"joints", required_argument, 0, 'n'},    {"mode", required_argument, 0, 'm'},
-        {"duration", required_argument, 0, 't'},  {"cycles", required_argument, 0, 'c'},
-        {"lost-cycles", required_argument, 0, 'L'}, {"amp", required_argument, 0, 'A'},
-        {"freq", required_argument, 0, 'f'},      {"log", required_argument, 0, 'l'},
-        {"stats", required_argument, 0, 's'},     {"compare-robot", required_argument, 0, 'r'},
-        {"q0", required_argument, 0, 'q'},        {"watchdog-cycles", required_argument, 0, 'w'},
+        {"iface", required_argument, 0, 'i'},
+        {"id-base", required_argument, 0, 'b'},
+        {"joints", required_argument, 0, 'n'},
+        {"mode", required_argument, 0, 'm'},
+        {"duration", required_argument, 0, 't'},
+        {"cycles", required_argument, 0, 'c'},
+        {"lost-cycles", required_argument, 0, 'L'},
+        {"amp", required_argument, 0, 'A'},
+        {"freq", required_argument, 0, 'f'},
+        {"log", required_argument, 0, 'l'},
+        {"stats", required_argument, 0, 's'},
+        {"compare-robot", required_argument, 0, 'r'},
+        {"q0", required_argument, 0, 'q'},
+        {"watchdog-cycles", required_argument, 0, 'w'},
         {0, 0, 0, 0},
     };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
         switch (o) {
-        case 'i': iface = optarg; break;
-        case 'b': base = strtol(optarg, NULL, 0); break;
-        case 'n': n = strtol(optarg, NULL, 0); break;
-        case 'm': mode = optarg; break;
-        case 't': duration = strtod(optarg, NULL); break;
-        case 'c': cycles = strtol(optarg, NULL, 0); break;
-        case 'L': lost_cycles = strtol(optarg, NULL, 0); break;
-        case 'A': amp = strtod(optarg, NULL); break;
-        case 'f': freq = strtod(optarg, NULL); break;
-        case 'l': logp = optarg; break;
-        case 's': statp = optarg; break;
-        case 'r': robot = optarg; break;
-        case 'q': q0s = optarg; break;
-        case 'w': wd = strtol(optarg, NULL, 0); break;
-        default: fprintf(stderr, "mca-can-ctl: bad arguments\n"); return 2;
+        case 'i':
+            iface = optarg;
+            break;
+        case 'b':
+            base = strtol(optarg, NULL, 0);
+            break;
+        case 'n':
+            n = strtol(optarg, NULL, 0);
+            break;
+        case 'm':
+            mode = optarg;
+            break;
+        case 't':
+            duration = strtod(optarg, NULL);
+            break;
+        case 'c':
+            cycles = strtol(optarg, NULL, 0);
+            break;
+        case 'L':
+            lost_cycles = strtol(optarg, NULL, 0);
+            break;
+        case 'A':
+            amp = strtod(optarg, NULL);
+            break;
+        case 'f':
+            freq = strtod(optarg, NULL);
+            break;
+        case 'l':
+            logp = optarg;
+            break;
+        case 's':
+            statp = optarg;
+            break;
+        case 'r':
+            robot = optarg;
+            break;
+        case 'q':
+            q0s = optarg;
+            break;
+        case 'w':
+            wd = strtol(optarg, NULL, 0);
+            break;
+        default:
+            fprintf(stderr, "mca-can-ctl: bad arguments\n");
+            return 2;
         }
     }
     int lockstep = strcmp(mode, "lockstep") == 0;
@@ -196,7 +226,10 @@ int main(int argc, char **argv)
             if (rc == MCA_OK || rc == MCA_EFAULT || (rc == MCA_EIO && fb.stamp_ns != 0)) {
                 rx_new++;
                 last_fb_cycle = k;
-                rec_t r = {.rx = 1, .cycle = (uint32_t)k, .frame_id = fb.frame_id, .state = fb.state,
+                rec_t r = {.rx = 1,
+                           .cycle = (uint32_t)k,
+                           .frame_id = fb.frame_id,
+                           .state = fb.state,
                            .fault = fb.fault_code};
                 memcpy(r.a, fb.position, sizeof(r.a));
                 memcpy(r.b, fb.velocity, sizeof(r.b));
@@ -311,7 +344,10 @@ int main(int argc, char **argv)
             }
             rtt[k] = fb.stamp_ns - t0;
             rx_new++;
-            r = (rec_t){.rx = 1, .cycle = (uint32_t)k, .frame_id = fb.frame_id, .state = fb.state,
+            r = (rec_t){.rx = 1,
+                        .cycle = (uint32_t)k,
+                        .frame_id = fb.frame_id,
+                        .state = fb.state,
                         .fault = fb.fault_code};
             memcpy(r.a, fb.position, sizeof(r.a));
             memcpy(r.b, fb.velocity, sizeof(r.b));
@@ -328,8 +364,8 @@ int main(int argc, char **argv)
             }
         }
         qsort(rtt, (size_t)cycles, sizeof(*rtt), cmp_i64);
-        printf("rtt_us p50=%.1f p99=%.1f max=%.1f n=%ld\n", rtt[cycles / 2] / 1e3, rtt[(cycles * 99) / 100] / 1e3,
-               rtt[cycles - 1] / 1e3, cycles);
+        printf("rtt_us p50=%.1f p99=%.1f max=%.1f n=%ld\n", rtt[cycles / 2] / 1e3,
+               rtt[(cycles * 99) / 100] / 1e3, rtt[cycles - 1] / 1e3, cycles);
         if (sim) {
             /* Resolution: feedback position 1e-6 rad (half a step when rounding), velocity 1e-4 rad/s. */
             int same = maxdq <= 0.5e-6 + 1e-12 && maxdv <= 0.5e-4 + 1e-12 && state_mismatch == 0;
@@ -350,15 +386,18 @@ int main(int argc, char **argv)
         fprintf(outs[i],
                 "cycles=%ld commands_sent=%" PRIu64 " feedback_received=%" PRIu64 " rx_bad_length=%" PRIu64
                 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64 " bus_errors=%" PRIu64
-                " bus_off=%d eio=%" PRIu64 " fb_new=%" PRIu64 " last_fb_cycle=%ld lost_at=%ld overruns=%" PRIu64 " fault_clears=%" PRIu64 "\n",
-                k, st.commands_sent, st.feedback_received, st.rx_bad_length, st.rx_bad_counter, st.rx_unknown_id,
-                st.bus_errors, st.bus_off, eio, rx_new, last_fb_cycle, lost_at, overruns, clears);
+                " bus_off=%d eio=%" PRIu64 " fb_new=%" PRIu64
+                " last_fb_cycle=%ld lost_at=%ld overruns=%" PRIu64 " fault_clears=%" PRIu64 "\n",
+                k, st.commands_sent, st.feedback_received, st.rx_bad_length, st.rx_bad_counter,
+                st.rx_unknown_id, st.bus_errors, st.bus_off, eio, rx_new, last_fb_cycle, lost_at, overruns,
+                clears);
     }
     if (sf) {
         fclose(sf);
     }
     if (lost_at >= 0) {
-        fprintf(stderr, "mca-can-ctl: LOST feedback: last at cycle %ld, detected at cycle %ld; commanding stopped\n",
+        fprintf(stderr,
+                "mca-can-ctl: LOST feedback: last at cycle %ld, detected at cycle %ld; commanding stopped\n",
                 last_fb_cycle, lost_at);
     }
     if (logp) {

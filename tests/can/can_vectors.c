@@ -10,21 +10,18 @@
 
 static uint64_t g_x = 0x9E3779B97F4A7C15ull;
 
-static double uni(double lo, double hi)
-{
+static double uni(double lo, double hi) {
     g_x ^= g_x << 13, g_x ^= g_x >> 7, g_x ^= g_x << 17;
     return lo + (hi - lo) * ((double)(g_x >> 11) / 9007199254740992.0);
 }
 
-static void hex(const uint8_t *b, size_t n)
-{
+static void hex(const uint8_t *b, size_t n) {
     for (size_t i = 0; i < n; i++) {
         printf("%02x", b[i]);
     }
 }
 
-int main(void)
-{
+int main(void) {
     uint8_t b[64];
     for (int it = 0; it < 50; it++) {
         mca_arm_command_t c;
@@ -41,7 +38,8 @@ int main(void)
         hex(b, 64);
         printf(" Counter=%d NJoints=%d FrameId=%u", it & 255, c.n, c.frame_id & 0xFFFFu);
         for (int j = 0; j < MCA_MAX_DOF; j++) {
-            printf(" Flags%d=%d Vel%d=%.9f PosRef%d=%.9f", j, c.flags[j], j, c.velocity[j], j, c.position_ref[j]);
+            printf(" Flags%d=%d Vel%d=%.9f PosRef%d=%.9f", j, c.flags[j], j, c.velocity[j], j,
+                   c.position_ref[j]);
         }
         printf("\n");
 
@@ -66,14 +64,16 @@ int main(void)
         }
         printf("\n");
 
-        mca_can_state_msg_t s = {.state = (uint8_t)(it % 5), .n = (uint8_t)(1 + it % 8),
-                                 .fault_code = (uint16_t)(it % 6), .missed = (uint16_t)(it * 1311),
+        mca_can_state_msg_t s = {.state = (uint8_t)(it % 5),
+                                 .n = (uint8_t)(1 + it % 8),
+                                 .fault_code = (uint16_t)(it % 6),
+                                 .missed = (uint16_t)(it * 1311),
                                  .rx_errors = (uint8_t)(it * 37)};
         mca_can_encode_state(&s, (uint8_t)it, b);
         printf("MCA_State ");
         hex(b, 8);
-        printf(" Counter=%d State=%d FaultCode=%d Missed=%d NJoints=%d RxErrors=%d\n", it, s.state, s.fault_code,
-               s.missed, s.n, s.rx_errors);
+        printf(" Counter=%d State=%d FaultCode=%d Missed=%d NJoints=%d RxErrors=%d\n", it, s.state,
+               s.fault_code, s.missed, s.n, s.rx_errors);
 
         mca_can_fault_msg_t m;
         memset(&m, 0, sizeof(m));

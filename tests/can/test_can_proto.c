@@ -18,26 +18,24 @@
 #include "mca/can_proto.h"
 #include "mca/err.h"
 
-static uint32_t le32(const uint8_t *b)
-{
+static uint32_t le32(const uint8_t *b) {
     return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
 }
 
-static void test_command_layout(void **state)
-{
+static void test_command_layout(void **state) {
     (void)state;
     mca_arm_command_t c;
     memset(&c, 0, sizeof(c));
     c.n = 3;
     c.frame_id = 0x12345678u;
     c.flags[0] = MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE; /* 3 */
-    c.flags[1] = MCA_ACT_CLEAR_FAULT;                         /* 4 */
+    c.flags[1] = MCA_ACT_CLEAR_FAULT;                          /* 4 */
     c.flags[2] = 0xF7;                                         /* only 4 bits travel: 7 */
-    c.velocity[0] = 1.0;         /* 1000000 = 0x000F4240 */
-    c.velocity[1] = -0.0000024;  /* -2.4 -> -2 = 0xFFFFFFFE */
-    c.velocity[2] = 1e9;         /* saturates at INT32_MAX */
-    c.position_ref[0] = -1.0;    /* -100000 -> int24 0xFE7960 */
-    c.position_ref[1] = 1000.0;  /* saturates at 0x7FFFFF */
+    c.velocity[0] = 1.0;                                       /* 1000000 = 0x000F4240 */
+    c.velocity[1] = -0.0000024;                                /* -2.4 -> -2 = 0xFFFFFFFE */
+    c.velocity[2] = 1e9;                                       /* saturates at INT32_MAX */
+    c.position_ref[0] = -1.0;                                  /* -100000 -> int24 0xFE7960 */
+    c.position_ref[1] = 1000.0;                                /* saturates at 0x7FFFFF */
     uint8_t b[64];
     assert_int_equal(mca_can_encode_command(&c, 0xAB, b), MCA_OK);
     assert_int_equal(b[0], 0xAB);
@@ -73,8 +71,7 @@ static void test_command_layout(void **state)
     assert_true(fabs(d.position_ref[1] - 83.88607) < 1e-9);
 }
 
-static void test_command_bad(void **state)
-{
+static void test_command_bad(void **state) {
     (void)state;
     mca_arm_command_t c;
     memset(&c, 0, sizeof(c));
@@ -97,8 +94,7 @@ static void test_command_bad(void **state)
     assert_int_equal(mca_can_decode_command(b, 64, &d, NULL), MCA_EINVAL);
 }
 
-static void test_feedback_layout(void **state)
-{
+static void test_feedback_layout(void **state) {
     (void)state;
     mca_arm_feedback_t f;
     memset(&f, 0, sizeof(f));
@@ -106,13 +102,13 @@ static void test_feedback_layout(void **state)
     f.frame_id = 0x1BEEF;
     f.state = MCA_ARM_BRAKING;
     f.fault_code = MCA_ARM_FAULT_WATCHDOG;
-    f.position[0] = 3.141593;      /* 3141593 = 0x002FEFD9 */
-    f.position[7] = -0.000001;     /* -1 */
-    f.velocity[0] = -0.5;          /* -5000 = 0xEC78 */
-    f.velocity[7] = 10.0;          /* saturates 32767 */
-    f.torque[0] = 1.0;             /* 10 = 0x00A */
-    f.torque[1] = -0.1;            /* -1 = 0xFFF */
-    f.torque[7] = -1000;           /* saturates -2048 = 0x800 */
+    f.position[0] = 3.141593;  /* 3141593 = 0x002FEFD9 */
+    f.position[7] = -0.000001; /* -1 */
+    f.velocity[0] = -0.5;      /* -5000 = 0xEC78 */
+    f.velocity[7] = 10.0;      /* saturates 32767 */
+    f.torque[0] = 1.0;         /* 10 = 0x00A */
+    f.torque[1] = -0.1;        /* -1 = 0xFFF */
+    f.torque[7] = -1000;       /* saturates -2048 = 0x800 */
     uint8_t b[64];
     assert_int_equal(mca_can_encode_feedback(&f, 7, b), MCA_OK);
     assert_int_equal(b[0], 7);
@@ -158,8 +154,7 @@ static void test_feedback_layout(void **state)
 }
 
 /* Round trip of many values: |decoded - value| <= scale / 2 inside the range (fixed-point definition). */
-static void test_roundtrip_resolution(void **state)
-{
+static void test_roundtrip_resolution(void **state) {
     (void)state;
     uint64_t x = 88172645463325252ull;
     for (int it = 0; it < 2000; it++) {
@@ -184,8 +179,7 @@ static void test_roundtrip_resolution(void **state)
     }
 }
 
-static void test_state_fault_frames(void **state)
-{
+static void test_state_fault_frames(void **state) {
     (void)state;
     mca_can_state_msg_t s = {.state = MCA_ARM_FAULT, .n = 6, .fault_code = 1, .missed = 300, .rx_errors = 9};
     uint8_t b[64];
@@ -216,8 +210,7 @@ static void test_state_fault_frames(void **state)
     assert_int_equal(mca_can_decode_fault(b, 24, &m2, &ctr), MCA_EINVAL);
 }
 
-static void test_seq(void **state)
-{
+static void test_seq(void **state) {
     (void)state;
     mca_can_seq_t s;
     mca_can_seq_reset(&s);
@@ -241,8 +234,7 @@ static void test_seq(void **state)
     assert_int_equal(mca_can_seq_accept(&s, 16), 1);
 }
 
-static void test_unwrap16(void **state)
-{
+static void test_unwrap16(void **state) {
     (void)state;
     assert_int_equal(mca_can_unwrap16(100, 100), 100u);
     assert_int_equal(mca_can_unwrap16(100, 99), 99u);
@@ -252,8 +244,7 @@ static void test_unwrap16(void **state)
     assert_int_equal(mca_can_unwrap16(5, 0xFFFE), 0xFFFFFFFEu); /* wraps below 0 as serial numbers do */
 }
 
-static mca_can_frame_t fb_frame(uint32_t base, uint8_t ctr, uint32_t frame_id, double q0, int n)
-{
+static mca_can_frame_t fb_frame(uint32_t base, uint8_t ctr, uint32_t frame_id, double q0, int n) {
     mca_arm_feedback_t f;
     memset(&f, 0, sizeof(f));
     f.n = n;
@@ -270,8 +261,7 @@ static mca_can_frame_t fb_frame(uint32_t base, uint8_t ctr, uint32_t frame_id, d
     return fr;
 }
 
-static void test_link(void **state)
-{
+static void test_link(void **state) {
     (void)state;
     mca_can_link_t l;
     assert_int_equal(mca_can_link_init(&l, 0x105, 6), MCA_EINVAL); /* not a block start */
@@ -371,8 +361,7 @@ static void test_link(void **state)
     assert_int_equal(l.st.bus_errors, 2);
 }
 
-static void test_backend_open_errors(void **state)
-{
+static void test_backend_open_errors(void **state) {
     (void)state;
     mca_arm_t *arm = NULL;
     char err[256] = "";
@@ -387,13 +376,16 @@ static void test_backend_open_errors(void **state)
     assert_null(arm);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_command_layout),    cmocka_unit_test(test_command_bad),
-        cmocka_unit_test(test_feedback_layout),   cmocka_unit_test(test_roundtrip_resolution),
-        cmocka_unit_test(test_state_fault_frames), cmocka_unit_test(test_seq),
-        cmocka_unit_test(test_unwrap16),          cmocka_unit_test(test_link),
+        cmocka_unit_test(test_command_layout),
+        cmocka_unit_test(test_command_bad),
+        cmocka_unit_test(test_feedback_layout),
+        cmocka_unit_test(test_roundtrip_resolution),
+        cmocka_unit_test(test_state_fault_frames),
+        cmocka_unit_test(test_seq),
+        cmocka_unit_test(test_unwrap16),
+        cmocka_unit_test(test_link),
         cmocka_unit_test(test_backend_open_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

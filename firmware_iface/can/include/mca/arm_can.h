@@ -71,15 +71,15 @@ int mca_can_backend_fd(const mca_arm_t *arm);
 typedef struct mca_can_link {
     uint32_t id_base;
     int n;
-    uint8_t tx_counter;         /**< counter of the next command frame */
-    uint32_t last_frame_id;     /**< frame id of the last command sent */
+    uint8_t tx_counter;     /**< counter of the next command frame */
+    uint32_t last_frame_id; /**< frame id of the last command sent */
     mca_can_seq_t seq_fb, seq_state, seq_fault;
-    mca_arm_feedback_t fb;      /**< newest valid feedback */
-    int fb_new;                 /**< 1 when fb has not been taken yet */
+    mca_arm_feedback_t fb; /**< newest valid feedback */
+    int fb_new;            /**< 1 when fb has not been taken yet */
     uint16_t fault_flags[MCA_MAX_DOF];
-    mca_can_state_msg_t state;  /**< newest heartbeat */
+    mca_can_state_msg_t state; /**< newest heartbeat */
     int have_state;
-    int err_pending;            /**< error frame since the last take */
+    int err_pending; /**< error frame since the last take */
     mca_arm_stats_t st;
 } mca_can_link_t;
 
@@ -90,7 +90,8 @@ int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n);
 int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f);
 
 /** Encode the next command frame (does not consume the counter). @retval as mca_can_encode_command() */
-int mca_can_link_encode(const mca_can_link_t *l, const mca_arm_command_t *cmd, uint8_t out[MCA_CAN_LEN_COMMAND]);
+int mca_can_link_encode(const mca_can_link_t *l, const mca_arm_command_t *cmd,
+                        uint8_t out[MCA_CAN_LEN_COMMAND]);
 
 /** Record that the frame from mca_can_link_encode() went out (counter + 1, stats). */
 void mca_can_link_sent(mca_can_link_t *l, const mca_arm_command_t *cmd);

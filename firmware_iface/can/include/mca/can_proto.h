@@ -57,11 +57,11 @@ enum {
 
 /** State / heartbeat frame contents. */
 typedef struct mca_can_state_msg {
-    uint8_t state;             /**< mca_arm_state_t */
-    uint8_t n;                 /**< joints of the arm */
-    uint16_t fault_code;       /**< enum mca_arm_fault */
-    uint16_t missed;           /**< consecutive firmware cycles without a valid command (saturates) */
-    uint8_t rx_errors;         /**< bad frames the arm side ignored, modulo 256 */
+    uint8_t state;       /**< mca_arm_state_t */
+    uint8_t n;           /**< joints of the arm */
+    uint16_t fault_code; /**< enum mca_arm_fault */
+    uint16_t missed;     /**< consecutive firmware cycles without a valid command (saturates) */
+    uint8_t rx_errors;   /**< bad frames the arm side ignored, modulo 256 */
 } mca_can_state_msg_t;
 
 /** Fault frame contents. */

@@ -20,11 +20,11 @@ extern "C" {
 
 /** One received frame. */
 typedef struct mca_can_frame {
-    uint32_t can_id;   /**< raw SocketCAN id: 11/29-bit id plus CAN_EFF/RTR/ERR flag bits */
-    uint8_t len;       /**< payload bytes (0..64) */
-    uint8_t fd;        /**< 1: CAN FD frame, 0: classic CAN */
+    uint32_t can_id; /**< raw SocketCAN id: 11/29-bit id plus CAN_EFF/RTR/ERR flag bits */
+    uint8_t len;     /**< payload bytes (0..64) */
+    uint8_t fd;      /**< 1: CAN FD frame, 0: classic CAN */
     uint8_t data[64];
-    int64_t stamp_ns;  /**< kernel receive time, CLOCK_MONOTONIC [ns] (read time if the kernel gave none) */
+    int64_t stamp_ns; /**< kernel receive time, CLOCK_MONOTONIC [ns] (read time if the kernel gave none) */
 } mca_can_frame_t;
 
 /**
@@ -39,7 +39,8 @@ typedef struct mca_can_frame {
  * @retval MCA_ENOENT  no such interface
  * @retval MCA_EIO     another socket error
  */
-int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err_mask, char *err, size_t errlen);
+int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err_mask, char *err,
+                      size_t errlen);
 
 /** Receive one frame without blocking. @retval MCA_OK, MCA_EAGAIN (none queued), MCA_EIO, MCA_EINVAL */
 int mca_can_sock_recv(int fd, mca_can_frame_t *f);
