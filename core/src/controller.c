@@ -389,7 +389,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         }
         info->brake = si.brake;
         info->active_rows = si.active_rows;
-        mca_pdnn_result_t pr;
+        mca_pdnn_result_t pr = {0};
         rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &cfg->pdnn, ctrl->phi, &pr);
         info->pdnn_steps = pr.steps;
         info->pdnn_residual = pr.residual;
