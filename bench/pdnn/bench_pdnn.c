@@ -7,7 +7,8 @@
  *   bench_pdnn dump DIR [OPTIONS]    the same QPs written for bench/pdnn/osqp_vs_pdnn.py, with
  *                                    DIR/pdnn_times.csv (file, ns, steps, warm)
  *   bench_pdnn edge [OPTIONS]        fixed Euler step kappa = f * kappa_bound for a range of f on cold
- *                                    solves: steps to converge, or diverged, or capped (the stability edge)
+ *                                    solves: steps to converge (or capped, or diverged), and whether 5
+ *                                    warm ticks (moves of --eps) after it converge too (the stability edge)
  * OPTIONS: --runs R (100) --ticks T (10) --eps E (1e-3) --tol X (1e-9) --precond orth|scale|none
  *          --rule adaptive|bound --far W (0.3; 1 = off) --max-steps S (20000) --seed K (1) --tight P (0.15)
  *          --gamma G (1.9)
@@ -223,19 +224,20 @@ static int run_ticks(const opts_t *o)
 /* edge: fixed kappa = f * kappa_bound(gamma = 2, i.e. the bound 2/||I+M||^2 itself) */
 static int run_edge(const opts_t *o)
 {
-    static const double f[] = {0.25, 0.5, 0.75, 0.95, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.7, 2.0, 2.5, 3.0};
+    static const double f[] = {0.25, 0.5, 0.75, 1.0, 1.2, 1.4, 1.5, 1.6, 1.65, 1.7, 1.8, 1.9, 2.0, 2.5, 3.0};
     const int nf = (int)(sizeof(f) / sizeof(f[0]));
     const int nqp = o->runs;
     printf("pdnn edge: %d cold QPs, precond %d, tol %g, cap %d; kappa = f * 2/||I+M||^2 (upper-bounded norm)\n",
            nqp, o->precond, o->tol, o->max_steps);
-    printf("  %5s %9s %9s %9s %12s %12s\n", "f", "converged", "capped", "diverged", "steps p50", "steps max");
+    printf("  %5s %9s %9s %9s %9s %12s %12s\n", "f", "converged", "stays", "capped", "diverged", "steps p50",
+           "steps max");
     double *st = calloc((size_t)nqp, sizeof(double));
     if (st == NULL) {
         return 2;
     }
     for (int a = 0; a < nf; a++) {
-        qpgen_rng_t rng = {o->seed};
-        int conv = 0, cap = 0, div = 0;
+        qpgen_rng_t rng = {o->seed}, rng_tick = {o->seed + 1000};
+        int conv = 0, cap = 0, div = 0, stays = 0;
         for (int k = 0; k < nqp; k++) {
             qpgen_scene_t sc;
             mca_qp_t qp;
@@ -257,13 +259,25 @@ static int run_edge(const opts_t *o)
             const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
             if (rc == MCA_OK) {
                 st[conv++] = res.steps;
+                /* Passing through the tolerance once is not stability: continue as a controller would, 5 ticks
+                 * of a slightly moved QP (--eps) warm-started from here, at the same kappa, no far-row
+                 * rescaling (the same network). Stable iff all 5 converge. */
+                prm.far_weight = 1.0;
+                int ok = 1;
+                for (int t = 0; t < 5; t++) {
+                    qpgen_scene_perturb(&sc, &rng_tick, o->eps);
+                    qpgen_build(&sc, &qp);
+                    ok &= mca_pdnn_solve(&solver, &qp, &prm, phi, &res) == MCA_OK;
+                }
+                stays += ok;
             } else if (!isfinite(res.residual) || res.residual > 1e3) {
                 div++;
             } else {
                 cap++;
             }
         }
-        printf("  %5.2f %9d %9d %9d %12.0f %12.0f\n", f[a], conv, cap, div, pct(st, conv, 50), pct(st, conv, 100));
+        printf("  %5.2f %9d %9d %9d %9d %12.0f %12.0f\n", f[a], conv, stays, cap, div, pct(st, conv, 50),
+               pct(st, conv, 100));
     }
     free(st);
     return 0;

@@ -105,7 +105,7 @@ def main():
     print(f"edge_spectrum ({args.precond}): {len(files)} QPs; in units of the bound 2/L2 (Gershgorin ||N||):")
     print(f"  exact 2/||I+M||^2        min {f_exact.min():.3f} median {np.median(f_exact):.3f} max {f_exact.max():.3f}")
     print(f"  local edge at y* (f_loc) min {f_loc.min():.3f} median {np.median(f_loc):.3f} max {f_loc.max():.3f}")
-    for f in (1.0, 1.2, 1.3, 1.4, 1.5, 1.7, 2.0, 2.5, 3.0):
+    for f in (1.0, 1.2, 1.4, 1.5, 1.6, 1.65, 1.7, 1.8, 1.9, 2.0, 2.5, 3.0):
         print(f"  f = {f:4.2f}: {int(np.sum(f_loc <= f)):3d} of {len(f_loc)} QPs predicted unstable near y*")
     return 0
 
