@@ -320,8 +320,7 @@ int main(int argc, char **argv) {
         for (int j = 0; j < cfg.n; j++) {
             char *end = NULL;
             cfg.q0[j] = strtod(p, &end);
-            if (end == p || !isfinite(cfg.q0[j]) || (*end != ',' && *end != 0) ||
-                (*end == 0 && j != cfg.n - 1)) {
+            if (end == p || !isfinite(cfg.q0[j]) || (j < cfg.n - 1 ? *end != ',' : *end != 0)) {
                 fprintf(stderr, "mca-armsim: --q0 '%s': expected %d comma-separated numbers\n", q0s, cfg.n);
                 return 2;
             }
