@@ -156,17 +156,30 @@ typedef struct qp_dump {
     int written;
 } qp_dump_t;
 
-/* Run `ticks` ticks of ctrl from q0 (integrating qdot by Euler steps); on a fault the task restarts from q0.
- */
-static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_DOF], int ticks,
-                 run_stats_t *s, qp_dump_t *dump) {
+/* Where a task run stands between calls of drive() (the scaling sweep runs its cells round-robin). */
+typedef struct drive_state {
+    double q0[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double q[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double t;
+    int since_reset;
+    int k; /* ticks driven so far */
+} drive_state_t;
+
+static void drive_start(drive_state_t *ds, const double q0[MCA_MAX_ARMS][MCA_MAX_DOF]) {
+    memset(ds, 0, sizeof *ds);
+    memcpy(ds->q0, q0, sizeof ds->q0);
+    memcpy(ds->q, q0, sizeof ds->q);
+}
+
+/* Run `ticks` more ticks of ctrl (integrating qdot by Euler steps); on a fault the task restarts from q0. */
+static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats_t *s, qp_dump_t *dump) {
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const int na = cfg->n_arms;
     const double dt = cfg->dt;
-    static double q[MCA_MAX_ARMS][MCA_MAX_DOF], qd[MCA_MAX_ARMS][MCA_MAX_DOF];
+    double(*q)[MCA_MAX_DOF] = ds->q;
+    static double qd[MCA_MAX_ARMS][MCA_MAX_DOF];
     const double *qp_[MCA_MAX_ARMS];
     double *qdp[MCA_MAX_ARMS];
-    memcpy(q, q0, sizeof q);
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         qp_[a] = q[a];
         qdp[a] = qd[a];
@@ -177,9 +190,10 @@ static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_D
     }
     static double phi_prev[MCA_QP_MAX_VARS], phi[MCA_QP_MAX_VARS];
     mca_tick_info_t info;
-    double t = 0.0;
-    int since_reset = 0;
-    for (int k = 0; k < ticks; k++, t += dt) {
+    double t = ds->t;
+    int since_reset = ds->since_reset;
+    const int k_end = ds->k + ticks;
+    for (int k = ds->k; k < k_end; k++, t += dt) {
         if (k % 500 == 499) {
             /* ~10 ms of busy work, then 2 ms asleep: a SCHED_FIFO thread busy for 950 ms of a second is
              * throttled for the rest (sched_rt_runtime_us), which would show up as a 50 ms "tick" */
@@ -204,7 +218,7 @@ static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_D
             }
             s->resets++;
             mca_controller_reset(ctrl);
-            memcpy(q, q0, sizeof q);
+            memcpy(ds->q, ds->q0, sizeof ds->q);
             t = -dt;
             since_reset = 0;
             if (dump && dump->idx >= 0) {
@@ -291,6 +305,9 @@ static int drive(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_D
             }
         }
     }
+    ds->t = t;
+    ds->since_reset = since_reset;
+    ds->k = k_end;
     return MCA_OK;
 }
 
@@ -521,7 +538,9 @@ int main(int argc, char **argv) {
         if (stats_alloc(&s, ticks) != MCA_OK) {
             return 1;
         }
-        rc = drive(ctrl, (const double(*)[MCA_MAX_DOF])q0, ticks, &s, dump.dir ? &dump : NULL);
+        static drive_state_t ds;
+        drive_start(&ds, (const double(*)[MCA_MAX_DOF])q0);
+        rc = drive(ctrl, &ds, ticks, &s, dump.dir ? &dump : NULL);
         fprintf(of,
                 "{\"mode\": \"task\", \"scenario\": \"%s\", \"sched_fifo\": %d, \"qp_dumped\": %d, \"run\": ",
                 scn.name, rt, dump.written);
@@ -567,33 +586,54 @@ int main(int argc, char **argv) {
                 defs[nd++] = (cfgdef_t){"d2", 2, 8, d2s[k]};
             }
         }
-        fprintf(of, "{\"mode\": \"scaling\", \"sched_fifo\": %d, \"ticks_per_config\": %d, \"runs\": [\n", rt,
-                ticks);
+        /* every cell keeps its own controller and task state; the cells run round-robin in `rounds` slices so
+         * that a change of the host's load touches all of them alike */
+        const int rounds = quick ? 1 : 5;
+        mca_controller_t **cc = calloc((size_t)nd, sizeof *cc);
+        drive_state_t *dss = calloc((size_t)nd, sizeof *dss);
+        run_stats_t *ss = calloc((size_t)nd, sizeof *ss);
+        if (!cc || !dss || !ss) {
+            return 1;
+        }
         for (int c = 0; c < nd; c++) {
             /* default gap 0.22 m: the circles (2 R = 0.16 m inwards) bring neighbouring arms inside d2 = 0.12
              */
+            cc[c] = calloc(1, sizeof *cc[c]);
+            if (!cc[c] || stats_alloc(&ss[c], ticks) != MCA_OK) {
+                return 1;
+            }
             if ((rc = synth_config(cfg, q0, &pa10, defs[c].arms, defs[c].dof, gap, defs[c].d2)) != MCA_OK ||
-                (rc = mca_controller_init(ctrl, cfg)) != MCA_OK) {
+                (rc = mca_controller_init(cc[c], cfg)) != MCA_OK) {
                 fprintf(stderr, "bench_tick: config %d arms %d dof: %s\n", defs[c].arms, defs[c].dof,
                         mca_strerror(rc));
                 return 1;
             }
-            run_stats_t s;
-            if (stats_alloc(&s, ticks) != MCA_OK) {
-                return 1;
+            drive_start(&dss[c], (const double(*)[MCA_MAX_DOF])q0);
+        }
+        for (int r = 0; r < rounds; r++) {
+            for (int c = 0; c < nd; c++) {
+                const int n = ticks * (r + 1) / rounds - ticks * r / rounds;
+                if ((rc = drive(cc[c], &dss[c], n, &ss[c], NULL)) != MCA_OK) {
+                    return 1;
+                }
             }
-            rc = drive(ctrl, (const double(*)[MCA_MAX_DOF])q0, ticks, &s, NULL);
-            if (rc != MCA_OK) {
-                return 1;
-            }
+        }
+        fprintf(of,
+                "{\"mode\": \"scaling\", \"sched_fifo\": %d, \"ticks_per_config\": %d, \"rounds\": %d, "
+                "\"runs\": [\n",
+                rt, ticks, rounds);
+        for (int c = 0; c < nd; c++) {
             char name[64];
             snprintf(name, sizeof name, "%s:%dx%d:d2=%g", defs[c].sweep, defs[c].arms, defs[c].dof,
                      defs[c].d2);
-            stats_json(of, &s, name, &ctrl->cfg, &ctrl->qp);
+            stats_json(of, &ss[c], name, &cc[c]->cfg, &cc[c]->qp);
             fprintf(of, "%s\n", c + 1 < nd ? "," : "");
-            fflush(of);
-            stats_free(&s);
+            stats_free(&ss[c]);
+            free(cc[c]);
         }
+        free(cc);
+        free(dss);
+        free(ss);
         fprintf(of, "]}\n");
     }
     if (of != stdout) {
