@@ -5,6 +5,7 @@
 # Natively when this kernel has vcan and we are root, else in one QEMU guest boot (tools/vcan-guest, the
 # can engineer's harness). Checks: mcad exits 0 in state stopped with no fault, ran the whole task, and
 # its minimum distance is the one of the same task on the in-process sim backend (mca-sim, 0.0514 m).
+# Then the right arm's emulator is frozen mid-task: lost-feedback fault, both arms braked, exit status 3.
 # usage: vcan_e2e.sh BUILD_DIR SOURCE_DIR [--in-guest]
 set -u
 B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
@@ -63,4 +64,37 @@ t=$(sed -n 's/.*minimum distance \([0-9.]*\) m at t = \([0-9.]*\) s.*/\2/p' "$OU
 awk -v d="${d:-0}" -v t="${t:-0}" 'BEGIN{exit !(d > 0.050 && d < 0.053 && t > 7.9 && t < 8.2)}' ||
     { echo "E2E FAIL: minimum distance ${d:-?} m at ${t:-?} s, expected 0.0514 m at 8.03 s"; fail=1; }
 [ $fail -eq 0 ] && echo "E2E ok: cross circles over vcan0/vcan1: minimum distance $d m at $t s, stopped, no fault"
+
+# ---- phase 2: the right arm's firmware freezes mid-task (SIGSTOP): lost feedback -> fault, both arms
+# braked to zero, zero commands with the servo released; SIGTERM then ends mcad with exit status 3.
+"$ARMSIM" --iface vcan0 --robot "$URDF" --id-base 0x100 --dec-limit 5 --acc-limit 10 --q0 "$Q0L" --lockstep \
+    > "$OUT/armsim0b.log" 2>&1 &
+A0=$!
+"$ARMSIM" --iface vcan1 --robot "$URDF" --id-base 0x100 --dec-limit 5 --acc-limit 10 --q0 "$Q0R" --lockstep \
+    > "$OUT/armsim1b.log" 2>&1 &
+A1=$!
+sleep 0.5
+"$MCAD" --no-dds --stop-after 30 "$CELL" 2> "$OUT/mcad-fault.log" &
+M=$!
+# let it run: wait for 1000 ticks of task time (CSV-free: watch the log for "running", then time)
+n=0
+while ! grep -q "running" "$OUT/mcad-fault.log" && [ $n -lt 100 ]; do sleep 0.2; n=$((n + 1)); done
+sleep 2
+kill -STOP $A1
+n=0
+while ! grep -q "state fault" "$OUT/mcad-fault.log" && [ $n -lt 300 ]; do sleep 0.2; n=$((n + 1)); done
+kill -TERM $M
+wait $M
+rc=$?
+kill -CONT $A1
+kill -TERM $A0 $A1 2>/dev/null
+wait $A0 $A1 2>/dev/null
+cat "$OUT/mcad-fault.log"
+f2=0
+[ $rc -eq 3 ] || { echo "E2E FAIL: phase 2: mcad exit status $rc, want 3 (fault)"; f2=1; }
+grep -q "no feedback for 200 cycles" "$OUT/mcad-fault.log" || { echo "E2E FAIL: phase 2: no lost-feedback report"; f2=1; }
+grep -q "braking both arms: lost feedback" "$OUT/mcad-fault.log" || { echo "E2E FAIL: phase 2: no braking"; f2=1; }
+grep -q "all joints commanded to zero at .* state fault" "$OUT/mcad-fault.log" || { echo "E2E FAIL: phase 2: not braked"; f2=1; }
+[ $f2 -eq 0 ] && echo "E2E ok: frozen firmware on vcan1: lost feedback fault, both arms braked, exit 3"
+[ $f2 -eq 0 ] || fail=1
 exit $fail
