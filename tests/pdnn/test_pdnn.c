@@ -547,6 +547,49 @@ static void test_split_blocks(void **state)
     }
 }
 
+static void test_inactive_zero_rows(void **state)
+{
+    (void)state;
+    /* mca_scheme keeps inactive collision rows in place as U = 0, beta = big: the answer must be that of
+     * the QP without them, and they must not slow the solve down (they belong to no block). */
+    qpgen_rng_t rng = {33};
+    qpgen_scene_t sc;
+    mca_qp_t qp, red;
+    qpgen_scene_random(&sc, &rng, 0.15);
+    qpgen_build(&sc, &qp);
+    mca_qp_reset(&red, qp.n, qp.n_eq, 0);
+    memcpy(red.G, qp.G, sizeof(qp.G));
+    memcpy(red.alpha, qp.alpha, sizeof(qp.alpha));
+    memcpy(red.lb, qp.lb, sizeof(qp.lb));
+    memcpy(red.ub, qp.ub, sizeof(qp.ub));
+    for (int i = 0; i < qp.n_ineq; i++) {
+        if (i % 3 == 0) { /* keep a third of the rows */
+            memcpy(red.U[red.n_ineq], qp.U[i], sizeof(qp.U[i]));
+            red.beta[red.n_ineq++] = qp.beta[i];
+        } else {
+            memset(qp.U[i], 0, sizeof(qp.U[i]));
+            qp.beta[i] = 1e6;
+        }
+    }
+    mca_pdnn_params_t prm;
+    mca_pdnn_default_params(&prm);
+    prm.max_steps = 400000;
+    double phi1[16], phi2[16];
+    mca_pdnn_result_t r1, r2;
+    assert_int_equal(solve(&qp, &prm, phi1, &r1), MCA_OK);
+    for (int i = 0; i < qp.n_ineq; i++) {
+        if (i % 3 != 0) {
+            assert_near(solver.y[qp.n + qp.n_eq + i], 0.0, 0.0); /* the zero rows' duals are exactly 0 */
+        }
+    }
+    assert_int_equal(solve(&red, &prm, phi2, &r2), MCA_OK);
+    assert_int_equal(r1.blocks, 2);
+    assert_int_equal(r1.steps, r2.steps);
+    for (int j = 0; j < 16; j++) {
+        assert_near(phi1[j], phi2[j], 1e-12);
+    }
+}
+
 static void test_bound_step_is_stable(void **state)
 {
     (void)state;
@@ -586,6 +629,7 @@ int main(void)
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_divergence_reported),
         cmocka_unit_test(test_split_blocks),
+        cmocka_unit_test(test_inactive_zero_rows),
         cmocka_unit_test(test_bound_step_is_stable),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
