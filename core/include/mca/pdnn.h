@@ -91,7 +91,9 @@ typedef struct mca_pdnn {
     int ws_blk[MCA_QP_MAX_VARS][5];                                     /**< c0, nc, r0, nr, offset in B */
 } mca_pdnn_t;
 
-/** Defaults: kappa from the bound, tol 1e-9, max_steps, big 1e10. */
+/** Defaults: kappa from the rule (adaptive), tol 1e-9, max_steps 20000, big 1e10, gamma 1.9, ORTH,
+ *  far_weight 0.3, blocks split. For the 1 kHz loop set max_steps to the budget (~0.45 us per step for the
+ *  dual-arm QP on the build machine, docs/pdnn.md). */
 void mca_pdnn_default_params(mca_pdnn_params_t *params);
 
 /** Cold state (y = 0). Call once before the first solve (the state is large: keep it static or in a
@@ -104,9 +106,10 @@ void mca_pdnn_init(mca_pdnn_t *s);
  * @param params  NULL: defaults
  * @param result  may be NULL
  * @param[out] phi  the primal part (qp->n values)
- * @retval MCA_OK         converged
- * @retval MCA_ENOTCONV   step cap hit (phi, result still filled from the last iterate)
- * @retval MCA_EINVAL     NULL, bad sizes or non-finite data
+ * @retval MCA_OK         converged: ||e(y)||_inf <= tol for the QP as given
+ * @retval MCA_ENOTCONV   step cap hit, no progress (e.g. contradicting constraints) or diverged (a user
+ *                        kappa above the stability edge); phi and result are filled from the last iterate
+ * @retval MCA_EINVAL     NULL, bad sizes, non-finite data, NaN or empty box (lb > ub), bad params
  */
 int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *params, double *phi,
                    mca_pdnn_result_t *result);
