@@ -73,7 +73,14 @@ struct mca_daemon {
     FILE *csv;
     mca_daemon_csv_rec_t csv_rec; /* rt scratch */
     mca_daemon_csv_rec_t csv_out; /* writer scratch */
+
+    /* figures: rt -> supervisor, once a second */
+    mca_ring_t sum_ring;
+    _Alignas(8) unsigned char sum_storage[MCA_RING_STORAGE_SIZE(sizeof(mca_daemon_summary_t), 4)];
+    mca_daemon_summary_t sum_rt, sum_main;
 };
+
+static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
 
 static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
 
@@ -186,10 +193,12 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (!out || !cell || !opts) {
         return MCA_EINVAL;
     }
-    mca_daemon_t *d = calloc(1, sizeof *d);
+    /* the rings inside have 64-byte aligned members (producer/consumer cache lines) */
+    mca_daemon_t *d = aligned_alloc(_Alignof(mca_daemon_t), sizeof *d);
     if (!d) {
         return MCA_ENOMEM;
     }
+    memset(d, 0, sizeof *d);
     d->cell = *cell;
     d->opts = *opts;
     if (!d->opts.log) {
@@ -198,6 +207,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     d->dma_fd = -1;
     atomic_store(&d->state, MCA_DAEMON_INIT);
     mca_rtlog_init(&d->log, "mcad");
+    mca_ring_init(&d->sum_ring, d->sum_storage, sizeof d->sum_storage, sizeof(mca_daemon_summary_t), 4);
     mca_hist_reset(&d->jitter);
     mca_hist_reset(&d->compute);
     mca_hist_reset(&d->ctrl_time);
@@ -556,10 +566,13 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     }
     const uint64_t n = atomic_load_explicit(&d->ticks, memory_order_relaxed);
     if (n % 1000 == 0) {
-        d->pct_cache[0] = mca_hist_percentile(&d->compute, 0.5);
-        d->pct_cache[1] = mca_hist_percentile(&d->compute, 0.99);
-        d->pct_cache[3] = mca_hist_percentile(&d->jitter, 0.5);
-        d->pct_cache[4] = mca_hist_percentile(&d->jitter, 0.99);
+        /* once a second: figures for the DDS status and for the supervisor (STATUS= lines) */
+        compute_summary(d, &d->sum_rt);
+        d->pct_cache[0] = d->sum_rt.compute_p50_ns;
+        d->pct_cache[1] = d->sum_rt.compute_p99_ns;
+        d->pct_cache[3] = d->sum_rt.jitter_p50_ns;
+        d->pct_cache[4] = d->sum_rt.jitter_p99_ns;
+        mca_ring_push(&d->sum_ring, &d->sum_rt);
     }
     if (d->dds) {
         fill_snapshot(d, stamp_ns, state);
@@ -787,7 +800,8 @@ int mca_daemon_join(mca_daemon_t *d) {
     return MCA_OK;
 }
 
-void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
+/* Figures from the loop's own data: call from the loop, or once it has ended (rt safe: no formatting). */
+static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     memset(s, 0, sizeof *s);
     s->state = mca_daemon_state(d);
     s->ticks = mca_daemon_ticks(d);
@@ -807,7 +821,9 @@ void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->min_distance_t = d->min_d_t;
     s->fault = d->fault;
     s->ctrl_fault = d->ctrl_fault;
-    snprintf(s->fault_text, sizeof s->fault_text, "%s", d->fault_text);
+    for (size_t i = 0; i < sizeof s->fault_text - 1 && d->fault_text[i]; i++) {
+        s->fault_text[i] = d->fault_text[i];
+    }
     s->fault_t = d->fault_t;
     s->log_dropped = mca_rtlog_dropped(&d->log);
     if (d->csv) {
@@ -818,6 +834,19 @@ void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->sched_fifo = d->sched_fifo;
     s->mem_locked = d->mem_locked;
     s->dma_latency_held = d->dma_fd >= 0 || (d->sched_fifo && d->cell.rt.dma_latency && !d->opts.no_rt);
+}
+
+void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
+    if (d->thread_started && !mca_daemon_finished(d)) {
+        /* the loop runs: take its newest published figures (no reads of its live data) */
+        while (mca_ring_pop(&d->sum_ring, &d->sum_main) == MCA_OK) {
+        }
+        *s = d->sum_main;
+        s->state = mca_daemon_state(d);
+        s->ticks = mca_daemon_ticks(d);
+        return;
+    }
+    compute_summary(d, s);
 }
 
 void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {

@@ -125,8 +125,9 @@ int mca_daemon_service(mca_daemon_t *d);
 /** Wait for the loop thread to end. */
 int mca_daemon_join(mca_daemon_t *d);
 
-/** Figures so far (exact once the loop has ended; approximate while it runs). */
-void mca_daemon_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
+/** Figures so far: while the loop runs, the ones it published last (once a second; state and ticks are
+ *  current); once it has ended (or without a loop thread), exact. Call from ONE non-rt thread. */
+void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s);
 /** Print the summary block on f ("<6>mcad: ..." lines). */
 void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f);
 
