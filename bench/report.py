@@ -431,7 +431,7 @@ def main():
         rows.append(("6. vcan command -> feedback round trip (QEMU guest)",
                      f"p50 {fmt(vc['p50_us'])} / p99 {fmt(vc['p99_us'])} / max {fmt(vc['max_us'])} us",
                      "1 ms period", f"{vc['p50_us'] / 10:.1f} % at p50",
-                     f"{vc['n']} lockstep cycles, mca-can-ctl <-> mca-armsim over vcan0 in the guest (TCG, "
+                     f"{vc['n']} lockstep cycles, mca-can-ctl <-> mca-armsim over vcan0 in the guest (TCG, 1 vCPU, "
                      f"kernel {vc.get('kernel', '?')}); {vc.get('source', '')}"))
     else:
         why = (vc or {}).get("error", "no figure (guest not booted and no cached figure)")

@@ -153,7 +153,7 @@ vcan_from_log() { # guest log -> OUT/vcan.json; a failed boot keeps an earlier f
 import json, os, re, sys
 txt = open(sys.argv[1], encoding="utf-8", errors="replace").read().replace("\r", "") if os.path.exists(sys.argv[1]) else ""
 m = re.search(r"rtt_us p50=([0-9.]+) p99=([0-9.]+) max=([0-9.]+) n=(\d+)", txt)
-k = re.search(r"BENCH-VCAN kernel (\S+)", txt)
+k = re.search(r"(?:BENCH-VCAN|CAN-SUITE) kernel (\S+)", txt)
 d = {"source": sys.argv[3], "kernel": k.group(1) if k else None}
 if m:
     d.update(p50_us=float(m.group(1)), p99_us=float(m.group(2)), max_us=float(m.group(3)), n=int(m.group(4)))
@@ -182,6 +182,11 @@ if not d.get("source", "").startswith("cached"):
     d["source"] = "cached figure from " + d.get("source", "an earlier run")
 json.dump(d, open(sys.argv[1], "w"))
 PYEOF
+elif [ $QUICK = 1 ] && grep -qs "CAN-SUITE g:.*rtt_us" "$B/tests/can/vcan-out/results.txt"; then
+    step "vcan: --quick: taking the figure of the can engineer's last suite run (ctest, $B/tests/can/vcan-out)"
+    rm -f "$OUT/vcan.json"
+    vcan_from_log "$B/tests/can/vcan-out/results.txt" \
+        "the can engineer's vcan suite (tests/can/suite.sh, case g) as last run by ctest, $(date -u -r "$B/tests/can/vcan-out/results.txt" +%Y-%m-%dT%H:%MZ)"
 elif [ $QUICK = 1 ]; then
     echo '{"error": "no cached figure; --quick does not boot the guest"}' >"$OUT/vcan.json"
 elif have "$ARMSIM" && have "$CTL"; then
@@ -196,16 +201,18 @@ echo "BENCH-VCAN kernel \$(uname -r)"
 "$ARMSIM" --iface vcan0 --robot "$ROOT/config/robots/jaco2.urdf" --q0 0,3.14,3.14,0,0,0 --lockstep \
     2>"$RAW/vcan/armsim.err" & ARM=\$!
 # the emulated guest is slow to start the emulator: retry the controller until it gets feedback
+sleep 1
 for try in 1 2 3 4; do
-    sleep 1
     "$CTL" --iface vcan0 --joints 6 --mode lockstep --cycles 1000 >"$RAW/vcan/ctl.out" 2>"$RAW/vcan/ctl.err"
     sed 's/^/BENCH-VCAN /' "$RAW/vcan/ctl.out"
     grep -q rtt_us "$RAW/vcan/ctl.out" && break
     echo "BENCH-VCAN try \$try: \$(cat "$RAW/vcan/ctl.err")"
+    sleep 1
 done
 kill \$ARM; wait \$ARM
 JOB
-    MCA_GUEST_LOG=$RAW/vcan/console.log sh "$ROOT/tools/vcan-guest/run.sh" "$B/vcan-guest-cache" "$job" 240 \
+    # 1 vCPU as in the can engineer's suite: under TCG a wake-up across emulated CPUs costs milliseconds
+    MCA_GUEST_SMP=1 MCA_GUEST_LOG=$RAW/vcan/console.log sh "$ROOT/tools/vcan-guest/run.sh" "$B/vcan-guest-cache" "$job" 240 \
         >/dev/null 2>"$RAW/vcan/run.err"
     vcan_from_log "$RAW/vcan/console.log" "measured $(date -u +%Y-%m-%dT%H:%MZ) by bench/run.sh in the guest"
 fi
