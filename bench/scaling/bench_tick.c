@@ -586,9 +586,9 @@ int main(int argc, char **argv) {
                 defs[nd++] = (cfgdef_t){"d2", 2, 8, d2s[k]};
             }
         }
-        /* every cell keeps its own controller and task state; the cells run round-robin in `rounds` slices so
-         * that a change of the host's load touches all of them alike */
-        const int rounds = quick ? 1 : 5;
+        /* every cell keeps its own controller and task state; the cells run round-robin in `rounds` slices
+         * (100 ticks each by default) so that a change of the host's load touches all of them alike */
+        const int rounds = quick ? 1 : 20;
         mca_controller_t **cc = calloc((size_t)nd, sizeof *cc);
         drive_state_t *dss = calloc((size_t)nd, sizeof *dss);
         run_stats_t *ss = calloc((size_t)nd, sizeof *ss);
