@@ -594,6 +594,7 @@ static void prefault_stack(void) {
 
 static void *rt_main(void *arg) {
     mca_daemon_t *d = arg;
+    pthread_setname_np(pthread_self(), "mcad-loop"); /* visible in ps -L, top -H */
     prefault_stack();
     if (d->cell.rt.cpu >= 0) {
         cpu_set_t set;
