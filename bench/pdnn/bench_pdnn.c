@@ -11,7 +11,7 @@
  *                                    warm ticks (moves of --eps) after it converge too (the stability edge)
  * OPTIONS: --runs R (100) --ticks T (10) --eps E (1e-3) --tol X (1e-9) --precond orth|scale|none
  *          --rule adaptive|bound --far W (0.3; 1 = off) --max-steps S (20000) --seed K (1) --tight P (0.15)
- *          --gamma G (1.9)
+ *          --gamma G (1.9) --form componentwise|normal (componentwise: 3 rows per link, 54; normal: 1, 18)
  * Not a test: numbers depend on the machine. */
 #include <errno.h>
 #include <math.h>
@@ -28,7 +28,7 @@
 typedef struct opts {
     int runs, ticks, max_steps;
     double eps, tol, far, tight, gamma;
-    int precond, rule;
+    int precond, rule, normal;
     unsigned long long seed;
     const char *dir;
 } opts_t;
@@ -62,7 +62,8 @@ static void usage(const char *argv0)
 {
     fprintf(stderr,
             "usage: %s time|dump DIR|edge [--runs R] [--ticks T] [--eps E] [--tol X] [--precond orth|scale|none]\n"
-            "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n",
+            "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n"
+            "       [--form componentwise|normal]\n",
             argv0);
 }
 
@@ -94,6 +95,9 @@ static int parse(int argc, char **argv, int first, opts_t *o)
             o->gamma = strtod(v, &end);
         } else if (!strcmp(a, "--tight")) {
             o->tight = strtod(v, &end);
+        } else if (!strcmp(a, "--form")) {
+            o->normal = !strcmp(v, "normal") ? 1 : !strcmp(v, "componentwise") ? 0 : -1;
+            end = o->normal < 0 ? (char *)v : (char *)v + strlen(v);
         } else if (!strcmp(a, "--precond")) {
             o->precond = !strcmp(v, "orth") ? MCA_PDNN_PRECOND_ORTH
                          : !strcmp(v, "scale") ? MCA_PDNN_PRECOND_SCALE
@@ -172,7 +176,11 @@ static int run_ticks(const opts_t *o)
         } else {
             qpgen_scene_perturb(&sc, &rng, o->eps);
         }
-        qpgen_build(&sc, &qp);
+        if (o->normal) {
+            qpgen_build_normal(&sc, &qp);
+        } else {
+            qpgen_build(&sc, &qp);
+        }
         mca_pdnn_result_t res;
         const double t0 = now_ns();
         const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
@@ -202,9 +210,10 @@ static int run_ticks(const opts_t *o)
     if (csv != NULL) {
         fclose(csv);
     }
-    printf("pdnn bench: %d solves (%d runs x %d ticks, eps %g), tol %g, precond %d, rule %d, far %g, cap %d: "
-           "%d not converged\n",
-           total, o->runs, o->ticks, o->eps, o->tol, o->precond, o->rule, o->far, o->max_steps, fails);
+    printf("pdnn bench: %d solves (%d runs x %d ticks, eps %g), %s form (n_ineq %d), tol %g, precond %d, rule %d, "
+           "far %g, cap %d: %d not converged\n",
+           total, o->runs, o->ticks, o->eps, o->normal ? "normal" : "componentwise",
+           o->normal ? QPGEN_NINEQ_NORMAL : QPGEN_NINEQ, o->tol, o->precond, o->rule, o->far, o->max_steps, fails);
     printf("  cold (%4d): us  p50 %8.1f p99 %8.1f max %8.1f | steps p50 %6.0f p99 %6.0f max %6.0f\n", nc,
            pct(ns_c, nc, 50) / 1e3, pct(ns_c, nc, 99) / 1e3, pct(ns_c, nc, 100) / 1e3, pct(st_c, nc, 50),
            pct(st_c, nc, 99), pct(st_c, nc, 100));

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* pdnn_qpgen OUTDIR COUNT [SEED]: make COUNT random feasible dual-arm-shaped QPs (tests/pdnn/qpgen.h) in
- * runs of 10 control ticks (a fresh scene solved cold, then 9 small moves solved warm; every third run has
- * a row coupling the two arms, so both the split and the single-network paths are checked), solve each with
+ * runs of 10 control ticks (a fresh scene solved cold, then 9 small moves solved warm; of every three runs
+ * one is in the componentwise form (54 rows), one in the normal form (18 rows) and one componentwise with a
+ * row coupling the two arms, so the split and the single-network paths are both checked), solve each with
  * the LVI-PDNN at default parameters and dump it with its answer (mca_qp_dump_json) for
  * tools/qp-check/osqp_check.py. Exit 0 when every solve converged, 1 otherwise, 2 on bad arguments/I/O. */
 #include <errno.h>
@@ -49,7 +50,11 @@ int main(int argc, char **argv)
         } else {
             qpgen_scene_perturb(&sc, &rng, 1e-3);
         }
-        qpgen_build(&sc, &qp);
+        if ((k / 10) % 3 == 1) { /* every third run: the normal form, one row per link */
+            qpgen_build_normal(&sc, &qp);
+        } else {
+            qpgen_build(&sc, &qp);
+        }
         if ((k / 10) % 3 == 2) { /* every third run: one row couples the arms (one block, not two) */
             qpgen_couple(&sc, &qp, QPGEN_NINEQ - 1);
         }

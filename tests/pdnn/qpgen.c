@@ -37,6 +37,20 @@ void qpgen_scene_random(qpgen_scene_t *sc, qpgen_rng_t *r, double tight_prob)
     /* a joint or two without a bound, as the paper's box may be one-sided */
     sc->ub[(int)qpgen_uniform(r, 0, QPGEN_N)] = INFINITY;
     sc->lb[(int)qpgen_uniform(r, 0, QPGEN_N)] = -INFINITY;
+    for (int a = 0; a < QPGEN_ARMS; a++) {
+        for (int l = 0; l < QPGEN_LINKS; l++) {
+            double *d = sc->dir[a][l], nn = 0.0;
+            do {
+                for (int k = 0; k < 3; k++) {
+                    d[k] = qpgen_uniform(r, -1.0, 1.0);
+                }
+                nn = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            } while (nn < 1e-2 || nn > 1.0);
+            for (int k = 0; k < 3; k++) {
+                d[k] /= sqrt(nn);
+            }
+        }
+    }
     for (int i = 0; i < QPGEN_NINEQ; i++) {
         /* tight rows get a small positive slack: exact zeros would make the three parallel rows of a
          * first link an implicit equality that rounding in beta can turn infeasible */
@@ -105,6 +119,36 @@ void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp)
     for (int j = 0; j < QPGEN_N; j++) {
         qp->lb[j] = sc->lb[j];
         qp->ub[j] = sc->ub[j];
+    }
+}
+
+void qpgen_build_normal(const qpgen_scene_t *sc, mca_qp_t *qp)
+{
+    qpgen_build(sc, qp); /* G, alpha, box */
+    qp->n_ineq = QPGEN_NINEQ_NORMAL;
+    for (int a = 0; a < QPGEN_ARMS; a++) {
+        for (int l = 0; l < QPGEN_LINKS; l++) {
+            const int i = a * QPGEN_LINKS + l;
+            double s = 0.0;
+            for (int j = 0; j < QPGEN_N; j++) {
+                qp->U[i][j] = 0.0;
+            }
+            for (int j = 0; j < QPGEN_DOF; j++) {
+                double v = 0.0;
+                for (int k = 0; k < 3; k++) {
+                    v += sc->dir[a][l][k] * sc->Jc[a][l][k][j];
+                }
+                qp->U[i][QPGEN_DOF * a + j] = v;
+                s += v * sc->phi0[QPGEN_DOF * a + j];
+            }
+            qp->beta[i] = s + sc->slack[(a * QPGEN_LINKS + l) * 3];
+        }
+    }
+    for (int i = QPGEN_NINEQ_NORMAL; i < QPGEN_NINEQ; i++) {
+        for (int j = 0; j < QPGEN_N; j++) {
+            qp->U[i][j] = 0.0;
+        }
+        qp->beta[i] = 0.0;
     }
 }
 

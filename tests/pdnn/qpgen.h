@@ -31,6 +31,7 @@ typedef struct qpgen_scene {
     double phi0[QPGEN_N];
     double slack[QPGEN_NINEQ];
     double lb[QPGEN_N], ub[QPGEN_N];
+    double dir[QPGEN_ARMS][QPGEN_LINKS][3]; /**< unit P -> E direction per link (normal form) */
 } qpgen_scene_t;
 
 /** A fresh random scene; tight_prob is the chance that a collision row is nearly tight at phi0
@@ -42,6 +43,11 @@ void qpgen_scene_perturb(qpgen_scene_t *sc, qpgen_rng_t *r, double eps);
 
 /** The QP of the scene. */
 void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp);
+
+/** The normal-form QP of the scene (mca_scheme's default): one row per link, dir^T Jc, n_ineq = 18, with
+ *  the slack of the link's first componentwise row. */
+#define QPGEN_NINEQ_NORMAL (QPGEN_ARMS * QPGEN_LINKS)
+void qpgen_build_normal(const qpgen_scene_t *sc, mca_qp_t *qp);
 
 /** Make inequality row @p row couple the two arms (entries in both arms' columns), keeping the QP feasible
  *  at phi0: the QP then no longer splits into one block per arm. */
