@@ -19,9 +19,15 @@ echo "== the same QPs with the plain variants"
 echo "== tolerance"
 "$BIN" time --tol 1e-6
 "$BIN" time --tol 1e-12 --max-steps 200000
+echo "== normal form (mca_scheme's default: one row per link, n_ineq 18)"
+"$BIN" time --form normal
+"$BIN" time --form normal --far 1
+"$BIN" time --form normal --tol 1e-6
 echo "== PDNN vs OSQP on the same QPs"
 "$BIN" dump "$OUT/seq" --runs 50 >/dev/null
 "$PY" "$ROOT/bench/pdnn/osqp_vs_pdnn.py" "$OUT/seq"
+"$BIN" dump "$OUT/seqn" --runs 50 --form normal >/dev/null
+"$PY" "$ROOT/bench/pdnn/osqp_vs_pdnn.py" "$OUT/seqn"
 echo "== stability edge: measured (fixed kappa) and predicted (local spectrum)"
 "$BIN" edge --runs 40 --max-steps 100000
 "$BIN" dump "$OUT/edge" --ticks 1 --runs 40 --max-steps 200000 >/dev/null
