@@ -62,9 +62,10 @@ grep -q "summary: state stopped" "$OUT/mcad.log" || { echo "E2E FAIL: not stoppe
 grep -q "summary: faults: none" "$OUT/mcad.log" || { echo "E2E FAIL: fault"; fail=1; }
 d=$(sed -n 's/.*minimum distance \([0-9.]*\) m at t = \([0-9.]*\) s.*/\1/p' "$OUT/mcad.log")
 t=$(sed -n 's/.*minimum distance \([0-9.]*\) m at t = \([0-9.]*\) s.*/\2/p' "$OUT/mcad.log")
-# same task on the in-process sim backend: 0.0514 m at 8.03 s (mca-sim and mcad, docs/daemon.md)
+# same task on the in-process sim backend: 0.0514 m at 8.03 s (mca-sim and mcad, docs/daemon.md); over CAN in
+# the emulated guest feedback is sometimes a tick older (0.0517-0.0523 m at 8.05-8.10 s seen): up to 0.056 m, 8.3 s
 awk -v d="${d:-0}" -v t="${t:-0}" 'BEGIN{exit !(d > 0.050 && d < 0.056 && t > 7.9 && t < 8.3)}' ||
-    { echo "E2E FAIL: minimum distance ${d:-?} m at ${t:-?} s, expected 0.0514 m at 8.03 s"; fail=1; }
+    { echo "E2E FAIL: minimum distance ${d:-?} m at ${t:-?} s, expected (0.050, 0.056) m at 7.9-8.3 s"; fail=1; }
 [ $fail -eq 0 ] && echo "E2E ok: cross circles over vcan0/vcan1: minimum distance $d m at $t s, stopped, no fault"
 
 # ---- phase 2: the right arm's firmware freezes mid-task (SIGSTOP): lost feedback -> fault, both arms
