@@ -64,5 +64,13 @@ expect("wrong row length", run({"a.json": variant(G=[[1, 1]])}), 2)
 expect("NaN-like string in beta", run({"a.json": variant(beta=["x"])}), 2)
 expect("too few files", run({"a.json": GOOD}, "--min-count", "2"), 2)
 expect("empty folder", run({}), 2)
+# A QP dumped by mca-sim (componentwise form) with collision rows of norm ~1e-7: the PDNN answer is exact
+# (unit-row violation 6e-16); OSQP on the raw rows lets the tiny rows slip by 2.6e-4 (its tolerances are
+# absolute per row), on unit rows it agrees to 1e-13. Default: scaled rows.
+with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "scheme_tiny_rows.json"),
+          encoding="utf-8") as f:
+    TINY = json.load(f)
+expect("mca-sim QP with tiny rows", run({"a.json": TINY}), 0)
+expect("the same, --no-row-scale", run({"a.json": TINY}, "--no-row-scale"), 1)
 print("FAILED" if failures else "all ok")
 sys.exit(1 if failures else 0)

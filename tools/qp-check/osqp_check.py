@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 """Check LVI-PDNN answers against OSQP, the independent second solver.
 
-usage: osqp_check.py [--min-count N] [--tol T] [--eps E] [--verbose] DIR [DIR ...]
+usage: osqp_check.py [--min-count N] [--tol T] [--eps E] [--no-row-scale] [--verbose] DIR [DIR ...]
 
 Loads every *.json file under each DIR (recursively) written by mca_qp_dump_json (format in
 core/include/mca/qp.h: n, n_eq, n_ineq, G, alpha, U, beta, lb, ub with null for infinities, and the
@@ -10,6 +10,12 @@ PDNN answer phi, steps, residual, tag), solves
     minimize 1/2 phi^T phi  s.t.  G phi = alpha,  U phi <= beta,  lb <= phi <= ub
 with OSQP (eps_abs = eps_rel = 1e-10, polishing on, max_iter 1e6) and asserts
 max |phi_pdnn - phi_osqp| <= T (default 1e-6) on every file.
+
+Rows of G and U are scaled to unit norm first (alpha, beta with them: the same QP). OSQP's tolerances are
+absolute per row, so a row of norm 1e-7 (mca_scheme's componentwise rows when a component of r_PE is ~0)
+would be allowed a violation of 1e-3 in phi units, or trip OSQP's infeasibility test; measured on
+mca-sim dumps: without scaling 2.6e-4 differences and false 'primal infeasible', with it 1e-9 agreement.
+--no-row-scale hands OSQP the rows as dumped.
 
 Exit status: 0 all files agree; 1 at least one mismatch (or OSQP could not solve a QP the PDNN answered);
 2 bad input (unreadable/malformed file, a file without a PDNN answer, fewer than --min-count files).
@@ -90,14 +96,24 @@ def load_qp(path):
     return qp
 
 
-def solve_osqp(qp, eps):
+def _unit_rows(M, v):
+    norms = np.linalg.norm(M, axis=1) if M.size else np.zeros(0)
+    s = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+    return M * s[:, None], v * s
+
+
+def solve_osqp(qp, eps, row_scale=True):
     import osqp
     from scipy import sparse
 
     n = qp["n"]
-    A = sparse.csc_matrix(np.vstack([qp["G"], qp["U"], np.eye(n)]))
-    lo = np.concatenate([qp["alpha"], np.full(len(qp["beta"]), -np.inf), qp["lb"]])
-    hi = np.concatenate([qp["alpha"], qp["beta"], qp["ub"]])
+    G, alpha, U, beta = qp["G"], qp["alpha"], qp["U"], qp["beta"]
+    if row_scale:
+        G, alpha = _unit_rows(G, alpha)
+        U, beta = _unit_rows(U, beta)
+    A = sparse.csc_matrix(np.vstack([G, U, np.eye(n)]))
+    lo = np.concatenate([alpha, np.full(len(beta), -np.inf), qp["lb"]])
+    hi = np.concatenate([alpha, beta, qp["ub"]])
     prob = osqp.OSQP()
     prob.setup(sparse.identity(n, format="csc"), np.zeros(n), A, lo, hi, eps_abs=eps, eps_rel=eps,
                polishing=True, max_iter=1000000, verbose=False)
@@ -111,6 +127,7 @@ def main(argv=None):
     ap.add_argument("--min-count", type=int, default=1, help="fail (exit 2) with fewer files (default 1)")
     ap.add_argument("--tol", type=float, default=1e-6, help="max |phi_pdnn - phi_osqp| (default 1e-6)")
     ap.add_argument("--eps", type=float, default=1e-10, help="OSQP eps_abs = eps_rel (default 1e-10)")
+    ap.add_argument("--no-row-scale", action="store_true", help="do not scale G, U rows to unit norm")
     ap.add_argument("--verbose", action="store_true", help="one line per file")
     args = ap.parse_args(argv)
 
@@ -137,7 +154,7 @@ def main(argv=None):
             print(f"osqp_check: bad input: {e}", file=sys.stderr)
             bad_input += 1
             continue
-        res = solve_osqp(qp, args.eps)
+        res = solve_osqp(qp, args.eps, row_scale=not args.no_row_scale)
         status = res.info.status
         if status not in ("solved",):
             print(f"osqp_check: MISMATCH {path}: OSQP status '{status}' but the PDNN gave an answer",
