@@ -260,6 +260,9 @@ def main():
         print(__doc__, file=sys.stderr)
         return 2
     out_dir = sys.argv[1]
+    if not os.path.isdir(out_dir):
+        print(f"report.py: {out_dir}: not a folder (bench/run.sh writes OUT_DIR/raw/ first)", file=sys.stderr)
+        return 2
     raw = os.path.join(out_dir, "raw")
     R = {"machine": {}, "notes": []}
     mach = read(os.path.join(raw, "machine.txt")) or ""
