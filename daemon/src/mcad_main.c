@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
+#include <pthread.h>
 #include <sched.h>
 #include <signal.h>
 #include <stdio.h>
@@ -131,6 +132,16 @@ int main(int argc, char **argv) {
         if (sched_setscheduler(0, SCHED_OTHER, &sp0) == 0) {
             fprintf(stderr, "<6>mcad: started real-time: non-loop threads reset to SCHED_OTHER\n");
         }
+    }
+
+    /* Threads created from here on (DDS; the loop sets its own) get this default stack; with mlockall every
+     * byte of it is resident: 1 MB instead of glibc's 8 MB (RLIMIT_STACK) per thread is plenty. */
+    pthread_attr_t dattr;
+    if (pthread_attr_init(&dattr) == 0) {
+        if (pthread_attr_setstacksize(&dattr, 1u << 20) == 0) {
+            pthread_setattr_default_np(&dattr);
+        }
+        pthread_attr_destroy(&dattr);
     }
 
     mca_cell_t *cell = calloc(1, sizeof *cell);

@@ -51,6 +51,29 @@ def check(cond, what):
         failures.append(what)
 
 
+def check_rt_setup(pid):
+    """What the loop claims, seen from /proc: a thread "mcad-loop" SCHED_FIFO at the cell's priority (60),
+    the other threads SCHED_OTHER, memory locked, /dev/cpu_dma_latency held open."""
+    threads = {}
+    for tid in os.listdir(f"/proc/{pid}/task"):
+        with open(f"/proc/{pid}/task/{tid}/comm") as f:
+            comm = f.read().strip()
+        with open(f"/proc/{pid}/task/{tid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        # after "pid (comm)": field 3 is fields[0]; rt_priority is field 40, policy field 41
+        threads[tid] = (comm, int(fields[37]), int(fields[38]))
+    loops = [t for t in threads.values() if t[0] == "mcad-loop"]
+    check(len(loops) == 1 and loops[0][1:] == (60, 1),
+          f"loop thread mcad-loop SCHED_FIFO priority 60 ({loops})")
+    others = [t for t in threads.values() if t[0] != "mcad-loop"]
+    check(others and all(t[2] == 0 for t in others), f"{len(others)} other threads SCHED_OTHER")
+    with open(f"/proc/{pid}/status") as f:
+        lck = next((int(ln.split()[1]) for ln in f if ln.startswith("VmLck:")), 0)
+    check(lck > 4096, f"memory locked: VmLck {lck} kB")
+    fds = [os.readlink(f"/proc/{pid}/fd/{fd}") for fd in os.listdir(f"/proc/{pid}/fd")]
+    check("/dev/cpu_dma_latency" in fds, "/dev/cpu_dma_latency held open")
+
+
 def run(tmp, name, extra_yaml, stall_by_signal):
     cell = os.path.join(tmp, name + ".yaml")
     with open(cell, "w") as f:
@@ -91,6 +114,8 @@ def run(tmp, name, extra_yaml, stall_by_signal):
         print(proc.stderr.read())
         return
     check(any(m.startswith("STATUS=") for _, m in msgs), f"{name}: STATUS= line before READY")
+    if name == "healthy" and "--no-rt" not in EXTRA:
+        check_rt_setup(proc.pid)
     t_stall = None
     if stall_by_signal:
         pump(time.monotonic() + 1.0)
