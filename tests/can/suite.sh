@@ -107,29 +107,48 @@ sleep 0.05; kill "$ARM"; wait "$ARM"; echo "A_ARC=$?" >>"$ST"
 dump_stop
 
 # (b) the emulator dies mid-run: the controller reports lost feedback within 5 cycles and stops commanding.
-dump_start "$OUT/b.candump"
-$RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD_LONG 2>>"$OUT/b.err" & ARM=$!
-seen 101 1
-$T $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles 5 --stats "$OUT/b.ctl" 2>>"$OUT/b.err" & C=$!
-seen 100 300
-alive=0; kill -0 "$C" 2>/dev/null && alive=1
-kill -9 "$ARM"; wait "$ARM" 2>/dev/null
-wait "$C"; echo "B_RC=$? B_ALIVE=$alive B_LOST=5" >>"$ST"
-dump_stop
+#     If the controller already reported lost feedback before the kill (both programs preempted unevenly
+#     in the emulated guest), the run is repeated, at most 3 times (the check reports it if it stays so).
+try=1
+while :; do
+    dump_start "$OUT/b.candump"
+    $RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD_LONG 2>>"$OUT/b.err" & ARM=$!
+    seen 101 1
+    $T $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles 5 --stats "$OUT/b.ctl" 2>>"$OUT/b.err" & C=$!
+    seen 100 300
+    alive=0; kill -0 "$C" 2>/dev/null && alive=1
+    kill -9 "$ARM"; wait "$ARM" 2>/dev/null
+    wait "$C"; brc=$?
+    dump_stop
+    [ $alive = 1 ] || [ $try -ge 3 ] && break
+    note "b: attempt $try: the controller reported lost feedback before the kill: repeating"
+    try=$((try + 1))
+done
+echo "B_RC=$brc B_ALIVE=$alive B_LOST=5" >>"$ST"
 
 # (c) the controller dies mid-run: the emulator's watchdog (MCA_CAN_WD cycles, default 3 as the PA-10
 #     firmware) brakes within its decel limit, then FAULT.
+#     A watchdog trip before the kill (controller preempted >= WD cycles in the emulated guest; the test
+#     controller clears it and goes on) could leave the arm outside SERVOING at the kill: then the run is
+#     repeated, at most 3 times (the check reports it if it still happens).
 WD=${MCA_CAN_WD:-3}
-dump_start "$OUT/c.candump"
-$RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD --dec-limit 5 --stats "$OUT/c.armsim" 2>>"$OUT/c.err" & ARM=$!
-seen 101 1
-# (no `timeout` wrapper here: kill -9 must hit the controller itself; --duration bounds it)
-$RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles $WD_LONG --amp 0.4 2>>"$OUT/c.err" & C=$!
-seen 100 300
-kill -9 "$C"; wait "$C" 2>/dev/null
-seen 102 20                                              # >= 190 firmware cycles after the kill (braking <= 100)
-kill "$ARM"; wait "$ARM"
-dump_stop
+try=1
+while :; do
+    dump_start "$OUT/c.candump"
+    $RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD --dec-limit 5 --stats "$OUT/c.armsim" 2>>"$OUT/c.err" & ARM=$!
+    seen 101 1
+    # (no `timeout` wrapper here: kill -9 must hit the controller itself; --duration bounds it)
+    $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles $WD_LONG --amp 0.4 2>>"$OUT/c.err" & C=$!
+    seen 100 300
+    kill -9 "$C"; wait "$C" 2>/dev/null
+    seen 102 20                                          # >= 190 firmware cycles after the kill (braking <= 100)
+    kill "$ARM"; wait "$ARM"
+    dump_stop
+    trips=$(sed -n 's/.*watchdog_trips=\([0-9]*\).*/\1/p' "$OUT/c.armsim")
+    [ "$trips" = 1 ] || [ $try -ge 3 ] && break
+    note "c: attempt $try had $trips watchdog trips (an early one while the controller was preempted): repeating"
+    try=$((try + 1))
+done
 echo "C_WD=$WD C_DEC=5" >>"$ST"
 
 # (d)+(e) malformed frames (wrong length, replayed counter, unknown ids) and error frames injected with
