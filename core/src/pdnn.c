@@ -338,7 +338,7 @@ static int uf_find(int *par, int j)
  * with its own step, is still explicit Euler on (32) with a time scale lambda per block. Each block's
  * N_b is stored compactly, which also skips the zero blocks of the paper's blkdiag(J_L, J_R). Rows of
  * N that are all zero belong to no block (their dual has a closed form). */
-static void split(mca_pdnn_t *s, int n, int m, int no_split)
+static void split(mca_pdnn_t *s, int n, int m, int ne, const double *eqf, int no_split)
 {
     int par[MCA_QP_MAX_VARS], blk_of[MCA_QP_MAX_VARS], row_blk[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];
     for (int j = 0; j < n; j++) {
@@ -423,6 +423,7 @@ static void split(mca_pdnn_t *s, int n, int m, int no_split)
                 B[r * nc + k] = s->ws_N[i * n + s->ws_pv[bc0 + k]];
             }
             s->ws_Bq[br0 + r] = s->ws_q[i];
+            s->ws_Bf[br0 + r] = i < ne ? eqf[i] : s->ws_d[i];
             s->ws_Blo[seg + nc + r] = s->ws_lo[n + i];
             s->ws_Bhi[seg + nc + r] = s->ws_hi[n + i];
         }
@@ -482,7 +483,20 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         s->ws_t[i] = keep ? s->y[i] : 0.0;
     }
     duals_to_iter(s, qp, pre, s->ws_t, s->ws_y);
-    split(s, n, m, prm.no_split);
+    /* equality rows' residual in the QP as given: G x - alpha = R^T (Q x - alpha') (ORTH), = (row) / d (SCALE) */
+    double eqf[MCA_QP_MAX_EQ];
+    double rt = 0.0;
+    for (int i = 0; i < qp->n_eq && pre == MCA_PDNN_PRECOND_ORTH; i++) {
+        double row = 0.0; /* row i of R^T = column i of R */
+        for (int k = 0; k <= i; k++) {
+            row += fabs(s->ws_R[k * qp->n_eq + i]);
+        }
+        rt = fmax(rt, row);
+    }
+    for (int i = 0; i < qp->n_eq; i++) {
+        eqf[i] = pre == MCA_PDNN_PRECOND_ORTH ? rt : 1.0 / s->ws_d[i];
+    }
+    split(s, n, m, qp->n_eq, eqf, prm.no_split);
     /* all-zero rows: the fixed point of w = P(w - q) is w = 0 when q >= 0 (inequality); otherwise there is
      * none (infeasible row) and the true residual below reports it */
     for (int k = m - s->ws_nzero; k < m; k++) {
@@ -500,7 +514,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         if (prm.kappa > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
             const int *bl = s->ws_blk[b];
             const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]]};
+                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]], NULL};
             /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in s */
             const double s2 = mca_pdnn__norm_sq_bound(&p);
             const double kb = prm.gamma / (0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2)));
@@ -519,7 +533,8 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         for (int b = 0; b < s->ws_nblk; b++) {
             const int *bl = s->ws_blk[b];
             const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]]};
+                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]],
+                                           &s->ws_Bf[bl[2]]};
             mca_pdnn_result_t it;
             mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm.gamma, tol_it, prm.max_steps - bsteps[b],
                               &it);

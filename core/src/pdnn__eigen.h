@@ -16,14 +16,18 @@ typedef struct mca_pdnn__problem {
     const double *q;  /**< m, [-alpha; beta] (likewise) */
     const double *lo; /**< n + m, Omega lower bounds */
     const double *hi; /**< n + m, Omega upper bounds */
+    /** m, or NULL. How a row's residual reads in the QP as given: an inequality row (lo = 0) has the
+     *  multiplier f w and the slack b / f there; an equality row's residual is f times this one. */
+    const double *f;
 } mca_pdnn__problem_t;
 
 /** Upper bound on ||N||_2^2: Gershgorin row bound of N^T N. No allocation. */
 double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p);
 
 /**
- * Explicit Euler steps y += kappa_k (I + M^T) e(y) from y (n + m values, updated in place) until
- * ||e(y)||_inf <= tol for this (N, q) or max_steps updates were made; stops early on a non-finite residual. kappa_fixed > 0: constant
+ * Explicit Euler steps y += kappa_k (I + M^T) e(y) from y (n + m values, updated in place) until the
+ * residual, read through f in the QP as given, is <= tol, or max_steps updates were made; stops early on a
+ * non-finite residual. kappa_fixed > 0: constant
  * step; else kappa_k = gamma ||e||^2 / ||(I + M^T) e||^2. Fills steps, residual, converged, kappa.
  * No allocation.
  */

@@ -37,12 +37,15 @@ void qpgen_scene_random(qpgen_scene_t *sc, qpgen_rng_t *r, double tight_prob)
     /* a joint or two without a bound, as the paper's box may be one-sided */
     sc->ub[(int)qpgen_uniform(r, 0, QPGEN_N)] = INFINITY;
     sc->lb[(int)qpgen_uniform(r, 0, QPGEN_N)] = -INFINITY;
+    /* the normal-form directions come from a side stream, so the componentwise scenes (and the figures in
+     * docs/pdnn.md) are the same as before they were added */
+    qpgen_rng_t rd = {r->s ^ 0xD1B54A32D192ED03ull};
     for (int a = 0; a < QPGEN_ARMS; a++) {
         for (int l = 0; l < QPGEN_LINKS; l++) {
             double *d = sc->dir[a][l], nn = 0.0;
             do {
                 for (int k = 0; k < 3; k++) {
-                    d[k] = qpgen_uniform(r, -1.0, 1.0);
+                    d[k] = qpgen_uniform(&rd, -1.0, 1.0);
                 }
                 nn = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             } while (nn < 1e-2 || nn > 1.0);
