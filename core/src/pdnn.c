@@ -455,6 +455,54 @@ static void gather(mca_pdnn_t *s, int n, int to_blocks)
     }
 }
 
+typedef struct pdnn_run {
+    double r_true, kappa;
+    int steps, total, diverged;
+} pdnn_run_t;
+
+/* Integrate every block from ws_By until the QP as given meets tol (checked on the mapped-back y, the
+ * inner tolerance tightened if the rewriting's factors fooled the inner test), the cap, or no progress.
+ * Leaves ws_y (iterate, original order) and ws_t (the QP's y) filled. */
+static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdnn_params_t *prm,
+                       const double *kfix, int cap, pdnn_run_t *run)
+{
+    const int n = qp->n;
+    double tol_it = prm->tol, r_prev = INFINITY;
+    int bsteps[MCA_QP_MAX_VARS] = {0};
+    run->r_true = INFINITY;
+    for (int pass = 0; pass < 8; pass++) {
+        for (int b = 0; b < s->ws_nblk; b++) {
+            const int *bl = s->ws_blk[b];
+            const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
+                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]],
+                                           &s->ws_Bf[bl[2]]};
+            mca_pdnn_result_t it;
+            mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b], &it);
+            bsteps[b] += it.steps;
+            run->total += it.steps;
+            if (bsteps[b] >= run->steps) {
+                run->steps = bsteps[b];
+                run->kappa = it.kappa;
+            }
+            if (!isfinite(it.residual)) {
+                run->diverged = 1;
+                run->r_true = it.residual;
+            }
+        }
+        gather(s, n, 0);
+        if (run->diverged) {
+            return;
+        }
+        duals_from_iter(s, qp, pre, s->ws_y, s->ws_t);
+        run->r_true = true_residual(qp, s, prm->big, s->ws_t);
+        if (run->r_true <= prm->tol || run->steps >= cap || (pass >= 3 && run->r_true > 0.5 * r_prev)) {
+            return; /* done, out of steps, or no progress (a contradiction the blocks cannot see) */
+        }
+        r_prev = run->r_true;
+        tol_it *= fmax(1e-3, 0.5 * prm->tol / run->r_true);
+    }
+}
+
 int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *params, double *phi,
                    mca_pdnn_result_t *result)
 {
@@ -525,45 +573,35 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         }
     }
 
-    /* The iteration stops on its own residual; the answer must meet tol on the QP as given, which the
-     * rewriting changes by bounded factors: check, and tighten the inner tolerance if needed. */
-    double tol_it = prm.tol, r_true = INFINITY, r_prev = INFINITY;
-    int bsteps[MCA_QP_MAX_VARS] = {0}, steps = 0, total = 0, diverged = 0;
-    for (int pass = 0; pass < 8 && !diverged; pass++) {
-        for (int b = 0; b < s->ws_nblk; b++) {
-            const int *bl = s->ws_blk[b];
-            const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]],
-                                           &s->ws_Bf[bl[2]]};
-            mca_pdnn_result_t it;
-            mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm.gamma, tol_it, prm.max_steps - bsteps[b],
-                              &it);
-            bsteps[b] += it.steps;
-            total += it.steps;
-            if (bsteps[b] >= steps) {
-                steps = bsteps[b];
-                res.kappa = it.kappa;
-            }
-            if (!isfinite(it.residual)) {
-                diverged = 1;
-                r_true = it.residual;
-            }
+    /* A warm start gets half the steps: when the QP jumped (a new active row with a large multiplier), the
+     * old y can be far from the new solution and the linear convergence slow, while a restart from 0
+     * (a re-initialised network) often gets close fast. The better of the two answers is kept. */
+    pdnn_run_t run = {0};
+    const int cap1 = warm ? (prm.max_steps + 1) / 2 : prm.max_steps;
+    run_passes(s, qp, pre, &prm, kfix, cap1, &run);
+    res.kappa = run.kappa;
+    if (warm && !run.diverged && !(run.r_true <= prm.tol) && prm.max_steps - run.steps > 0) {
+        pdnn_run_t run2 = {0};
+        memcpy(s->ws_y2, s->ws_y, sizeof(double) * (size_t)h);
+        memcpy(s->ws_t2, s->ws_t, sizeof(double) * (size_t)h);
+        memset(s->ws_y, 0, sizeof(double) * (size_t)h);
+        gather(s, n, 1);
+        run_passes(s, qp, pre, &prm, kfix, prm.max_steps - run.steps, &run2);
+        res.restarted = 1;
+        if (run2.diverged || !(run2.r_true < run.r_true)) { /* keep the warm answer */
+            memcpy(s->ws_y, s->ws_y2, sizeof(double) * (size_t)h);
+            memcpy(s->ws_t, s->ws_t2, sizeof(double) * (size_t)h);
+            run.steps += run2.steps;
+            run.total += run2.total;
+        } else {
+            run2.steps += run.steps;
+            run2.total += run.total;
+            run = run2;
+            res.kappa = run2.kappa;
         }
-        if (diverged) {
-            break;
-        }
-        gather(s, n, 0);
-        duals_from_iter(s, qp, pre, s->ws_y, s->ws_t);
-        r_true = true_residual(qp, s, prm.big, s->ws_t);
-        if (r_true <= prm.tol || steps >= prm.max_steps || (pass >= 3 && r_true > 0.5 * r_prev)) {
-            break; /* done, out of steps, or no progress (a contradiction the blocks cannot see) */
-        }
-        r_prev = r_true;
-        tol_it *= fmax(1e-3, 0.5 * prm.tol / r_true);
     }
-    if (diverged) {
-        gather(s, n, 0);
-    }
+    const double r_true = run.r_true;
+    const int steps = run.steps, total = run.total;
     res.blocks = s->ws_nblk;
     res.steps_total = total;
     res.steps = steps;

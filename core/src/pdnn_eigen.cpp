@@ -44,10 +44,10 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
     const MapV q(p->q, m), lox(p->lo, n), hix(p->hi, n), low(p->lo + n, m), hiw(p->hi + n, m);
     Eigen::Map<Eigen::VectorXd> x(y, n), w(y + n, m);
 
-    VecX a(n), ex(n), u(n), dx(n);
-    VecW b(m), ew(m), v(m), dw(m);
+    VecX a(n), ex(n), u(n), dx(n), best_x(n);
+    VecW b(m), ew(m), v(m), dw(m), best_w(m);
     int steps = 0;
-    double kappa = kappa_fixed, r = 0.0;
+    double kappa = kappa_fixed, r = 0.0, best_r = INFINITY;
     for (;;) {
         // e(y) = P_Omega(y - (M y + q)) - y, with y - (M y + q) = [N^T w; w - (N x + q)].
         a.noalias() = N.transpose() * w;
@@ -78,6 +78,13 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         if (r <= tol || steps >= max_steps) {
             break;
         }
+        // The projection-contraction argument makes the distance to the solution fall, not the residual:
+        // keep the best point seen, to hand back if the cap comes first.
+        if (r < best_r) {
+            best_r = r;
+            best_x = x;
+            best_w = w;
+        }
         // Direction (I + M^T) e = [2 e_x + N^T e_w; e_w - N e_x].
         u.noalias() = N.transpose() * ew;
         v.noalias() = N * ex;
@@ -91,6 +98,11 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         x += kappa * dx;
         w += kappa * dw;
         steps++;
+    }
+    if (std::isfinite(r) && r > tol && best_r < r) {
+        x = best_x;
+        w = best_w;
+        r = best_r;
     }
     res->steps = steps;
     res->residual = r;

@@ -67,6 +67,7 @@ typedef struct mca_pdnn_result {
     int precond;        /**< enum mca_pdnn_precond actually used */
     int blocks;         /**< independent sub-networks integrated (steps: the most any of them took) */
     int steps_total;    /**< Euler steps summed over the blocks (the work done) */
+    int restarted;      /**< 1: the warm start missed tol in half the steps and a cold restart had the rest */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
@@ -83,6 +84,7 @@ typedef struct mca_pdnn {
     double ws_lo[MCA_QP_MAX_H], ws_hi[MCA_QP_MAX_H];                  /**< Omega */
     double ws_y[MCA_QP_MAX_H];                                        /**< iterate (rewritten duals) */
     double ws_t[MCA_QP_MAX_H];                                        /**< scratch */
+    double ws_y2[MCA_QP_MAX_H], ws_t2[MCA_QP_MAX_H];                  /**< the warm attempt, kept */
     double ws_B[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< per block N_b, compact */
     double ws_Bq[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                    /**< per block q_b */
     double ws_Bf[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< per block: row factors to the given QP's residual */
@@ -109,7 +111,8 @@ void mca_pdnn_init(mca_pdnn_t *s);
  * @param[out] phi  the primal part (qp->n values)
  * @retval MCA_OK         converged: ||e(y)||_inf <= tol for the QP as given
  * @retval MCA_ENOTCONV   step cap hit, no progress (e.g. contradicting constraints) or diverged (a user
- *                        kappa above the stability edge); phi and result are filled from the last iterate
+ *                        kappa above the stability edge); phi and result are filled from the iterate of
+ *                        least residual seen (the state continues from there next tick)
  * @retval MCA_EINVAL     NULL, bad sizes, non-finite data, NaN or empty box (lb > ub), bad params
  */
 int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *params, double *phi,
