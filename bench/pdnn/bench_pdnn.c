@@ -260,6 +260,7 @@ static int run_edge(const opts_t *o)
             /* the bound for this QP: kappa_bound at gamma -> 2 */
             prm.step_rule = MCA_PDNN_STEP_BOUND;
             prm.gamma = 1.0;
+            prm.no_rescue = 1; /* the network itself: last iterate, no cold restart */
             prm.max_steps = 0;
             mca_pdnn_init(&solver);
             mca_pdnn_solve(&solver, &qp, &prm, phi, &res);

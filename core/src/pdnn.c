@@ -477,7 +477,8 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
                                            &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]],
                                            &s->ws_Bf[bl[2]]};
             mca_pdnn_result_t it;
-            mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b], &it);
+            mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b],
+                              !prm->no_rescue, &it);
             bsteps[b] += it.steps;
             run->total += it.steps;
             if (bsteps[b] >= run->steps) {
@@ -577,10 +578,11 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
      * old y can be far from the new solution and the linear convergence slow, while a restart from 0
      * (a re-initialised network) often gets close fast. The better of the two answers is kept. */
     pdnn_run_t run = {0};
-    const int cap1 = warm ? (prm.max_steps + 1) / 2 : prm.max_steps;
+    const int rescue = warm && !prm.no_rescue;
+    const int cap1 = rescue ? (prm.max_steps + 1) / 2 : prm.max_steps;
     run_passes(s, qp, pre, &prm, kfix, cap1, &run);
     res.kappa = run.kappa;
-    if (warm && !run.diverged && !(run.r_true <= prm.tol) && prm.max_steps - run.steps > 0) {
+    if (rescue && !run.diverged && !(run.r_true <= prm.tol) && prm.max_steps - run.steps > 0) {
         pdnn_run_t run2 = {0};
         memcpy(s->ws_y2, s->ws_y, sizeof(double) * (size_t)h);
         memcpy(s->ws_t2, s->ws_t, sizeof(double) * (size_t)h);

@@ -37,7 +37,7 @@ extern "C" double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p)
 }
 
 extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, double kappa_fixed, double gamma,
-                                  double tol, int max_steps, mca_pdnn_result_t *res)
+                                  double tol, int max_steps, int keep_best, mca_pdnn_result_t *res)
 {
     const int n = p->n, m = p->m;
     const MapN N(p->N, m, n);
@@ -80,7 +80,7 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         }
         // The projection-contraction argument makes the distance to the solution fall, not the residual:
         // keep the best point seen, to hand back if the cap comes first.
-        if (r < best_r) {
+        if (keep_best && r < best_r) {
             best_r = r;
             best_x = x;
             best_w = w;

@@ -53,6 +53,9 @@ typedef struct mca_pdnn_params {
     int no_split;  /**< 1: one network for the whole QP; 0: independent blocks (variables that share no row,
                         e.g. the two arms of the paper's block-diagonal G and U) are integrated as separate
                         sub-networks, each with its own adaptive step */
+    int no_rescue; /**< 1: the network alone: return the last iterate, no cold restart. 0: when capped, return
+                        the least-residual iterate seen, and a warm start that misses tol within half the
+                        steps is followed by a cold restart for the other half (the better answer is kept) */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
@@ -67,7 +70,8 @@ typedef struct mca_pdnn_result {
     int precond;        /**< enum mca_pdnn_precond actually used */
     int blocks;         /**< independent sub-networks integrated (steps: the most any of them took) */
     int steps_total;    /**< Euler steps summed over the blocks (the work done) */
-    int restarted;      /**< 1: the warm start missed tol in half the steps and a cold restart had the rest */
+    int restarted;      /**< 1: the warm start missed tol in half the steps and a cold restart had the rest
+                             (the result is the better of the two) */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
