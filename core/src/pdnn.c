@@ -423,7 +423,8 @@ static void split(mca_pdnn_t *s, int n, int m, int ne, const double *eqf, int no
                 B[r * nc + k] = s->ws_N[i * n + s->ws_pv[bc0 + k]];
             }
             s->ws_Bq[br0 + r] = s->ws_q[i];
-            s->ws_Bf[br0 + r] = i < ne ? eqf[i] : s->ws_d[i];
+            s->ws_Bf[br0 + r] = i < ne ? 1.0 / eqf[i] : s->ws_d[i];
+            s->ws_Bfi[br0 + r] = 1.0 / s->ws_Bf[br0 + r];
             s->ws_Blo[seg + nc + r] = s->ws_lo[n + i];
             s->ws_Bhi[seg + nc + r] = s->ws_hi[n + i];
         }
@@ -475,7 +476,7 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
             const int *bl = s->ws_blk[b];
             const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
                                            &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]],
-                                           &s->ws_Bf[bl[2]]};
+                                           &s->ws_Bf[bl[2]], &s->ws_Bfi[bl[2]]};
             mca_pdnn_result_t it;
             mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b],
                               !prm->no_rescue, &it);
@@ -532,7 +533,8 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         s->ws_t[i] = keep ? s->y[i] : 0.0;
     }
     duals_to_iter(s, qp, pre, s->ws_t, s->ws_y);
-    /* equality rows' residual in the QP as given: G x - alpha = R^T (Q x - alpha') (ORTH), = (row) / d (SCALE) */
+    /* equality rows in the QP as given: G x - alpha = R^T (Q x - alpha'), bounded by ||R^T||_inf times the
+     * iterated row (ORTH); = row / d (SCALE). Stored as f = 1 / factor: row value b / f. */
     double eqf[MCA_QP_MAX_EQ];
     double rt = 0.0;
     for (int i = 0; i < qp->n_eq && pre == MCA_PDNN_PRECOND_ORTH; i++) {
@@ -563,7 +565,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         if (prm.kappa > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
             const int *bl = s->ws_blk[b];
             const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]], NULL};
+                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]], NULL, NULL};
             /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in s */
             const double s2 = mca_pdnn__norm_sq_bound(&p);
             const double kb = prm.gamma / (0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2)));

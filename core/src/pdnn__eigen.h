@@ -16,9 +16,9 @@ typedef struct mca_pdnn__problem {
     const double *q;  /**< m, [-alpha; beta] (likewise) */
     const double *lo; /**< n + m, Omega lower bounds */
     const double *hi; /**< n + m, Omega upper bounds */
-    /** m, or NULL. How a row's residual reads in the QP as given: an inequality row (lo = 0) has the
-     *  multiplier f w and the slack b / f there; an equality row's residual is f times this one. */
-    const double *f;
+    /** m, or NULL: how a row reads in the QP as given: multiplier f w, row value b / f (b = (N x + q)_i);
+     *  finv = 1 / f. */
+    const double *f, *finv;
 } mca_pdnn__problem_t;
 
 /** Upper bound on ||N||_2^2: Gershgorin row bound of N^T N. No allocation. */

@@ -45,7 +45,8 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
     Eigen::Map<Eigen::VectorXd> x(y, n), w(y + n, m);
 
     VecX a(n), ex(n), u(n), dx(n), best_x(n);
-    VecW b(m), ew(m), v(m), dw(m), best_w(m);
+    VecW b(m), ew(m), v(m), dw(m), best_w(m), vt(m), et(m);
+    const MapV f(p->f != nullptr ? p->f : p->q, m), finv(p->finv != nullptr ? p->finv : p->q, m);
     int steps = 0;
     double kappa = kappa_fixed, r = 0.0, best_r = INFINITY;
     for (;;) {
@@ -62,15 +63,9 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         if (p->f == nullptr) {
             r = std::max(r, ew.lpNorm<Eigen::Infinity>());
         } else {
-            for (int i = 0; i < m; i++) {
-                const double fi = p->f[i];
-                if (p->lo[n + i] < 0.0) { /* equality row */
-                    r = std::max(r, fi * std::fabs(ew[i]));
-                } else {
-                    const double vt = fi * w[i];
-                    r = std::max(r, std::fabs(std::min(std::max(vt - b[i] / fi, 0.0), p->hi[n + i]) - vt));
-                }
-            }
+            vt = f.cwiseProduct(w);
+            et = (vt - b.cwiseProduct(finv)).cwiseMax(low).cwiseMin(hiw) - vt;
+            r = std::max(r, et.lpNorm<Eigen::Infinity>());
         }
         if (!std::isfinite(r)) {
             break; // diverged (kappa above the stability edge): report, do not spin on NaN

@@ -92,6 +92,7 @@ typedef struct mca_pdnn {
     double ws_B[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< per block N_b, compact */
     double ws_Bq[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                    /**< per block q_b */
     double ws_Bf[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< per block: row factors to the given QP's residual */
+    double ws_Bfi[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< their inverses */
     double ws_By[MCA_QP_MAX_H], ws_Blo[MCA_QP_MAX_H], ws_Bhi[MCA_QP_MAX_H]; /**< per block [x_b; w_b] */
     int ws_pv[MCA_QP_MAX_VARS], ws_pr[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< block order of vars, rows */
     int ws_nblk, ws_nzero;                                              /**< blocks, all-zero rows */
