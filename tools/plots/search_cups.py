@@ -5,17 +5,27 @@ Wanted: a real pick-and-place task in which both arms work in the shared target 
 plain MVN scheme drives the minimum distance below d1 and the MCA scheme keeps it above d1 with collision
 rows binding, without a fault, tracking within 1e-4 m.
 
-Layout: two stacks in the target area between the arms, one per arm, at the same x and ys_jaco / ys_mico
-(the MICO2's stack farther out in -y, so its forearm reaches over the JACO2's stack); each arm fetches two
-cups from its own side (grasp at z = 0.10 m) and builds its stack of two (place at z = 0.10 and 0.10 + dz).
-The MICO2 waits w1 s after grasping its first cup and w2 s after its second, which sets when both arms are
-at the stacks together.
+Layout: two stacks in the target area between the arms, one per arm: the JACO2's at (x, ysj), the MICO2's
+at (x + dxm, ysm), farther out in -y, so the MICO2's hand comes down over the JACO2's tool while both place;
+each arm fetches two cups from its own side (grasp at z = 0.10 m) and builds its stack of two (place at
+z = 0.10 and 0.10 + dz). Timing: the MICO2 waits w1 s holding its first cup and w2 s holding its second;
+the JACO2's release dwell lasts 1 + hj s at its first place and 1 + hj2 s at its second.
+What makes a schedule MCA can finish (see docs/scheme.md, task 3): a tool tip (prescribed) must not move
+towards the other arm inside the band (each arm's rows limit only its own approach; the other arm does
+not yield): the JACO2 waits at its stack (hj) until the MICO2 has left, and in the second round the MICO2
+waits (w2) until the JACO2 has gone.
 
-Usage:
-  search_cups.py MCA_SIM [--x a:b:s] [--ysj a:b:s] [--ysm a:b:s] [--w1 a:b:s] [--w2 a:b:s] [--jobs N]
-      runs mvn,mca for every candidate (mca-sim --euler), one line each, the best last;
-  search_cups.py --emit --x X --ysj Y --ysm Y --w1 W --w2 W [--out FILE]
-      prints (or writes) the scenario YAML of one candidate (config/scenarios/cup_stacking.yaml is one).
+Usage (negative values as --ysj=-0.25):
+  search_cups.py MCA_SIM [--x a:b:s|v,v] [--dxm ..] [--ysj ..] [--ysm ..] [--w1 ..] [--w2 ..] [--hj ..]
+                 [--hj2 ..] [--dz D] [--jobs N] [--trapezoid]
+      runs mvn,mca for every candidate (mca-sim --euler; --trapezoid: the sim backend, as the tests), one
+      line each (MVN/MCA minimum, binding ticks, PDNN steps, fault), the best (largest of the smaller of
+      the MVN violation and the MCA margin) last;
+  search_cups.py --emit --x X --ysj Y --ysm Y --w1 W --w2 W --hj H [--out FILE]
+      prints (or writes) the scenario YAML of one candidate. config/scenarios/cup_stacking.yaml is
+      --x 0.36 --ysj=-0.25 --ysm=-0.45 --w1 3 --w2 11 --hj 6; its neighbourhood:
+      search_cups.py build/tools/mca-sim/mca-sim --trapezoid --x 0.36 --ysj=-0.25 --ysm=-0.45 \
+          --w1 2,3,4 --w2 9,10,11 --hj 6
 """
 import argparse
 import concurrent.futures
@@ -31,7 +41,6 @@ ROBOTS = os.path.normpath(os.path.join(HERE, "..", "..", "config", "robots"))
 JACO_Q0 = "[4.7997, 2.9234, 1.0036, 4.1888, 1.4399, 1.3090]"
 MICO_Q0 = "[6.4228, 2.9234, 1.0036, 4.1888, 1.4399, 1.3090]"
 JACO_HOME = (0.214, -0.258, 0.511)
-MICO_HOME = (0.564, -0.205, 0.422)
 MICO_REST = (0.66, -0.40, 0.25)  # back above its first pick-up place, clear of the target area
 Z_GRASP = 0.10  # grasp / first place height of the tool tip [m]
 Z_UP = 0.25     # carry height above cups on the table
