@@ -27,7 +27,7 @@ $(STAMP_DEB): tools/deps/debian-packages.txt
 	fi
 	@touch $@
 
-$(STAMP_PY): tools/deps/requirements.txt
+$(STAMP_PY): tools/deps/requirements.txt $(STAMP_DEB)
 	@[ -x $(VENV)/bin/python3 ] || $(PY) -m venv $(VENV)
 	$(VENV)/bin/pip install -q --disable-pip-version-check -r tools/deps/requirements.txt
 	@touch $@
