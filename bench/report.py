@@ -76,7 +76,7 @@ def us(ns):
 
 def fmt(x, nd=1, unit=""):
     if isinstance(x, float) and x == float("inf"):
-        return "> 2000 (histogram overflow)"
+        return "> histogram range (overflow)"
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-"
     return f"{x:.{nd}f}{unit}"
@@ -157,10 +157,13 @@ def osqp_compare(qpdir, eps):
     if not txt:
         return {"error": f"{csvp} missing"}
     rows = [dict(zip(txt.splitlines()[0].split(","), line.split(","))) for line in txt.splitlines()[1:] if line]
+    if not rows:
+        return {"error": f"no QPs dumped in {qpdir} (run shorter than the dump interval?)"}
     blocks = {}
     for r in rows:
         blocks.setdefault(int(r["block"]), []).append(r)
-    res = {k: {"pdnn": [], "solve": [], "run": [], "delta": [], "iters": [], "bad": 0} for k in ("cold", "warm")}
+    res = {k: {"pdnn": [], "solve": [], "run": [], "polish": [], "delta": [], "iters": [], "bad": 0}
+           for k in ("cold", "warm")}
     settings = dict(eps_abs=eps, eps_rel=eps, polishing=True, max_iter=100000, verbose=False)
     for _, blk in sorted(blocks.items()):
         blk.sort(key=lambda r: int(r["idx"]))
@@ -191,6 +194,7 @@ def osqp_compare(qpdir, eps):
             d["pdnn"].append(pdnn_ns / 1e3)
             d["solve"].append(sol.info.solve_time * 1e6)
             d["run"].append(sol.info.run_time * 1e6)
+            d["polish"].append(sol.info.polish_time * 1e6)
             d["iters"].append(sol.info.iter)
             d["delta"].append(float(np.max(np.abs(sol.x - phi))))
     out = {"eps": eps, "qps": len(rows), "blocks": len(blocks)}
@@ -203,6 +207,7 @@ def osqp_compare(qpdir, eps):
             "pdnn_p50_us": p(d["pdnn"], 50), "pdnn_p99_us": p(d["pdnn"], 99),
             "osqp_solve_p50_us": p(d["solve"], 50), "osqp_solve_p99_us": p(d["solve"], 99),
             "osqp_run_p50_us": p(d["run"], 50), "osqp_run_p99_us": p(d["run"], 99),
+            "osqp_polish_p50_us": p(d["polish"], 50),
             "osqp_iter_p50": p(d["iters"], 50), "osqp_iter_max": max(d["iters"]),
             "ratio_p50_solve": p(d["pdnn"], 50) / p(d["solve"], 50),
             "ratio_p50_run": p(d["pdnn"], 50) / p(d["run"], 50),
@@ -327,7 +332,8 @@ def main():
                 f"2. PDNN vs OSQP, {key}, {kind} ({c['n']} QPs)",
                 f"PDNN p50 {fmt(c['pdnn_p50_us'], 2)} / p99 {fmt(c['pdnn_p99_us'], 2)} us",
                 f"OSQP solve_time p50 {fmt(c['osqp_solve_p50_us'], 2)} / p99 {fmt(c['osqp_solve_p99_us'], 2)} us "
-                f"(run_time p50 {fmt(c['osqp_run_p50_us'], 2)})",
+                f"(run_time p50 {fmt(c['osqp_run_p50_us'], 2)}, of it polish p50 "
+                f"{fmt(c.get('osqp_polish_p50_us'), 2)})",
                 f"{c['ratio_p50_solve']:.2f} (vs run_time {c['ratio_p50_run']:.2f})",
                 f"PDNN/OSQP at p50; OSQP eps 1e-9 + polish, ADMM iterations p50 {c['osqp_iter_p50']:.0f} max "
                 f"{c['osqp_iter_max']}; "
@@ -355,7 +361,9 @@ def main():
             continue
         rows.append((f"3. segment distance: {k}", f"{v['ns']:.1f} ns/pair",
                      f"closed form {closed['ns']:.1f} ns/pair" if closed else "-", f"{v['ratio']:.2f}",
-                     f"max |d - d_closed| {v['max_err']} m, mean iterations {v['iter']}"))
+                     f"max |d - d_closed| {v['max_err']} m, mean iterations {v['iter']}"
+                     + ("; our GJK distance loop on libccd's vectors and support functions (libccd 2.x has "
+                        "no distance query, only intersection and penetration)" if "GJK" in k else "")))
     if not seg:
         rows.append(("3. segment distance", "not measured", "-", "-", "raw/segdist.txt missing or unparsable"))
 

@@ -21,9 +21,11 @@ PY=${PY:-$ROOT/.venv/bin/python3}
 [ -x "$PY" ] || PY=python3
 VCAN=${MCA_BENCH_VCAN:-cached}
 if [ $QUICK = 1 ]; then
-    JIT=${MCA_BENCH_JITTER_S:-3} DDS_TICKS=1000 LAT_N=1000 QP_EVERY=2000 SCALE="--quick" TICKS_CS="--ticks 8000"
+    # QP_EVERY_CS below the 8000 ticks of the short cup-stacking run, so that it dumps QP blocks too
+    JIT=${MCA_BENCH_JITTER_S:-3} DDS_TICKS=1000 LAT_N=1000 QP_EVERY=2000 QP_EVERY_CS=2000 SCALE="--quick"
+    TICKS_CS="--ticks 8000"
 else
-    JIT=${MCA_BENCH_JITTER_S:-20} DDS_TICKS=3000 LAT_N=3000 QP_EVERY=1000 SCALE="" TICKS_CS=""
+    JIT=${MCA_BENCH_JITTER_S:-20} DDS_TICKS=3000 LAT_N=3000 QP_EVERY=1000 QP_EVERY_CS=4000 SCALE="" TICKS_CS=""
 fi
 # a DDS domain of our own so that other runs on this host do not mix in
 DOMAIN=${MCA_BENCH_DOMAIN:-97}
@@ -51,7 +53,7 @@ if have "$TICK"; then
         --qp-every $QP_EVERY --qp-block 10 --out "$RAW/tick_cross_circles.json" 2>"$RAW/tick_cross_circles.err"
     # shellcheck disable=SC2086
     "$TICK" task --scenario "$ROOT/config/scenarios/cup_stacking.yaml" --fifo $FIFO --qp-dir "$RAW/qp_cup_stacking" \
-        --qp-every $((QP_EVERY * 4)) --qp-block 10 $TICKS_CS --out "$RAW/tick_cup_stacking.json" \
+        --qp-every $QP_EVERY_CS --qp-block 10 $TICKS_CS --out "$RAW/tick_cup_stacking.json" \
         2>"$RAW/tick_cup_stacking.err"
     # dual JACO2: task 3 with the MICO2 replaced by a second JACO2 (same waypoints, bases, q0)
     sed -e "s#urdf: \.\./robots/[a-z0-9]*\.urdf#urdf: $ROOT/config/robots/jaco2.urdf#" \
@@ -86,7 +88,10 @@ if have "$SEG"; then
         "$SEG" $([ $QUICK = 1 ] && echo "--n 20000 --reps 3") >"$RAW/segdist.txt" 2>&1
 fi
 
-# 4. wake-up jitter: mcad's loop and cyclictest, same settings, one after the other
+# 4. wake-up jitter: mcad's loop and cyclictest, same settings, one after the other. cyclictest's histogram
+#    spans 0-200 ms in 1 us bins (mcad's own histogram reaches further), so that the VM stalls seen here
+#    (~100 ms) land in a bin instead of an overflow count.
+CYC_HIST=200000
 MCAD=$B/daemon/mcad
 CELL=$ROOT/config/cells/cross_circles_sim.yaml
 if have "$MCAD"; then
@@ -95,8 +100,8 @@ if have "$MCAD"; then
     echo "exit $?" >>"$RAW/mcad_jitter.log"
 fi
 if command -v cyclictest >/dev/null; then
-    step "jitter: cyclictest $JIT s (-m -p $FIFO -i 1000, histogram 1 us bins)"
-    cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h 2000 >"$RAW/cyclictest.txt" 2>&1
+    step "jitter: cyclictest $JIT s (-m -p $FIFO -i 1000, histogram 1 us bins to $CYC_HIST us)"
+    cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h $CYC_HIST >"$RAW/cyclictest.txt" 2>&1
 else
     echo "cyclictest missing (apt-get install rt-tests)" >"$RAW/cyclictest.txt"
 fi
@@ -104,7 +109,7 @@ fi
 # 4b. both at once: the same host disturbances hit both (each wakes for < 50 us of a 1 ms period)
 if have "$MCAD" && command -v cyclictest >/dev/null; then
     step "jitter: mcad and cyclictest at the same time, $JIT s"
-    cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h 2000 >"$RAW/cyclictest_concurrent.txt" 2>&1 &
+    cyclictest -m -p $FIFO -i 1000 -l $((JIT * 1000)) -q -h $CYC_HIST >"$RAW/cyclictest_concurrent.txt" 2>&1 &
     cyc=$!
     "$MCAD" --no-dds --stop-after "$JIT" "$CELL" >"$RAW/mcad_concurrent.out" 2>"$RAW/mcad_concurrent.log"
     echo "exit $?" >>"$RAW/mcad_concurrent.log"
