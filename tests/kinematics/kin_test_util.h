@@ -3,6 +3,7 @@
 #ifndef KIN_TEST_UTIL_H
 #define KIN_TEST_UTIL_H
 
+#include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -31,6 +32,15 @@ static inline uint64_t kin_rand_u64(uint64_t *s) {
 /* uniform in [lo, hi) */
 static inline double kin_rand(uint64_t *s, double lo, double hi) {
     return lo + (hi - lo) * (double)(kin_rand_u64(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Running maximum of an error that a NaN poisons: once e is NaN the result stays NaN, so a final
+ * `!(worst <= tol)` check fails (fmax would drop the NaN and let the test pass). */
+static inline double kin_worst(double worst, double e) {
+    if (isnan(worst)) {
+        return worst;
+    }
+    return (isnan(e) || e > worst) ? e : worst;
 }
 
 /* Load config/robots/<file> with tip "tool_tip"; fails the test with the message on error. */
