@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Runs the mca-geom tool on good and bad input and checks numbers (known answers) and exit codes.
-usage: test_mca_geom.py MCA_GEOM ROBOTS_DIR"""
+usage: test_mca_geom.py MCA_GEOM ROBOTS_DIR EXACT_CASES_TXT"""
+from fractions import Fraction
 import math
 import os
 import subprocess
@@ -10,6 +11,8 @@ import tempfile
 
 TOOL = sys.argv[1]
 ROBOTS = sys.argv[2]
+EXACT_CASES = sys.argv[3]
+MIN_EXACT_CASES = 21  # as many as exact_cases.txt holds today (segdist.unit checks the same count)
 failures = 0
 
 
@@ -78,6 +81,67 @@ check(rc == 0 and abs(float(out2.split()[0]) - 0.1) < 1e-15, "closed: near-paral
 check(abs(d_lsdm - math.sqrt(0.01 + 1e-6 / (1 + 1e-6) ** 2)) < 1e-14, f"lsdm tol 1e-5 stops early at {d_lsdm}")
 rc, out, err = run(["segdist", "--method", "lsdm-cert", "--tol", "1e-9", "--max-iter", "50"], NEARPAR)
 check(rc == 0 and "cap" in err and len(rows(out)) == 1, "lsdm-cert at its cap: answer printed + warning")
+
+# --- segdist: the hand-derived exact hard cases of exact_cases.txt (also checked on the library by
+# segdist.unit), through the tool, in both orders (D C B A swaps P and E) ---
+def load_exact_cases(path):
+    cases = []
+    with open(path) as f:
+        for lineno, ln in enumerate(f, 1):
+            ln = ln.strip()
+            if not ln or ln.startswith("#"):
+                continue
+            name, seg, d, pe = (x.strip() for x in ln.split("|"))  # exactly 4 fields, else ValueError
+            seg = [float(x) for x in seg.split()]
+            pe = None if pe == "-" else [float(x) for x in pe.split()]
+            assert len(seg) == 12 and (pe is None or len(pe) == 6), f"{path}:{lineno}: bad case"
+            cases.append((name, seg, float(d), pe))
+    return cases
+
+
+def seg_point_dist_exact(x, a, b):
+    """Distance from x to segment ab, in exact rational arithmetic on the given doubles."""
+    x, a, b = ([Fraction(v) for v in p] for p in (x, a, b))
+    u = [bi - ai for ai, bi in zip(a, b)]
+    w = [xi - ai for ai, xi in zip(a, x)]
+    uu = sum(c * c for c in u)
+    t = min(max(sum(p * q for p, q in zip(w, u)) / uu, Fraction(0)), Fraction(1)) if uu else Fraction(0)
+    return math.sqrt(sum((wi - t * ui) ** 2 for wi, ui in zip(w, u)))
+
+
+cases = load_exact_cases(EXACT_CASES)
+check(len(cases) >= MIN_EXACT_CASES, f"exact cases: {len(cases)} read from {EXACT_CASES}")
+swapped = [seg[9:12] + seg[6:9] + seg[3:6] + seg[0:3] for _, seg, _, _ in cases]
+stdin = "".join(" ".join(repr(v) for v in seg) + "\n" for seg in [c[1] for c in cases] + swapped)
+rc, out, err = run(["segdist", "--method", "closed"], stdin)
+r = rows(out)
+check(rc == 0 and len(r) == 2 * len(cases), f"exact cases: exit 0, {2 * len(cases)} answers [{rc} {err.strip()}]")
+TOL = 1e-12
+worst_d = worst_pe = 0.0
+for i, (name, seg, d, pe) in enumerate(cases):
+    for order, row in (("", i), (" (swapped)", len(cases) + i)):
+        if row >= len(r):
+            check(False, f"exact case {name}{order}: no answer")
+            continue
+        got = r[row]
+        segs = seg if not order else swapped[i]
+        P, E = got[1:4], got[4:7]
+        err_d = abs(got[0] - d)
+        worst_d = max(worst_d, err_d) if err_d == err_d else math.inf  # a NaN counts as a failure
+        ok = err_d <= TOL and len(got) == 8 and got[7] == 0
+        # P on the first segment, E on the second, |P - E| = d (all that is defined when P, E are not unique)
+        ok = ok and seg_point_dist_exact(P, segs[0:3], segs[3:6]) <= TOL
+        ok = ok and seg_point_dist_exact(E, segs[6:9], segs[9:12]) <= TOL
+        ok = ok and abs(math.dist(P, E) - d) <= TOL
+        what = "d, P on AB, E on CD"
+        if pe is not None:
+            expP, expE = (pe[0:3], pe[3:6]) if not order else (pe[3:6], pe[0:3])
+            e_pe = max(abs(x - y) for x, y in zip(P + E, expP + expE))
+            worst_pe = max(worst_pe, e_pe) if e_pe == e_pe else math.inf
+            ok = ok and e_pe <= TOL
+            what = "d, P, E"
+        check(ok, f"exact case {name}{order}: {what} within {TOL:g}: {got}")
+print(f"exact cases through the tool: max |d - exact| = {worst_d:.3g}, max |P, E - exact| = {worst_pe:.3g}")
 
 # --- segdist: bad input ---
 for bad, lineno, answered, what in (
