@@ -116,16 +116,18 @@ int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb) {
     if (!l || !fb) {
         return MCA_EINVAL;
     }
-    int fresh = l->fb_new;
-    if (fresh) {
+    /* New feedback wins over a link error seen in the same read (mca/arm.h, read contract): the error
+     * stays pending until a take without new feedback reports it. */
+    if (l->fb_new) {
         *fb = l->fb;
         l->fb_new = 0;
+        return MCA_OK;
     }
     if (l->err_pending || l->st.bus_off) {
         l->err_pending = 0;
         return MCA_EIO;
     }
-    return fresh ? MCA_OK : MCA_EAGAIN;
+    return MCA_EAGAIN;
 }
 
 void mca_can_options_default(mca_can_options_t *opt) {
@@ -151,7 +153,8 @@ static int can_read(void *ctx, mca_arm_feedback_t *fb) {
             break;
         }
         if (rc != MCA_OK) {
-            return MCA_EIO;
+            b->link.err_pending = 1; /* reported like an error frame, never hiding feedback already in */
+            break;
         }
         mca_can_link_rx(&b->link, &f);
     }

@@ -10,8 +10,17 @@
  * The arm side runs a watchdog: no valid command within its timeout -> it brakes to zero velocity
  * within its deceleration limit and enters MCA_ARM_FAULT until a command carries MCA_ACT_CLEAR_FAULT.
  *
- * Context: mca_arm_open/close are start-up/shut-down only (they may allocate and block);
- * mca_arm_read/write are real-time safe for every backend (no allocation, no blocking, no locks).
+ * Context: opening (a backend's open function, e.g. mca_sim_backend_open() or mca_can_backend_open(),
+ * which ends in mca_arm_wrap()) and mca_arm_close() are start-up/shut-down only (they may allocate and
+ * block); mca_arm_read/write/stats are real-time safe for every backend (no allocation, no blocking,
+ * no locks).
+ *
+ * Read contract (every backend): the return code says what is in fb, and a read never discards
+ * feedback. A link error (CAN error frame, bus-off, socket error) seen by a read that also has new
+ * feedback does not hide it: that read returns the feedback (MCA_OK / MCA_EFAULT) and the error stays
+ * pending; the next read without new feedback reports it (MCA_EIO). Bus-off is reported by every read
+ * without new feedback while it lasts. Every error is also counted in mca_arm_stats(). A caller
+ * therefore uses fb on MCA_OK / MCA_EFAULT and counts a lost cycle on MCA_EAGAIN / MCA_EIO.
  */
 #ifndef MCA_ARM_H
 #define MCA_ARM_H
@@ -105,8 +114,13 @@ typedef struct mca_arm_ops {
 /** Wrap a backend (start-up only). @retval MCA_OK, MCA_EINVAL, MCA_ENOMEM */
 int mca_arm_wrap(mca_arm_t **arm, const mca_arm_ops_t *ops, void *ctx);
 
-/** Newest feedback. @retval MCA_OK (new feedback), MCA_EAGAIN (nothing new since the last read;
- *  fb untouched), MCA_EIO (bus error), MCA_EFAULT (arm reports fault; fb filled) */
+/** Newest feedback (see "Read contract" above).
+ *  @retval MCA_OK      new feedback in fb (even if the link also saw an error: it stays pending)
+ *  @retval MCA_EFAULT  new feedback in fb, and the arm reports FAULT
+ *  @retval MCA_EAGAIN  nothing new since the last read; fb untouched
+ *  @retval MCA_EIO     nothing new, and a link error since the last read that reported one, or the
+ *                      link is bus-off; fb untouched
+ *  @retval MCA_EINVAL  NULL argument */
 int mca_arm_read(mca_arm_t *arm, mca_arm_feedback_t *fb);
 /** Send one cycle's command. @retval MCA_OK, MCA_EINVAL, MCA_EIO, MCA_EAGAIN (tx queue full) */
 int mca_arm_write(mca_arm_t *arm, const mca_arm_command_t *cmd);
