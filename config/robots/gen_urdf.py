@@ -137,7 +137,8 @@ def pa10plus():
     comment = ("PA10+: Mitsubishi PA-10 7-DOF (0.317/0.45/0.48/0.07 m; limits +-177,94,174,137,255,165,255 deg)\n"
                "plus a 1-DOF pitch tool joint T at the flange carrying a 0.25 m tool (tool length and\n"
                "T limit +-90 deg are our choice, see docs/robots.md). Zero configuration: straight up.\n"
-               "Speeds: 57 deg/s (S1..E1), 114 deg/s (E2..W2, T): our assumption (no data sheet), see docs/robots.md.")
+               "Speeds: 57 deg/s (S1..E1), 114 deg/s (E2..W2, T): our assumption (no data sheet), "
+               "see docs/robots.md.")
     write_urdf("pa10plus.urdf", "pa10plus", comment, 0.08, joints, [0.0, 0.0, TOOL], [0.0, 0.0, 0.0])
 
 

@@ -366,7 +366,9 @@ static void read_feedback(mca_daemon_t *d, double t) {
                 latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t);
             }
         } else if (rc == MCA_EIO) {
-            /* error frame or bus-off: counts as a lost cycle (a burst becomes a lost-feedback fault) */
+            /* no new feedback and a link error (error frame, bus-off): a lost cycle, as EAGAIN (a burst
+             * becomes a lost-feedback fault). Feedback that came with an error was returned as MCA_OK
+             * above (mca/arm.h: a read never discards feedback; the error is reported later). */
             d->lost[a]++;
             if (d->bus_errors[a]++ == 0) {
                 LOGN(d, MCA_LOG_WARNING, "arm %g: bus error on its link", 1, a, 0, 0, 0, NULL);
@@ -939,4 +941,13 @@ const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a) {
 
 mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
+}
+
+mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {
+    if (!d || !arm || a < 0 || a >= d->n_arms) {
+        return NULL;
+    }
+    mca_arm_t *old = d->arm[a];
+    d->arm[a] = arm;
+    return old;
 }

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* The daemon's tick in virtual time (mca_daemon_step, sim backend, no real-time loop), its braking ramp
- * and faults; the latency histogram against sorted samples; the rt log ring. */
+ * and faults; bus errors through the CAN link code; the latency histogram against sorted samples; the
+ * rt log ring. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -13,6 +14,10 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <linux/can.h>
+#include <linux/can/error.h>
+
+#include "mca/arm_can.h"
 #include "mca/cell.h"
 #include "mca/daemon.h"
 #include "mca/err.h"
@@ -284,6 +289,170 @@ static void test_distance_fault(void **state) {
     free(cell);
 }
 
+/* ---- the SocketCAN backend's link code (mca_can_link_t, no socket) between the daemon and a sim arm:
+ * every feedback goes through a CAN FD frame, and error frames are injected on the way ---- */
+typedef struct canproxy {
+    mca_arm_t *inner;
+    mca_can_link_t link;
+    uint8_t ctr;
+    int err_with_fb; /* an error frame in every read that also carries a feedback frame */
+    int drop_fb;     /* feedback frames lost on the bus */
+    int reads_ok, reads_eio;
+} canproxy_t;
+
+static void proxy_error_frame(canproxy_t *p, uint32_t cls) {
+    mca_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.can_id = CAN_ERR_FLAG | cls;
+    f.len = CAN_ERR_DLC;
+    assert_int_equal(mca_can_link_rx(&p->link, &f), MCA_OK);
+}
+
+static int proxy_read(void *ctx, mca_arm_feedback_t *fb) {
+    canproxy_t *p = ctx;
+    mca_arm_feedback_t in;
+    const int rc = mca_arm_read(p->inner, &in);
+    const int with_fb = (rc == MCA_OK || rc == MCA_EFAULT) && !p->drop_fb;
+    /* the error frame before the feedback frame in one drain, or after it (alternating) */
+    const int err_first = p->ctr % 2 == 0;
+    if (p->err_with_fb && with_fb && err_first) {
+        proxy_error_frame(p, CAN_ERR_PROT);
+    }
+    if (with_fb) {
+        mca_can_frame_t f;
+        memset(&f, 0, sizeof f);
+        f.can_id = p->link.id_base + MCA_CAN_OFF_FEEDBACK;
+        f.fd = 1;
+        f.len = MCA_CAN_LEN_FEEDBACK;
+        f.stamp_ns = in.stamp_ns;
+        assert_int_equal(mca_can_encode_feedback(&in, p->ctr++, f.data), MCA_OK);
+        assert_int_equal(mca_can_link_rx(&p->link, &f), MCA_OK);
+    }
+    if (p->err_with_fb && with_fb && !err_first) {
+        proxy_error_frame(p, CAN_ERR_PROT);
+    }
+    const int got = mca_can_link_take(&p->link, fb);
+    p->reads_ok += got == MCA_OK;
+    p->reads_eio += got == MCA_EIO;
+    return got;
+}
+
+static int proxy_write(void *ctx, const mca_arm_command_t *cmd) {
+    canproxy_t *p = ctx;
+    const int rc = mca_arm_write(p->inner, cmd);
+    if (rc == MCA_OK) {
+        mca_can_link_sent(&p->link, cmd);
+    }
+    return rc;
+}
+
+static int proxy_stats(void *ctx, mca_arm_stats_t *st) {
+    *st = ((canproxy_t *)ctx)->link.st;
+    return MCA_OK;
+}
+
+static void proxy_close(void *ctx) {
+    mca_arm_close(((canproxy_t *)ctx)->inner);
+}
+
+static const mca_arm_ops_t proxy_ops = {
+    .name = "canproxy", .read = proxy_read, .write = proxy_write, .stats = proxy_stats, .close = proxy_close};
+
+/* An error frame in the same read as a fresh feedback must not cost the feedback (mca/arm.h read
+ * contract): the daemon keeps running on it. The pending error is reported by the next read without
+ * feedback (one lost cycle, one warning); bus-off without feedback is still a lost-feedback fault. */
+static void test_bus_error_keeps_feedback(void **state) {
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
+    FILE *log = tmpfile();
+    assert_non_null(log);
+    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = log};
+    mca_daemon_t *d = NULL;
+    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    static canproxy_t p;
+    memset(&p, 0, sizeof p);
+    assert_int_equal(mca_can_link_init(&p.link, 0x100, cell->scn.arm[1].n_q0), MCA_OK);
+    mca_arm_t *proxy = NULL;
+    assert_int_equal(mca_arm_wrap(&proxy, &proxy_ops, &p), MCA_OK);
+    assert_null(mca_daemon_swap_arm(d, 2, proxy));
+    p.inner = mca_daemon_swap_arm(d, 1, proxy);
+    assert_non_null(p.inner);
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(p.inner);
+    assert_non_null(fw);
+
+    /* 300 ticks, each feedback with an error frame beside it (lost_feedback_cycles = 5) */
+    p.err_with_fb = 1;
+    double t = 0.0;
+    for (int k = 0; k < 300; k++, t += 0.001) {
+        const int st = mca_daemon_step(d, t, 0);
+        if (st != MCA_DAEMON_RUNNING) {
+            mca_daemon_summary_t s;
+            mca_daemon_summary(d, &s);
+            fail_msg("tick %d: state %s: %s", k, mca_daemon_state_name(st), s.fault_text);
+        }
+    }
+    /* every read but the first (the handshake took the sim's last feedback) had a feedback frame and an
+     * error frame, and returned the feedback */
+    assert_int_equal(p.link.st.bus_errors, 299);
+    assert_int_equal(p.link.st.feedback_received, 299);
+    assert_int_equal(p.reads_ok, 299);
+    assert_int_equal(p.reads_eio, 0);
+    /* the daemon ran on the CAN-decoded feedback: its command's position reference is that feedback's
+     * position plus one step; the wire quantises positions to 1e-6 rad */
+    const mca_arm_command_t *c = mca_daemon_last_command(d, 1);
+    for (int j = 0; j < c->n; j++) {
+        assert_true(fabs(c->position_ref[j] - c->velocity[j] * 0.001 - p.link.fb.position[j]) < 1e-12);
+        assert_true(fabs(p.link.fb.position[j] - fw->q[j]) < 1e-3);
+    }
+
+    /* one feedback lost with the error still pending: that read reports it (MCA_EIO, a lost cycle) */
+    p.err_with_fb = 0;
+    p.drop_fb = 1;
+    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
+    assert_int_equal(p.reads_eio, 1);
+    p.drop_fb = 0;
+    for (int k = 0; k < 20; k++) {
+        assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
+    }
+    assert_int_equal(p.reads_eio, 1);
+
+    /* bus-off, no feedback gets through: EIO every read, the 5th lost cycle is the fault */
+    p.drop_fb = 1;
+    proxy_error_frame(&p, CAN_ERR_BUSOFF);
+    int k = 0, st;
+    do {
+        st = mca_daemon_step(d, t += 0.001, 0);
+        k++;
+    } while (st == MCA_DAEMON_RUNNING && k < 100);
+    assert_int_equal(st, MCA_DAEMON_BRAKING);
+    assert_int_equal(k, 5);
+    assert_int_equal(p.reads_eio, 6);
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_LOST_FEEDBACK);
+
+    mca_daemon_service(d);
+    fflush(log);
+    rewind(log);
+    char line[256];
+    int warnings = 0, lost = 0;
+    while (fgets(line, sizeof line, log)) {
+        warnings += strstr(line, "arm 1: bus error on its link") != NULL;
+        lost += strstr(line, "arm 1: no feedback for 5 cycles") != NULL;
+    }
+    print_message("  300 ticks with error frames: running; bus-off: fault after %d ticks\n", k);
+    assert_int_equal(warnings, 1);
+    assert_int_equal(lost, 1);
+    mca_daemon_close(d); /* closes the proxy, which closes the sim arm */
+    fclose(log);
+    free(cell);
+}
+
 /* Histogram percentiles against the exact order statistics of the same samples. */
 static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
@@ -370,6 +539,7 @@ int main(void) {
         cmocka_unit_test(test_arm_fault_is_a_fault),
         cmocka_unit_test(test_arm_not_servoing_is_a_fault),
         cmocka_unit_test(test_distance_fault),
+        cmocka_unit_test(test_bus_error_keeps_feedback),
         cmocka_unit_test(test_histogram_vs_sorted),
         cmocka_unit_test(test_rtlog),
     };

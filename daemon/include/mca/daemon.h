@@ -146,6 +146,10 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns);
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);
 /** Arm handle (tests: sim backend fault injection). */
 mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a);
+/** Test hook (not while the loop runs): put @p arm in the place of arm a, e.g. a proxy around the
+ *  handle returned (link fault injection). The daemon closes @p arm at mca_daemon_close(); the caller
+ *  owns the old handle. @return the old handle, NULL (and nothing changed) if a or arm is bad. */
+mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm);
 
 #ifdef __cplusplus
 }

@@ -14,9 +14,11 @@
  *   own command id sent by another node) and never applied.
  *   Error frames (CAN_ERR_FLAG) are counted in bus_errors; CAN_ERR_BUSOFF sets bus_off until a
  *   CAN_ERR_RESTARTED frame or the next valid feedback. Return codes:
- *     MCA_EIO    an error frame arrived since the last read, or the link is bus-off (fb is filled
- *                too when new feedback arrived in the same read)
- *     MCA_OK / MCA_EFAULT  new feedback (EFAULT: the arm reports FAULT), else MCA_EAGAIN.
+ *     MCA_OK / MCA_EFAULT  new feedback (EFAULT: the arm reports FAULT), also when an error frame
+ *                arrived in the same read: the feedback wins and the error stays pending (mca/arm.h)
+ *     MCA_EIO    no new feedback, and an error frame (or a socket error) since the last MCA_EIO, or
+ *                the link is bus-off; fb untouched
+ *     MCA_EAGAIN no new feedback, no error; fb untouched.
  *   fb.frame_id is the 32-bit id of the command answered (the wire carries 16 bits, unwrapped against
  *   the last id sent), fb.fault_flags are those of the newest fault frame, fb.stamp_ns the kernel
  *   receive time (CLOCK_MONOTONIC).
@@ -79,7 +81,7 @@ typedef struct mca_can_link {
     uint16_t fault_flags[MCA_MAX_DOF];
     mca_can_state_msg_t state; /**< newest heartbeat */
     int have_state;
-    int err_pending; /**< error frame since the last take */
+    int err_pending; /**< error frame (or socket error) not yet reported by a take */
     mca_arm_stats_t st;
 } mca_can_link_t;
 
@@ -96,8 +98,8 @@ int mca_can_link_encode(const mca_can_link_t *l, const mca_arm_command_t *cmd,
 /** Record that the frame from mca_can_link_encode() went out (counter + 1, stats). */
 void mca_can_link_sent(mca_can_link_t *l, const mca_arm_command_t *cmd);
 
-/** Take the newest feedback. @retval MCA_OK (new), MCA_EAGAIN (nothing new), MCA_EIO (error frame
- *  since the last take or bus-off; fb filled as well when new feedback was there) */
+/** Take the newest feedback. @retval MCA_OK (new; a pending error stays pending), MCA_EAGAIN (nothing
+ *  new), MCA_EIO (nothing new, and an error frame since the last MCA_EIO or bus-off; fb untouched) */
 int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb);
 
 #ifdef __cplusplus
