@@ -254,8 +254,9 @@ int main(int argc, char **argv) {
                    r->scheme, r->pdnn_capped);
         }
         if (dump) {
-            printf("%s: %d QPs dumped to %s (%d with binding collision rows)\n", r->scheme, r->dumped, dump,
-                   r->dumped_binding);
+            printf("%s: %d QPs dumped to %s (%d with binding collision rows); %d capped ticks not dumped "
+                   "(%d picked by --dump-every)\n",
+                   r->scheme, r->dumped, dump, r->dumped_binding, r->pdnn_capped, r->dump_skipped_capped);
         }
     }
     if (summary) {
@@ -275,7 +276,7 @@ int main(int argc, char **argv) {
                     "\"pdnn_steps_mean\":%.3f,\"pdnn_residual_max\":%.3g,\"eq_residual_max\":%.3g,"
                     "\"binding_ticks\":%d,\"pdnn_capped\":%d,\"compute_p50_ns\":%lld,\"compute_p99_ns\":%lld,"
                     "\"compute_max_ns\":%lld,\"cpu_p50_ns\":%lld,\"cpu_p99_ns\":%lld,\"cpu_max_ns\":%lld,"
-                    "\"dumped\":%d,\"dumped_binding\":%d,\"samples\":[",
+                    "\"dumped\":%d,\"dumped_binding\":%d,\"dump_skipped_capped\":%d,\"samples\":[",
                     s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
                     r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
                     isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
@@ -283,7 +284,7 @@ int main(int argc, char **argv) {
                     r->pdnn_steps_max, r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max,
                     r->binding_ticks, r->pdnn_capped, (long long)r->compute_p50, (long long)r->compute_p99,
                     (long long)r->compute_max, (long long)r->cpu_p50, (long long)r->cpu_p99,
-                    (long long)r->cpu_max, r->dumped, r->dumped_binding);
+                    (long long)r->cpu_max, r->dumped, r->dumped_binding, r->dump_skipped_capped);
             for (int i = 0; i < r->n_samples; i++) {
                 fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
                         isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);

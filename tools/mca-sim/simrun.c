@@ -245,16 +245,19 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         if (csv) {
             csv_row(csv, cfg, t, q, &info);
         }
+        /* the ticks --dump-every picks: every Nth, and every N/5th with binding rows */
+        const int every = o->dump_every > 0 ? o->dump_every : 1;
+        const int every_b = every / 5 > 0 ? every / 5 : 1;
+        const int picked = k % every == 0 || (info.binding_rows > 0 && k % every_b == 0);
         if (!info.fault && o->scheme != MCA_SCHEME_APF && !info.pdnn_converged) {
             r->pdnn_capped++;
+            r->dump_skipped_capped += o->dump_dir != NULL && picked;
         }
         /* only converged answers are dumped: at the step cap the controller accepts residuals up to
          * fault_residual, whose phi may differ from the exact solution by more than the check's 1e-6 */
         if (o->dump_dir && !info.fault && info.pdnn_converged && o->scheme != MCA_SCHEME_APF &&
             (o->dump_max <= 0 || r->dumped < o->dump_max)) {
-            const int every = o->dump_every > 0 ? o->dump_every : 1;
-            const int every_b = every / 5 > 0 ? every / 5 : 1;
-            if (k % every == 0 || (info.binding_rows > 0 && k % every_b == 0)) {
+            if (picked) {
                 char path[1024], tag[128];
                 snprintf(path, sizeof path, "%s/%s-%s-%06d.json", o->dump_dir, scn->name, r->scheme, k);
                 snprintf(tag, sizeof tag, "%s %s t=%.3f binding=%d", scn->name, r->scheme, t,

@@ -57,6 +57,7 @@ typedef struct mca_simrun_result {
     int64_t compute_p50, compute_p99, compute_max; /**< info.compute_ns (CLOCK_MONOTONIC, wall) */
     int64_t cpu_p50, cpu_p99, cpu_max;             /**< thread CPU time of the tick call (no preemption) */
     int dumped, dumped_binding;
+    int dump_skipped_capped; /**< ticks --dump-every picked but not dumped: PDNN at its cap (not converged) */
 } mca_simrun_result_t;
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);
