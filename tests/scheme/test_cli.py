@@ -41,6 +41,23 @@ def main():
         expect([sim, "--scenario", bad], 1, ["q0", "7 values"])
         open(bad, "w").write("name: x\nduration: [\n")
         expect([sim, "--scenario", bad], 1, [bad])
+    # --csv naming: one scheme writes OUT as given; several write OUT-<scheme>.csv, with or without a .csv
+    # suffix on OUT (docs/scheme.md section 6)
+    with tempfile.TemporaryDirectory() as tmp:
+        for out, schemes, expect_files in (("one.csv", "mca", ["one.csv"]),
+                                           ("two.csv", "mvn,mca", ["two-mvn.csv", "two-mca.csv"]),
+                                           ("three", "mvn,mca", ["three-mvn.csv", "three-mca.csv"])):
+            p = subprocess.run([sim, "--scenario", good, "--scheme", schemes, "--duration", "0.05", "--csv",
+                                os.path.join(tmp, out)], capture_output=True, text=True, timeout=120)
+            made = sorted(os.listdir(tmp))
+            ok = p.returncode == 0 and all(f in made for f in expect_files)
+            ok = ok and all(open(os.path.join(tmp, f)).readline().startswith("t,") for f in expect_files)
+            print(("ok   " if ok else "FAIL ") + "--scheme %s --csv %s -> %s (files: %s)" % (schemes, out,
+                                                                                          expect_files, made))
+            if not ok:
+                FAILS.append("--csv " + out)
+            for f in made:
+                os.remove(os.path.join(tmp, f))
     # a good run succeeds and prints the table
     p = subprocess.run([sim, "--scenario", good, "--scheme", "mca", "--duration", "0.5"], capture_output=True,
                        text=True, timeout=120)

@@ -20,7 +20,7 @@ static void usage(FILE *f) {
         "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm]\n"
-        "  --csv OUT      per-tick CSV (with several schemes: OUT gets -<scheme> before .csv)\n"
+        "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows)\n"
         "  --euler        integrate qdot directly instead of the in-process sim backend\n"
@@ -47,7 +47,7 @@ static void csv_name(char *out, size_t len, const char *base, const char *scheme
     if (dot && strcmp(dot, ".csv") == 0) {
         snprintf(out, len, "%.*s-%s.csv", (int)(dot - base), base, scheme);
     } else {
-        snprintf(out, len, "%s-%s", base, scheme);
+        snprintf(out, len, "%s-%s.csv", base, scheme); /* OUT without .csv: still OUT-<scheme>.csv */
     }
 }
 
