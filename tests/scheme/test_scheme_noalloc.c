@@ -1,8 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /* No heap allocation inside mca_controller_tick: malloc, calloc, realloc, free, posix_memalign,
  * aligned_alloc and C++ operator new/delete are wrapped at link time (-Wl,--wrap) and counted while a
- * tick runs. Runs the cross-circles task (MCA with binding collision rows, MVN, APF) and the negative
- * example (faults) for enough ticks to go through every branch; FAILS on any allocation. */
+ * tick runs. Runs the cross-circles task (2 x 8-DOF PA10+: MCA with binding collision rows in both forms,
+ * MVN, APF, and the NaN, not-converged and fake-attractor faults), the cup-stacking task (6-DOF JACO2 +
+ * MICO2: MCA through its binding window at 14.6-15.9 s, MVN, APF) and the paper's LSDM distance path
+ * (MCA_DIST_LSDM) on both, for enough ticks to go through every branch; FAILS on any allocation. */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -68,7 +70,14 @@ void __wrap__ZdaPv(void *p) {
     __real__ZdaPv(p);
 }
 
+enum { CROSS_CIRCLES, CUP_STACKING, N_SCENARIOS };
+static const char *const scenario_file[N_SCENARIOS] = {"cross_circles.yaml", "cup_stacking.yaml"};
+
 struct variant {
+    const char *what;
+    int scenario;
+    mca_dist_method_t dist;
+    int need_binding; /* 1: the run must reach binding collision rows (else it proves nothing about them) */
     mca_scheme_kind_t scheme;
     int form;       /* -1: the scenario's */
     double v_floor; /* < 0: keep */
@@ -99,6 +108,7 @@ static int run(const char *path, const struct variant *v, long *ticks_faulted, l
     if (v->max_steps > 0) {
         cfg.pdnn.max_steps = v->max_steps;
     }
+    cfg.dist_method = v->dist;
     mca_controller_t *c = malloc(sizeof *c);
     if (!c || mca_controller_init(c, &cfg) != MCA_OK) {
         free(c);
@@ -145,8 +155,10 @@ int main(int argc, char **argv) {
         fprintf(stderr, "usage: test_scheme_noalloc SCENARIO_DIR\n");
         return 2;
     }
-    char p1[512];
-    snprintf(p1, sizeof p1, "%s/cross_circles.yaml", argv[1]);
+    char paths[N_SCENARIOS][512];
+    for (int i = 0; i < N_SCENARIOS; i++) {
+        snprintf(paths[i], sizeof paths[i], "%s/%s", argv[1], scenario_file[i]);
+    }
     /* self-check: the wrapping works (else the test could not fail) */
     void *(*volatile m)(size_t) = malloc;
     void (*volatile f)(void *) = free;
@@ -161,37 +173,52 @@ int main(int argc, char **argv) {
     allocs = 0;
     /* Every branch of the tick: MCA normal form (active rows), componentwise with a floor (binding rows
      * from the start), MVN, APF, a NaN input (latched fault afterwards), the not-converged and the
-     * fake-attractor faults (forced by a 1-step cap and a tiny eq_tol). */
+     * fake-attractor faults (forced by a 1-step cap and a tiny eq_tol); the 6-DOF arms of task 3 (16 000
+     * ticks: through the binding window); the LSDM distance path on both tasks. */
     const struct variant vs[] = {
-        {MCA_SCHEME_MCA, MCA_FORM_NORMAL, -1, 0, 0, -1, 300},
-        {MCA_SCHEME_MCA, MCA_FORM_COMPONENTWISE, 0.0, 0, 0, -1, 300},
-        {MCA_SCHEME_MVN, -1, -1, 0, 0, -1, 200},
-        {MCA_SCHEME_APF, -1, -1, 0, 0, -1, 200},
-        {MCA_SCHEME_MCA, -1, -1, 0, 0, 50, 100},
-        {MCA_SCHEME_MCA, -1, -1, 0, 1, -1, 20},
-        {MCA_SCHEME_MCA, -1, -1, 1e-14, 0, -1, 20},
+        {"cross_circles mca normal", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MCA, MCA_FORM_NORMAL, -1,
+         0, 0, -1, 300},
+        {"cross_circles mca componentwise", CROSS_CIRCLES, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA,
+         MCA_FORM_COMPONENTWISE, 0.0, 0, 0, -1, 300},
+        {"cross_circles mvn", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MVN, -1, -1, 0, 0, -1, 200},
+        {"cross_circles apf", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_APF, -1, -1, 0, 0, -1, 200},
+        {"cross_circles mca nan", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MCA, -1, -1, 0, 0, 50, 100},
+        {"cross_circles mca not-converged", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MCA, -1, -1, 0, 1,
+         -1, 20},
+        {"cross_circles mca fake-attractor", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MCA, -1, -1, 1e-14,
+         0, -1, 20},
+        {"cup_stacking mca normal", CUP_STACKING, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1,
+         16000},
+        {"cup_stacking mvn", CUP_STACKING, MCA_DIST_CLOSED, 0, MCA_SCHEME_MVN, -1, -1, 0, 0, -1, 200},
+        {"cup_stacking apf", CUP_STACKING, MCA_DIST_CLOSED, 0, MCA_SCHEME_APF, -1, -1, 0, 0, -1, 200},
+        {"cross_circles mca componentwise lsdm", CROSS_CIRCLES, MCA_DIST_LSDM, 1, MCA_SCHEME_MCA,
+         MCA_FORM_COMPONENTWISE, 0.0, 0, 0, -1, 300},
+        {"cup_stacking mca normal lsdm", CUP_STACKING, MCA_DIST_LSDM, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1,
+         16000},
     };
-    long faulted = 0, binding = 0;
+    long faulted = 0, binding = 0, failed = 0;
     for (size_t i = 0; i < sizeof vs / sizeof vs[0]; i++) {
-        long fb = faulted;
-        if (run(p1, &vs[i], &faulted, &binding)) {
-            fprintf(stderr, "FAIL: run error in variant %zu\n", i);
+        const long fb = faulted, bb = binding, ab = allocs;
+        if (run(paths[vs[i].scenario], &vs[i], &faulted, &binding)) {
+            fprintf(stderr, "FAIL: run error in variant %zu (%s)\n", i, vs[i].what);
             return 1;
         }
-        if (i >= 4 && faulted == fb) {
-            fprintf(stderr, "FAIL: variant %zu did not fault\n", i);
-            return 1;
+        printf("%-38s %6d ticks, %5ld with binding rows, %4ld faulted, %ld allocations\n", vs[i].what,
+               vs[i].ticks, binding - bb, faulted - fb, allocs - ab);
+        if ((vs[i].nan_at >= 0 || vs[i].max_steps > 0 || vs[i].eq_tol > 0.0) && faulted == fb) {
+            fprintf(stderr, "FAIL: variant %zu (%s) did not fault\n", i, vs[i].what);
+            failed++;
+        }
+        if (vs[i].need_binding && binding == bb) {
+            fprintf(stderr, "FAIL: variant %zu (%s) did not reach binding collision rows\n", i, vs[i].what);
+            failed++;
         }
     }
     printf("ticks with binding collision rows: %ld, faulted ticks: %ld, allocations during ticks: %ld\n",
            binding, faulted, allocs);
-    if (binding == 0) {
-        fprintf(stderr, "FAIL: the runs did not reach binding rows\n");
-        return 1;
-    }
     if (allocs != 0) {
         fprintf(stderr, "FAIL: %ld heap allocations inside mca_controller_tick\n", allocs);
         return 1;
     }
-    return 0;
+    return failed ? 1 : 0;
 }
