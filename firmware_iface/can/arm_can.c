@@ -24,6 +24,15 @@ int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n) {
     return MCA_OK;
 }
 
+/* bus_off and the link fault code that names it move together. */
+static void set_bus_off(mca_can_link_t *l, int on) {
+    if (on && !l->st.bus_off) {
+        l->st.bus_off_events++;
+    }
+    l->st.bus_off = on;
+    l->st.link_fault = on ? MCA_ARM_FAULT_BUS : MCA_ARM_FAULT_NONE;
+}
+
 static int ignored(uint64_t *counter) {
     (*counter)++;
     return MCA_EAGAIN;
@@ -37,10 +46,10 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         l->st.bus_errors++;
         l->err_pending = 1;
         if (f->can_id & CAN_ERR_BUSOFF) {
-            l->st.bus_off = 1;
+            set_bus_off(l, 1);
         }
         if (f->can_id & CAN_ERR_RESTARTED) {
-            l->st.bus_off = 0;
+            set_bus_off(l, 0);
         }
         return MCA_OK;
     }
@@ -61,10 +70,15 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         fb.frame_id = mca_can_unwrap16(l->last_frame_id, (uint16_t)fb.frame_id);
         memcpy(fb.fault_flags, l->fault_flags, sizeof(fb.fault_flags));
         fb.stamp_ns = f->stamp_ns;
+        if (f->kstamp) {
+            l->st.rx_stamp_kernel++;
+        } else {
+            l->st.rx_stamp_user++;
+        }
         l->fb = fb;
         l->fb_new = 1;
         l->st.feedback_received++;
-        l->st.bus_off = 0; /* feedback got through: the bus works again */
+        set_bus_off(l, 0); /* feedback got through: the bus works again */
         return MCA_OK;
     }
     case MCA_CAN_OFF_STATE: {

@@ -142,13 +142,20 @@ int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
     /* The kernel stamps in CLOCK_REALTIME; move it to CLOCK_MONOTONIC with the current offset. */
     struct timespec mono, real;
     clock_gettime(CLOCK_MONOTONIC, &mono);
+    /* Fallback when the kernel gave no stamp (cmsg missing or truncated): the read time, flagged as
+     * such (kstamp = 0) so the backend can count it instead of passing it off as a kernel stamp. */
     f->stamp_ns = ts_ns(&mono);
-    for (struct cmsghdr *c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
-        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
-            struct timespec k;
-            memcpy(&k, CMSG_DATA(c), sizeof(k));
-            clock_gettime(CLOCK_REALTIME, &real);
-            f->stamp_ns = ts_ns(&k) + (ts_ns(&mono) - ts_ns(&real));
+    f->kstamp = 0;
+    if (!(msg.msg_flags & MSG_CTRUNC)) {
+        for (struct cmsghdr *c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS &&
+                c->cmsg_len >= CMSG_LEN(sizeof(struct timespec))) {
+                struct timespec k;
+                memcpy(&k, CMSG_DATA(c), sizeof(k));
+                clock_gettime(CLOCK_REALTIME, &real);
+                f->stamp_ns = ts_ns(&k) + (ts_ns(&mono) - ts_ns(&real));
+                f->kstamp = 1;
+            }
         }
     }
     return MCA_OK;

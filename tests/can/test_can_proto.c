@@ -285,7 +285,10 @@ static void test_link(void **state) {
     assert_int_equal(mca_can_link_encode(&l, &c, b), MCA_EINVAL);
 
     mca_can_frame_t f = fb_frame(0x100, 0, 0x10004, 0.25, 6);
+    f.kstamp = 1; /* kernel time stamp; the frames below carry the user-space fallback (kstamp 0) */
     assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(l.st.rx_stamp_kernel, 1);
+    assert_int_equal(l.st.rx_stamp_user, 0);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
     assert_int_equal(fb.frame_id, 0x10004u); /* unwrapped against 0x10005 */
     assert_true(fabs(fb.position[0] - 0.25) < 1e-12);
@@ -316,6 +319,7 @@ static void test_link(void **state) {
     assert_int_equal(st.rx_bad_counter, 1);
     assert_int_equal(st.rx_unknown_id, 3);
     assert_int_equal(st.feedback_received, 1);
+    assert_int_equal(st.rx_stamp_kernel + st.rx_stamp_user, 1); /* ignored frames are not counted */
 
     /* the genuine next frame is still accepted after the stray counter */
     f = fb_frame(0x100, 1, 0x10005, 0.5, 6);
@@ -347,18 +351,38 @@ static void test_link(void **state) {
     assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EAGAIN);
+    assert_int_equal(l.st.bus_off_events, 0);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
     ef.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
     assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
     assert_int_equal(l.st.bus_off, 1);
+    assert_int_equal(l.st.bus_off_events, 1);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_BUS);
+    assert_string_equal(mca_arm_fault_name(l.st.link_fault), "BUS");
+    assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK); /* still bus-off: not a new event */
+    assert_int_equal(l.st.bus_off_events, 1);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
     f = fb_frame(0x100, 3, 0x10005, 0.75, 6);
     assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
     assert_int_equal(l.st.bus_off, 0);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
     fb.position[0] = 0;
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK); /* error already reported */
     assert_true(fabs(fb.position[0] - 0.75) < 1e-12);
-    assert_int_equal(l.st.bus_errors, 2);
+    assert_int_equal(l.st.bus_errors, 3);
+    /* a restarted controller (CAN_ERR_RESTARTED) ends bus-off too; a second bus-off is a second event */
+    ef.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
+    assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
+    ef.can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED;
+    assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
+    assert_int_equal(l.st.bus_off, 0);
+    assert_int_equal(l.st.bus_off_events, 2);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO); /* the error frames are still reported once */
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EAGAIN);
+    assert_int_equal(l.st.rx_stamp_kernel, 1);
+    assert_int_equal(l.st.rx_stamp_user, 3);
 }
 
 static void test_backend_open_errors(void **state) {

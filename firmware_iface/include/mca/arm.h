@@ -37,10 +37,10 @@ extern "C" {
 /** Arm state reported by the arm side. */
 typedef enum mca_arm_state {
     MCA_ARM_INIT = 0,
-    MCA_ARM_READY = 1,     /**< powered, brakes on, waiting for servo enable */
-    MCA_ARM_SERVOING = 2,  /**< following velocity commands */
-    MCA_ARM_BRAKING = 3,   /**< decelerating to zero (watchdog or requested) */
-    MCA_ARM_FAULT = 4,     /**< stopped; needs MCA_ACT_CLEAR_FAULT */
+    MCA_ARM_READY = 1,    /**< powered, brakes on, waiting for servo enable */
+    MCA_ARM_SERVOING = 2, /**< following velocity commands */
+    MCA_ARM_BRAKING = 3,  /**< decelerating to zero (watchdog or requested) */
+    MCA_ARM_FAULT = 4,    /**< stopped; needs MCA_ACT_CLEAR_FAULT */
 } mca_arm_state_t;
 
 /** Per-actuator command flags. */
@@ -53,11 +53,11 @@ enum {
 /** Arm fault codes (feedback.fault_code). */
 enum mca_arm_fault {
     MCA_ARM_FAULT_NONE = 0,
-    MCA_ARM_FAULT_WATCHDOG = 1,       /**< no valid command within the timeout */
-    MCA_ARM_FAULT_JOINT_LIMIT = 2,    /**< position limit reached */
-    MCA_ARM_FAULT_VELOCITY = 3,       /**< commanded velocity above the limit */
-    MCA_ARM_FAULT_INJECTED = 4,       /**< test fault injection */
-    MCA_ARM_FAULT_BUS = 5,            /**< bus error / bus-off */
+    MCA_ARM_FAULT_WATCHDOG = 1,    /**< no valid command within the timeout */
+    MCA_ARM_FAULT_JOINT_LIMIT = 2, /**< position limit reached */
+    MCA_ARM_FAULT_VELOCITY = 3,    /**< commanded velocity above the limit */
+    MCA_ARM_FAULT_INJECTED = 4,    /**< test fault injection */
+    MCA_ARM_FAULT_BUS = 5,         /**< bus error / bus-off */
 };
 
 /** Per-actuator fault flag bits (feedback.fault_flags[j]); latched until MCA_ACT_CLEAR_FAULT. */
@@ -70,34 +70,40 @@ enum {
 };
 
 typedef struct mca_arm_command {
-    uint32_t frame_id;                  /**< sequence number, +1 per cycle */
-    int n;                              /**< actuators */
-    uint8_t flags[MCA_MAX_DOF];         /**< MCA_ACT_* */
-    double velocity[MCA_MAX_DOF];       /**< joint velocity setpoint [rad/s] */
-    double position_ref[MCA_MAX_DOF];   /**< position reference [rad] (informative) */
+    uint32_t frame_id;                /**< sequence number, +1 per cycle */
+    int n;                            /**< actuators */
+    uint8_t flags[MCA_MAX_DOF];       /**< MCA_ACT_* */
+    double velocity[MCA_MAX_DOF];     /**< joint velocity setpoint [rad/s] */
+    double position_ref[MCA_MAX_DOF]; /**< position reference [rad] (informative) */
 } mca_arm_command_t;
 
 typedef struct mca_arm_feedback {
-    uint32_t frame_id;                  /**< the command frame id this answers */
+    uint32_t frame_id; /**< the command frame id this answers */
     int n;
-    double position[MCA_MAX_DOF];       /**< [rad] */
-    double velocity[MCA_MAX_DOF];       /**< [rad/s] */
-    double torque[MCA_MAX_DOF];         /**< [N m] */
-    uint16_t fault_flags[MCA_MAX_DOF];  /**< per actuator */
+    double position[MCA_MAX_DOF];      /**< [rad] */
+    double velocity[MCA_MAX_DOF];      /**< [rad/s] */
+    double torque[MCA_MAX_DOF];        /**< [N m] */
+    uint16_t fault_flags[MCA_MAX_DOF]; /**< per actuator */
     mca_arm_state_t state;
-    uint16_t fault_code;                /**< enum mca_arm_fault */
-    int64_t stamp_ns;                   /**< receive time, CLOCK_MONOTONIC (kernel time stamp on CAN) */
+    uint16_t fault_code; /**< enum mca_arm_fault */
+    int64_t stamp_ns;    /**< receive time, CLOCK_MONOTONIC (kernel time stamp on CAN) */
 } mca_arm_feedback_t;
 
 /** Link statistics a backend keeps (counters only grow). */
 typedef struct mca_arm_stats {
     uint64_t commands_sent;
     uint64_t feedback_received;
-    uint64_t rx_bad_length;     /**< frames with a wrong length, ignored */
-    uint64_t rx_bad_counter;    /**< stale or skipped rolling counter, ignored */
-    uint64_t rx_unknown_id;     /**< unexpected CAN ids, ignored */
-    uint64_t bus_errors;        /**< error frames seen */
-    int bus_off;                /**< 1 while the controller is bus-off */
+    uint64_t rx_bad_length;  /**< frames with a wrong length, ignored */
+    uint64_t rx_bad_counter; /**< stale or skipped rolling counter, ignored */
+    uint64_t rx_unknown_id;  /**< unexpected CAN ids, ignored */
+    uint64_t bus_errors;     /**< error frames seen */
+    int bus_off;             /**< 1 while the controller is bus-off */
+    /* CAN backend (the sim backend leaves these 0): */
+    uint64_t bus_off_events;  /**< times bus_off went 0 -> 1 */
+    uint16_t link_fault;      /**< the link's own fault (enum mca_arm_fault, for mca_arm_fault_name()):
+                                   MCA_ARM_FAULT_BUS while bus_off, else NONE; the arm's is fb.fault_code */
+    uint64_t rx_stamp_kernel; /**< feedback frames applied with the kernel's receive time stamp */
+    uint64_t rx_stamp_user;   /**< feedback frames applied with the user-space read time (no kernel stamp) */
 } mca_arm_stats_t;
 
 typedef struct mca_arm mca_arm_t; /**< opaque handle */

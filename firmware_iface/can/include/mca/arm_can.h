@@ -12,8 +12,10 @@
  *   continues its stream (mca_can_seq_accept()). Anything else is counted (rx_bad_length: wrong length
  *   or undecodable contents; rx_bad_counter; rx_unknown_id: other ids of the arm's block, including our
  *   own command id sent by another node) and never applied.
- *   Error frames (CAN_ERR_FLAG) are counted in bus_errors; CAN_ERR_BUSOFF sets bus_off until a
- *   CAN_ERR_RESTARTED frame or the next valid feedback. Return codes:
+ *   Error frames (CAN_ERR_FLAG) are counted in bus_errors; CAN_ERR_BUSOFF sets bus_off (counted in
+ *   bus_off_events, and stats.link_fault = MCA_ARM_FAULT_BUS, so a controller that gets MCA_EIO can
+ *   name the cause with mca_arm_fault_name()) until a CAN_ERR_RESTARTED frame or the next valid
+ *   feedback. Return codes:
  *     MCA_OK / MCA_EFAULT  new feedback (EFAULT: the arm reports FAULT), also when an error frame
  *                arrived in the same read: the feedback wins and the error stays pending (mca/arm.h)
  *     MCA_EIO    no new feedback, and an error frame (or a socket error) since the last MCA_EIO, or
@@ -21,7 +23,8 @@
  *     MCA_EAGAIN no new feedback, no error; fb untouched.
  *   fb.frame_id is the 32-bit id of the command answered (the wire carries 16 bits, unwrapped against
  *   the last id sent), fb.fault_flags are those of the newest fault frame, fb.stamp_ns the kernel
- *   receive time (CLOCK_MONOTONIC).
+ *   receive time (CLOCK_MONOTONIC). A feedback frame without a kernel stamp (no SO_TIMESTAMPNS
+ *   cmsg) gets the user-space read time instead; stats.rx_stamp_kernel / rx_stamp_user count both.
  * Lost feedback is the caller's decision (count cycles of MCA_EAGAIN), as with every backend.
  *
  * Context: open/close start-up/shut-down only; read/write/stats and mca_can_link_*() real-time safe.

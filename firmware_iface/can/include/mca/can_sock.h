@@ -25,6 +25,7 @@ typedef struct mca_can_frame {
     uint8_t fd;      /**< 1: CAN FD frame, 0: classic CAN */
     uint8_t data[64];
     int64_t stamp_ns; /**< kernel receive time, CLOCK_MONOTONIC [ns] (read time if the kernel gave none) */
+    uint8_t kstamp;   /**< 1: stamp_ns is the kernel's (SO_TIMESTAMPNS), 0: user-space read time (fallback) */
 } mca_can_frame_t;
 
 /**
