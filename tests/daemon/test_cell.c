@@ -305,14 +305,39 @@ static void test_shipped_cells(void **state) {
     if (glob(pat, 0, NULL, &g) != 0) {
         skip();
     }
+    /* every task of the scheme on the sim backend and on vcan (a cell that goes missing fails here) */
+    static const char *const want[] = {"cross_circles", "hui", "cup_stacking", "negative"};
+    int seen[4][2] = {{0}};
     for (size_t i = 0; i < g.gl_pathc; i++) {
         char err[1024] = "";
         const int rc = mca_cell_load(g.gl_pathv[i], &cell, err, sizeof err);
         print_message("  %s: %s\n", g.gl_pathv[i], rc == MCA_OK ? "ok" : err);
         assert_int_equal(rc, MCA_OK);
         assert_true(cell.scn.n_arms == 2);
+        for (int k = 0; k < 4; k++) {
+            for (int b = 0; b < 2; b++) {
+                char name[64];
+                snprintf(name, sizeof name, "%s_%s", want[k], b ? "vcan" : "sim");
+                if (strcmp(cell.name, name) == 0) {
+                    /* the cell runs its task's scenario, on the backend its name says */
+                    assert_string_equal(cell.scn.name, want[k]);
+                    for (int a = 0; a < cell.scn.n_arms; a++) {
+                        assert_int_equal(cell.arm[a].backend,
+                                         b ? MCA_CELL_BACKEND_SOCKETCAN : MCA_CELL_BACKEND_SIM);
+                    }
+                    seen[k][b]++;
+                }
+            }
+        }
     }
     globfree(&g);
+    for (int k = 0; k < 4; k++) {
+        for (int b = 0; b < 2; b++) {
+            if (seen[k][b] != 1) {
+                fail_msg("shipped cell %s_%s.yaml: found %d times", want[k], b ? "vcan" : "sim", seen[k][b]);
+            }
+        }
+    }
 }
 
 int main(void) {
