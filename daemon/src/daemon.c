@@ -477,11 +477,13 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     st->fault_text[i] = 0;
     st->ticks = s->tick;
     st->overruns = d->overruns;
+    st->skipped_periods = d->skipped;
     st->compute_p50_ns = d->pct_cache[0];
     st->compute_p99_ns = d->pct_cache[1];
     st->compute_max_ns = d->compute.max_ns;
     st->jitter_p50_ns = d->pct_cache[3];
     st->jitter_p99_ns = d->pct_cache[4];
+    st->jitter_p999_ns = d->pct_cache[5];
     st->jitter_max_ns = d->jitter.max_ns;
     st->pdnn_steps = (uint32_t)(in->pdnn_steps > 0 ? in->pdnn_steps : 0);
     st->pdnn_residual = in->pdnn_residual;
@@ -574,6 +576,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         d->pct_cache[1] = d->sum_rt.compute_p99_ns;
         d->pct_cache[3] = d->sum_rt.jitter_p50_ns;
         d->pct_cache[4] = d->sum_rt.jitter_p99_ns;
+        d->pct_cache[5] = d->sum_rt.jitter_p999_ns;
         mca_ring_push(&d->sum_ring, &d->sum_rt);
     }
     if (d->dds) {
@@ -904,7 +907,10 @@ void mca_daemon_close(mca_daemon_t *d) {
         st->compute_max_ns = s.compute_max_ns;
         st->jitter_p50_ns = s.jitter_p50_ns;
         st->jitter_p99_ns = s.jitter_p99_ns;
+        st->jitter_p999_ns = s.jitter_p999_ns;
         st->jitter_max_ns = s.jitter_max_ns;
+        st->overruns = s.overruns;
+        st->skipped_periods = s.skipped_periods;
         d->snap.tick = s.ticks;
         st->ticks = s.ticks;
         /* the bridge queues every rate_divisor-th push: offer the final snapshot until it is queued */

@@ -46,14 +46,12 @@ struct mca_dds_bridge {
     uint64_t since_status;
 };
 
-static void bump(_Atomic uint64_t *c)
-{
+static void bump(_Atomic uint64_t *c) {
     /* Single writer per counter: load + store, no locked instruction. */
     atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + 1u, memory_order_relaxed);
 }
 
-void mca_dds_config_default(mca_dds_config_t *cfg)
-{
+void mca_dds_config_default(mca_dds_config_t *cfg) {
     if (cfg == NULL) {
         return;
     }
@@ -68,8 +66,7 @@ void mca_dds_config_default(mca_dds_config_t *cfg)
     cfg->frame_id = "world";
 }
 
-double mca_dds_brake_factor(double d, double d1, double d2)
-{
+double mca_dds_brake_factor(double d, double d1, double d2) {
     if (d >= d2) {
         return 1.0;
     }
@@ -81,8 +78,7 @@ double mca_dds_brake_factor(double d, double d1, double d2)
 }
 
 int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *dist, uint8_t arm_a,
-                      uint8_t arm_b, double d1, double d2)
-{
+                      uint8_t arm_b, double d1, double d2) {
     if (out == NULL || dist == NULL || dist->n_links_a < 0 || dist->n_links_a > MCA_MAX_LINKS ||
         dist->n_links_b < 0 || dist->n_links_b > MCA_MAX_LINKS || !(d1 >= 0.0 && d1 < d2)) {
         return MCA_EINVAL;
@@ -108,14 +104,12 @@ int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *d
     return MCA_OK;
 }
 
-static dds_sequence_double seq_of(double *buf, uint32_t n)
-{
+static dds_sequence_double seq_of(double *buf, uint32_t n) {
     dds_sequence_double s = {._maximum = n, ._length = n, ._buffer = buf, ._release = false};
     return s;
 }
 
-static int snapshot_valid(const mca_dds_snapshot_t *s)
-{
+static int snapshot_valid(const mca_dds_snapshot_t *s) {
     if (s->n_arms > MCA_MAX_ARMS || s->n_pairs > MCA_MAX_PAIRS) {
         return 0;
     }
@@ -132,8 +126,7 @@ static int snapshot_valid(const mca_dds_snapshot_t *s)
     return 1;
 }
 
-static void write_one(mca_dds_bridge_t *b, int w, const void *sample)
-{
+static void write_one(mca_dds_bridge_t *b, int w, const void *sample) {
     if (dds_write(b->writer[w], sample) < 0) {
         bump(&b->write_errors);
     } else {
@@ -141,8 +134,7 @@ static void write_one(mca_dds_bridge_t *b, int w, const void *sample)
     }
 }
 
-static void write_status(mca_dds_bridge_t *b)
-{
+static void write_status(mca_dds_bridge_t *b) {
     const mca_dds_status_snapshot_t *st = &b->last_status;
     mca_ring_stats_t rs;
     mca_ring_stats(&b->ring, &rs);
@@ -157,11 +149,13 @@ static void write_status(mca_dds_bridge_t *b)
     m.fault_text[sizeof m.fault_text - 1] = '\0';
     m.ticks = st->ticks;
     m.overruns = st->overruns;
+    m.skipped_periods = st->skipped_periods;
     m.compute_p50_ns = st->compute_p50_ns;
     m.compute_p99_ns = st->compute_p99_ns;
     m.compute_max_ns = st->compute_max_ns;
     m.jitter_p50_ns = st->jitter_p50_ns;
     m.jitter_p99_ns = st->jitter_p99_ns;
+    m.jitter_p999_ns = st->jitter_p999_ns;
     m.jitter_max_ns = st->jitter_max_ns;
     m.pdnn_steps = st->pdnn_steps;
     m.pdnn_residual = st->pdnn_residual;
@@ -172,8 +166,7 @@ static void write_status(mca_dds_bridge_t *b)
     b->since_status = 0;
 }
 
-static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s)
-{
+static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
     if (!snapshot_valid(s)) {
         bump(&b->invalid);
         return;
@@ -233,8 +226,7 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s)
     bump(&b->published);
 }
 
-static void *publisher_main(void *arg)
-{
+static void *publisher_main(void *arg) {
     mca_dds_bridge_t *b = arg;
     const struct timespec nap = {(time_t)(b->cfg.poll_period_us / 1000000u),
                                  (long)(b->cfg.poll_period_us % 1000000u) * 1000L};
@@ -265,13 +257,11 @@ static void *publisher_main(void *arg)
     return NULL;
 }
 
-static int is_pow2(uint32_t x)
-{
+static int is_pow2(uint32_t x) {
     return x >= 2 && (x & (x - 1u)) == 0;
 }
 
-static void delete_entities(mca_dds_bridge_t *b)
-{
+static void delete_entities(mca_dds_bridge_t *b) {
     if (b->participant > 0) {
         dds_delete(b->participant); /* deletes topics and writers too */
     }
@@ -280,8 +270,7 @@ static void delete_entities(mca_dds_bridge_t *b)
     }
 }
 
-int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg)
-{
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
     if (out == NULL || cfg == NULL || cfg->rate_divisor == 0 || cfg->status_divisor == 0 ||
         !is_pow2(cfg->ring_capacity) || cfg->ring_capacity > MCA_RING_MAX_CAPACITY ||
         cfg->domain_id > MCA_DDS_MAX_DOMAIN || cfg->poll_period_us == 0 || cfg->poll_period_us > 1000000) {
@@ -373,8 +362,7 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg)
     return MCA_OK;
 }
 
-void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap)
-{
+void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
     const uint64_t n = atomic_load_explicit(&bridge->offered, memory_order_relaxed);
     atomic_store_explicit(&bridge->offered, n + 1u, memory_order_relaxed);
     if (bridge->cfg.rate_divisor == 1 || n % bridge->cfg.rate_divisor == 0) {
@@ -382,8 +370,7 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
     }
 }
 
-int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out)
-{
+int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     if (bridge == NULL || out == NULL) {
         return MCA_EINVAL;
     }
@@ -402,8 +389,8 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out)
     return MCA_OK;
 }
 
-int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n, uint32_t timeout_ms)
-{
+int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n,
+                                uint32_t timeout_ms) {
     if (bridge == NULL) {
         return MCA_EINVAL;
     }
@@ -443,8 +430,7 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
     }
 }
 
-void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats)
-{
+void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats) {
     if (bridge == NULL) {
         return;
     }

@@ -3,13 +3,16 @@
 """mcad on DDS: a Python subscriber (PyPI cyclonedds, the IDL types of tests/dds/mca_types.py) watches a
 2 s run of a sim cell (the left arm draws a circle, the right one holds) and checks that
   - the final ControllerStatus says STOPPED, no fault, and carries the SAME figures as mcad's summary on
-    stderr (ticks, overruns, jitter/compute p50/p99/max, minimum distance so far);
+    stderr (ticks, overruns, skipped periods, jitter p50/p99/p99.9/max, compute p50/p99/max, minimum
+    distance so far); mcad is stopped (SIGSTOP) for 60 ms mid-run so that overruns and skipped periods
+    are not 0 and differ (one late tick skips ~60 periods);
   - Distances samples arrive at the cell's rate (publish_divisor 10 -> ~100 Hz) with the cell's d1/d2,
     and their smallest min_distance is the summary's minimum (to the publish decimation);
   - JointCommand velocity setpoints of the last samples are zero (braked) and JointState has 8 joints.
 usage: test_dds_status.py MCAD SOURCE_DIR [--no-rt]"""
 import os
 import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -71,7 +74,14 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-status-") as tmp:
     proc = subprocess.Popen([MCAD] + EXTRA + [cell], stderr=subprocess.PIPE, text=True)
     status, dist, cmd, js = [], [], [], []
     t_exit = None
+    t_start, paused = time.monotonic(), False
     while True:
+        if not paused and time.monotonic() - t_start > 1.5 and proc.poll() is None:
+            # a 60 ms stall of the whole process: one overrun of ~60 skipped periods (overrun_limit is huge)
+            os.kill(proc.pid, signal.SIGSTOP)
+            time.sleep(0.06)
+            os.kill(proc.pid, signal.SIGCONT)
+            paused = True
         status += [s for s in rs.take(N=100) if isinstance(s, m.ControllerStatus)]
         dist += [s for s in rd.take(N=1000) if isinstance(s, m.Distances)]
         cmd += [s for s in rc_.take(N=1000) if isinstance(s, m.JointCommand)]
@@ -88,8 +98,8 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-status-") as tmp:
         mm = re.search(pattern, err)
         return tuple(cast(x) for x in mm.groups()) if mm else None
 
-    ticks, overruns = fig(r"ticks (\d+), overruns (\d+)", int) or (None, None)
-    jit = fig(r"wake-up jitter p50 ([\d.]+) us, p99 ([\d.]+) us, p99.9 [\d.]+ us, max ([\d.]+) us")
+    ticks, overruns, skipped = fig(r"ticks (\d+), overruns (\d+) \(skipped periods (\d+)\)", int) or (None,) * 3
+    jit = fig(r"wake-up jitter p50 ([\d.]+) us, p99 ([\d.]+) us, p99.9 ([\d.]+) us, max ([\d.]+) us")
     comp = fig(r"compute time \(whole tick\) p50 ([\d.]+) us, p99 ([\d.]+) us, max ([\d.]+) us")
     dmin = fig(r"minimum distance ([\d.]+) m")
     check(None not in (ticks, jit, comp, dmin), "summary figures on stderr")
@@ -99,12 +109,16 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-status-") as tmp:
         print("final status:", last)
         check(last.state == m.ControllerState.STATE_STOPPED, f"final state {last.state} is STOPPED")
         check(last.fault_code == 0 and last.fault_text == "", "no fault in the final status")
-        check(last.ticks == ticks and last.overruns == overruns,
-              f"final status ticks/overruns {last.ticks}/{last.overruns} = summary {ticks}/{overruns}")
-        for name, (p50, p99, mx) in (("jitter", jit), ("compute", comp)):
-            got = (getattr(last, f"{name}_p50_ns"), getattr(last, f"{name}_p99_ns"), getattr(last, f"{name}_max_ns"))
-            same = all(abs(g / 1e3 - w) <= 0.051 for g, w in zip(got, (p50, p99, mx)))
-            check(same, f"final status {name} p50/p99/max {[g / 1e3 for g in got]} us = summary {[p50, p99, mx]}")
+        check(overruns is not None and 1 <= overruns < skipped and skipped >= 40,
+              f"the 60 ms stop shows: {overruns} overrun(s), {skipped} skipped periods")
+        check(last.ticks == ticks and last.overruns == overruns and last.skipped_periods == skipped,
+              f"final status ticks/overruns/skipped periods {last.ticks}/{last.overruns}/{last.skipped_periods}"
+              f" = summary {ticks}/{overruns}/{skipped}")
+        for name, want, fields in (("jitter", jit, ("p50", "p99", "p999", "max")),
+                                   ("compute", comp, ("p50", "p99", "max"))):
+            got = [getattr(last, f"{name}_{f}_ns") for f in fields]
+            same = all(abs(g / 1e3 - w) <= 0.051 for g, w in zip(got, want))
+            check(same, f"final status {name} {'/'.join(fields)} {[g / 1e3 for g in got]} us = summary {list(want)}")
         check(abs(last.min_distance_so_far - dmin[0]) < 6e-5,
               f"final status min distance {last.min_distance_so_far:.5f} m = summary {dmin[0]} m")
     # Distances stream

@@ -91,11 +91,13 @@ class ControllerStatus(IdlStruct, typename="mca::dds::ControllerStatus"):
     fault_text: t.bounded_str[64]
     ticks: t.uint64
     overruns: t.uint64
+    skipped_periods: t.uint64
     compute_p50_ns: t.int64
     compute_p99_ns: t.int64
     compute_max_ns: t.int64
     jitter_p50_ns: t.int64
     jitter_p99_ns: t.int64
+    jitter_p999_ns: t.int64
     jitter_max_ns: t.int64
     pdnn_steps: t.uint32
     pdnn_residual: t.float64
