@@ -1,33 +1,135 @@
 #!/bin/bash
 # SPDX-License-Identifier: MIT
-# mcad with a bad cell file: "<3>mcad: bad cell file: FILE:LINE: FIELD: ..." on stderr, exit status 2,
-# and no arm opened (no "ready" line). usage: test_bad_cell_cli.sh MCAD SOURCE_DIR
+# Bad cell files through the mcad binary, every kind daemon_cell (tests/daemon/test_cell.c) checks in the
+# library: for each, both `mcad --check CELL` and `mcad CELL` must
+#   - exit with status 2,
+#   - print exactly one line on stderr, "<3>mcad: bad cell file: FILE:LINE[:COL]: FIELD: reason", whose
+#     LINE is the line of the bad text (found here independently, with grep) and which names the field,
+#   - start nothing: no other stderr line (no "cell ... arms", "ready", "running"), nothing on stdout.
+# The good cell is test_cell.c's (a sim arm and a socketcan arm, inline task); each variant replaces one
+# exact piece of it. usage: test_bad_cell_cli.sh MCAD SOURCE_DIR
 set -u
 MCAD=$1 SRC=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-fail=0
-sed "s#\.\./\.\./\.\./config#$SRC/config#" "$SRC/tests/daemon/data/hold_sim.yaml" > "$tmp/good.yaml"
-expect() { # name, sed expression, expected message regex
-    sed "$2" "$tmp/good.yaml" > "$tmp/$1.yaml"
-    "$MCAD" --no-dds --stop-after 0.1 "$tmp/$1.yaml" 2> "$tmp/$1.err"
-    local rc=$?
-    if [ $rc -ne 2 ] || ! grep -Eq "^<3>mcad: bad cell file: $tmp/$1.yaml:$3" "$tmp/$1.err" || grep -q "ready" "$tmp/$1.err"; then
-        echo "FAIL $1: exit $rc, stderr:"; cat "$tmp/$1.err"; fail=1
-    else
-        echo "ok   $1: $(cat "$tmp/$1.err")"
-    fi
+fail=0 kinds=0
+
+good="# test cell
+name: cli-cell
+task:
+  duration: 3.5
+scheme: mvn
+d1: 0.04
+d2: 0.15
+solver:
+  K: 12
+  pdnn_max_steps: 321
+arms:
+  - name: left
+    backend: sim
+    urdf: $SRC/config/robots/pa10plus.urdf
+    base_xyz: [0.0, -0.6, 0.1]
+    base_rpy: [0.0, 0.0, 1.5]
+    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]
+    dec_limit: 4.0
+  - name: right
+    backend: socketcan
+    interface: vcan1
+    id_base: 0x140
+    urdf: $SRC/config/robots/pa10plus.urdf
+    base_xyz: [0.0, 0.6, 0.0]
+    q0: [0.1, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]
+    path: {kind: circle, radius: 0.1, period: 3.0, u: [1, 0, 0], v: [0, 0, 1]}
+dds:
+  enabled: false
+  domain: 7
+  publish_divisor: 4
+rt:
+  period_us: 2000
+  priority: 70
+  overrun_limit: 3
+  lost_feedback_cycles: 6
+stop_after: 1.5
+"
+printf '%s' "$good" > "$tmp/good.yaml"
+
+# run_both NAME FILE LINE FIELD REASON: both modes, exit 2, the one message, nothing started
+run_both() {
+    local name=$1 file=$2 line=$3 field=$4 reason=$5 mode rc out
+    kinds=$((kinds + 1))
+    for mode in check run; do
+        if [ $mode = check ]; then
+            "$MCAD" --check "$file" > "$tmp/$name.$mode.out" 2> "$tmp/$name.$mode.err"
+        else
+            "$MCAD" --no-rt --stop-after 0.1 "$file" > "$tmp/$name.$mode.out" 2> "$tmp/$name.$mode.err"
+        fi
+        rc=$?
+        local why=""
+        [ $rc -eq 2 ] || why="exit status $rc, not 2"
+        [ "$(wc -l < "$tmp/$name.$mode.err")" -eq 1 ] || why="$why; stderr has $(wc -l < "$tmp/$name.$mode.err") lines (something started?)"
+        [ -s "$tmp/$name.$mode.out" ] && why="$why; stdout not empty"
+        out=$(head -n 1 "$tmp/$name.$mode.err")
+        case "$out" in
+        "<3>mcad: bad cell file: $file:$line:"*) ;;
+        *) why="$why; does not start with '<3>mcad: bad cell file: $file:$line:'" ;;
+        esac
+        [[ "$out" == *"$field"* ]] || why="$why; field '$field' not named"
+        [[ "$out" == *"$reason"* ]] || why="$why; reason '$reason' missing"
+        if [ -n "$why" ]; then
+            echo "FAIL $name (mcad ${mode/check/--check}): ${why#; }"
+            cat "$tmp/$name.$mode.out" "$tmp/$name.$mode.err"
+            fail=1
+        fi
+    done
+    echo "ok   $name: $out"
 }
-expect d1d2 's/^d1: 0.05/d1: 0.3/' '6: d1/d2: need 0 <= d1 < d2'
-expect badtype 's/priority: 80/priority: urgent/' "2[0-9]:13: rt.priority: Invalid INT value: 'urgent'"
-expect backend '0,/backend: sim/s//backend: profibus/' "10: arms\[0\].backend: unknown backend 'profibus'"
-expect period 's/period_us: 1000/period_us: 0/' '2[0-9]: rt.period_us: must be in 1..1000000'
-"$MCAD" --no-dds "$tmp/none.yaml" 2> "$tmp/none.err"
-rc=$?
-if [ $rc -ne 2 ] || ! grep -q "none.yaml:0: cannot open cell file" "$tmp/none.err"; then
-    echo "FAIL missing file: exit $rc"; cat "$tmp/none.err"; fail=1
-else
-    echo "ok   missing: $(cat "$tmp/none.err")"
+
+# expect NAME FROM TO NEEDLE FIELD REASON [LINE_OFFSET]: the good cell with FROM replaced by TO; the
+# message must name the line holding NEEDLE (plus LINE_OFFSET), FIELD and REASON
+expect() {
+    local name=$1 from=$2 to=$3 needle=$4 field=$5 reason=$6 off=${7:-0}
+    [[ "$good" == *"$from"* ]] || { echo "FAIL $name: test bug, '$from' not in the good cell"; fail=1; return; }
+    printf '%s' "${good/"$from"/"$to"}" > "$tmp/$name.yaml"
+    local line
+    line=$(grep -nF -m 1 -- "$needle" "$tmp/$name.yaml" | cut -d: -f1)
+    [ -n "$line" ] || { echo "FAIL $name: test bug, '$needle' not in the variant"; fail=1; return; }
+    run_both "$name" "$tmp/$name.yaml" $((line + off)) "$field" "$reason"
+}
+
+NL=$'\n'
+URDF="$SRC/config/robots/pa10plus.urdf"
+run_both missing_file "$tmp/no-such-cell.yaml" 0 "" "cannot open cell file"
+expect yaml_syntax "[0.0, 0.6, 0.0]" "[0.0, 0.6, 0.0" "[0.0, 0.6, 0.0" "arms[1].base_xyz" "did not find expected"
+expect wrong_type "priority: 70" "priority: high" "priority: high" "rt.priority" "Invalid INT value: 'high'"
+expect wrong_type_in_arm "dec_limit: 4.0" "dec_limit: fast" "dec_limit: fast" "arms[0].dec_limit" "Invalid FLOAT value"
+expect unknown_key "    dec_limit: 4.0$NL" "    dec_limit: 4.0$NL    colour: red$NL" "colour: red" \
+    "arms[0].colour" "Unexpected key: colour"
+expect unknown_top_key "stop_after: 1.5" "stop_afterwards: 1.5" "stop_afterwards" "stop_afterwards" "Unexpected key"
+expect missing_required "  - name: left$NL    backend: sim$NL" "  - name: left$NL" "- name: left" \
+    "arms[0].backend" "Missing required mapping field"
+expect d1_ge_d2 "d1: 0.04" "d1: 0.15" "d1: 0.15" "d1/d2" "need 0 <= d1 < d2 (got d1 = 0.15, d2 = 0.15)"
+expect missing_urdf "$URDF${NL}    base_xyz: [0.0, 0.6" "/nonexistent/pa11.urdf${NL}    base_xyz: [0.0, 0.6" \
+    "pa11.urdf" "arms[1].urdf" "file '/nonexistent/pa11.urdf' not found"
+expect unknown_backend "backend: socketcan" "backend: ethercat" "ethercat" "arms[1].backend" \
+    "unknown backend 'ethercat' (known: sim, socketcan)"
+expect dof_mismatch "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]" "q0: [0.0, 0.3, 0.0]" "q0: [0.0, 0.3, 0.0]" \
+    "arms[0].q0" "3 values but"
+expect q0_outside_limits "q0: [0.1, 0.3," "q0: [9.0, 0.3," "q0: [9.0" "arms[1].q0[0] = 9" "outside joint"
+expect negative_period "period_us: 2000" "period_us: -1000" "period_us" "rt.period_us" "must be in 1..1000000 us (got -1000)"
+expect zero_period "period_us: 2000" "period_us: 0" "period_us" "rt.period_us" "must be in 1..1000000 us (got 0)"
+expect bad_priority "priority: 70" "priority: 150" "priority: 150" "rt.priority" "must be in 0..99"
+expect scenario_missing "  duration: 3.5$NL" "  scenario: gone/cross.yaml$NL" "scenario: gone" "task.scenario" \
+    "gone/cross.yaml' not found"
+expect socketcan_no_interface "    interface: vcan1$NL" "" "backend: socketcan" "arms[1].interface" \
+    "required with backend socketcan"
+expect dds_config_missing "  domain: 7$NL" "  domain: 7$NL  config: nowhere/cyclone.xml$NL" "config: nowhere" \
+    "dds.config" "nowhere/cyclone.xml' not found"
+expect unknown_scheme "scheme: mvn" "scheme: magic" "scheme: magic" "scheme" "unknown scheme 'magic' (known: mca, mvn, apf)"
+expect duplicate_arm "  - name: right" "  - name: left" "backend: socketcan" "arms[1].name" "'left' used twice" -1
+
+# the good cell itself passes the check (so the failures above are the variants')
+if ! "$MCAD" --check "$tmp/good.yaml" > "$tmp/good.out" 2>&1; then
+    echo "FAIL: good cell rejected:"; cat "$tmp/good.out"; fail=1
 fi
-"$MCAD" --check "$tmp/good.yaml" > /dev/null || { echo "FAIL: good cell rejected"; fail=1; }
+echo "$kinds kinds of bad cell, each through mcad --check and mcad"
 exit $fail
