@@ -10,6 +10,7 @@ PY="$ROOT/.venv/bin/python3"
 mkdir -p "$OUT"
 run() { # name schemes title d1 d2
     "$SIM" --scenario "$ROOT/config/scenarios/$1.yaml" --scheme "$2" --csv "$OUT/$1.csv" > "$OUT/$1.txt"
+    sed -i "s#$ROOT/##g" "$OUT/$1.txt" # repository-relative paths in the committed reports
     set --  "$1" "$2" "$3" "$4" "$5"
     args=""
     for s in $(echo "$2" | tr ',' ' '); do args="$args $s=$OUT/$1-$s.csv"; done
