@@ -3,12 +3,13 @@
 """Plays systemd's side of the sd_notify protocol against mcad (sd_notify(3), sd_watchdog_enabled(3)).
 
 A unix datagram socket stands in for systemd: NOTIFY_SOCKET points at it and WATCHDOG_USEC asks for
-keep-alives. Three runs of a short sim cell (two PA10+, hold task, DDS on the loopback config):
+keep-alives. Four runs of a short sim cell (two PA10+, hold task, DDS on the loopback config):
   1. READY=1 arrives, WATCHDOG=1 keep-alives arrive at about WATCHDOG_USEC/4 and never more than WatchdogSec apart, SIGTERM gives STOPPING=1,
      the summary, exit 0.
   2. debug_stall_after_ticks: the loop stalls after 400 ticks; the keep-alives must STOP (none later than
      one check interval after the stall), while the process still runs; SIGTERM ends it (exit 4).
   3. same with SIGUSR1 as the stall trigger.
+  4. as 1 with SIGINT (Ctrl-C) instead of SIGTERM: STOPPING=1, braking, stopped, exit 0.
 usage: test_notify.py MCAD SOURCE_DIR [--no-rt]
 """
 import os
@@ -74,7 +75,7 @@ def check_rt_setup(pid):
     check("/dev/cpu_dma_latency" in fds, "/dev/cpu_dma_latency held open")
 
 
-def run(tmp, name, extra_yaml, stall_by_signal):
+def run(tmp, name, extra_yaml, stall_by_signal, stop_sig=signal.SIGTERM):
     cell = os.path.join(tmp, name + ".yaml")
     with open(cell, "w") as f:
         f.write(CELL.format(src=SRC, extra=extra_yaml, domain=221 + os.getpid() % 10))  # not the DDS-status test's
@@ -147,7 +148,8 @@ def run(tmp, name, extra_yaml, stall_by_signal):
         check(not late, f"{name}: no WATCHDOG=1 after the stall (last ping {pings[-1] if pings else 0:.3f} s, "
                         f"stall at {t_stall:.3f} s)")
         check(proc.poll() is None, f"{name}: mcad still running while stalled (systemd would kill it)")
-    proc.send_signal(signal.SIGTERM)
+    sig_name = "SIGINT" if stop_sig == signal.SIGINT else "SIGTERM"
+    proc.send_signal(stop_sig)
     t_term = time.monotonic() - t0
     pump(time.monotonic() + 10)
     try:
@@ -157,7 +159,8 @@ def run(tmp, name, extra_yaml, stall_by_signal):
         rc = None
     err = proc.stderr.read()
     t_stop = next((t for t, m in msgs if m == "STOPPING=1" and t >= t_term), None)
-    check(t_stop is not None, f"{name}: STOPPING=1 after SIGTERM")
+    check(t_stop is not None, f"{name}: STOPPING=1 after {sig_name}")
+    check(f"<5>mcad: {sig_name}: braking to zero and stopping" in err, f"{name}: '{sig_name}: braking' logged")
     want = 0 if not (extra_yaml or stall_by_signal) else 4
     check(rc == want, f"{name}: exit status {rc} (want {want})")
     check("summary: wake-up jitter p50" in err and "summary: compute time" in err, f"{name}: summary printed")
@@ -172,6 +175,7 @@ with tempfile.TemporaryDirectory(prefix="mca-notify-") as tmp:
     run(tmp, "healthy", "", False)
     run(tmp, "stall-config", "debug_stall_after_ticks: 400", False)
     run(tmp, "stall-signal", "", True)
+    run(tmp, "sigint", "", False, signal.SIGINT)
 
 if failures:
     print(f"{len(failures)} check(s) failed")
