@@ -6,6 +6,10 @@
  * and on change; fault frame on change (and with the heartbeat while a fault is set).
  * --lockstep runs one firmware cycle per valid command instead of the clock (virtual time: used to
  * compare trajectories with the in-process backend; no watchdog without commands in that mode).
+ * --log FILE writes every state and fault frame sent (as the values handed to the encoder) at exit:
+ *   st <fw_cycle> <counter> <state> <fault_code> <missed> <n_joints> <rx_errors>
+ *   ft <fw_cycle> <counter> <state> <fault_code> <flags0..7>
+ * (recorded in a buffer allocated at start-up; nothing is written on the cycle path).
  * Exits cleanly on SIGTERM/SIGINT, printing its counters. Bad arguments: message, exit 2. */
 #include <errno.h>
 #include <getopt.h>
@@ -39,6 +43,15 @@ typedef struct armsim_counters {
     uint64_t bus_errors, tx_feedback, tx_state, tx_fault, tx_dropped, overruns;
 } armsim_counters_t;
 
+/* One sent state or fault frame (--log). */
+typedef struct txrec {
+    char kind; /* 's' state, 'f' fault */
+    uint8_t counter;
+    uint64_t cycle;
+    mca_can_state_msg_t st;
+    mca_can_fault_msg_t ft;
+} txrec_t;
+
 typedef struct armsim {
     int fd;
     uint32_t base;
@@ -53,14 +66,61 @@ typedef struct armsim {
     uint16_t sent_flags[MCA_MAX_DOF];
     int sent_state;
     armsim_counters_t c;
+    txrec_t *log; /* --log: sent state/fault frames */
+    size_t nlog, caplog;
+    uint64_t log_lost;
 } armsim_t;
+
+static void log_tx(armsim_t *s, char kind, uint8_t counter, const mca_can_state_msg_t *st,
+                   const mca_can_fault_msg_t *ft) {
+    if (!s->log) {
+        return;
+    }
+    if (s->nlog >= s->caplog) {
+        s->log_lost++;
+        return;
+    }
+    txrec_t *r = &s->log[s->nlog++];
+    memset(r, 0, sizeof(*r));
+    r->kind = kind;
+    r->counter = counter;
+    r->cycle = s->arm.cycle;
+    if (st) {
+        r->st = *st;
+    }
+    if (ft) {
+        r->ft = *ft;
+    }
+}
+
+static void write_log(const armsim_t *s, const char *path) {
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "mca-armsim: --log %s: %s\n", path, strerror(errno));
+        return;
+    }
+    for (size_t i = 0; i < s->nlog; i++) {
+        const txrec_t *r = &s->log[i];
+        if (r->kind == 's') {
+            fprintf(f, "st %" PRIu64 " %u %u %u %u %u %u\n", r->cycle, r->counter, r->st.state,
+                    r->st.fault_code, r->st.missed, r->st.n, r->st.rx_errors);
+        } else {
+            fprintf(f, "ft %" PRIu64 " %u %u %u", r->cycle, r->counter, r->ft.state, r->ft.fault_code);
+            for (int j = 0; j < MCA_MAX_DOF; j++) {
+                fprintf(f, " %u", r->ft.fault_flags[j]);
+            }
+            fputc('\n', f);
+        }
+    }
+    fclose(f);
+}
 
 static void usage(FILE *f) {
     fprintf(
         f,
         "usage: mca-armsim --iface IF (--robot URDF | --joints N) [--id-base 0x100] [--watchdog-cycles 3]\n"
         "                  [--period-us 1000] [--acc-limit A] [--dec-limit D] [--q0 a,b,...]\n"
-        "                  [--lockstep] [--duration S] [--stats FILE]\n");
+        "                  [--lockstep] [--duration S] [--stats FILE] [--log FILE]\n");
 }
 
 static int parse_long(const char *opt, const char *s, long lo, long hi, long *out) {
@@ -123,14 +183,15 @@ static void drain(armsim_t *s) {
     }
 }
 
-static void send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len, uint64_t *ok,
-                       uint8_t *ctr) {
+/* @return 1 sent, 0 dropped */
+static int send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len, uint64_t *ok, uint8_t *ctr) {
     if (mca_can_sock_send(s->fd, s->base + off, buf, len, 1, 1) == MCA_OK) {
         (*ok)++;
         (*ctr)++;
-    } else {
-        s->c.tx_dropped++;
+        return 1;
     }
+    s->c.tx_dropped++;
+    return 0;
 }
 
 /* One firmware cycle and its frames. */
@@ -161,8 +222,11 @@ static void cycle(armsim_t *s, double dt) {
             .rx_errors = (uint8_t)(s->c.rx_bad_length + s->c.rx_bad_counter + s->c.rx_unknown_id),
         };
         uint8_t buf[MCA_CAN_LEN_STATE];
-        mca_can_encode_state(&m, s->ctr_state, buf);
-        send_frame(s, MCA_CAN_OFF_STATE, buf, sizeof(buf), &s->c.tx_state, &s->ctr_state);
+        const uint8_t ctr = s->ctr_state;
+        mca_can_encode_state(&m, ctr, buf);
+        if (send_frame(s, MCA_CAN_OFF_STATE, buf, sizeof(buf), &s->c.tx_state, &s->ctr_state)) {
+            log_tx(s, 's', ctr, &m, NULL);
+        }
         s->sent_state = (int)a->state;
     }
     if (flags_changed || a->fault_code != s->sent_code || (beat && any_fault)) {
@@ -172,8 +236,11 @@ static void cycle(armsim_t *s, double dt) {
         m.fault_code = a->fault_code;
         memcpy(m.fault_flags, a->fault_flags, sizeof(m.fault_flags));
         uint8_t buf[MCA_CAN_LEN_FAULT];
-        mca_can_encode_fault(&m, s->ctr_fault, buf);
-        send_frame(s, MCA_CAN_OFF_FAULT, buf, sizeof(buf), &s->c.tx_fault, &s->ctr_fault);
+        const uint8_t ctr = s->ctr_fault;
+        mca_can_encode_fault(&m, ctr, buf);
+        if (send_frame(s, MCA_CAN_OFF_FAULT, buf, sizeof(buf), &s->c.tx_fault, &s->ctr_fault)) {
+            log_tx(s, 'f', ctr, NULL, &m);
+        }
         s->sent_code = a->fault_code;
         memcpy(s->sent_flags, a->fault_flags, sizeof(s->sent_flags));
     }
@@ -198,15 +265,15 @@ static void print_counters(FILE *f, const armsim_t *s) {
             " rx_bad_length=%" PRIu64 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64
             " bus_errors=%" PRIu64 " tx_feedback=%" PRIu64 " tx_state=%" PRIu64 " tx_fault=%" PRIu64
             " tx_dropped=%" PRIu64 " overruns=%" PRIu64 " fw_cmd_accepted=%" PRIu64 " fw_cmd_stale=%" PRIu64
-            " watchdog_trips=%" PRIu64 " state=%s fault_code=%u\n",
+            " watchdog_trips=%" PRIu64 " state=%s fault_code=%u log_lost=%" PRIu64 "\n",
             fw->cycles, s->c.frames_rx, s->c.cmd_accepted, s->c.cmd_superseded, s->c.rx_bad_length,
             s->c.rx_bad_counter, s->c.rx_unknown_id, s->c.bus_errors, s->c.tx_feedback, s->c.tx_state,
             s->c.tx_fault, s->c.tx_dropped, s->c.overruns, fw->cmd_accepted, fw->cmd_stale,
-            fw->watchdog_trips, mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code);
+            fw->watchdog_trips, mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code, s->log_lost);
 }
 
 int main(int argc, char **argv) {
-    const char *iface = NULL, *robot = NULL, *stats = NULL, *q0s = NULL;
+    const char *iface = NULL, *robot = NULL, *stats = NULL, *q0s = NULL, *logp = NULL;
     long base = 0x100, wd = 3, period_us = 1000, joints = 0;
     double acc = -1, dec = -1, duration = 0;
     int lockstep = 0;
@@ -223,6 +290,7 @@ int main(int argc, char **argv) {
         {"lockstep", no_argument, 0, 'l'},
         {"duration", required_argument, 0, 't'},
         {"stats", required_argument, 0, 's'},
+        {"log", required_argument, 0, 'L'},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0},
     };
@@ -265,6 +333,9 @@ int main(int argc, char **argv) {
             break;
         case 's':
             stats = optarg;
+            break;
+        case 'L':
+            logp = optarg;
             break;
         case 'h':
             usage(stdout);
@@ -333,6 +404,14 @@ int main(int argc, char **argv) {
     }
     s.base = (uint32_t)base;
     s.sent_state = -1;
+    if (logp) {
+        s.caplog = 400000; /* > 60 s of state + fault frames at 1 kHz (one state frame per 10 cycles) */
+        s.log = calloc(s.caplog, sizeof(*s.log));
+        if (!s.log) {
+            fprintf(stderr, "mca-armsim: --log %s: out of memory\n", logp);
+            return 1;
+        }
+    }
     mca_can_seq_reset(&s.seq);
     int rc = mca_can_sock_open(&s.fd, iface, s.base, CAN_ERR_MASK, err, sizeof(err));
     if (rc != MCA_OK) {
@@ -388,6 +467,10 @@ int main(int argc, char **argv) {
             print_counters(f, &s);
             fclose(f);
         }
+    }
+    if (logp) {
+        write_log(&s, logp);
+        free(s.log);
     }
     mca_can_sock_close(s.fd);
     return 0;

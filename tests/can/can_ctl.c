@@ -7,9 +7,15 @@
  *   --mode lockstep  --cycles N commands, each waiting (poll) for the feedback that answers it: round
  *                    trip times; with --compare-robot URDF the same commands also go through the
  *                    in-process sim backend and the joint trajectories are compared (exit 5 if they
- *                    differ by more than the fixed-point resolution).
- * Log lines:  tx <cycle> <frame_id> <v0..vn-1>
+ *                    differ by more than the fixed-point resolution). Prints the rtt_us line: p50, p99,
+ *                    max, min and how many measured feedback frames carried a kernel time stamp.
+ *   --sat-from K --sat-len L --sat-vel V (sine): joint 0 is commanded V rad/s in cycles K..K+L-1 (above
+ *                    its limit: the arm flags VEL_SAT, so fault frames go on the bus).
+ * Sine mode sends position_ref = last feedback position + v dt (as the daemon does).
+ * Log lines:  tx <cycle> <frame_id> <flags0..n-1> <v0..vn-1> <posref0..n-1>
  *             rx <cycle> <frame_id> <state> <fault_code> <q0..qn-1> <qd0..qdn-1>
+ *             er <cycle> <eio> <bus_off> <bus_off_events> <bus_errors> <link_fault>   (sine mode: after
+ *                every read that returned MCA_EIO, left bus_off set or changed those counters)
  * Stats file: key=value lines. */
 #include <errno.h>
 #include <getopt.h>
@@ -33,8 +39,16 @@ typedef struct rec {
     int rx;
     uint32_t cycle, frame_id;
     int state, fault;
-    double a[MCA_MAX_DOF], b[MCA_MAX_DOF];
+    uint8_t flags[MCA_MAX_DOF];
+    double a[MCA_MAX_DOF], b[MCA_MAX_DOF], c[MCA_MAX_DOF];
 } rec_t;
+
+/* Link error record (bus-off / error-frame timing in cycles). */
+typedef struct erec {
+    uint32_t cycle;
+    int eio, bus_off, link_fault;
+    uint64_t bus_off_events, bus_errors;
+} erec_t;
 
 static volatile sig_atomic_t g_stop;
 
@@ -46,6 +60,9 @@ static void on_signal(int sig) {
 static rec_t *g_log;
 static size_t g_nlog, g_caplog;
 static int g_n;
+#define ER_CAP 20000
+static erec_t g_er[ER_CAP];
+static size_t g_ner;
 
 static void log_push(const rec_t *r) {
     if (g_nlog < g_caplog) {
@@ -83,10 +100,21 @@ static void write_log(const char *path) {
         } else {
             fprintf(f, "tx %u %u", r->cycle, r->frame_id);
             for (int j = 0; j < g_n; j++) {
+                fprintf(f, " %u", (unsigned)r->flags[j]);
+            }
+            for (int j = 0; j < g_n; j++) {
                 fprintf(f, " %.7f", r->a[j]);
+            }
+            for (int j = 0; j < g_n; j++) {
+                fprintf(f, " %.7f", r->c[j]);
             }
         }
         fputc('\n', f);
+    }
+    for (size_t i = 0; i < g_ner; i++) {
+        const erec_t *e = &g_er[i];
+        fprintf(f, "er %u %d %d %" PRIu64 " %" PRIu64 " %d\n", e->cycle, e->eio, e->bus_off,
+                e->bus_off_events, e->bus_errors, e->link_fault);
     }
     fclose(f);
 }
@@ -98,23 +126,18 @@ static double quant(double v, double scale) {
 int main(int argc, char **argv) {
     const char *iface = "vcan0", *mode = "sine", *logp = NULL, *statp = NULL, *robot = NULL, *q0s = NULL;
     long base = 0x100, n = 6, lost_cycles = 5, cycles = 2000, wd = 3;
-    double duration = 2.0, amp = 0.3, freq = 0.5;
+    double duration = 2.0, amp = 0.3, freq = 0.5, sat_vel = 0;
+    long sat_from = -1, sat_len = 0;
     static const struct option opts[] = {
-        {"iface", required_argument, 0, 'i'},
-        {"id-base", required_argument, 0, 'b'},
-        {"joints", required_argument, 0, 'n'},
-        {"mode", required_argument, 0, 'm'},
-        {"duration", required_argument, 0, 't'},
-        {"cycles", required_argument, 0, 'c'},
-        {"lost-cycles", required_argument, 0, 'L'},
-        {"amp", required_argument, 0, 'A'},
-        {"freq", required_argument, 0, 'f'},
-        {"log", required_argument, 0, 'l'},
-        {"stats", required_argument, 0, 's'},
-        {"compare-robot", required_argument, 0, 'r'},
-        {"q0", required_argument, 0, 'q'},
-        {"watchdog-cycles", required_argument, 0, 'w'},
-        {0, 0, 0, 0},
+        {"iface", required_argument, 0, 'i'},       {"id-base", required_argument, 0, 'b'},
+        {"joints", required_argument, 0, 'n'},      {"mode", required_argument, 0, 'm'},
+        {"duration", required_argument, 0, 't'},    {"cycles", required_argument, 0, 'c'},
+        {"lost-cycles", required_argument, 0, 'L'}, {"amp", required_argument, 0, 'A'},
+        {"freq", required_argument, 0, 'f'},        {"log", required_argument, 0, 'l'},
+        {"stats", required_argument, 0, 's'},       {"compare-robot", required_argument, 0, 'r'},
+        {"q0", required_argument, 0, 'q'},          {"watchdog-cycles", required_argument, 0, 'w'},
+        {"sat-from", required_argument, 0, 'S'},    {"sat-len", required_argument, 0, 'N'},
+        {"sat-vel", required_argument, 0, 'V'},     {0, 0, 0, 0},
     };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -161,6 +184,15 @@ int main(int argc, char **argv) {
         case 'w':
             wd = strtol(optarg, NULL, 0);
             break;
+        case 'S':
+            sat_from = strtol(optarg, NULL, 0);
+            break;
+        case 'N':
+            sat_len = strtol(optarg, NULL, 0);
+            break;
+        case 'V':
+            sat_vel = strtod(optarg, NULL);
+            break;
         default:
             fprintf(stderr, "mca-can-ctl: bad arguments\n");
             return 2;
@@ -196,7 +228,10 @@ int main(int argc, char **argv) {
     for (int j = 0; j < g_n; j++) {
         cmd.flags[j] = MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE;
     }
-    uint64_t eio = 0, rx_new = 0, overruns = 0, clears = 0;
+    uint64_t eio = 0, rx_new = 0, overruns = 0, clears = 0, kstamped = 0, ustamped = 0;
+    int64_t rtt_min = INT64_MAX;
+    mca_arm_stats_t lst;
+    memset(&lst, 0, sizeof(lst));
     long lost_at = -1, last_fb_cycle = -1, k = 0;
     int exit_code = 0;
 
@@ -223,6 +258,20 @@ int main(int argc, char **argv) {
             if (rc == MCA_EIO) {
                 eio++;
             }
+            /* error-frame / bus-off timing: what this read returned and left in the link state */
+            mca_arm_stats_t est;
+            mca_arm_stats(arm, &est);
+            if ((rc == MCA_EIO || est.bus_off || est.bus_off_events != lst.bus_off_events ||
+                 est.bus_errors != lst.bus_errors) &&
+                g_ner < ER_CAP) {
+                g_er[g_ner++] = (erec_t){.cycle = (uint32_t)k,
+                                         .eio = rc == MCA_EIO,
+                                         .bus_off = est.bus_off,
+                                         .link_fault = est.link_fault,
+                                         .bus_off_events = est.bus_off_events,
+                                         .bus_errors = est.bus_errors};
+            }
+            lst = est;
             if (rc == MCA_OK || rc == MCA_EFAULT || (rc == MCA_EIO && fb.stamp_ns != 0)) {
                 rx_new++;
                 last_fb_cycle = k;
@@ -253,9 +302,17 @@ int main(int argc, char **argv) {
                 cmd.velocity[j] = amp * (1.0 - 0.1 * j) * sin(2.0 * M_PI * freq * (1.0 + 0.2 * j) * t);
                 cmd.flags[j] = fl;
             }
+            if (k >= sat_from && k < sat_from + sat_len) {
+                cmd.velocity[0] = sat_vel;
+            }
+            for (int j = 0; j < g_n; j++) {
+                cmd.position_ref[j] = fb.position[j] + cmd.velocity[j] * 1e-3;
+            }
             if (mca_arm_write(arm, &cmd) == MCA_OK) {
                 rec_t r = {.rx = 0, .cycle = (uint32_t)k, .frame_id = cmd.frame_id};
+                memcpy(r.flags, cmd.flags, sizeof(r.flags));
                 memcpy(r.a, cmd.velocity, sizeof(r.a));
+                memcpy(r.c, cmd.position_ref, sizeof(r.c));
                 log_push(&r);
             }
             next.tv_nsec += 1000000;
@@ -324,6 +381,7 @@ int main(int argc, char **argv) {
                 return 4;
             }
             rec_t r = {.rx = 0, .cycle = (uint32_t)k, .frame_id = cmd.frame_id};
+            memcpy(r.flags, cmd.flags, sizeof(r.flags));
             memcpy(r.a, cmd.velocity, sizeof(r.a));
             log_push(&r);
             int got = 0;
@@ -343,6 +401,17 @@ int main(int argc, char **argv) {
                 return 4;
             }
             rtt[k] = fb.stamp_ns - t0;
+            rtt_min = rtt[k] < rtt_min ? rtt[k] : rtt_min;
+            /* Did the measured feedback carry the kernel's receive stamp? Every feedback frame applied
+             * since the last sample is counted by the link (one per command here). */
+            mca_arm_stats_t kst;
+            mca_arm_stats(arm, &kst);
+            if (kst.rx_stamp_user == lst.rx_stamp_user && kst.rx_stamp_kernel > lst.rx_stamp_kernel) {
+                kstamped++;
+            } else {
+                ustamped++;
+            }
+            lst = kst;
             rx_new++;
             r = (rec_t){.rx = 1,
                         .cycle = (uint32_t)k,
@@ -364,8 +433,10 @@ int main(int argc, char **argv) {
             }
         }
         qsort(rtt, (size_t)cycles, sizeof(*rtt), cmp_i64);
-        printf("rtt_us p50=%.1f p99=%.1f max=%.1f n=%ld\n", rtt[cycles / 2] / 1e3,
-               rtt[(cycles * 99) / 100] / 1e3, rtt[cycles - 1] / 1e3, cycles);
+        printf("rtt_us p50=%.1f p99=%.1f max=%.1f n=%ld min=%.1f kernel_stamped=%" PRIu64
+               " user_stamped=%" PRIu64 "\n",
+               rtt[cycles / 2] / 1e3, rtt[(cycles * 99) / 100] / 1e3, rtt[cycles - 1] / 1e3, cycles,
+               rtt_min / 1e3, kstamped, ustamped);
         if (sim) {
             /* Resolution: feedback position 1e-6 rad (half a step when rounding), velocity 1e-4 rad/s. */
             int same = maxdq <= 0.5e-6 + 1e-12 && maxdv <= 0.5e-4 + 1e-12 && state_mismatch == 0;
@@ -387,10 +458,12 @@ int main(int argc, char **argv) {
                 "cycles=%ld commands_sent=%" PRIu64 " feedback_received=%" PRIu64 " rx_bad_length=%" PRIu64
                 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64 " bus_errors=%" PRIu64
                 " bus_off=%d eio=%" PRIu64 " fb_new=%" PRIu64
-                " last_fb_cycle=%ld lost_at=%ld overruns=%" PRIu64 " fault_clears=%" PRIu64 "\n",
+                " last_fb_cycle=%ld lost_at=%ld overruns=%" PRIu64 " fault_clears=%" PRIu64
+                " bus_off_events=%" PRIu64 " link_fault=%u rx_stamp_kernel=%" PRIu64 " rx_stamp_user=%" PRIu64
+                "\n",
                 k, st.commands_sent, st.feedback_received, st.rx_bad_length, st.rx_bad_counter,
                 st.rx_unknown_id, st.bus_errors, st.bus_off, eio, rx_new, last_fb_cycle, lost_at, overruns,
-                clears);
+                clears, st.bus_off_events, (unsigned)st.link_fault, st.rx_stamp_kernel, st.rx_stamp_user);
     }
     if (sf) {
         fclose(sf);

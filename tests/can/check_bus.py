@@ -1,15 +1,20 @@
 #!/usr/bin/env python3
 """Checks of the vcan suite on a candump -L capture, decoded with python cantools and config/can/mca.dbc.
-  check_bus.py DBC a   CANDUMP CTL_LOG CTL_STATS ARMSIM_STATS           sent/received values vs the bus
-  check_bus.py DBC b   CANDUMP CTL_STATS LOST_CYCLES                    lost feedback -> controller stops
-  check_bus.py DBC c   CANDUMP WATCHDOG_CYCLES DEC_LIMIT ARMSIM_STATS   watchdog braking on the bus
-  check_bus.py DBC d   CANDUMP CTL_STATS ARMSIM_STATS                   injected frames counted, not applied
+  check_bus.py DBC a   CANDUMP CTL_LOG CTL_STATS ARMSIM_STATS ARMSIM_LOG  sent/received values vs the bus
+  check_bus.py DBC b   CANDUMP CTL_STATS LOST_CYCLES                      lost feedback -> controller stops
+  check_bus.py DBC c   CANDUMP WATCHDOG_CYCLES DEC_LIMIT ARMSIM_STATS ARMSIM_LOG  watchdog braking on the bus
+  check_bus.py DBC d   CANDUMP CTL_STATS ARMSIM_STATS                     injected frames counted, not applied
+  check_bus.py DBC e   CANDUMP CTL_STATS CTL_LOG                          error frames: EIO and bus-off timing
+  check_bus.py DBC g   CTL_OUTPUT                                         round trip: kernel stamps, RTT > 0
+CTL_LOG: mca-can-ctl --log (tx/rx/er lines), ARMSIM_LOG: mca-armsim --log (st/ft lines).
 Prints one line per check, exit 1 if any fails."""
 import sys
 
 import cantools
 
 BASE = 0x100
+CAN_ERR_FLAG = 0x20000000
+HEARTBEAT = 10  # MCA_CAN_HEARTBEAT_CYCLES
 FAILS = []
 
 
@@ -74,6 +79,81 @@ def seq_sim(frames, ident, length, fd=True):
     return acc, badlen, badctr
 
 
+def read_ctl_log(path):
+    """mca-can-ctl --log: (tx, rx, er) lists of number lists."""
+    out = {'tx': [], 'rx': [], 'er': []}
+    with open(path) as f:
+        for line in f:
+            p = line.split()
+            if p and p[0] in out:
+                out[p[0]].append([float(x) for x in p[1:]])
+    return out['tx'], out['rx'], out['er']
+
+
+def read_arm_log(path):
+    """mca-armsim --log: (state records, fault records) as int lists [cycle, counter, ...]."""
+    st, ft = [], []
+    with open(path) as f:
+        for line in f:
+            p = line.split()
+            if p and p[0] in ('st', 'ft'):
+                (st if p[0] == 'st' else ft).append([int(x) for x in p[1:]])
+    return st, ft
+
+
+def state_fault_vs_sent(fr, arm_log, what):
+    """Every state (heartbeat) and fault frame on the bus, decoded with the DBC, equals what the emulator
+    logged as sent, in order; heartbeats every HEARTBEAT cycles plus one per state change; fault frames on
+    a change and with every heartbeat while a fault (code or flags) is set."""
+    st, ft = read_arm_log(arm_log)
+    bst = [d for t, i, f, data, d in fr if i == BASE + 2]
+    bft = [d for t, i, f, data, d in fr if i == BASE + 3]
+    ok = len(bst) == len(st) and all(d is not None for d in bst)
+    bad = 0
+    if ok:
+        for d, r in zip(bst, st):
+            want = {'Counter': r[1], 'State': r[2], 'FaultCode': r[3], 'Missed': r[4], 'NJoints': r[5], 'RxErrors': r[6]}
+            bad += any(int(d[k]) != v for k, v in want.items())
+    check(ok and bad == 0 and len(st) > 0,
+          f'{what}: {len(bst)} state frames on the bus = {len(st)} sent (Counter, State, FaultCode, Missed, NJoints,'
+          f' RxErrors), {bad} differ')
+    ok = len(bft) == len(ft) and all(d is not None for d in bft)
+    bad = 0
+    if ok:
+        for d, r in zip(bft, ft):
+            want = {'Counter': r[1], 'State': r[2], 'FaultCode': r[3]}
+            want.update({f'FaultFlags{j}': r[4 + j] for j in range(8)})
+            bad += any(int(d[k]) != v for k, v in want.items())
+    check(ok and bad == 0,
+          f'{what}: {len(bft)} fault frames on the bus = {len(ft)} sent (Counter, State, FaultCode, FaultFlags0..7),'
+          f' {bad} differ')
+    # heartbeat rule, from the sender's cycle numbers (fw cycle = completed cycles)
+    if st:
+        cyc = [r[0] for r in st]
+        beats = {c for c in cyc if c % HEARTBEAT == 0}
+        want = set(range(-(-cyc[0] // HEARTBEAT) * HEARTBEAT, cyc[-1] + 1, HEARTBEAT))
+        extra_ok = all(r[0] % HEARTBEAT == 0 or r[2] != p[2] for p, r in zip(st, st[1:]))
+        check(beats == want and extra_ok,
+              f'{what}: a state frame every {HEARTBEAT} firmware cycles ({len(beats)} heartbeats, {len(want - beats)} '
+              f'missing) and the others on state changes ({len(st) - len(beats)})')
+    if ft:
+        fc = {r[0]: r for r in ft}
+        changes = sum(1 for p, r in zip([None] + ft, ft) if p is None or p[3:] != r[3:])
+        repeats = [r for p, r in zip([None] + ft, ft) if p is not None and p[3:] == r[3:]]
+        rep_ok = all(r[0] % HEARTBEAT == 0 and (r[3] or any(r[4:])) for r in repeats)
+        # while a fault is set, every heartbeat cycle carries a fault frame
+        missing = 0
+        for a, b in zip(ft, ft[1:] + [None]):
+            if a[3] or any(a[4:]):
+                end = b[0] if b else (st[-1][0] if st else a[0])
+                missing += sum(1 for c in range(a[0] + 1, end) if c % HEARTBEAT == 0 and c not in fc
+                               and (not st or c <= st[-1][0]))
+        check(rep_ok and missing == 0,
+              f'{what}: fault frames: {changes} on a change, {len(repeats)} repeats, all on heartbeats while a fault is'
+              f' set ({missing} heartbeats without one)')
+    return st, ft
+
+
 def complete(fr, arm_stats, ctl_stats, what):
     """The capture holds every frame both programs sent (candump can drop frames when starved)."""
     a, c = stats(arm_stats), stats(ctl_stats)
@@ -90,18 +170,14 @@ def complete(fr, arm_stats, ctl_stats, what):
     return True
 
 
-def case_a(db, dump, log, ctl_stats, arm_stats):
+def case_a(db, dump, log, ctl_stats, arm_stats, arm_log):
     fr = decode_all(db, read_candump(dump))
     if not complete(fr, arm_stats, ctl_stats, 'a'):
         return
     cmds = [d for t, i, f, data, d in fr if i == BASE and d]
     fbs = [d for t, i, f, data, d in fr if i == BASE + 1 and d]
-    tx, rx = [], []
-    with open(log) as f:
-        for line in f:
-            p = line.split()
-            (tx if p[0] == 'tx' else rx).append([float(x) for x in p[1:]])
-    n = (len(tx[0]) - 2) if tx else 0
+    tx, rx, _ = read_ctl_log(log)
+    n = (len(tx[0]) - 2) // 3 if tx else 0  # tx: cycle frame_id flags[n] vel[n] posref[n]
     check(len(tx) > 1500, f'a: controller sent {len(tx)} commands in 2 s (> 1500)')
     # every logged command is on the bus once (last one is the braking request, not logged)
     bus_by_id = {}
@@ -109,12 +185,25 @@ def case_a(db, dump, log, ctl_stats, arm_stats):
         bus_by_id.setdefault(int(d['FrameId']), []).append(d)
     missing = [r for r in tx if int(r[1]) & 0xFFFF not in bus_by_id]
     check(not missing, f'a: all {len(tx)} logged commands found on the bus (missing {len(missing)})')
-    maxerr = 0.0
+    maxerr = maxpr = 0.0
+    badflags = badn = 0
+    flagset = set()
     for r in tx:
         for d in bus_by_id.get(int(r[1]) & 0xFFFF, []):
+            badn += int(d['NJoints']) != n
             for j in range(n):
-                maxerr = max(maxerr, abs(d[f'Vel{j}'] - r[2 + j]))
+                maxerr = max(maxerr, abs(d[f'Vel{j}'] - r[2 + n + j]))
+                maxpr = max(maxpr, abs(d[f'PosRef{j}'] - r[2 + 2 * n + j]))
+                badflags += int(d[f'Flags{j}']) != int(r[2 + j])
+                flagset.add(int(r[2 + j]))
+            badflags += sum(int(d[f'Flags{j}']) != 0 for j in range(n, 8))  # unused joints: no flags
     check(maxerr <= 0.5e-6 + 1e-12, f'a: cantools-decoded command velocities = sent values (max err {maxerr:.2e} <= 5e-7)')
+    # position_ref = last feedback position + v dt (joint 1, 2 near 3.14 rad): 1e-5 rad wire step
+    check(maxpr <= 0.5e-5 + 1e-9 and max(abs(r[2 + 2 * n + j]) for r in tx for j in range(n)) > 1,
+          f'a: cantools-decoded command PosRef = sent values (max err {maxpr:.2e} <= 5e-6)')
+    check(badflags == 0 and badn == 0,
+          f'a: cantools-decoded command Flags0..7 and NJoints = sent ({badflags} flag and {badn} NJoints mismatches;'
+          f' flag values sent {sorted(flagset)})')
     # each feedback the controller used is a bus frame, in bus order, with equal values
     k, matched, worst = 0, 0, 0.0
     for r in rx:
@@ -134,6 +223,12 @@ def case_a(db, dump, log, ctl_stats, arm_stats):
     cs, asx = stats(ctl_stats), stats(arm_stats)
     bad = {k: v for k, v in list(cs.items()) + list(asx.items()) if k.startswith('rx_bad') and v != '0'}
     check(not bad, f'a: no bad frames on either side {bad or ""}')
+    check(asx.get('log_lost') == '0', f'a: emulator log complete (log_lost={asx.get("log_lost")})')
+    st, ft = state_fault_vs_sent(fr, arm_log, 'a')
+    # the VEL_SAT burst of joint 0 (mca-can-ctl --sat-*) put fault frames on the bus: flag set, then cleared
+    sat = [r for r in ft if r[4] & 4]
+    check(len(sat) >= 2 and any(not any(r[4:]) for r in ft if r[0] > sat[-1][0]),
+          f'a: {len(sat)} fault frames with VEL_SAT on joint 0, then one with the flags cleared')
 
 
 def case_b(db, dump, ctl_stats, lost):
@@ -149,7 +244,7 @@ def case_b(db, dump, ctl_stats, lost):
     check(bus_cmds == int(cs['commands_sent']), f'b: bus commands {bus_cmds} = controller commands_sent {cs["commands_sent"]}')
 
 
-def case_c(db, dump, wd, dec, arm_stats):
+def case_c(db, dump, wd, dec, arm_stats, arm_log):
     fr = decode_all(db, read_candump(dump))
     a = stats(arm_stats)
     got = sum(1 for x in fr if x[1] == BASE + 1)
@@ -203,6 +298,9 @@ def case_c(db, dump, wd, dec, arm_stats):
     check(3 in sts and 4 in sts and sts.index(3) < sts.index(4), f'c: state frames show BRAKING then FAULT {sts[:6]}...')
     flt = [x[4] for x in fr[idx_last_cmd + 1:] if x[1] == BASE + 3 and x[4]]
     check(any(int(d['FaultCode']) == 1 for d in flt), 'c: fault frame with fault code WATCHDOG')
+    st, ft = state_fault_vs_sent(fr, arm_log, 'c')
+    wdf = [r for r in ft if r[3] == 1]
+    check(len(wdf) >= 3, f'c: {len(wdf)} fault frames with WATCHDOG (on the change, then with every heartbeat)')
 
 
 def case_d(db, dump, ctl_stats, arm_stats):
@@ -212,6 +310,7 @@ def case_d(db, dump, ctl_stats, arm_stats):
     cs, asx = stats(ctl_stats), stats(arm_stats)
     # arm side: command stream; everything else in the block is unknown to it
     acc, badlen, badctr = seq_sim(fr, BASE, 64)
+    fr = [x for x in fr if not x[1] & CAN_ERR_FLAG]  # error frames (case e) are not data frames
     unk_arm = sum(1 for x in fr if x[1] != BASE)
     arm_ours = int(asx['tx_feedback']) + int(asx['tx_state']) + int(asx['tx_fault'])  # own frames: not received
     want_arm = {'rx_bad_length': badlen, 'rx_bad_counter': badctr, 'rx_unknown_id': unk_arm - arm_ours,
@@ -237,16 +336,96 @@ def case_d(db, dump, ctl_stats, arm_stats):
           'd: arm stayed SERVOING through the injections (the injected flags=0 command was not applied)')
     check(int(asx['cmd_accepted']) == acc and acc <= int(cs['commands_sent']) + 0,
           f'd: arm accepted {acc} commands <= {cs["commands_sent"]} sent by the controller (none injected)')
-    check(int(cs['bus_errors']) == 2 and int(cs['eio']) >= 1,
-          f'e: 2 injected error frames counted by the controller (bus_errors={cs["bus_errors"]}, '
-          f'EIO returned {cs["eio"]} times)')
-    check(int(asx['bus_errors']) == 2, f'e: arm side counted bus_errors={asx["bus_errors"]}')
+
+
+def case_e(db, dump, ctl_stats, log):
+    """Error frames injected in run d: a bus-off (while the emulator was stopped, so no feedback clears it at
+    once) and a controller problem. Timing in controller cycles (cycle k reads, then writes frame id k + 1),
+    against the read contract of mca/arm.h: a read with new feedback returns it and leaves an error pending;
+    the next read without new feedback returns MCA_EIO; while bus-off every read without feedback does."""
+    fr = decode_all(db, read_candump(dump))
+    cs = stats(ctl_stats)
+    errs = [(k, x[1]) for k, x in enumerate(fr) if x[1] & CAN_ERR_FLAG]
+    check([i for k, i in errs] == [0x20000040, 0x20000004],
+          f'e: the two injected error frames are on the capture {[hex(i) for k, i in errs]} (bus-off, controller)')
+    check(int(cs['bus_errors']) == 2, f'e: 2 injected error frames counted by the controller (bus_errors={cs["bus_errors"]})')
+    check(int(cs['bus_off_events']) == 1 and int(cs['bus_off']) == 0 and int(cs['link_fault']) == 0,
+          f'e: one bus-off event, cleared at the end (bus_off_events={cs["bus_off_events"]} bus_off={cs["bus_off"]}'
+          f' link_fault={cs["link_fault"]})')
+    if len(errs) != 2:
+        return
+    tx, rx, er = read_ctl_log(log)
+    erc = {int(r[0]): [int(x) for x in r[1:]] for r in er}  # cycle -> eio bus_off bus_off_events bus_errors link_fault
+    fresh = {int(r[0]) for r in rx}  # cycles whose read returned new feedback
+    eio_cycles = {c for c, r in erc.items() if r[0]}
+    check(len(eio_cycles) == int(cs['eio']), f'e: {len(eio_cycles)} EIO cycles logged = eio {cs["eio"]}')
+    counted = []
+    for n_err, (k, ident) in enumerate(errs, 1):
+        # newest genuine command before the error frame (replays carry older frame ids)
+        ids = [int(x[4]['FrameId']) for x in fr[:k] if x[1] == BASE and x[4]]
+        F = max(ids) if ids else -1
+        c = min((c for c, r in erc.items() if r[3] >= n_err), default=None)
+        counted.append(c)
+        # the first read after the frame: cycle F (it arrived after command F), or F + 1 if it arrived between
+        # that cycle's read and its write
+        check(c is not None and c in (F, F + 1),
+              f'e: error frame {hex(ident)} after command {F} on the bus: counted by the read of cycle {c} '
+              f'(the first read after it: {F} or {F + 1})')
+    if None in counted:
+        return
+    cb = counted[0]
+    check(erc[cb][2] == 1 and erc[cb][1] == 1 and erc[cb][4] == 5,
+          f'e: bus_off went 0 -> 1 in cycle {cb} (bus_off={erc[cb][1]}, bus_off_events={erc[cb][2]}, link_fault='
+          f'{erc[cb][4]}: 5 = BUS)')
+    kb = errs[0][0]
+    g = next((int(x[4]['FrameId']) for x in fr[kb + 1:] if x[1] == BASE + 1 and x[4]), None)
+    r = next((int(x[0]) for x in rx if int(x[0]) > cb and (int(x[1]) & 0xFFFF) >= (g if g is not None else 1 << 17)), None)
+    if r is None:
+        check(False, f'e: no feedback read after the bus-off frame (first on the bus after it: {g})')
+        return
+    held = [c for c in range(cb, r) if c in erc and erc[c][1] == 1 and erc[c][4] == 5]
+    check(len(held) == r - cb and not (fresh & set(range(cb + 1, r))),
+          f'e: bus_off = 1 and link_fault = BUS after every read of cycles {cb}..{r - 1} ({len(held)}/{r - cb}), no '
+          f'feedback in between (emulator stopped)')
+    after = [c for c, x in erc.items() if c >= r and x[1]]
+    check(erc.get(r, [0, 0])[1] == 0 and not after,
+          f'e: bus_off cleared in cycle {r}, the read of the first feedback after the bus-off frame (frame {g}); stays 0')
+    # expected MCA_EIO cycles from the contract, cycle by cycle
+    pending, want = False, set()
+    for c in range(min(int(x[0]) for x in tx), max(int(x[0]) for x in tx) + 1):
+        if c in counted:
+            pending = True
+        bus_off = erc.get(c, [0, 0])[1]
+        if c not in fresh and (pending or bus_off):
+            want.add(c)
+            pending = False
+    first = [min((c for c in want if c >= cc), default=None) for cc in counted]
+    check(eio_cycles == want and len(want) > 0,
+          f'e: MCA_EIO in exactly the {len(want)} cycles the read contract gives: first for the bus-off frame in '
+          f'cycle {first[0]}, then every read while bus-off (to {r - 1}); for the controller-problem frame (counted '
+          f'in {counted[1]}) in cycle {first[1]}, the first read without new feedback after it '
+          f'(extra {sorted(eio_cycles - want)[:5]}, missing {sorted(want - eio_cycles)[:5]})')
+
+
+def case_g(db, out):
+    """Round trip figures from mca-can-ctl --mode lockstep."""
+    import re
+    txt = open(out).read()
+    m = re.search(r'rtt_us p50=([0-9.]+) p99=([0-9.]+) max=([0-9.]+) n=(\d+) min=(-?[0-9.]+) '
+                  r'kernel_stamped=(\d+) user_stamped=(\d+)', txt)
+    if not m:
+        check(False, f'g: no rtt_us line in {out}')
+        return
+    n, mn, ks, us = int(m.group(4)), float(m.group(5)), int(m.group(6)), int(m.group(7))
+    check(ks == n and us == 0, f'g: all {n} measured feedback frames carried a kernel receive stamp '
+                               f'(kernel {ks}, user-space fallback {us})')
+    check(mn > 0, f'g: every round trip > 0 (min {mn} us)')
 
 
 def main():
     db = cantools.database.load_file(sys.argv[1], strict=True)
     case = sys.argv[2]
-    {'a': case_a, 'b': case_b, 'c': case_c, 'd': case_d}[case](
+    {'a': case_a, 'b': case_b, 'c': case_c, 'd': case_d, 'e': case_e, 'g': case_g}[case](
         db, *[int(a) if a.isdigit() else (float(a) if a.replace('.', '', 1).isdigit() else a) for a in sys.argv[3:]])
     return 1 if FAILS else 0
 

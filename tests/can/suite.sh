@@ -24,17 +24,20 @@ if [ "$phase" = check ]; then
         cat "$OUT/check.$1.txt" | tee -a "$RES"
         return $r
     }
-    [ "$A_RC$A_ARC" = 00 ] && chk a "$OUT/a.candump" "$OUT/a.log" "$OUT/a.ctl" "$OUT/a.armsim"
-    verdict "a: 2 s sine run, bus decoded with the DBC = logged values (ctl rc $A_RC, armsim rc $A_ARC)" $?
+    [ "$A_RC$A_ARC" = 00 ] && chk a "$OUT/a.candump" "$OUT/a.log" "$OUT/a.ctl" "$OUT/a.armsim" "$OUT/a.armlog"
+    verdict "a: 2 s sine run, bus decoded with the DBC = logged values: commands, feedback, state, fault (ctl rc $A_RC, armsim rc $A_ARC)" $?
     [ "$B_ALIVE$B_RC" = 13 ] && chk b "$OUT/b.candump" "$OUT/b.ctl" "$B_LOST"
     verdict "b: emulator killed -> lost feedback reported within $B_LOST cycles, commanding stopped (alive $B_ALIVE, ctl rc $B_RC, want 1 3)" $?
-    chk c "$OUT/c.candump" "$C_WD" "$C_DEC" "$OUT/c.armsim"
+    chk c "$OUT/c.candump" "$C_WD" "$C_DEC" "$OUT/c.armsim" "$OUT/c.armlog"
     verdict "c: controller killed -> watchdog BRAKING after $C_WD cycles, ramp within $C_DEC rad/s^2, FAULT" $?
-    [ "$D_RC$D_ARC" = 00 ] && chk d "$OUT/d.candump" "$OUT/d.ctl" "$OUT/d.armsim" && ! grep -q ' 3.0000000' "$OUT/d.log"
-    verdict "d+e: injected malformed and error frames counted by the receiving side, not applied (ctl rc $D_RC, armsim rc $D_ARC)" $?
+    [ "$D_RC$D_ARC" = 00 ] && chk d "$OUT/d.candump" "$OUT/d.ctl" "$OUT/d.armsim" && ! grep -q '^rx .* 3.0000000' "$OUT/d.log"
+    verdict "d: injected malformed frames counted by the receiving side, not applied (ctl rc $D_RC, armsim rc $D_ARC)" $?
+    [ "$D_RC$D_ARC" = 00 ] && chk e "$OUT/d.candump" "$OUT/d.ctl" "$OUT/d.log"
+    verdict "e: error frames counted by the first read after each, MCA_EIO in the cycles the read contract gives, bus-off held until the next feedback" $?
     cat "$OUT/f.out" >>"$RES" 2>/dev/null
     verdict "f: same trajectory via in-process sim and SocketCAN + mca-armsim ($(grep compare "$OUT/f.out"))" "$F_RC"
-    note "CAN-SUITE g: command->feedback round trip over vcan (lockstep, kernel rx stamp - write time): $(grep rtt_us "$OUT/f.out")"
+    [ "$F_RC" = 0 ] && chk g "$OUT/f.out"
+    verdict "g: command->feedback round trip over vcan (lockstep, kernel rx stamp - write time): $(grep rtt_us "$OUT/f.out")" $?
     note "CAN-SUITE done: $fails failing"
     [ $fails -eq 0 ]
     exit $?
@@ -74,7 +77,8 @@ chrt -f 50 true 2>/dev/null && RT="chrt -f 50"
 
 # candump writes to a tmpfs (the shared tree is 9p in the guest: slow), copied out afterwards.
 TMPD=$(mktemp -d /dev/shm/mca-can.XXXXXX 2>/dev/null || mktemp -d)
-dump_start() { DUMPF=$1; candump -r 33554432 -L "$IF,100:7F0" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
+# the arm's id block plus every error frame (#FFFFFFFF: error mask)
+dump_start() { DUMPF=$1; candump -r 33554432 -L "$IF,100:7F0,#FFFFFFFF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
 # candump runs below the real-time programs and may lag far behind: let it drain its socket (the file
 # stops growing once the bus is quiet) before stopping it.
 dump_stop() {
@@ -97,11 +101,14 @@ T="timeout 300"
 WD_LONG=1000
 
 # (a) controller and emulator run 2 s of sinusoidal joint velocities; the bus, decoded with the DBC,
-#     carries exactly what the controller logged as sent and received.
+#     carries exactly what the controller logged as sent (flags, velocities, position refs) and received,
+#     and the state and fault frames the emulator logged as sent. Joint 0 is commanded 1 rad/s (above
+#     its 0.63 rad/s limit) in cycles 800..829: the arm flags VEL_SAT, so fault frames are on the bus.
 dump_start "$OUT/a.candump"
-$RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD_LONG --stats "$OUT/a.armsim" 2>>"$OUT/a.err" & ARM=$!
+$RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD_LONG --stats "$OUT/a.armsim" --log "$OUT/a.armlog" 2>>"$OUT/a.err" & ARM=$!
 seen 101 1
-$T $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 2 --lost-cycles $WD_LONG --log "$OUT/a.log" --stats "$OUT/a.ctl" 2>>"$OUT/a.err"
+$T $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 2 --lost-cycles $WD_LONG --sat-from 800 --sat-len 30 \
+    --sat-vel 1.0 --log "$OUT/a.log" --stats "$OUT/a.ctl" 2>>"$OUT/a.err"
 echo "A_RC=$?" >>"$ST"
 sleep 0.05; kill "$ARM"; wait "$ARM"; echo "A_ARC=$?" >>"$ST"
 dump_stop
@@ -135,7 +142,7 @@ WD=${MCA_CAN_WD:-3}
 try=1
 while :; do
     dump_start "$OUT/c.candump"
-    $RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD --dec-limit 5 --stats "$OUT/c.armsim" 2>>"$OUT/c.err" & ARM=$!
+    $RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD --dec-limit 5 --stats "$OUT/c.armsim" --log "$OUT/c.armlog" 2>>"$OUT/c.err" & ARM=$!
     seen 101 1
     # (no `timeout` wrapper here: kill -9 must hit the controller itself; --duration bounds it)
     $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles $WD_LONG --amp 0.4 2>>"$OUT/c.err" & C=$!
@@ -152,7 +159,8 @@ done
 echo "C_WD=$WD C_DEC=5" >>"$ST"
 
 # (d)+(e) malformed frames (wrong length, replayed counter, unknown ids) and error frames injected with
-#     cansend during a run: counted by the side that receives them, never applied.
+#     cansend during a run: counted by the side that receives them, never applied; (e) also checks, cycle
+#     by cycle, when the controller saw MCA_EIO and bus_off (mca-can-ctl logs "er" lines).
 dump_start "$OUT/d.candump"
 $RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD_LONG --stats "$OUT/d.armsim" 2>>"$OUT/d.err" & ARM=$!
 seen 101 1
@@ -171,7 +179,13 @@ cansend "$IF" 10F#00                                     # unknown id in the arm
 cansend "$IF" 101#0102                                   # feedback id, wrong length
 hex=$(grab 101)                                          # replayed feedback (stale counter), Pos0 = 3 rad
 cansend "$IF" 101##1$(echo "$hex" | cut -c1-8)C0C62D00$(echo "$hex" | cut -c17-128)
+# (e) error frames. The bus-off frame goes out while the emulator is stopped (SIGSTOP), as on a real
+#     bus-off where no feedback gets through: the controller must hold bus_off (EIO every read) until the
+#     first feedback after it. 50 ms = ~50 cycles, far below the long watchdog / lost-feedback limits.
+kill -STOP "$ARM"
 cansend "$IF" 20000040#0000000000000000                  # error frame: bus-off
+sleep 0.05
+kill -CONT "$ARM"
 cansend "$IF" 20000004#0004000000000000                  # error frame: controller problem (rx warning)
 seen 100 100                                             # the run goes on after the injections
 kill -TERM "$C"; wait "$C"; echo "D_RC=$?" >>"$ST"
