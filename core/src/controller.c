@@ -278,6 +278,26 @@ static void zero_cmd(const mca_controller_t *ctrl, double *const qdot[MCA_MAX_AR
     }
 }
 
+int mca_controller_observe(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
+                           mca_tick_info_t *info) {
+    if (!ctrl || !q || !info) {
+        return MCA_EINVAL;
+    }
+    const int na = ctrl->cfg.n_arms;
+    for (int a = 0; a < na; a++) {
+        if (!q[a] || mca_fk(&ctrl->cfg.chain[a], q[a], &ctrl->kin[a]) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
+    info->t = t;
+    info->task_t = ctrl->started ? t - ctrl->t_start : 0.0;
+    info->n_arms = na;
+    for (int a = 0; a < na; a++) {
+        mca_v3_set(info->ee[a], ctrl->kin[a].ee);
+    }
+    return distances(ctrl, info);
+}
+
 int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
                         double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info_out) {
     const int64_t t_enter = now_ns();

@@ -525,11 +525,13 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     read_feedback(d, t);
     state = atomic_load_explicit(&d->state, memory_order_relaxed);
 
+    const double *qp[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qp[a] = d->q[a];
+    }
     if (state == MCA_DAEMON_RUNNING) {
-        const double *qp[MCA_MAX_ARMS];
         double *qdp[MCA_MAX_ARMS];
         for (int a = 0; a < MCA_MAX_ARMS; a++) {
-            qp[a] = d->q[a];
             qdp[a] = d->qdot[a];
         }
         const int rc = mca_controller_tick(&d->ctrl, t, qp, qdp, &d->info);
@@ -546,6 +548,14 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
             state = MCA_DAEMON_BRAKING;
         } else {
             send_commands(d, 1);
+        }
+    } else if (mca_controller_observe(&d->ctrl, t, qp, &d->info) == MCA_OK) {
+        /* braking, stopped or in fault: the arms may still move, so the distances are still measured
+         * (and published; the minimum covers the braking). The solver figures stay the last tick's. */
+        if (d->info.min_distance < d->min_d) {
+            d->min_d = d->info.min_distance;
+            d->min_d_t = t;
+            d->min_d_stamp = stamp_ns;
         }
     }
     if (state == MCA_DAEMON_BRAKING) {

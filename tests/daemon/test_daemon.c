@@ -453,6 +453,84 @@ static void test_bus_error_keeps_feedback(void **state) {
     free(cell);
 }
 
+/* Braking after a stop request: the arms still move, so the distances are still measured
+ * (mca_controller_observe): in the CSV the distance changes tick by tick while BRAKING, the end
+ * effector moves, and once STOPPED (the ramp's last step fed back) the distance stays put. (Before,
+ * the last controller tick's figures froze.) */
+static void test_distances_while_braking(void **state) {
+    (void)state;
+    write_cell(NULL, "[0.3, -0.3, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    char err[1024] = "", csv[512];
+    assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
+    snprintf(csv, sizeof csv, "/tmp/mca-test-daemon-%d.csv", (int)getpid());
+    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = stderr, .csv_path = csv};
+    mca_daemon_t *d = NULL;
+    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    double t = 0.0;
+    for (int k = 0; k < 1500; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        mca_daemon_service(d);
+    }
+    mca_daemon_request_stop(d);
+    int st;
+    do {
+        st = mca_daemon_step(d, t += 0.001, 0);
+        mca_daemon_service(d);
+    } while (st == MCA_DAEMON_BRAKING);
+    for (int k = 0; k < 20; k++) {
+        assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_STOPPED);
+        mca_daemon_service(d);
+    }
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    mca_daemon_close(d);
+
+    FILE *f = fopen(csv, "r");
+    assert_non_null(f);
+    static char line[8192];
+    assert_non_null(fgets(line, sizeof line, f));
+    int col_d = -1, col_state = -1, col_ee = -1, n = 0;
+    for (char *tok = strtok(line, ",\n"); tok; tok = strtok(NULL, ",\n"), n++) {
+        col_d = strcmp(tok, "min_d") == 0 ? n : col_d;
+        col_state = strcmp(tok, "state") == 0 ? n : col_state;
+        col_ee = strcmp(tok, "ee0_x") == 0 ? n : col_ee;
+    }
+    assert_true(col_d > 0 && col_state > 0 && col_ee > 0);
+    int braking = 0, changed = 0, ee_moved = 0, stopped = 0, stopped_changed = 0;
+    double prev_d = NAN, prev_ee = NAN;
+    while (fgets(line, sizeof line, f)) {
+        double dist = NAN, ee = NAN;
+        int stt = -1, c = 0;
+        for (char *tok = strtok(line, ",\n"); tok; tok = strtok(NULL, ",\n"), c++) {
+            dist = c == col_d ? atof(tok) : dist;
+            ee = c == col_ee ? atof(tok) : ee;
+            stt = c == col_state ? atoi(tok) : stt;
+        }
+        if (stt == MCA_DAEMON_BRAKING) {
+            changed += braking > 0 && dist != prev_d;
+            ee_moved += braking > 0 && ee != prev_ee;
+            braking++;
+        } else if (stt == MCA_DAEMON_STOPPED) {
+            /* the feedback of the ramp's last step arrives one tick after the state changed */
+            stopped_changed += stopped++ >= 2 && dist != prev_d;
+        }
+        prev_d = dist;
+        prev_ee = ee;
+    }
+    fclose(f);
+    remove(csv);
+    print_message("  braking: %d ticks, distance changed in %d, end effector moved in %d; stopped %d ticks; "
+                  "minimum %.4f m\n",
+                  braking, changed, ee_moved, stopped, s.min_distance);
+    assert_true(braking > 10);
+    assert_true(changed >= braking / 2 && ee_moved >= braking / 2);
+    assert_true(stopped >= 20 && stopped_changed == 0);
+    free(cell);
+}
+
 /* Histogram percentiles against the exact order statistics of the same samples. */
 static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
@@ -540,6 +618,7 @@ int main(void) {
         cmocka_unit_test(test_arm_not_servoing_is_a_fault),
         cmocka_unit_test(test_distance_fault),
         cmocka_unit_test(test_bus_error_keeps_feedback),
+        cmocka_unit_test(test_distances_while_braking),
         cmocka_unit_test(test_histogram_vs_sorted),
         cmocka_unit_test(test_rtlog),
     };

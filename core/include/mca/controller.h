@@ -163,6 +163,16 @@ void mca_controller_clear_fault(mca_controller_t *ctrl);
 int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
                         double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info);
 
+/**
+ * Kinematics and distances only, no QP, no command, no fault raised (real-time safe): what a braking or
+ * stopped controller still measures. Updates info->t, task_t, n_arms, ee, min_distance with its arms,
+ * links and points P/E, and link_distance (and ctrl->kin, ctrl->dist); every other field of info is left
+ * as it was (the last tick's solver figures stay readable).
+ * @retval MCA_OK, MCA_EINVAL (NULL pointers, non-finite joint position: info's distances untouched)
+ */
+int mca_controller_observe(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
+                           mca_tick_info_t *info);
+
 /** Last QP assembled and the PDNN's phi (for --dump-qp; not meaningful for APF). */
 const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi);
 
