@@ -119,15 +119,17 @@ fi
 # 5. DDS publishing on vs off
 MON=$B/tools/mca-monitor/mca-monitor
 if have "$MCAD" && have "$MON"; then
-    step "dds: mcad $JIT s with publishing (domain $DOMAIN, mca-monitor subscribed)"
+    # one run, publishing every tick in every other block of 500 ticks (mcad --dds-ab): the whole tick's
+    # time with and without publishing under the same host load
+    step "dds: mcad $JIT s, publishing on/off in alternate blocks of 500 ticks (domain $DOMAIN, mca-monitor subscribed)"
     cell_on=$RAW/cell_dds_on.yaml
     sed -e "s#scenario: \.\./#scenario: $ROOT/config/#" -e "s#config: \.\./#config: $ROOT/config/#" \
-        -e "s#domain: .*#domain: $DOMAIN#" "$CELL" >"$cell_on"
+        -e "s#domain: .*#domain: $DOMAIN#" -e "s#publish_divisor: .*#publish_divisor: 1#" "$CELL" >"$cell_on"
     "$MON" --domain $DOMAIN --config "$ROOT/config/dds/loopback.xml" --duration $((JIT + 6)) >/dev/null \
         2>"$RAW/mcad_dds_on.monitor" &
     mon=$!
     sleep 1
-    "$MCAD" --stop-after "$JIT" "$cell_on" >"$RAW/mcad_dds_on.out" 2>"$RAW/mcad_dds_on.log"
+    "$MCAD" --dds-ab 500 --stop-after "$JIT" "$cell_on" >"$RAW/mcad_dds_on.out" 2>"$RAW/mcad_dds_on.log"
     echo "exit $?" >>"$RAW/mcad_dds_on.log"
     kill -INT $mon 2>/dev/null
     wait $mon 2>/dev/null

@@ -60,6 +60,7 @@ struct mca_daemon {
     int consecutive_overruns;
     uint64_t overruns, skipped;
     mca_hist_t jitter, compute, ctrl_time;
+    mca_hist_t compute_ab[2]; /* --dds-ab: whole tick with publishing [0] off, [1] on */
     double min_d, min_d_t;
     int64_t min_d_stamp;
     mca_tick_info_t info;
@@ -102,6 +103,11 @@ static void set_err(char *err, size_t errlen, const char *fmt, const char *a, co
 
 #define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
 #define LOGN(d, lvl, fmt, n, a0, a1, a2, a3, txt) mca_rtlog(&(d)->log, lvl, fmt, n, a0, a1, a2, a3, txt)
+
+/* --dds-ab: tick @p n publishes only in the odd blocks; without it every tick publishes */
+static inline int dds_ab_publishes(const mca_daemon_t *d, uint64_t n) {
+    return d->opts.dds_ab_block == 0 || (n / d->opts.dds_ab_block) % 2 == 1;
+}
 
 /* ---------------------------------------------------------------- start-up */
 
@@ -211,6 +217,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     mca_hist_reset(&d->jitter);
     mca_hist_reset(&d->compute);
     mca_hist_reset(&d->ctrl_time);
+    mca_hist_reset(&d->compute_ab[0]);
+    mca_hist_reset(&d->compute_ab[1]);
     d->min_d = INFINITY;
     d->min_d_t = 0.0;
     int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
@@ -589,7 +597,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         d->pct_cache[5] = d->sum_rt.jitter_p999_ns;
         mca_ring_push(&d->sum_ring, &d->sum_rt);
     }
-    if (d->dds) {
+    if (d->dds && dds_ab_publishes(d, n)) {
         fill_snapshot(d, stamp_ns, state);
         mca_dds_bridge_push(d->dds, &d->snap);
     }
@@ -653,6 +661,9 @@ static void *rt_main(void *arg) {
         const int state = mca_daemon_step(d, t, wake);
         const int64_t end = now_ns();
         mca_hist_record(&d->compute, end - wake);
+        if (d->opts.dds_ab_block) {
+            mca_hist_record(&d->compute_ab[dds_ab_publishes(d, ticks)], end - wake);
+        }
         next += period;
         if (end > next) {
             /* every period missed counts: one 20 ms stall is 20 consecutive overruns */
@@ -833,6 +844,13 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->ctrl_p50_ns = mca_hist_percentile(&d->ctrl_time, 0.5);
     s->ctrl_p99_ns = mca_hist_percentile(&d->ctrl_time, 0.99);
     s->ctrl_max_ns = d->ctrl_time.max_ns;
+    s->dds_ab_block = d->dds ? d->opts.dds_ab_block : 0;
+    for (int k = 0; k < 2; k++) {
+        s->dds_ab_n[k] = d->compute_ab[k].count;
+        s->dds_ab_p50_ns[k] = mca_hist_percentile(&d->compute_ab[k], 0.5);
+        s->dds_ab_p99_ns[k] = mca_hist_percentile(&d->compute_ab[k], 0.99);
+        s->dds_ab_mean_ns[k] = mca_hist_mean(&d->compute_ab[k]);
+    }
     s->min_distance = d->min_d;
     s->min_distance_t = d->min_d_t;
     s->fault = d->fault;
@@ -880,6 +898,19 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
             "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
             (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3, (double)s->compute_max_ns / 1e3,
             (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3, (double)s->ctrl_max_ns / 1e3);
+    if (s->dds_ab_block && s->dds_ab_n[0] && s->dds_ab_n[1] && s->dds_ab_p50_ns[0] && s->dds_ab_p99_ns[0]) {
+        fprintf(
+            f,
+            "<6>mcad: summary: dds on/off (blocks of %u ticks): whole tick publishing off p50 %.1f us, "
+            "p99 %.1f us, mean %.2f us (%llu ticks); on p50 %.1f us, p99 %.1f us, mean %.2f us (%llu ticks); "
+            "ratio on/off p50 %.3f, p99 %.3f, mean %.3f\n",
+            s->dds_ab_block, (double)s->dds_ab_p50_ns[0] / 1e3, (double)s->dds_ab_p99_ns[0] / 1e3,
+            s->dds_ab_mean_ns[0] / 1e3, (unsigned long long)s->dds_ab_n[0], (double)s->dds_ab_p50_ns[1] / 1e3,
+            (double)s->dds_ab_p99_ns[1] / 1e3, s->dds_ab_mean_ns[1] / 1e3, (unsigned long long)s->dds_ab_n[1],
+            (double)s->dds_ab_p50_ns[1] / (double)s->dds_ab_p50_ns[0],
+            (double)s->dds_ab_p99_ns[1] / (double)s->dds_ab_p99_ns[0],
+            s->dds_ab_mean_ns[1] / s->dds_ab_mean_ns[0]);
+    }
     if (isfinite(s->min_distance)) {
         fprintf(f, "<6>mcad: summary: minimum distance %.4f m at t = %.3f s\n", s->min_distance,
                 s->min_distance_t);

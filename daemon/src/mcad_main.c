@@ -26,6 +26,8 @@ static void usage(FILE *f) {
             "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
             "  --no-dds           do not publish on DDS\n"
             "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
+            "  --dds-ab N         DDS cost benchmark: publish only in every other block of N ticks and\n"
+            "                     print the whole tick's time with publishing off and on (one run)\n"
             "  -h, --help\n"
             "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
             "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
@@ -65,6 +67,7 @@ int main(int argc, char **argv) {
         {"stop-after", required_argument, NULL, 's'},
         {"no-dds", no_argument, NULL, 'D'},
         {"no-rt", no_argument, NULL, 'R'},
+        {"dds-ab", required_argument, NULL, 'A'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -98,6 +101,17 @@ int main(int argc, char **argv) {
         case 'R':
             opts.no_rt = 1;
             break;
+        case 'A': {
+            char *end;
+            const unsigned long b = strtoul(optarg, &end, 10);
+            if (*end || b == 0 || b > 1000000) {
+                fprintf(stderr, "<3>mcad: --dds-ab: need a block length of 1..1000000 ticks, got '%s'\n",
+                        optarg);
+                return 2;
+            }
+            opts.dds_ab_block = (uint32_t)b;
+            break;
+        }
         case 'h':
             usage(stdout);
             return 0;

@@ -105,6 +105,16 @@ def main():
     check(m is not None and (m["ticks"], m["overruns"], m["p50_us"], m["p99_us"], m["p999_us"], m["max_us"],
                              m["compute_p50_us"], m["ctrl_p99_us"]) == (19977, 24, 30.0, 86.0, 1069.0, 2855.9, 19.0,
                                                                        30.0), "mcad summary parsed")
+    m = report.mcad_summary(
+        "<6>mcad: summary: state stopped, ticks 15002, overruns 0 (skipped periods 0), SCHED_FIFO yes, memory "
+        "locked yes\n<6>mcad: summary: wake-up jitter p50 22.0 us, p99 57.0 us, p99.9 108.0 us, max 215.5 us\n"
+        "<6>mcad: summary: dds on/off (blocks of 500 ticks): whole tick publishing off p50 18.0 us, p99 33.0 us, "
+        "mean 18.38 us (7501 ticks); on p50 21.0 us, p99 31.0 us, mean 20.00 us (7500 ticks); ratio on/off p50 "
+        "1.167, p99 0.939, mean 1.088\n")
+    ab = (m or {}).get("dds_ab") or {}
+    check((ab.get("block"), ab.get("off_p50"), ab.get("off_mean"), ab.get("off_n"), ab.get("on_p99"),
+           ab.get("on_mean"), ab.get("on_n")) == (500, 18.0, 18.38, 7501, 31.0, 20.0, 7500),
+          "mcad --dds-ab summary line parsed")
 
     # 6. the table: measured rows carry figures, the others say "not measured"
     with open(os.path.join(raw, "machine.txt"), "w") as f:

@@ -141,6 +141,45 @@ with tempfile.TemporaryDirectory(prefix="mca-monitor-mcad-") as tmp:
     if failures:
         print(run.stderr)
 
+# Phase 2: mcad --dds-ab BLOCK (the DDS cost benchmark of bench/run.sh): publishing only in the odd blocks of
+# BLOCK ticks. The monitor must see ticks of odd blocks only (plus the final status snapshot), nearly all of
+# them, and mcad's summary must split its ticks between the two kinds of block.
+AB_BLOCK = 250
+with tempfile.TemporaryDirectory(prefix="mca-monitor-ab-") as tmp:
+    cell, mon_csv = os.path.join(tmp, "cell.yaml"), os.path.join(tmp, "monitor.csv")
+    with open(cell, "w") as f:
+        f.write(CELL.replace("duration: 3.0", "duration: 2.0").replace("stop_after: 3.0", "stop_after: 2.0"))
+    mon = subprocess.Popen([MONITOR, "--domain", str(DOMAIN), "--config", XML, "--csv", mon_csv, "--no-color"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    run = subprocess.run([MCAD] + EXTRA + ["--dds-ab", str(AB_BLOCK), cell], stderr=subprocess.PIPE, text=True,
+                         timeout=60)
+    time.sleep(1.5)
+    mon.send_signal(signal.SIGINT)
+    try:
+        mon.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        mon.kill()
+        mon.communicate()
+    check(run.returncode == 0, f"--dds-ab run: mcad exit status {run.returncode}")
+    import re  # noqa: E402 (only this phase parses the summary)
+    m = re.search(r"dds on/off \(blocks of (\d+) ticks\): .*\((\d+) ticks\); on .*\((\d+) ticks\); ratio", run.stderr)
+    total = re.search(r"summary: state \w+, ticks (\d+)", run.stderr)
+    check(m is not None and total is not None, "--dds-ab run: summary has the dds on/off line")
+    if m and total:
+        block, n_off, n_on, ticks = int(m.group(1)), int(m.group(2)), int(m.group(3)), int(total.group(1))
+        check(block == AB_BLOCK and abs(n_off + n_on - ticks) <= 1 and abs(n_off - n_on) <= AB_BLOCK,
+              f"--dds-ab run: {n_off} ticks off + {n_on} on of {ticks}, blocks of {block}")
+        with open(mon_csv) as f:
+            got = [int(r["tick"]) for r in csv.DictReader(f)]
+        in_loop = [k for k in got if k < ticks]
+        wrong = [k for k in in_loop if (k // AB_BLOCK) % 2 != 1]
+        want = sum(1 for k in range(ticks) if (k // AB_BLOCK) % 2 == 1)
+        check(not wrong, f"--dds-ab run: monitor saw only odd-block ticks ({len(wrong)} others, e.g. {wrong[:5]})")
+        check(len(in_loop) >= 0.99 * want - 100, f"--dds-ab run: monitor saw {len(in_loop)} of the {want} published ticks")
+    if failures:
+        print(run.stderr)
+
 if failures:
     print(f"{len(failures)} check(s) failed")
     sys.exit(1)

@@ -59,11 +59,13 @@ const char *mca_daemon_state_name(int state);
 
 /** Options not in the cell file. */
 typedef struct mca_daemon_opts {
-    int no_dds;           /**< 1: do not publish (overrides the cell) */
-    int no_rt;            /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
-    const char *csv_path; /**< per-tick CSV (written by a non-rt thread), NULL: none */
-    double stop_after;    /**< > 0: overrides the cell's stop_after [s] */
-    FILE *log;            /**< where log lines go (stderr) */
+    int no_dds;            /**< 1: do not publish (overrides the cell) */
+    int no_rt;             /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
+    const char *csv_path;  /**< per-tick CSV (written by a non-rt thread), NULL: none */
+    double stop_after;     /**< > 0: overrides the cell's stop_after [s] */
+    uint32_t dds_ab_block; /**< > 0: DDS cost benchmark: publish only in every other block of this many
+                            *   ticks and time the whole tick of both kinds of block (summary dds_ab_*) */
+    FILE *log;             /**< where log lines go (stderr) */
 } mca_daemon_opts_t;
 
 /** One CSV row (rt -> writer ring). */
@@ -84,6 +86,10 @@ typedef struct mca_daemon_summary {
     int64_t jitter_p50_ns, jitter_p99_ns, jitter_p999_ns, jitter_max_ns;
     int64_t compute_p50_ns, compute_p99_ns, compute_max_ns;
     int64_t ctrl_p50_ns, ctrl_p99_ns, ctrl_max_ns; /**< mca_controller_tick alone */
+    uint32_t dds_ab_block;                         /**< 0: no DDS on/off comparison in this run */
+    uint64_t dds_ab_n[2];                          /**< ticks timed with publishing [0] off, [1] on */
+    int64_t dds_ab_p50_ns[2], dds_ab_p99_ns[2];    /**< whole tick, publishing [0] off, [1] on */
+    double dds_ab_mean_ns[2];                      /**< the same, mean (exact, not binned) */
     double min_distance, min_distance_t;
     int fault;      /**< mca_daemon_fault_t */
     int ctrl_fault; /**< mca_ctrl_fault_t when fault == CONTROLLER */
