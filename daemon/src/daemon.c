@@ -386,7 +386,15 @@ static void read_feedback(mca_daemon_t *d, double t) {
         }
         if (running && d->lost[a] >= d->cell.rt.lost_feedback_cycles) {
             LOGN(d, MCA_LOG_ERR, "arm %g: no feedback for %g cycles", 2, a, d->lost[a], 0, 0, NULL);
-            latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t);
+            /* name the cause when the link knows it: a bus-off controller hears nothing */
+            mca_arm_stats_t st;
+            if (mca_arm_stats(d->arm[a], &st) == MCA_OK && st.link_fault == MCA_ARM_FAULT_BUS) {
+                char txt[96];
+                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " link is bus-off: lost feedback", "");
+                latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, txt, t);
+            } else {
+                latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t);
+            }
         }
     }
 }
