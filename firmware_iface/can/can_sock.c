@@ -112,6 +112,29 @@ static int64_t ts_ns(const struct timespec *t) {
     return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
 }
 
+/* CLOCK_MONOTONIC - CLOCK_REALTIME now, for moving the kernel's CLOCK_REALTIME receive stamps onto the
+ * controller's clock. The monotonic read is bracketed by two realtime reads and the tightest of three
+ * brackets is kept: a preemption between two unbracketed reads (seen in an emulated guest) would shift
+ * the stamp by the time lost, up to making a round trip negative. */
+static int64_t mono_minus_real_ns(void) {
+    int64_t best_gap = INT64_MAX, off = 0;
+    for (int i = 0; i < 3; i++) {
+        struct timespec r0, m, r1;
+        clock_gettime(CLOCK_REALTIME, &r0);
+        clock_gettime(CLOCK_MONOTONIC, &m);
+        clock_gettime(CLOCK_REALTIME, &r1);
+        const int64_t gap = ts_ns(&r1) - ts_ns(&r0);
+        if (gap < best_gap) {
+            best_gap = gap;
+            off = ts_ns(&m) - (ts_ns(&r0) + gap / 2);
+        }
+        if (gap < 2000) { /* within 2 us: good enough, no more reads */
+            break;
+        }
+    }
+    return off;
+}
+
 int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
     if (fd < 0 || !f) {
         return MCA_EINVAL;
@@ -139,8 +162,7 @@ int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
     f->fd = nb == (ssize_t)CANFD_MTU;
     f->len = cf.len > 64 ? 64 : cf.len;
     memcpy(f->data, cf.data, f->len);
-    /* The kernel stamps in CLOCK_REALTIME; move it to CLOCK_MONOTONIC with the current offset. */
-    struct timespec mono, real;
+    struct timespec mono;
     clock_gettime(CLOCK_MONOTONIC, &mono);
     /* Fallback when the kernel gave no stamp (cmsg missing or truncated): the read time, flagged as
      * such (kstamp = 0) so the backend can count it instead of passing it off as a kernel stamp. */
@@ -152,8 +174,7 @@ int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
                 c->cmsg_len >= CMSG_LEN(sizeof(struct timespec))) {
                 struct timespec k;
                 memcpy(&k, CMSG_DATA(c), sizeof(k));
-                clock_gettime(CLOCK_REALTIME, &real);
-                f->stamp_ns = ts_ns(&k) + (ts_ns(&mono) - ts_ns(&real));
+                f->stamp_ns = ts_ns(&k) + mono_minus_real_ns();
                 f->kstamp = 1;
             }
         }
