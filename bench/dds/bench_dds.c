@@ -25,8 +25,7 @@
 
 extern char **environ;
 
-static int64_t now_ns(void)
-{
+static int64_t now_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
@@ -34,8 +33,7 @@ static int64_t now_ns(void)
 
 /* Deterministic floating-point work standing in for FK + distances + QP of one tick. */
 static volatile double g_sink;
-static void workload(long iters)
-{
+static void workload(long iters) {
     double x = 0.5, y = 0.25, acc = 0.0;
     for (long i = 0; i < iters; ++i) {
         x = x * 0.999999 + y * 1e-6;
@@ -45,8 +43,7 @@ static void workload(long iters)
     g_sink = acc;
 }
 
-static int cmp_i64(const void *a, const void *b)
-{
+static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
 }
@@ -55,8 +52,7 @@ typedef struct summary {
     double p50, p99, max, mean;
 } summary_t;
 
-static summary_t summarize(int64_t *v, size_t n)
-{
+static summary_t summarize(int64_t *v, size_t n) {
     summary_t s = {0, 0, 0, 0};
     if (n == 0) {
         return s;
@@ -73,8 +69,7 @@ static summary_t summarize(int64_t *v, size_t n)
     return s;
 }
 
-static void usage(FILE *f)
-{
+static void usage(FILE *f) {
     fprintf(f, "usage: bench_dds [--ticks N] [--work-us U] [--block B] [--domain D] [--config XML]\n"
                "                 [--monitor PATH] [--fifo PRIO]\n"
                "  --ticks N     ticks per mode (default 5000, i.e. 10 s in total at 1 kHz)\n"
@@ -84,8 +79,7 @@ static void usage(FILE *f)
                "  --fifo PRIO   run the loop SCHED_FIFO at PRIO (needs privileges)\n");
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     long ticks = 5000, block = 500, fifo = 0;
     double work_us = 100.0;
     const char *monitor = NULL;

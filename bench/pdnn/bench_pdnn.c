@@ -35,21 +35,18 @@ typedef struct opts {
 
 static mca_pdnn_t solver;
 
-static double now_ns(void)
-{
+static double now_ns(void) {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
 }
 
-static int cmp_d(const void *a, const void *b)
-{
+static int cmp_d(const void *a, const void *b) {
     const double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
-static double pct(double *v, int n, double p)
-{
+static double pct(double *v, int n, double p) {
     if (n == 0) {
         return NAN;
     }
@@ -58,17 +55,16 @@ static double pct(double *v, int n, double p)
     return v[i < 0 ? 0 : (i >= n ? n - 1 : i)];
 }
 
-static void usage(const char *argv0)
-{
+static void usage(const char *argv0) {
     fprintf(stderr,
-            "usage: %s time|dump DIR|edge [--runs R] [--ticks T] [--eps E] [--tol X] [--precond orth|scale|none]\n"
+            "usage: %s time|dump DIR|edge [--runs R] [--ticks T] [--eps E] [--tol X] [--precond "
+            "orth|scale|none]\n"
             "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n"
             "       [--form componentwise|normal]\n",
             argv0);
 }
 
-static int parse(int argc, char **argv, int first, opts_t *o)
-{
+static int parse(int argc, char **argv, int first, opts_t *o) {
     for (int i = first; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (v == NULL) {
@@ -99,13 +95,15 @@ static int parse(int argc, char **argv, int first, opts_t *o)
             o->normal = !strcmp(v, "normal") ? 1 : !strcmp(v, "componentwise") ? 0 : -1;
             end = o->normal < 0 ? (char *)v : (char *)v + strlen(v);
         } else if (!strcmp(a, "--precond")) {
-            o->precond = !strcmp(v, "orth") ? MCA_PDNN_PRECOND_ORTH
+            o->precond = !strcmp(v, "orth")    ? MCA_PDNN_PRECOND_ORTH
                          : !strcmp(v, "scale") ? MCA_PDNN_PRECOND_SCALE
                          : !strcmp(v, "none")  ? MCA_PDNN_PRECOND_NONE
                                                : -1;
             end = o->precond < 0 ? (char *)v : (char *)v + strlen(v);
         } else if (!strcmp(a, "--rule")) {
-            o->rule = !strcmp(v, "adaptive") ? MCA_PDNN_STEP_ADAPTIVE : !strcmp(v, "bound") ? MCA_PDNN_STEP_BOUND : -1;
+            o->rule = !strcmp(v, "adaptive") ? MCA_PDNN_STEP_ADAPTIVE
+                      : !strcmp(v, "bound")  ? MCA_PDNN_STEP_BOUND
+                                             : -1;
             end = o->rule < 0 ? (char *)v : (char *)v + strlen(v);
         } else {
             fprintf(stderr, "unknown option %s\n", a);
@@ -117,15 +115,15 @@ static int parse(int argc, char **argv, int first, opts_t *o)
         }
     }
     if (o->runs < 1 || o->ticks < 1 || o->max_steps < 1 || !(o->eps >= 0) || !(o->tol > 0) ||
-        !(o->far > 0 && o->far <= 1) || !(o->tight >= 0 && o->tight <= 1) || !(o->gamma > 0 && o->gamma < 2)) {
+        !(o->far > 0 && o->far <= 1) || !(o->tight >= 0 && o->tight <= 1) ||
+        !(o->gamma > 0 && o->gamma < 2)) {
         fprintf(stderr, "option out of range\n");
         return -1;
     }
     return 0;
 }
 
-static void params_of(const opts_t *o, mca_pdnn_params_t *prm)
-{
+static void params_of(const opts_t *o, mca_pdnn_params_t *prm) {
     mca_pdnn_default_params(prm);
     prm->tol = o->tol;
     prm->max_steps = o->max_steps;
@@ -136,8 +134,7 @@ static void params_of(const opts_t *o, mca_pdnn_params_t *prm)
 }
 
 /* time and dump: runs of ticks */
-static int run_ticks(const opts_t *o)
-{
+static int run_ticks(const opts_t *o) {
     const int total = o->runs * o->ticks;
     double *ns_c = calloc((size_t)total, sizeof(double)), *ns_w = calloc((size_t)total, sizeof(double));
     double *st_c = calloc((size_t)total, sizeof(double)), *st_w = calloc((size_t)total, sizeof(double));
@@ -200,7 +197,8 @@ static int run_ticks(const opts_t *o)
             char path[4096], name[64];
             snprintf(name, sizeof(name), "qp_%06d.json", k);
             snprintf(path, sizeof(path), "%s/%s", o->dir, name);
-            if (mca_qp_dump_json(&qp, phi, res.steps, res.residual, res.warm ? "warm" : "cold", path) != MCA_OK) {
+            if (mca_qp_dump_json(&qp, phi, res.steps, res.residual, res.warm ? "warm" : "cold", path) !=
+                MCA_OK) {
                 fprintf(stderr, "cannot write %s\n", path);
                 return 2;
             }
@@ -210,10 +208,12 @@ static int run_ticks(const opts_t *o)
     if (csv != NULL) {
         fclose(csv);
     }
-    printf("pdnn bench: %d solves (%d runs x %d ticks, eps %g), %s form (n_ineq %d), tol %g, precond %d, rule %d, "
+    printf("pdnn bench: %d solves (%d runs x %d ticks, eps %g), %s form (n_ineq %d), tol %g, precond %d, "
+           "rule %d, "
            "far %g, cap %d: %d not converged\n",
            total, o->runs, o->ticks, o->eps, o->normal ? "normal" : "componentwise",
-           o->normal ? QPGEN_NINEQ_NORMAL : QPGEN_NINEQ, o->tol, o->precond, o->rule, o->far, o->max_steps, fails);
+           o->normal ? QPGEN_NINEQ_NORMAL : QPGEN_NINEQ, o->tol, o->precond, o->rule, o->far, o->max_steps,
+           fails);
     printf("  cold (%4d): us  p50 %8.1f p99 %8.1f max %8.1f | steps p50 %6.0f p99 %6.0f max %6.0f\n", nc,
            pct(ns_c, nc, 50) / 1e3, pct(ns_c, nc, 99) / 1e3, pct(ns_c, nc, 100) / 1e3, pct(st_c, nc, 50),
            pct(st_c, nc, 99), pct(st_c, nc, 100));
@@ -222,7 +222,8 @@ static int run_ticks(const opts_t *o)
                pct(ns_w, nw, 50) / 1e3, pct(ns_w, nw, 99) / 1e3, pct(ns_w, nw, 100) / 1e3, pct(st_w, nw, 50),
                pct(st_w, nw, 99), pct(st_w, nw, 100));
     }
-    printf("  ns per Euler step of one block (solves >= 2000 block steps, %d): p50 %.0f\n", nsp, pct(nsps, nsp, 50));
+    printf("  ns per Euler step of one block (solves >= 2000 block steps, %d): p50 %.0f\n", nsp,
+           pct(nsps, nsp, 50));
     free(ns_c);
     free(ns_w);
     free(st_c);
@@ -232,13 +233,13 @@ static int run_ticks(const opts_t *o)
 }
 
 /* edge: fixed kappa = f * kappa_bound(gamma = 2, i.e. the bound 2/||I+M||^2 itself) */
-static int run_edge(const opts_t *o)
-{
+static int run_edge(const opts_t *o) {
     static const double f[] = {0.25, 0.5, 0.75, 1.0, 1.2, 1.4, 1.5, 1.6, 1.65, 1.7, 1.8, 1.9, 2.0, 2.5, 3.0};
     const int nf = (int)(sizeof(f) / sizeof(f[0]));
     const int nqp = o->runs;
-    printf("pdnn edge: %d cold QPs, precond %d, tol %g, cap %d; kappa = f * 2/||I+M||^2 (upper-bounded norm)\n",
-           nqp, o->precond, o->tol, o->max_steps);
+    printf(
+        "pdnn edge: %d cold QPs, precond %d, tol %g, cap %d; kappa = f * 2/||I+M||^2 (upper-bounded norm)\n",
+        nqp, o->precond, o->tol, o->max_steps);
     printf("  %5s %9s %9s %9s %9s %12s %12s\n", "f", "converged", "stays", "capped", "diverged", "steps p50",
            "steps max");
     double *st = calloc((size_t)nqp, sizeof(double));
@@ -270,8 +271,8 @@ static int run_edge(const opts_t *o)
             const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
             if (rc == MCA_OK) {
                 st[conv++] = res.steps;
-                /* Passing through the tolerance once is not stability: continue as a controller would, 5 ticks
-                 * of a slightly moved QP (--eps) warm-started from here, at the same kappa, no far-row
+                /* Passing through the tolerance once is not stability: continue as a controller would, 5
+                 * ticks of a slightly moved QP (--eps) warm-started from here, at the same kappa, no far-row
                  * rescaling (the same network). Stable iff all 5 converge. */
                 prm.far_weight = 1.0;
                 int ok = 1;
@@ -294,8 +295,7 @@ static int run_edge(const opts_t *o)
     return 0;
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     opts_t o = {.runs = 100,
                 .ticks = 10,
                 .max_steps = 20000,

@@ -13,8 +13,7 @@
 #define PDNN_DEFAULT_FAR_WEIGHT 0.3
 #define PDNN_FAR_SLACK 0.02 /* rows are unit-norm: slack in phi units, relative to 1 + ||phi|| */
 
-void mca_pdnn_default_params(mca_pdnn_params_t *params)
-{
+void mca_pdnn_default_params(mca_pdnn_params_t *params) {
     if (params == NULL) {
         return;
     }
@@ -29,15 +28,13 @@ void mca_pdnn_default_params(mca_pdnn_params_t *params)
     params->far_weight = PDNN_DEFAULT_FAR_WEIGHT;
 }
 
-void mca_pdnn_init(mca_pdnn_t *s)
-{
+void mca_pdnn_init(mca_pdnn_t *s) {
     if (s != NULL) {
         memset(s, 0, sizeof(*s));
     }
 }
 
-static int all_finite(const double *v, int len)
-{
+static int all_finite(const double *v, int len) {
     for (int i = 0; i < len; i++) {
         if (!isfinite(v[i])) {
             return 0;
@@ -46,10 +43,9 @@ static int all_finite(const double *v, int len)
     return 1;
 }
 
-static int check_qp(const mca_qp_t *qp)
-{
-    if (qp->n < 1 || qp->n > MCA_QP_MAX_VARS || qp->n_eq < 0 || qp->n_eq > MCA_QP_MAX_EQ ||
-        qp->n_ineq < 0 || qp->n_ineq > MCA_QP_MAX_INEQ) {
+static int check_qp(const mca_qp_t *qp) {
+    if (qp->n < 1 || qp->n > MCA_QP_MAX_VARS || qp->n_eq < 0 || qp->n_eq > MCA_QP_MAX_EQ || qp->n_ineq < 0 ||
+        qp->n_ineq > MCA_QP_MAX_INEQ) {
         return MCA_EINVAL;
     }
     for (int i = 0; i < qp->n_eq; i++) {
@@ -75,26 +71,23 @@ static int check_qp(const mca_qp_t *qp)
     return MCA_OK;
 }
 
-static int check_params(const mca_pdnn_params_t *p)
-{
+static int check_params(const mca_pdnn_params_t *p) {
     if (!isfinite(p->kappa) || !(p->tol > 0.0) || !isfinite(p->tol) || p->max_steps < 0 || !(p->big > 0.0) ||
-        !isfinite(p->big) || !(p->gamma < 2.0) || (p->step_rule != MCA_PDNN_STEP_ADAPTIVE &&
-                                                    p->step_rule != MCA_PDNN_STEP_BOUND) ||
+        !isfinite(p->big) || !(p->gamma < 2.0) ||
+        (p->step_rule != MCA_PDNN_STEP_ADAPTIVE && p->step_rule != MCA_PDNN_STEP_BOUND) ||
         p->precond < MCA_PDNN_PRECOND_ORTH || p->precond > MCA_PDNN_PRECOND_NONE || !(p->far_weight <= 1.0)) {
         return MCA_EINVAL;
     }
     return MCA_OK;
 }
 
-static double clampd(double x, double lo, double hi)
-{
+static double clampd(double x, double lo, double hi) {
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
 /* The constraint rows in the iteration's form: row i of N x + q >= 0 (inequality) or = 0 (equality),
  * N = [G; -U], q = [-alpha; beta]. */
-static const double *orig_row(const mca_qp_t *qp, int i, double *sign, double *qi)
-{
+static const double *orig_row(const mca_qp_t *qp, int i, double *sign, double *qi) {
     if (i < qp->n_eq) {
         *sign = 1.0;
         *qi = -qp->alpha[i];
@@ -105,8 +98,7 @@ static const double *orig_row(const mca_qp_t *qp, int i, double *sign, double *q
     return qp->U[i - qp->n_eq];
 }
 
-static double dot(const double *a, const double *b, int n)
-{
+static double dot(const double *a, const double *b, int n) {
     double s = 0.0;
     for (int j = 0; j < n; j++) {
         s += a[j] * b[j];
@@ -116,8 +108,7 @@ static double dot(const double *a, const double *b, int n)
 
 /* Modified Gram-Schmidt (two passes) on the equality rows of ws_N: G = R^T Q, alpha' = R^-T alpha.
  * Returns 0 when G is numerically rank deficient (then ws_N/ws_q are left for a rebuild). */
-static int orth_equalities(mca_pdnn_t *s, int n, int ne)
-{
+static int orth_equalities(mca_pdnn_t *s, int n, int ne) {
     double *R = s->ws_R;
     memset(R, 0, sizeof(double) * (size_t)(ne * ne));
     for (int i = 0; i < ne; i++) {
@@ -150,8 +141,7 @@ static int orth_equalities(mca_pdnn_t *s, int n, int ne)
 /* Build N, q and Omega in the workspace for the chosen rewriting (enum mca_pdnn_precond). Each rewriting
  * keeps the feasible set, hence phi: row scaling trivially; R^-T G phi = R^-T alpha iff G phi = alpha;
  * adding multiples of equality rows to an inequality row changes nothing where G phi = alpha. */
-static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm, int warm)
-{
+static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm, int warm) {
     const int n = qp->n, ne = qp->n_eq, m = qp->n_eq + qp->n_ineq;
     int pre = prm->precond;
     for (int i = 0; i < m; i++) {
@@ -231,8 +221,7 @@ static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm
 }
 
 /* out[j] = sum_i (-U)_ij v_i: the inequality rows' share of the stationarity point. */
-static void ineq_sum(const mca_qp_t *qp, const double *vi, double *out)
-{
+static void ineq_sum(const mca_qp_t *qp, const double *vi, double *out) {
     for (int j = 0; j < qp->n; j++) {
         out[j] = 0.0;
     }
@@ -248,8 +237,7 @@ static void ineq_sum(const mca_qp_t *qp, const double *vi, double *out)
 /* Duals of the QP as given (yt) -> duals of the rewritten rows (yw). Inequalities: v_i = d_i w_i.
  * Equalities (ORTH): G^T v_e + N0_I^T v_i = Q^T w_e + N'_I^T w_i and Q N'_I^T = 0, so w_e = R v_e +
  * Q N0_I^T v_i; otherwise v_e = d_e w_e. */
-static void duals_to_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const double *yt, double *yw)
-{
+static void duals_to_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const double *yt, double *yw) {
     const int n = qp->n, ne = qp->n_eq, m = ne + qp->n_ineq;
     for (int i = 0; i < n; i++) {
         yw[i] = yt[i];
@@ -274,8 +262,7 @@ static void duals_to_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const doub
     }
 }
 
-static void duals_from_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const double *yw, double *yt)
-{
+static void duals_from_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const double *yw, double *yt) {
     const int n = qp->n, ne = qp->n_eq, m = ne + qp->n_ineq;
     for (int i = 0; i < n; i++) {
         yt[i] = yw[i];
@@ -301,8 +288,7 @@ static void duals_from_iter(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const do
 }
 
 /* ||P_Omega(y - (M y + q)) - y||_inf for the QP as given (the reported residual and the stop test). */
-static double true_residual(const mca_qp_t *qp, const mca_pdnn_t *s, double big, const double *y)
-{
+static double true_residual(const mca_qp_t *qp, const mca_pdnn_t *s, double big, const double *y) {
     const int n = qp->n, ne = qp->n_eq;
     double a[MCA_QP_MAX_VARS], r = 0.0;
     ineq_sum(qp, y + n + ne, a);
@@ -323,8 +309,7 @@ static double true_residual(const mca_qp_t *qp, const mca_pdnn_t *s, double big,
     return r;
 }
 
-static int uf_find(int *par, int j)
-{
+static int uf_find(int *par, int j) {
     while (par[j] != j) {
         par[j] = par[par[j]];
         j = par[j];
@@ -338,8 +323,7 @@ static int uf_find(int *par, int j)
  * with its own step, is still explicit Euler on (32) with a time scale lambda per block. Each block's
  * N_b is stored compactly, which also skips the zero blocks of the paper's blkdiag(J_L, J_R). Rows of
  * N that are all zero belong to no block (their dual has a closed form). */
-static void split(mca_pdnn_t *s, int n, int m, int ne, const double *eqf, int no_split)
-{
+static void split(mca_pdnn_t *s, int n, int m, int ne, const double *eqf, int no_split) {
     int par[MCA_QP_MAX_VARS], blk_of[MCA_QP_MAX_VARS], row_blk[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];
     for (int j = 0; j < n; j++) {
         par[j] = no_split ? 0 : j;
@@ -432,8 +416,7 @@ static void split(mca_pdnn_t *s, int n, int m, int ne, const double *eqf, int no
 }
 
 /* ws_y (original order) <-> ws_By (block layout) */
-static void gather(mca_pdnn_t *s, int n, int to_blocks)
-{
+static void gather(mca_pdnn_t *s, int n, int to_blocks) {
     for (int b = 0; b < s->ws_nblk; b++) {
         const int bc0 = s->ws_blk[b][0], nc = s->ws_blk[b][1], br0 = s->ws_blk[b][2], nr = s->ws_blk[b][3];
         double *yb = &s->ws_By[bc0 + br0];
@@ -465,8 +448,7 @@ typedef struct pdnn_run {
  * inner tolerance tightened if the rewriting's factors fooled the inner test), the cap, or no progress.
  * Leaves ws_y (iterate, original order) and ws_t (the QP's y) filled. */
 static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdnn_params_t *prm,
-                       const double *kfix, int cap, pdnn_run_t *run)
-{
+                       const double *kfix, int cap, pdnn_run_t *run) {
     const int n = qp->n;
     double tol_it = prm->tol, r_prev = INFINITY;
     int bsteps[MCA_QP_MAX_VARS] = {0};
@@ -474,9 +456,14 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
     for (int pass = 0; pass < 8; pass++) {
         for (int b = 0; b < s->ws_nblk; b++) {
             const int *bl = s->ws_blk[b];
-            const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]],
-                                           &s->ws_Bf[bl[2]], &s->ws_Bfi[bl[2]]};
+            const mca_pdnn__problem_t p = {bl[1],
+                                           bl[3],
+                                           &s->ws_B[bl[4]],
+                                           &s->ws_Bq[bl[2]],
+                                           &s->ws_Blo[bl[0] + bl[2]],
+                                           &s->ws_Bhi[bl[0] + bl[2]],
+                                           &s->ws_Bf[bl[2]],
+                                           &s->ws_Bfi[bl[2]]};
             mca_pdnn_result_t it;
             mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b],
                               !prm->no_rescue, &it);
@@ -506,8 +493,7 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
 }
 
 int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *params, double *phi,
-                   mca_pdnn_result_t *result)
-{
+                   mca_pdnn_result_t *result) {
     mca_pdnn_params_t defaults;
     if (params == NULL) {
         mca_pdnn_default_params(&defaults);
@@ -564,9 +550,16 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         kfix[b] = prm.kappa;
         if (prm.kappa > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
             const int *bl = s->ws_blk[b];
-            const mca_pdnn__problem_t p = {bl[1], bl[3], &s->ws_B[bl[4]], &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]], &s->ws_Bhi[bl[0] + bl[2]], NULL, NULL};
-            /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in s */
+            const mca_pdnn__problem_t p = {bl[1],
+                                           bl[3],
+                                           &s->ws_B[bl[4]],
+                                           &s->ws_Bq[bl[2]],
+                                           &s->ws_Blo[bl[0] + bl[2]],
+                                           &s->ws_Bhi[bl[0] + bl[2]],
+                                           NULL,
+                                           NULL};
+            /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in
+             * s */
             const double s2 = mca_pdnn__norm_sq_bound(&p);
             const double kb = prm.gamma / (0.5 * (5.0 + 2.0 * s2 + sqrt(9.0 + 4.0 * s2)));
             res.kappa_bound = (b == 0 || kb < res.kappa_bound) ? kb : res.kappa_bound;

@@ -27,8 +27,7 @@ using MapV = Eigen::Map<const Eigen::VectorXd>;
 
 } // namespace
 
-extern "C" double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p)
-{
+extern "C" double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p) {
     const MapN N(p->N, p->m, p->n);
     MatH H(p->n, p->n);
     // lazyProduct: coefficient-wise evaluation, no GEMM blocking buffers (which would be heap-allocated).
@@ -37,8 +36,7 @@ extern "C" double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p)
 }
 
 extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, double kappa_fixed, double gamma,
-                                  double tol, int max_steps, int keep_best, mca_pdnn_result_t *res)
-{
+                                  double tol, int max_steps, int keep_best, mca_pdnn_result_t *res) {
     const int n = p->n, m = p->m;
     const MapN N(p->N, m, n);
     const MapV q(p->q, m), lox(p->lo, n), hix(p->hi, n), low(p->lo + n, m), hiw(p->hi + n, m);
@@ -86,7 +84,8 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         dx = 2.0 * ex + u;
         dw = ew - v;
         if (kappa_fixed <= 0.0) {
-            // He's projection-contraction step: ||y+ - y*||^2 <= ||y - y*||^2 - gamma (2 - gamma) rho ||e||^2.
+            // He's projection-contraction step: ||y+ - y*||^2 <= ||y - y*||^2 - gamma (2 - gamma) rho
+            // ||e||^2.
             const double dd = dx.squaredNorm() + dw.squaredNorm();
             kappa = gamma * (ex.squaredNorm() + ew.squaredNorm()) / dd;
         }

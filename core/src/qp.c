@@ -8,8 +8,7 @@
 
 #include "mca/err.h"
 
-int mca_qp_reset(mca_qp_t *qp, int n, int n_eq, int n_ineq)
-{
+int mca_qp_reset(mca_qp_t *qp, int n, int n_eq, int n_ineq) {
     if (qp == NULL || n < 0 || n_eq < 0 || n_ineq < 0) {
         return MCA_EINVAL;
     }
@@ -24,8 +23,7 @@ int mca_qp_reset(mca_qp_t *qp, int n, int n_eq, int n_ineq)
 }
 
 /* A JSON number; infinities (and NaN, which JSON cannot hold either) become null. */
-static void put_num(FILE *f, double x)
-{
+static void put_num(FILE *f, double x) {
     if (isfinite(x)) {
         fprintf(f, "%.17g", x);
     } else {
@@ -33,8 +31,7 @@ static void put_num(FILE *f, double x)
     }
 }
 
-static void put_vec(FILE *f, const double *v, int len)
-{
+static void put_vec(FILE *f, const double *v, int len) {
     fputc('[', f);
     for (int i = 0; i < len; i++) {
         if (i > 0) {
@@ -45,8 +42,7 @@ static void put_vec(FILE *f, const double *v, int len)
     fputc(']', f);
 }
 
-static void put_str(FILE *f, const char *s)
-{
+static void put_str(FILE *f, const char *s) {
     fputc('"', f);
     for (const unsigned char *p = (const unsigned char *)s; *p != '\0'; p++) {
         if (*p == '"' || *p == '\\') {
@@ -62,8 +58,7 @@ static void put_str(FILE *f, const char *s)
 }
 
 int mca_qp_dump_json(const mca_qp_t *qp, const double *phi, int steps, double residual, const char *tag,
-                     const char *path)
-{
+                     const char *path) {
     if (qp == NULL || path == NULL || qp->n < 0 || qp->n > MCA_QP_MAX_VARS || qp->n_eq < 0 ||
         qp->n_eq > MCA_QP_MAX_EQ || qp->n_ineq < 0 || qp->n_ineq > MCA_QP_MAX_INEQ) {
         return MCA_EINVAL;

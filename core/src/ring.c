@@ -21,13 +21,11 @@ void (*mca_ring_test_hook)(mca_ring_t *ring);
 #endif
 
 /* Slot layout: [seq word][payload words...]; everything is an _Atomic uint64_t. */
-static inline _Atomic uint64_t *slot_at(const mca_ring_t *ring, uint64_t n)
-{
+static inline _Atomic uint64_t *slot_at(const mca_ring_t *ring, uint64_t n) {
     return (_Atomic uint64_t *)(void *)(ring->slots + (size_t)(n & ring->mask) * ring->slot_size);
 }
 
-int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t elem_size, size_t capacity)
-{
+int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t elem_size, size_t capacity) {
     if (ring == NULL || storage == NULL || elem_size == 0 || capacity < 2 ||
         capacity > MCA_RING_MAX_CAPACITY || (capacity & (capacity - 1)) != 0 ||
         ((uintptr_t)storage & 7u) != 0) {
@@ -55,8 +53,7 @@ int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t e
     return MCA_OK;
 }
 
-void mca_ring_push(mca_ring_t *ring, const void *rec)
-{
+void mca_ring_push(mca_ring_t *ring, const void *rec) {
     /* Only this thread writes head, so a relaxed load reads our own last store. */
     const uint64_t n = atomic_load_explicit(&ring->head, memory_order_relaxed);
     _Atomic uint64_t *s = slot_at(ring, n);
@@ -82,14 +79,12 @@ void mca_ring_push(mca_ring_t *ring, const void *rec)
 }
 
 /* First record that can still be intact when a slot shows sequence word s (record (s-1)/2 is in it). */
-static uint64_t first_survivor(const mca_ring_t *ring, uint64_t s)
-{
+static uint64_t first_survivor(const mca_ring_t *ring, uint64_t s) {
     const uint64_t m = (s - 1u) / 2u;
     return m - ring->mask; /* m - capacity + 1 */
 }
 
-int mca_ring_pop(mca_ring_t *ring, void *out)
-{
+int mca_ring_pop(mca_ring_t *ring, void *out) {
     uint64_t t = atomic_load_explicit(&ring->tail, memory_order_relaxed);
     const uint64_t cap = ring->mask + 1u;
     const size_t full = ring->elem_size / 8u;
@@ -155,8 +150,7 @@ int mca_ring_pop(mca_ring_t *ring, void *out)
     return rc;
 }
 
-void mca_ring_stats(const mca_ring_t *ring, mca_ring_stats_t *out)
-{
+void mca_ring_stats(const mca_ring_t *ring, mca_ring_stats_t *out) {
     /* Consumer fields first: head only grows, so head - tail never underflows. */
     const uint64_t dropped = atomic_load_explicit(&ring->dropped, memory_order_acquire);
     const uint64_t popped = atomic_load_explicit(&ring->popped, memory_order_acquire);

@@ -8,8 +8,7 @@
 
 #include "mca/err.h"
 
-dds_qos_t *mca_dds_qos_stream(void)
-{
+dds_qos_t *mca_dds_qos_stream(void) {
     dds_qos_t *q = dds_create_qos();
     if (q == NULL) {
         return NULL;
@@ -21,8 +20,7 @@ dds_qos_t *mca_dds_qos_stream(void)
     return q;
 }
 
-dds_qos_t *mca_dds_qos_status(void)
-{
+dds_qos_t *mca_dds_qos_status(void) {
     dds_qos_t *q = dds_create_qos();
     if (q == NULL) {
         return NULL;
@@ -33,8 +31,7 @@ dds_qos_t *mca_dds_qos_status(void)
     return q;
 }
 
-dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain)
-{
+dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain) {
     if (domain == NULL || domain_id > MCA_DDS_MAX_DOMAIN) {
         fprintf(stderr, "mca dds: domain id %u out of range 0..%d\n", domain_id, MCA_DDS_MAX_DOMAIN);
         return MCA_EINVAL;
@@ -75,8 +72,7 @@ dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_pat
     return p;
 }
 
-static dds_entity_t create_in_partition(dds_entity_t pp, const char *partition, int publisher)
-{
+static dds_entity_t create_in_partition(dds_entity_t pp, const char *partition, int publisher) {
     dds_qos_t *q = NULL;
     if (partition != NULL) {
         q = dds_create_qos();
@@ -97,12 +93,10 @@ static dds_entity_t create_in_partition(dds_entity_t pp, const char *partition, 
     return e;
 }
 
-dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition)
-{
+dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition) {
     return create_in_partition(pp, partition, 1);
 }
 
-dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition)
-{
+dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition) {
     return create_in_partition(pp, partition, 0);
 }

@@ -7,8 +7,7 @@
 #include <string.h>
 
 void mca_dds_synth_fill(mca_dds_snapshot_t *snap, uint64_t k, int64_t stamp_ns, double *min_so_far,
-                        int64_t *min_stamp)
-{
+                        int64_t *min_stamp) {
     static const uint32_t dof[2] = {7, 6};
     snap->tick = k;
     snap->stamp_ns = stamp_ns;

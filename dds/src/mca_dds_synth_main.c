@@ -17,14 +17,12 @@
 
 static volatile sig_atomic_t g_stop;
 
-static void on_signal(int sig)
-{
+static void on_signal(int sig) {
     (void)sig;
     g_stop = 1;
 }
 
-static void usage(FILE *f)
-{
+static void usage(FILE *f) {
     fprintf(f, "usage: mca-dds-synth [options]\n"
                "  --domain N         DDS domain id (default 0)\n"
                "  --config FILE      Cyclone DDS XML (default: CYCLONEDDS_URI or built-in)\n"
@@ -41,8 +39,7 @@ static void usage(FILE *f)
                "  --help\n");
 }
 
-static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out)
-{
+static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out) {
     char *end = NULL;
     errno = 0;
     const unsigned long long v = strtoull(s, &end, 10);
@@ -54,15 +51,13 @@ static int parse_u64(const char *s, const char *name, unsigned long long max, un
     return 0;
 }
 
-static int64_t now_ns(void)
-{
+static int64_t now_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     mca_dds_config_t cfg;
     mca_dds_config_default(&cfg);
     unsigned long long ticks = 10000, wait_readers = 0, wait_timeout = 10000, linger = 0, v = 0;

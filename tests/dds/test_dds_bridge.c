@@ -25,8 +25,7 @@ static const char *g_config;
 static uint32_t g_domain;
 static char g_partition[64]; /* per process: other tests' publishers may share the domain */
 
-static void test_create_rejects_bad_arguments(void **state)
-{
+static void test_create_rejects_bad_arguments(void **state) {
     (void)state;
     mca_dds_config_t cfg;
     mca_dds_bridge_t *b = (mca_dds_bridge_t *)0x1;
@@ -58,8 +57,7 @@ static void test_create_rejects_bad_arguments(void **state)
     mca_dds_bridge_destroy(NULL, NULL); /* no crash */
 }
 
-static void test_create_rejects_bad_xml(void **state)
-{
+static void test_create_rejects_bad_xml(void **state) {
     (void)state;
     char path[] = "/tmp/mca_dds_bad_XXXXXX";
     const int fd = mkstemp(path);
@@ -90,8 +88,7 @@ typedef struct readers {
     dds_entity_t pp, rd_dist, rd_js, rd_jc, rd_st;
 } readers_t;
 
-static void open_readers_in(readers_t *r, const char *partition)
-{
+static void open_readers_in(readers_t *r, const char *partition) {
     dds_entity_t dom = 0;
     r->pp = mca_dds_open_participant(g_domain, NULL, &dom);
     assert_true(r->pp > 0);
@@ -117,13 +114,11 @@ static void open_readers_in(readers_t *r, const char *partition)
     assert_true(r->rd_dist > 0 && r->rd_js > 0 && r->rd_jc > 0 && r->rd_st > 0);
 }
 
-static void open_readers(readers_t *r)
-{
+static void open_readers(readers_t *r) {
     open_readers_in(r, g_partition);
 }
 
-static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32_t poll_us)
-{
+static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32_t poll_us) {
     mca_dds_config_t cfg;
     mca_dds_config_default(&cfg);
     cfg.domain_id = g_domain;
@@ -140,8 +135,7 @@ static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32
 
 /* Take every valid Distances sample: ticks into out (in arrival order); checks each one against the
  * snapshot that tick produced. Returns the count. */
-static int take_distances(dds_entity_t rd, uint64_t *out, int max)
-{
+static int take_distances(dds_entity_t rd, uint64_t *out, int max) {
     enum { BATCH = 256 };
     void *buf[BATCH];
     dds_sample_info_t info[BATCH];
@@ -185,8 +179,7 @@ static int take_distances(dds_entity_t rd, uint64_t *out, int max)
     return got;
 }
 
-static int take_joint_states(dds_entity_t rd, int *per_arm)
-{
+static int take_joint_states(dds_entity_t rd, int *per_arm) {
     enum { BATCH = 256 };
     void *buf[BATCH];
     dds_sample_info_t info[BATCH];
@@ -220,8 +213,7 @@ static int take_joint_states(dds_entity_t rd, int *per_arm)
     return got;
 }
 
-static int take_last_status(dds_entity_t rd, mca_dds_ControllerStatus *out)
-{
+static int take_last_status(dds_entity_t rd, mca_dds_ControllerStatus *out) {
     void *buf[1] = {NULL};
     dds_sample_info_t info[1];
     const int n = dds_take(rd, buf, info, 1, 1);
@@ -236,8 +228,7 @@ static int take_last_status(dds_entity_t rd, mca_dds_ControllerStatus *out)
     return ok;
 }
 
-static void push_range(mca_dds_bridge_t *b, uint64_t n)
-{
+static void push_range(mca_dds_bridge_t *b, uint64_t n) {
     static mca_dds_snapshot_t snap;
     double mn = INFINITY;
     int64_t ms = 0;
@@ -247,8 +238,7 @@ static void push_range(mca_dds_bridge_t *b, uint64_t n)
     }
 }
 
-static void test_every_snapshot_arrives_intact(void **state)
-{
+static void test_every_snapshot_arrives_intact(void **state) {
     (void)state;
     mca_dds_bridge_t *b = make_bridge(1, 256, 200);
     readers_t r;
@@ -303,8 +293,7 @@ static void test_every_snapshot_arrives_intact(void **state)
     dds_delete(r.pp);
 }
 
-static void test_rate_divisor(void **state)
-{
+static void test_rate_divisor(void **state) {
     (void)state;
     mca_dds_bridge_t *b = make_bridge(5, 64, 200);
     readers_t r;
@@ -324,8 +313,7 @@ static void test_rate_divisor(void **state)
     dds_delete(r.pp);
 }
 
-static void test_overrun_drops_oldest_and_counts(void **state)
-{
+static void test_overrun_drops_oldest_and_counts(void **state) {
     (void)state;
     /* Ring of 4 drained every 300 ms: 100 snapshots pushed at once must mostly be dropped. */
     mca_dds_bridge_t *b = make_bridge(1, 4, 300000);
@@ -357,8 +345,7 @@ static void test_overrun_drops_oldest_and_counts(void **state)
     dds_delete(r.pp);
 }
 
-static void test_partition_isolates(void **state)
-{
+static void test_partition_isolates(void **state) {
     (void)state;
     mca_dds_bridge_t *b = make_bridge(1, 16, 200);
     readers_t other, same;
@@ -376,8 +363,7 @@ static void test_partition_isolates(void **state)
     dds_delete(same.pp);
 }
 
-static void test_invalid_snapshot_rejected(void **state)
-{
+static void test_invalid_snapshot_rejected(void **state) {
     (void)state;
     mca_dds_bridge_t *b = make_bridge(1, 16, 200);
     static mca_dds_snapshot_t snap;
@@ -400,8 +386,7 @@ static void test_invalid_snapshot_rejected(void **state)
     assert_int_equal(st.published, 1);
 }
 
-static void test_brake_factor_eq13(void **state)
-{
+static void test_brake_factor_eq13(void **state) {
     (void)state;
     /* Closed values of S(d) = sin^2(pi/2 (d-d1)/(d2-d1)) between the thresholds. */
     assert_true(mca_dds_brake_factor(0.20, 0.05, 0.12) == 1.0);
@@ -412,8 +397,7 @@ static void test_brake_factor_eq13(void **state)
     assert_true(fabs(mca_dds_brake_factor(0.05 + 0.07 / 3.0, 0.05, 0.12) - 0.25) < 1e-15); /* sin^2(pi/6) */
 }
 
-static void test_pair_fill_from_armdist(void **state)
-{
+static void test_pair_fill_from_armdist(void **state) {
     (void)state;
     mca_arm_distances_t d;
     memset(&d, 0, sizeof d);
@@ -446,8 +430,7 @@ static void test_pair_fill_from_armdist(void **state)
     assert_int_equal(mca_dds_pair_fill(NULL, &d, 0, 1, 0.05, 0.12), MCA_EINVAL);
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     if (argc != 3) {
         fprintf(stderr, "usage: test_dds_bridge LOOPBACK_XML DOMAIN\n");
         return 2;

@@ -5,8 +5,7 @@
 #define MCA_TEST_FIXTURE_SIM7200_H
 #include <math.h>
 #include "mca/qp.h"
-static void fixture_tick7199(mca_qp_t *qp)
-{
+static void fixture_tick7199(mca_qp_t *qp) {
     mca_qp_reset(qp, 16, 6, 54);
     qp->G[0][0] = -0.11644512895087533;
     qp->G[0][1] = 0.7450540490816451;
@@ -171,8 +170,7 @@ static void fixture_tick7199(mca_qp_t *qp)
     qp->ub[14] = 1.9896753472735358;
     qp->ub[15] = 1.9896753472735358;
 }
-static void fixture_tick7200(mca_qp_t *qp)
-{
+static void fixture_tick7200(mca_qp_t *qp) {
     mca_qp_reset(qp, 16, 6, 54);
     qp->G[0][0] = -0.11630694549104642;
     qp->G[0][1] = 0.7451090054736871;

@@ -17,8 +17,7 @@
 
 static mca_pdnn_t solver; /* large: keep off the stack */
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     if (argc < 3 || argc > 4) {
         fprintf(stderr, "usage: %s OUTDIR COUNT [SEED]\n", argv[0]);
         return 2;

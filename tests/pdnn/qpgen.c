@@ -3,8 +3,7 @@
 
 #include <math.h>
 
-double qpgen_uniform(qpgen_rng_t *r, double lo, double hi)
-{
+double qpgen_uniform(qpgen_rng_t *r, double lo, double hi) {
     uint64_t z = (r->s += 0x9E3779B97F4A7C15ull);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -12,8 +11,7 @@ double qpgen_uniform(qpgen_rng_t *r, double lo, double hi)
     return lo + (hi - lo) * ((double)(z >> 11) * 0x1.0p-53);
 }
 
-void qpgen_scene_random(qpgen_scene_t *sc, qpgen_rng_t *r, double tight_prob)
-{
+void qpgen_scene_random(qpgen_scene_t *sc, qpgen_rng_t *r, double tight_prob) {
     for (int a = 0; a < QPGEN_ARMS; a++) {
         for (int k = 0; k < 3; k++) {
             for (int j = 0; j < QPGEN_DOF; j++) {
@@ -58,12 +56,11 @@ void qpgen_scene_random(qpgen_scene_t *sc, qpgen_rng_t *r, double tight_prob)
         /* tight rows get a small positive slack: exact zeros would make the three parallel rows of a
          * first link an implicit equality that rounding in beta can turn infeasible */
         sc->slack[i] = qpgen_uniform(r, 0.0, 1.0) < tight_prob ? qpgen_uniform(r, 1e-3, 0.03)
-                                                                : qpgen_uniform(r, 0.05, 1.0);
+                                                               : qpgen_uniform(r, 0.05, 1.0);
     }
 }
 
-static void wiggle(double *v, int len, qpgen_rng_t *r, double eps)
-{
+static void wiggle(double *v, int len, qpgen_rng_t *r, double eps) {
     for (int i = 0; i < len; i++) {
         if (v[i] != 0.0) { /* keep the structural zeros */
             v[i] += eps * qpgen_uniform(r, -1.0, 1.0);
@@ -71,8 +68,7 @@ static void wiggle(double *v, int len, qpgen_rng_t *r, double eps)
     }
 }
 
-void qpgen_scene_perturb(qpgen_scene_t *sc, qpgen_rng_t *r, double eps)
-{
+void qpgen_scene_perturb(qpgen_scene_t *sc, qpgen_rng_t *r, double eps) {
     wiggle(&sc->J[0][0][0], QPGEN_ARMS * 3 * QPGEN_DOF, r, eps);
     wiggle(&sc->Jc[0][0][0][0], QPGEN_ARMS * QPGEN_LINKS * 3 * QPGEN_DOF, r, eps);
     for (int j = 0; j < QPGEN_N; j++) {
@@ -88,8 +84,7 @@ void qpgen_scene_perturb(qpgen_scene_t *sc, qpgen_rng_t *r, double eps)
     }
 }
 
-void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp)
-{
+void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp) {
     mca_qp_reset(qp, QPGEN_N, QPGEN_NEQ, QPGEN_NINEQ);
     for (int a = 0; a < QPGEN_ARMS; a++) {
         for (int k = 0; k < 3; k++) {
@@ -125,8 +120,7 @@ void qpgen_build(const qpgen_scene_t *sc, mca_qp_t *qp)
     }
 }
 
-void qpgen_build_normal(const qpgen_scene_t *sc, mca_qp_t *qp)
-{
+void qpgen_build_normal(const qpgen_scene_t *sc, mca_qp_t *qp) {
     qpgen_build(sc, qp); /* G, alpha, box */
     qp->n_ineq = QPGEN_NINEQ_NORMAL;
     for (int a = 0; a < QPGEN_ARMS; a++) {
@@ -155,8 +149,7 @@ void qpgen_build_normal(const qpgen_scene_t *sc, mca_qp_t *qp)
     }
 }
 
-void qpgen_couple(const qpgen_scene_t *sc, mca_qp_t *qp, int row)
-{
+void qpgen_couple(const qpgen_scene_t *sc, mca_qp_t *qp, int row) {
     double s = 0.0;
     for (int j = 0; j < QPGEN_N; j++) {
         qp->U[row][j] += 0.3 * (1.0 - 0.05 * j);

@@ -31,54 +31,44 @@ void *__real__Znam(size_t n);
 void *__real__ZnwmSt11align_val_t(size_t n, size_t a);
 void *__real__ZnamSt11align_val_t(size_t n, size_t a);
 
-static void trip(void)
-{
+static void trip(void) {
     if (trip_armed) {
         trip_count++;
     }
 }
-void *__wrap_malloc(size_t n)
-{
+void *__wrap_malloc(size_t n) {
     trip();
     return __real_malloc(n);
 }
-void *__wrap_calloc(size_t k, size_t n)
-{
+void *__wrap_calloc(size_t k, size_t n) {
     trip();
     return __real_calloc(k, n);
 }
-void *__wrap_realloc(void *p, size_t n)
-{
+void *__wrap_realloc(void *p, size_t n) {
     trip();
     return __real_realloc(p, n);
 }
-int __wrap_posix_memalign(void **p, size_t a, size_t n)
-{
+int __wrap_posix_memalign(void **p, size_t a, size_t n) {
     trip();
     return __real_posix_memalign(p, a, n);
 }
-void *__wrap_aligned_alloc(size_t a, size_t n)
-{
+void *__wrap_aligned_alloc(size_t a, size_t n) {
     trip();
     return __real_aligned_alloc(a, n);
 }
-void *__wrap__Znwm(size_t n)
-{
+void *__wrap__Znwm(size_t n) {
     trip();
     return __real__Znwm(n);
 }
-void *__wrap__Znam(size_t n)
-{
+void *__wrap__Znam(size_t n) {
     trip();
     return __real__Znam(n);
 }
-void *__wrap__ZnwmSt11align_val_t(size_t n, size_t a)
-{
+void *__wrap__ZnwmSt11align_val_t(size_t n, size_t a) {
     trip();
     return __real__ZnwmSt11align_val_t(n, a);
 }
-void *__wrap__ZnamSt11align_val_t(size_t n, size_t a)
-{
+void *__wrap__ZnamSt11align_val_t(size_t n, size_t a) {
     trip();
     return __real__ZnamSt11align_val_t(n, a);
 }
@@ -86,8 +76,7 @@ void *__wrap__ZnamSt11align_val_t(size_t n, size_t a)
 /* ---- helpers ---- */
 /* cmocka 1.1.5 (Debian 12) has no assert_double_equal; print both values when it fails. */
 #define assert_near(a, b, tol) near_impl((a), (b), (tol), #a, __FILE__, __LINE__)
-static void near_impl(double a, double b, double tol, const char *what, const char *file, int line)
-{
+static void near_impl(double a, double b, double tol, const char *what, const char *file, int line) {
     if (!(fabs(a - b) <= tol)) {
         print_error("%s = %.17g, expected %.17g +- %g\n", what, a, b, tol);
         _fail(file, line);
@@ -97,8 +86,7 @@ static void near_impl(double a, double b, double tol, const char *what, const ch
 static mca_pdnn_t solver; /* large: static */
 
 /* Solve A x = b (k x k, row-major, destroyed) by Gaussian elimination with partial pivoting. */
-static void gauss(double *A, double *b, double *x, int k)
-{
+static void gauss(double *A, double *b, double *x, int k) {
     for (int c = 0; c < k; c++) {
         int p = c;
         for (int r = c + 1; r < k; r++) {
@@ -132,24 +120,21 @@ static void gauss(double *A, double *b, double *x, int k)
     }
 }
 
-static void free_box(mca_qp_t *qp)
-{
+static void free_box(mca_qp_t *qp) {
     for (int j = 0; j < qp->n; j++) {
         qp->lb[j] = -INFINITY;
         qp->ub[j] = INFINITY;
     }
 }
 
-static int solve(const mca_qp_t *qp, const mca_pdnn_params_t *prm, double *phi, mca_pdnn_result_t *res)
-{
+static int solve(const mca_qp_t *qp, const mca_pdnn_params_t *prm, double *phi, mca_pdnn_result_t *res) {
     mca_pdnn_init(&solver);
     return mca_pdnn_solve(&solver, qp, prm, phi, res);
 }
 
 /* Every variant of the solver: adaptive / bound step x ORTH / SCALE / NONE rewriting. */
 #define N_VARIANTS 6
-static void variant(mca_pdnn_params_t *prm, int v)
-{
+static void variant(mca_pdnn_params_t *prm, int v) {
     mca_pdnn_default_params(prm);
     prm->step_rule = (v & 1) ? MCA_PDNN_STEP_BOUND : MCA_PDNN_STEP_ADAPTIVE;
     prm->precond = v >> 1;
@@ -158,8 +143,7 @@ static void variant(mca_pdnn_params_t *prm, int v)
 }
 
 /* ---- 1. equality-only: phi = G^T (G G^T)^-1 alpha ---- */
-static void test_equality_closed_form(void **state)
-{
+static void test_equality_closed_form(void **state) {
     (void)state;
     qpgen_rng_t rng = {42};
     for (int trial = 0; trial < 5; trial++) {
@@ -210,8 +194,7 @@ static void test_equality_closed_form(void **state)
 }
 
 /* ---- 2. box, box + equality, active inequality, infeasible ---- */
-static void test_box_only(void **state)
-{
+static void test_box_only(void **state) {
     (void)state;
     mca_qp_t qp;
     mca_qp_reset(&qp, 3, 0, 0);
@@ -230,8 +213,7 @@ static void test_box_only(void **state)
     }
 }
 
-static void test_box_and_equality(void **state)
-{
+static void test_box_and_equality(void **state) {
     (void)state;
     /* min a^2+b^2 s.t. a + b = 2, a <= 0.5: unconstrained (1,1) violates the bound, so a = 0.5, b = 1.5;
      * KKT: (a, b) = v_e (1, 1) - mu (1, 0) with v_e = 1.5, mu = 1 >= 0. */
@@ -255,8 +237,7 @@ static void test_box_and_equality(void **state)
     }
 }
 
-static void test_active_inequality(void **state)
-{
+static void test_active_inequality(void **state) {
     (void)state;
     /* min |phi|^2/2 s.t. phi1 + phi2 + phi3 = 3, 2 phi1 <= 0.
      * Without the row: (1,1,1), which violates it; active: phi1 = 0, phi2 = phi3 = 1.5.
@@ -285,8 +266,7 @@ static void test_active_inequality(void **state)
     }
 }
 
-static void test_infeasible(void **state)
-{
+static void test_infeasible(void **state) {
     (void)state;
     mca_pdnn_params_t prm;
     mca_pdnn_default_params(&prm);
@@ -325,8 +305,7 @@ static void test_infeasible(void **state)
 }
 
 /* ---- 3. warm start ---- */
-static void test_warm_start(void **state)
-{
+static void test_warm_start(void **state) {
     (void)state;
     qpgen_rng_t rng = {3};
     mca_pdnn_params_t prm;
@@ -358,7 +337,8 @@ static void test_warm_start(void **state)
         const int warm = res.steps;
         mca_pdnn_init(&solver);
         assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi2, &res), MCA_OK);
-        print_message("warm start: cold %d, same QP 0, perturbed warm %d vs cold %d\n", cold, warm, res.steps);
+        print_message("warm start: cold %d, same QP 0, perturbed warm %d vs cold %d\n", cold, warm,
+                      res.steps);
         cold_sum += res.steps;
         pert_sum += warm;
         for (int j = 0; j < 16; j++) {
@@ -368,8 +348,7 @@ static void test_warm_start(void **state)
     assert_true(4 * pert_sum < cold_sum);
 }
 
-static void test_partial_warm_start(void **state)
-{
+static void test_partial_warm_start(void **state) {
     (void)state;
     /* n_ineq changes between ticks: phi and v_e are kept, v_i restarts at 0 */
     mca_qp_t qp;
@@ -396,8 +375,7 @@ static void test_partial_warm_start(void **state)
 }
 
 /* ---- 4. no heap allocation inside mca_pdnn_solve ---- */
-static void test_no_malloc(void **state)
-{
+static void test_no_malloc(void **state) {
     (void)state;
     /* the tripwire itself works (a test that cannot fail is worthless) */
     void *(*volatile alloc)(size_t) = malloc; /* through a pointer: the compiler may not elide it */
@@ -423,7 +401,7 @@ static void test_no_malloc(void **state)
         trip_count = 0;
         trip_armed = 1;
         const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res); /* cold or warm, both paths */
-        prm.kappa = 0.01;                                            /* the user-fixed step path */
+        prm.kappa = 0.01;                                             /* the user-fixed step path */
         const int rc2 = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
         trip_armed = 0;
         assert_true(rc == MCA_OK || rc == MCA_ENOTCONV);
@@ -433,8 +411,7 @@ static void test_no_malloc(void **state)
 }
 
 /* ---- 5. bad input, divergence, the stability bound ---- */
-static void test_bad_input(void **state)
-{
+static void test_bad_input(void **state) {
     (void)state;
     mca_qp_t qp;
     mca_qp_reset(&qp, 2, 1, 1);
@@ -489,8 +466,7 @@ static void test_bad_input(void **state)
     assert_near(phi[1], 0.0, 1e-9);
 }
 
-static void test_divergence_reported(void **state)
-{
+static void test_divergence_reported(void **state) {
     (void)state;
     /* A step far above the stability edge blows up: reported as not converged, and the state is
      * dropped so the next (sane) solve starts cold and succeeds. */
@@ -517,8 +493,7 @@ static void test_divergence_reported(void **state)
     assert_int_equal(res.warm, 0);
 }
 
-static void test_split_blocks(void **state)
-{
+static void test_split_blocks(void **state) {
     (void)state;
     /* The dual-arm QP splits into two blocks; one coupling row makes it one. Either way the split and the
      * single-network solves agree (OSQP checks both kinds too: pdnn.osqp_check). */
@@ -548,8 +523,7 @@ static void test_split_blocks(void **state)
     }
 }
 
-static void test_inactive_zero_rows(void **state)
-{
+static void test_inactive_zero_rows(void **state) {
     (void)state;
     /* mca_scheme keeps inactive collision rows in place as U = 0, beta = big: the answer must be that of
      * the QP without them, and they must not slow the solve down (they belong to no block). */
@@ -591,8 +565,7 @@ static void test_inactive_zero_rows(void **state)
     }
 }
 
-static void test_warm_restart_real_qp(void **state)
-{
+static void test_warm_restart_real_qp(void **state) {
     (void)state;
     /* mca-sim, componentwise form, t = 7.199 s -> 7.200 s: the QP jumps. From the old answer the
      * projection method crawls (residual stuck near 1e-4 for thousands of steps); with half the cap spent
@@ -626,13 +599,13 @@ static void test_warm_restart_real_qp(void **state)
         err = fmax(err, fabs(phi[j] - phi_ref[j]));
     }
     assert_true(err < 1e-3);
-    print_message("sim t=7.200: %d steps (warm + restart), residual %.3g, |phi - phi_ref| %.2g; cold to 1e-9: "
-                  "%d steps\n",
-                  res.steps, res.residual, err, ref.steps);
+    print_message(
+        "sim t=7.200: %d steps (warm + restart), residual %.3g, |phi - phi_ref| %.2g; cold to 1e-9: "
+        "%d steps\n",
+        res.steps, res.residual, err, ref.steps);
 }
 
-static void test_bound_step_is_stable(void **state)
-{
+static void test_bound_step_is_stable(void **state) {
     (void)state;
     /* The derived bound kappa < 2 / ||I+M||^2 (docs/pdnn.md): the residual never blows up at the bound
      * step, and the bound uses an upper estimate of ||N|| so it stays below the true edge. */
@@ -656,8 +629,7 @@ static void test_bound_step_is_stable(void **state)
     }
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_equality_closed_form),
         cmocka_unit_test(test_box_only),

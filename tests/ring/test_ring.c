@@ -21,8 +21,7 @@ typedef struct rec16 {
     uint64_t val;
 } rec16_t;
 
-static void test_init_rejects_bad_arguments(void **state)
-{
+static void test_init_rejects_bad_arguments(void **state) {
     (void)state;
     mca_ring_t r;
     _Alignas(8) unsigned char buf[MCA_RING_STORAGE_SIZE(16, 8)];
@@ -42,8 +41,7 @@ static void test_init_rejects_bad_arguments(void **state)
     assert_int_equal(MCA_RING_SLOT_SIZE(9), 24);
 }
 
-static void test_fifo_order_and_empty(void **state)
-{
+static void test_fifo_order_and_empty(void **state) {
     (void)state;
     mca_ring_t r;
     _Alignas(8) unsigned char buf[MCA_RING_STORAGE_SIZE(sizeof(rec16_t), 8)];
@@ -77,8 +75,7 @@ static void test_fifo_order_and_empty(void **state)
     assert_int_equal(st.pending, 0);
 }
 
-static void test_full_ring_drops_oldest(void **state)
-{
+static void test_full_ring_drops_oldest(void **state) {
     (void)state;
     mca_ring_t r;
     _Alignas(8) unsigned char buf[MCA_RING_STORAGE_SIZE(sizeof(rec16_t), 8)];
@@ -139,8 +136,7 @@ static void test_full_ring_drops_oldest(void **state)
     assert_int_equal(st.pushed, st.popped + st.dropped + st.pending);
 }
 
-static void test_odd_element_size(void **state)
-{
+static void test_odd_element_size(void **state) {
     (void)state;
     enum { ELEM = 13, CAP = 4 };
     mca_ring_t r;
@@ -170,8 +166,7 @@ typedef struct stress_rec {
     uint64_t sum;
 } stress_rec_t;
 
-static uint64_t mix(uint64_t x)
-{
+static uint64_t mix(uint64_t x) {
     x ^= x >> 33;
     x *= 0xff51afd7ed558ccdULL;
     x ^= x >> 33;
@@ -180,8 +175,7 @@ static uint64_t mix(uint64_t x)
     return x;
 }
 
-static void make_rec(stress_rec_t *r, uint64_t seq)
-{
+static void make_rec(stress_rec_t *r, uint64_t seq) {
     r->seq = seq;
     uint64_t sum = seq;
     for (int i = 0; i < STRESS_WORDS; ++i) {
@@ -191,8 +185,7 @@ static void make_rec(stress_rec_t *r, uint64_t seq)
     r->sum = sum;
 }
 
-static int rec_ok(const stress_rec_t *r)
-{
+static int rec_ok(const stress_rec_t *r) {
     stress_rec_t ref;
     make_rec(&ref, r->seq);
     return memcmp(&ref, r, sizeof ref) == 0;
@@ -205,8 +198,7 @@ typedef struct stress_ctx {
     _Atomic int done;
 } stress_ctx_t;
 
-static void *producer(void *arg)
-{
+static void *producer(void *arg) {
     stress_ctx_t *c = arg;
     atomic_fetch_add(&c->started, 1);
     while (atomic_load(&c->started) < 2) {
@@ -224,8 +216,7 @@ typedef struct stress_result {
     uint64_t popped, bad, non_increasing, last;
 } stress_result_t;
 
-static void consume(stress_ctx_t *c, stress_result_t *res)
-{
+static void consume(stress_ctx_t *c, stress_result_t *res) {
     atomic_fetch_add(&c->started, 1);
     while (atomic_load(&c->started) < 2) {
     }
@@ -260,8 +251,7 @@ static void consume(stress_ctx_t *c, stress_result_t *res)
     res->last = (uint64_t)last;
 }
 
-static void run_stress(size_t capacity, uint64_t n)
-{
+static void run_stress(size_t capacity, uint64_t n) {
     stress_ctx_t *c = calloc(1, sizeof *c);
     const size_t bytes = MCA_RING_STORAGE_SIZE(sizeof(stress_rec_t), capacity);
     void *storage = aligned_alloc(64, (bytes + 63) & ~(size_t)63);
@@ -292,20 +282,17 @@ static void run_stress(size_t capacity, uint64_t n)
     free(c);
 }
 
-static void test_stress_two_threads_small_ring(void **state)
-{
+static void test_stress_two_threads_small_ring(void **state) {
     (void)state;
     run_stress(4, 500000); /* constant lapping and torn reads */
 }
 
-static void test_stress_two_threads_large_ring(void **state)
-{
+static void test_stress_two_threads_large_ring(void **state) {
     (void)state;
     run_stress(1024, 500000);
 }
 
-int main(void)
-{
+int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_init_rejects_bad_arguments),
         cmocka_unit_test(test_fifo_order_and_empty),

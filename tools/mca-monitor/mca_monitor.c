@@ -20,16 +20,14 @@
 
 static volatile sig_atomic_t g_stop;
 
-static void on_signal(int sig)
-{
+static void on_signal(int sig) {
     (void)sig;
     g_stop = 1;
 }
 
 static const char *const state_names[] = {"INIT", "READY", "RUNNING", "BRAKING", "STOPPED", "FAULT"};
 
-static const char *state_name(int s)
-{
+static const char *state_name(int s) {
     return (s >= 0 && s < (int)(sizeof state_names / sizeof state_names[0])) ? state_names[s] : "?";
 }
 
@@ -53,15 +51,13 @@ typedef struct monitor {
     size_t n_lat, cap_lat;
 } monitor_t;
 
-static int64_t now_ns(void)
-{
+static int64_t now_ns(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
-static void usage(FILE *f)
-{
+static void usage(FILE *f) {
     fprintf(f, "usage: mca-monitor [options]\n"
                "Live view of the mca distances and controller state published on DDS.\n"
                "  --domain N      DDS domain id (default 0)\n"
@@ -75,8 +71,7 @@ static void usage(FILE *f)
                "Alarm word: OK above d2, WARN below d2, ALARM below d1. Ctrl-C exits cleanly.\n");
 }
 
-static const char *alarm_word(const mca_dds_Distances *d, const char **color)
-{
+static const char *alarm_word(const mca_dds_Distances *d, const char **color) {
     if (d->min_distance < d->d1) {
         *color = "\033[1;31m";
         return "ALARM";
@@ -89,8 +84,7 @@ static const char *alarm_word(const mca_dds_Distances *d, const char **color)
     return "OK";
 }
 
-static void draw(monitor_t *m)
-{
+static void draw(monitor_t *m) {
     if (m->tty && m->lines_drawn > 0) {
         printf("\033[%dA", m->lines_drawn); /* back to the first line of the block */
     }
@@ -122,8 +116,7 @@ static void draw(monitor_t *m)
     fflush(stdout);
 }
 
-static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx)
-{
+static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx) {
     if (m->csv == NULL) {
         return 0;
     }
@@ -138,14 +131,12 @@ static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx)
     return n < 0 ? -1 : 0;
 }
 
-static int cmp_i64(const void *a, const void *b)
-{
+static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
 }
 
-static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out)
-{
+static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out) {
     char *end = NULL;
     errno = 0;
     const unsigned long long v = strtoull(s, &end, 10);
@@ -157,8 +148,7 @@ static int parse_u64(const char *s, const char *name, unsigned long long max, un
     return 0;
 }
 
-int main(int argc, char **argv)
-{
+int main(int argc, char **argv) {
     unsigned long long domain = 0, count = 0;
     double duration = 0.0;
     const char *config = NULL, *csv_path = NULL, *partition = NULL;

@@ -21,21 +21,21 @@ typedef enum mca_dist_method {
 } mca_dist_method_t;
 
 typedef struct mca_link_pair {
-    int link;          /**< link index on this arm */
-    int other_link;    /**< closest link on the other arm */
-    double d;          /**< surface distance = axis distance - both radii [m] */
-    double d_axis;     /**< axis-to-axis segment distance [m] */
-    double p[3];       /**< critical point on this link's axis (world) */
-    double e[3];       /**< critical point on the other link's axis (world) */
+    int link;       /**< link index on this arm */
+    int other_link; /**< closest link on the other arm */
+    double d;       /**< surface distance = axis distance - both radii [m] */
+    double d_axis;  /**< axis-to-axis segment distance [m] */
+    double p[3];    /**< critical point on this link's axis (world) */
+    double e[3];    /**< critical point on the other link's axis (world) */
 } mca_link_pair_t;
 
 typedef struct mca_arm_distances {
-    int n_links_a;                          /**< links of arm A (dof_a + 1) */
+    int n_links_a; /**< links of arm A (dof_a + 1) */
     int n_links_b;
-    mca_link_pair_t a_to_b[MCA_MAX_LINKS];  /**< per link of A: closest link of B (p on A, e on B) */
-    mca_link_pair_t b_to_a[MCA_MAX_LINKS];  /**< per link of B: closest link of A (p on B, e on A) */
-    mca_link_pair_t min;                    /**< global minimum, seen from A (p on A, e on B) */
-    int iterations;                         /**< total LSDM iterations (0 for the closed form) */
+    mca_link_pair_t a_to_b[MCA_MAX_LINKS]; /**< per link of A: closest link of B (p on A, e on B) */
+    mca_link_pair_t b_to_a[MCA_MAX_LINKS]; /**< per link of B: closest link of A (p on B, e on A) */
+    mca_link_pair_t min;                   /**< global minimum, seen from A (p on A, e on B) */
+    int iterations;                        /**< total LSDM iterations (0 for the closed form) */
 } mca_arm_distances_t;
 
 /**

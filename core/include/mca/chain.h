@@ -34,12 +34,12 @@ typedef struct mca_pose {
 
 typedef struct mca_joint_model {
     char name[64];
-    mca_pose_t origin;  /**< previous joint frame (or root link) -> this joint frame at q = 0 */
-    double axis[3];     /**< unit rotation axis in this joint's frame */
-    double lower;       /**< position limit [rad]; -INFINITY when continuous */
-    double upper;       /**< position limit [rad]; +INFINITY when continuous */
-    double vel_limit;   /**< |qdot| limit [rad/s] */
-    int continuous;     /**< 1 when the joint has no position limits */
+    mca_pose_t origin; /**< previous joint frame (or root link) -> this joint frame at q = 0 */
+    double axis[3];    /**< unit rotation axis in this joint's frame */
+    double lower;      /**< position limit [rad]; -INFINITY when continuous */
+    double upper;      /**< position limit [rad]; +INFINITY when continuous */
+    double vel_limit;  /**< |qdot| limit [rad/s] */
+    int continuous;    /**< 1 when the joint has no position limits */
 } mca_joint_model_t;
 
 typedef struct mca_chain {
@@ -47,19 +47,19 @@ typedef struct mca_chain {
     char source[256]; /**< file it was loaded from (for messages) */
     int dof;          /**< number of revolute joints, 1..MCA_MAX_DOF */
     mca_joint_model_t joint[MCA_MAX_DOF];
-    mca_pose_t tool;                     /**< last joint frame -> tool tip (fixed joints folded in) */
-    double link_radius[MCA_MAX_LINKS];   /**< capsule radius of link k [m] */
-    mca_pose_t base;                     /**< world <- root link; identity after loading */
+    mca_pose_t tool;                   /**< last joint frame -> tool tip (fixed joints folded in) */
+    double link_radius[MCA_MAX_LINKS]; /**< capsule radius of link k [m] */
+    mca_pose_t base;                   /**< world <- root link; identity after loading */
 } mca_chain_t;
 
 /** Kinematic state of one arm at one configuration (all world frame). */
 typedef struct mca_kin {
     int dof;
-    int n_points;                        /**< dof + 2 */
-    double point[MCA_MAX_POINTS][3];     /**< root, joint origins, tool tip */
-    double axis[MCA_MAX_DOF][3];         /**< joint axes (unit) */
-    mca_pose_t frame[MCA_MAX_DOF];       /**< world <- joint frame */
-    double ee[3];                        /**< tool tip = point[dof + 1] */
+    int n_points;                    /**< dof + 2 */
+    double point[MCA_MAX_POINTS][3]; /**< root, joint origins, tool tip */
+    double axis[MCA_MAX_DOF][3];     /**< joint axes (unit) */
+    mca_pose_t frame[MCA_MAX_DOF];   /**< world <- joint frame */
+    double ee[3];                    /**< tool tip = point[dof + 1] */
 } mca_kin_t;
 
 /**

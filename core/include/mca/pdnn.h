@@ -45,9 +45,9 @@ typedef struct mca_pdnn_params {
     int max_steps; /**< step cap per solve */
     double big;    /**< the paper's varpi, stands for +infinity in Omega */
     /* Added fields; a zeroed value means the default. */
-    int step_rule; /**< enum mca_pdnn_step, used when kappa <= 0 */
-    double gamma;  /**< step factor in (0, 2) for the bound/adaptive rules; <= 0: 1.9 */
-    int precond;   /**< enum mca_pdnn_precond */
+    int step_rule;     /**< enum mca_pdnn_step, used when kappa <= 0 */
+    double gamma;      /**< step factor in (0, 2) for the bound/adaptive rules; <= 0: 1.9 */
+    int precond;       /**< enum mca_pdnn_precond */
     double far_weight; /**< full warm start, ORTH/SCALE: extra scale (0, 1] for inequality rows that were
                             inactive with a clear slack last solve (docs/pdnn.md); 1: off; <= 0: 0.3 */
     int no_split;  /**< 1: one network for the whole QP; 0: independent blocks (variables that share no row,
@@ -59,10 +59,10 @@ typedef struct mca_pdnn_params {
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
-    int steps;          /**< Euler steps taken */
-    double residual;    /**< final ||e(y)||_inf */
-    int converged;      /**< residual <= tol */
-    double kappa;       /**< step size used (adaptive rule: the last step taken) */
+    int steps;       /**< Euler steps taken */
+    double residual; /**< final ||e(y)||_inf */
+    int converged;   /**< residual <= tol */
+    double kappa;    /**< step size used (adaptive rule: the last step taken) */
     /* Added fields. */
     int warm;           /**< 2: whole y reused, 1: phi and v_e reused (n_ineq changed), 0: cold */
     double kappa_bound; /**< gamma / ||I+M||_2^2 (upper-bounded norm) of the iterated problem; 0 when not
@@ -76,8 +76,8 @@ typedef struct mca_pdnn_result {
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
 typedef struct mca_pdnn {
-    int h;                      /**< current length of y (0: cold) */
-    double y[MCA_QP_MAX_H];     /**< [phi; v_e; v_i] of the last solve, duals of the unscaled QP */
+    int h;                  /**< current length of y (0: cold) */
+    double y[MCA_QP_MAX_H]; /**< [phi; v_e; v_i] of the last solve, duals of the unscaled QP */
     /* Added fields: sizes of the last solve (partial warm start) and the solver's private workspace, kept
      * here so that a solve needs no allocation and little stack. */
     int n, n_eq, n_ineq;
@@ -91,12 +91,12 @@ typedef struct mca_pdnn {
     double ws_y2[MCA_QP_MAX_H], ws_t2[MCA_QP_MAX_H];                  /**< the warm attempt, kept */
     double ws_B[(MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ) * MCA_QP_MAX_VARS]; /**< per block N_b, compact */
     double ws_Bq[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];                    /**< per block q_b */
-    double ws_Bf[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< per block: row factors to the given QP's residual */
+    double ws_Bf[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];  /**< per block: row factors to the given QP's residual */
     double ws_Bfi[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< their inverses */
     double ws_By[MCA_QP_MAX_H], ws_Blo[MCA_QP_MAX_H], ws_Bhi[MCA_QP_MAX_H]; /**< per block [x_b; w_b] */
-    int ws_pv[MCA_QP_MAX_VARS], ws_pr[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< block order of vars, rows */
-    int ws_nblk, ws_nzero;                                              /**< blocks, all-zero rows */
-    int ws_blk[MCA_QP_MAX_VARS][5];                                     /**< c0, nc, r0, nr, offset in B */
+    int ws_pv[MCA_QP_MAX_VARS], ws_pr[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];     /**< block order of vars, rows */
+    int ws_nblk, ws_nzero;                                                  /**< blocks, all-zero rows */
+    int ws_blk[MCA_QP_MAX_VARS][5]; /**< c0, nc, r0, nr, offset in B */
 } mca_pdnn_t;
 
 /** Defaults: kappa from the rule (adaptive), tol 1e-9, max_steps 20000, big 1e10, gamma 1.9, ORTH,

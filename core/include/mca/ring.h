@@ -119,8 +119,7 @@ int mca_ring_pop(mca_ring_t *ring, void *out);
 void mca_ring_stats(const mca_ring_t *ring, mca_ring_stats_t *out);
 
 /** Capacity in records. */
-static inline size_t mca_ring_capacity(const mca_ring_t *ring)
-{
+static inline size_t mca_ring_capacity(const mca_ring_t *ring) {
     return (size_t)ring->mask + 1u;
 }
 
