@@ -11,4 +11,8 @@ exec systemd-run --unit="$UNIT" \
     -p WatchdogSec=2s -p TimeoutStartSec=30s -p TimeoutStopSec=10s -p KillSignal=SIGTERM -p Restart=no \
     -p CPUSchedulingPolicy=fifo -p CPUSchedulingPriority=1 -p LimitRTPRIO=99 \
     -p LimitMEMLOCK=infinity \
+    -p NoNewPrivileges=yes -p ProtectSystem=full \
+    -p "RestrictAddressFamilies=AF_UNIX AF_INET AF_INET6 AF_NETLINK AF_CAN" \
     "$MCAD" "$CELL"
+# As mcad@.service, but without PrivateTmp= and ProtectHome=: a trial run's cell, CSV or build tree often
+# lives under /tmp or a home directory, which those would hide or make read-only.
