@@ -19,7 +19,12 @@
 #   C: the MICO2's emulator is frozen (SIGSTOP) while both arms dwell: lost-feedback fault after the cell's
 #      lost_feedback_cycles, both arms braked within the limits, exit 3 after SIGTERM.
 # usage: vcan_e2e.sh BUILD_DIR SOURCE_DIR [--in-guest]
-#   env MCA_E2E_PHASES="A B C" (default) runs a subset (development).
+#   D: mcad SIGKILLed mid-task (t ~ 1-2 s, arms moving), the emulators on their own 4 ms clock: from the candump
+#      of both buses (tests/daemon/check_watchdog.py on the host) each arm BRAKING in the 3rd firmware cycle
+#      without a command, velocity steps within dec_limit * 4 ms, a ramp of the minimum length, then FAULT
+#      with fault code WATCHDOG; the emulators' counters: one watchdog trip, FAULT.
+#   Phase A also compares mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
+#   env MCA_E2E_PHASES="A B C D" (default) runs a subset (development).
 set -u
 B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
 OUT=$B/tests/daemon/vcan-e2e
@@ -28,24 +33,79 @@ MCAD=$B/daemon/mcad
 MON=$B/tools/mca-monitor/mca-monitor
 SRC_CELL=$S/config/cells/cup_stacking_vcan.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
-PHASES=${MCA_E2E_PHASES:-A B C}
+PHASES=${MCA_E2E_PHASES:-A B C D}
+PY=$S/.venv/bin/python3
+[ -x "$PY" ] || PY=python3
+# ---- on the host, after the guest (or the native run): the checks that need mca-sim or python cantools
+# (cheap here, slow under TCG). $1 = exit status of the guest part; prints E2E lines, returns the status.
+host_checks() {
+    hf=$1
+    if echo "$PHASES" | grep -q A && [ -s "$OUT/mcadA.csv" ]; then
+        # A: the joint trajectory over SocketCAN (mcad's q columns, the feedback it used at each tick) against
+        # the in-process sim backend in virtual time (mca-sim: same controller, same tick order: tick k uses
+        # the feedback of command k-1), row by row at the same tick, over the running rows
+        th=$(now)
+        "$B/tools/mca-sim/mca-sim" --scenario "$SCN" --scheme mca --csv "$OUT/simA.csv" > "$OUT/simA.txt" 2>&1 ||
+            { cat "$OUT/simA.txt"; echo "E2E FAIL: phase A: mca-sim"; hf=1; }
+        res=$(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simA.csv" "$OUT/mcadA.csv")
+        sup=$(sed -n 's/.* cmd_superseded=\([0-9]*\) .*/\1/p' "$OUT/armsim0A.txt" "$OUT/armsim1A.txt" 2>/dev/null | tr '\n' ' ')
+        set -- $res
+        echo "E2E phase A: joint trajectory vs the sim backend (mca-sim, $2 ticks compared, $3 without a sim row): JACO2 max |dq| $4 rad at tick $5 (joint $6), MICO2 max |dq| $7 rad at tick $8 (joint $9); commands superseded at the emulators: ${sup:-?}; $(($(now) - th)) s on the host"
+        # bound (docs/daemon.md, vcan e2e): the protocol rounds feedback positions to 1e-6 rad and commands
+        # to 1e-6 rad/s; open loop that is 5e-7 rad (can_vcan (f)). Closed loop the controller acts on the
+        # rounded positions, and in the null space (3 redundant DOF per arm) nothing pulls the two runs back
+        # together: measured 0.6e-6 rad in the first 5 s growing to 1.2-1.7e-6 rad at 40-50 s. 1e-5 rad
+        # (10 feedback steps) leaves room for that drift; a command the emulator skipped while the arm moved
+        # (cmd_superseded: the arm one cycle behind, |qdot| dt <= 0.6 mrad) is not within the protocol's
+        # resolution and fails here (a run with 45-49 superseded: 1e-3 rad)
+        awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" 'BEGIN { exit !(n >= 49990 && a + 0 <= m && b + 0 <= m) }' ||
+            { echo "E2E FAIL: phase A: joint trajectory differs from the sim backend's by more than $DQ_MAX rad"; hf=1; }
+    fi
+    if echo "$PHASES" | grep -q D && [ -s "$OUT/d.candump" ]; then
+        th=$(now)
+        "$PY" "$S/tests/daemon/check_watchdog.py" "$S/config/can/mca.dbc" "$OUT/d.candump" 3 "$DEC_H" "$D_PERIOD_US" "$OUT" \
+            > "$OUT/check_watchdog.txt" 2>&1
+        wrc=$?
+        grep '^FAIL\|^E2E\|Error\|error' "$OUT/check_watchdog.txt"
+        echo "E2E phase D: bus checks (check_watchdog.py, exit $wrc): $(grep -c '^ok' "$OUT/check_watchdog.txt") ok, $(grep -c '^FAIL' "$OUT/check_watchdog.txt") failed; $(($(now) - th)) s on the host"
+        if [ $wrc -eq 0 ]; then
+            echo "E2E ok: phase D: mcad SIGKILLed mid-task: both emulators' watchdogs braked their arm in the 3rd cycle without a command, within the deceleration limit, to FAULT WATCHDOG"
+        else
+            hf=1
+        fi
+    elif echo "$PHASES" | grep -q D; then
+        echo "E2E FAIL: phase D: no bus capture"; hf=1
+    fi
+    return $hf
+}
+now() { date +%s; }
+# phase A's bound on max |dq| against the sim backend (rad), phase D's deceleration limit (the cell's)
+DQ_MAX=${MCA_E2E_DQ_MAX:-1e-5}
+# phase D's firmware cycle (us): see there
+D_PERIOD_US=${MCA_E2E_D_PERIOD_US:-4000}
+DEC_H=$(sed -n 's/^ *dec_limit: *\([0-9.]*\).*/\1/p' "$SRC_CELL" | head -n 1)
 if [ "${3:-}" != "--in-guest" ]; then
     rm -rf "$OUT" && mkdir -p "$OUT"
     start=$(date +%s)
     if [ "$(id -u)" = 0 ] && ip link add dev mcae2etest type vcan 2>/dev/null; then
         ip link del dev mcae2etest
         echo "vcan_e2e: native vcan available"
-        exec sh "$0" "$B" "$S" --in-guest
+        sh "$0" "$B" "$S" --in-guest
+        host_checks $?
+        exit $?
     fi
     echo "vcan_e2e: no vcan on this kernel: booting the QEMU guest (TCG: slow, several minutes)"
     # an image cache of our own: can_vcan may be building the shared one at the same time (ctest -j)
     job=$OUT/job.sh
-    printf '#!/bin/sh\nexport MCA_IN_GUEST=1 MCA_E2E_PHASES="%s" PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin HOME=/root\nexec sh %s %s %s --in-guest\n' \
-        "$PHASES" "$S/tests/daemon/vcan_e2e.sh" "$B" "$S" > "$job"
+    printf '#!/bin/sh\nexport MCA_IN_GUEST=1 MCA_E2E_PHASES="%s" MCA_E2E_D_PERIOD_US=%s PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin HOME=/root\nexec sh %s %s %s --in-guest\n' \
+        "$PHASES" "$D_PERIOD_US" "$S/tests/daemon/vcan_e2e.sh" "$B" "$S" > "$job"
     MCA_GUEST_LOG=$OUT/console.log sh "$S/tools/vcan-guest/run.sh" "$B/tests/daemon/vcan-guest-cache" "$job" 1200 >/dev/null
     rc=$?
     grep -a 'E2E\|MCA-GUEST\|mcad:\|mca-monitor:\|^[-+]  ' "$OUT/console.log" | tr -d '\r'
-    echo "vcan_e2e: exit status $rc after $(($(date +%s) - start)) s (guest boot included)"
+    echo "vcan_e2e: guest exit status $rc after $(($(date +%s) - start)) s (guest boot included)"
+    host_checks $rc
+    rc=$?
+    echo "vcan_e2e: exit status $rc after $(($(date +%s) - start)) s in all"
     exit $rc
 fi
 
@@ -71,7 +131,6 @@ fi
 # CSVs and bus dumps on a tmpfs (the shared tree is 9p in the guest: slow), copied to $OUT at the end
 TMPD=$(mktemp -d /dev/shm/mca-e2e.XXXXXX 2>/dev/null || mktemp -d)
 trap 'cp "$TMPD"/* "$OUT/" 2>/dev/null; rm -rf "$TMPD"' EXIT
-now() { date +%s; }
 t_all=$(now)
 
 # Lockstep needs every command answered before the next tick, or the emulator takes only the newest of
@@ -115,13 +174,18 @@ END0=$(awk '/^  - name:/ { n++ } n == 1 && /^ *- \[/ { gsub(/[][,]/, " "); p = $
 END1=$(awk '/^  - name:/ { n++ } n == 2 && /^ *- \[/ { gsub(/[][,]/, " "); p = $2 " " $3 " " $4 } END { print p }' "$SCN")
 echo "E2E cell $SRC_CELL: task $DUR s, d1 $D1 m, dec_limit $DEC rad/s^2; JACO2 q0 $Q00 -> $END0, MICO2 q0 $Q01 -> $END1"
 
-# start both emulators (lockstep), stats into $TMPD/armsimX<tag>.txt
+# start both emulators (lockstep; $2 = clocked: on their own clock of D_PERIOD_US with the 3-cycle
+# watchdog, on the other CPU, sent state/fault frames logged into $TMPD/armlogX<tag>.txt), stats into
+# $TMPD/armsimX<tag>.txt
 armsims() {
-    $RTA $PIN "$ARMSIM" --iface vcan0 --robot "$URDF0" --id-base 0x100 --dec-limit "$DEC" --acc-limit 10 --q0 "$Q00" \
-        --lockstep --stats "$TMPD/armsim0$1.txt" > "$OUT/armsim0$1.log" 2>&1 &
+    X0=--lockstep X1=--lockstep P=$PIN
+    [ "${2:-}" = clocked ] && X0="--watchdog-cycles 3 --period-us $D_PERIOD_US --log $TMPD/armlog0$1.txt" \
+        X1="--watchdog-cycles 3 --period-us $D_PERIOD_US --log $TMPD/armlog1$1.txt" P=$PIN2
+    $RTA $P "$ARMSIM" --iface vcan0 --robot "$URDF0" --id-base 0x100 --dec-limit "$DEC" --acc-limit 10 --q0 "$Q00" \
+        $X0 --stats "$TMPD/armsim0$1.txt" > "$OUT/armsim0$1.log" 2>&1 &
     A0=$!
-    $RTA $PIN "$ARMSIM" --iface vcan1 --robot "$URDF1" --id-base 0x100 --dec-limit "$DEC" --acc-limit 10 --q0 "$Q01" \
-        --lockstep --stats "$TMPD/armsim1$1.txt" > "$OUT/armsim1$1.log" 2>&1 &
+    $RTA $P "$ARMSIM" --iface vcan1 --robot "$URDF1" --id-base 0x100 --dec-limit "$DEC" --acc-limit 10 --q0 "$Q01" \
+        $X1 --stats "$TMPD/armsim1$1.txt" > "$OUT/armsim1$1.log" 2>&1 &
     A1=$!
     sleep 0.5
 }
@@ -362,6 +426,60 @@ if echo "$PHASES" | grep -q C; then
     echo "E2E phase C: $(($(now) - t0)) s"
     [ $fC -eq 0 ] && echo "E2E ok: phase C: frozen firmware on vcan1: lost feedback fault after $LOST cycles, both arms braked, exit 3"
     [ $fC -eq 0 ] || fail=1
+fi
+# ---- phase D: mcad SIGKILLed mid-task while the arms move: nothing brakes them but each emulator's own
+# watchdog (3 cycles). So the emulators run on their own clock here (lockstep has no watchdog: without
+# commands it runs no cycle), on the other CPU than the loop. Not at 1 ms: two 1 kHz emulators slow the
+# TCG guest so much that mcad managed one tick per ~5 firmware cycles and the watchdog tripped at
+# t = 0.06-0.08 s (both placements tried). With a 4 ms firmware cycle (D_PERIOD_US; dt 4 ms, the watchdog
+# 12 ms, the deceleration step dec_limit * 4 ms) mcad's ~3-4 commands per cycle are taken newest first
+# and the arm follows the task. An early trip shows in mcad's log ("reports FAULT"): a failure.
+# candump records every frame of both id blocks from before the start; the host checks the capture
+# (check_watchdog.py: tests/can/check_bus.py's watchdog case per bus) against the emulators' --log.
+if echo "$PHASES" | grep -q D; then
+    t0=$(now)
+    # the first segment's quintic (3 s to above the first cup): joint speeds > 0.15 rad/s from 0.5 to 2.5 s,
+    # 0.59 at 1.5 s. The kill lands 0.5-1.8 s of task time after the CSV shows T_KILL (the CSV lags the loop
+    # and this polling is slow under TCG): the arm's speed at the kill is checked from the bus (>= 0.1 rad/s).
+    T_KILL=0.5
+    $PIN2 candump -r 33554432 -L vcan0,100:7F0 vcan1,100:7F0 > "$TMPD/d.candump" 2>/dev/null &
+    CD=$!
+    sleep 0.3
+    armsims D clocked
+    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcadD.csv" "$CELL" 2> "$OUT/mcadD.log" &
+    M=$!
+    n=0
+    while awk -v t="$(csv_t "$TMPD/mcadD.csv")" -v s="$T_KILL" 'BEGIN { exit !(t + 0 < s) }' && [ $n -lt 6000 ]; do
+        sleep 0.05; n=$((n + 1))
+    done
+    t_seen=$(csv_t "$TMPD/mcadD.csv")
+    kill -KILL $M
+    wait $M
+    rc=$?
+    # the watchdog, the ramp (<= 0.1 s at 5 rad/s^2 from <= 0.5 rad/s) and a few WATCHDOG heartbeats
+    sleep 2
+    stop_armsims D
+    prev=-1 i=0
+    while [ $i -lt 60 ]; do
+        sleep 0.5
+        cur=$(stat -c %s "$TMPD/d.candump")
+        [ "$cur" = "$prev" ] && break
+        prev=$cur i=$((i + 1))
+    done
+    kill $CD 2>/dev/null
+    wait $CD 2>/dev/null
+    cat "$OUT/mcadD.log"
+    fD=0
+    [ $rc -eq 137 ] || { echo "E2E FAIL: phase D: mcad exit status $rc, want 137 (SIGKILL)"; fD=1; }
+    ! grep -q "fault at\|brakes on its own\|reports FAULT" "$OUT/mcadD.log" ||
+        { echo "E2E FAIL: phase D: a fault before the kill (watchdog trip while mcad ran?)"; fD=1; }
+    for i in 0 1; do
+        st=$(sed -n 's/.* watchdog_trips=\([0-9]*\) state=\([A-Z]*\) fault_code=\([0-9]*\).*/\2 fault \3 watchdog trips \1/p' "$TMPD/armsim$i""D.txt" 2>/dev/null)
+        echo "E2E phase D: vcan$i: $(grep -c " vcan$i 10[0-3]##" "$TMPD/d.candump") frames captured; emulator: ${st:-?}"
+        [ "$st" = "FAULT fault 1 watchdog trips 1" ] || { echo "E2E FAIL: phase D: emulator on vcan$i not in FAULT WATCHDOG after one trip"; fD=1; }
+    done
+    echo "E2E phase D: SIGKILL when mcad's CSV showed t = $t_seen s; $(($(now) - t0)) s"
+    [ $fD -eq 0 ] || fail=1
 fi
 echo "E2E phases $PHASES: $(($(now) - t_all)) s in the guest, exit status $fail"
 exit $fail
