@@ -14,6 +14,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <inttypes.h>
+#include <limits.h> /* LONG_MAX */
 #include <math.h>
 #include <poll.h>
 #include <signal.h>
@@ -120,7 +121,75 @@ static void usage(FILE *f) {
         f,
         "usage: mca-armsim --iface IF (--robot URDF | --joints N) [--id-base 0x100] [--watchdog-cycles 3]\n"
         "                  [--period-us 1000] [--acc-limit A] [--dec-limit D] [--q0 a,b,...]\n"
-        "                  [--lockstep] [--duration S] [--stats FILE] [--log FILE]\n");
+        "                  [--lockstep] [--duration S] [--stats FILE] [--log FILE]\n"
+        "                  [--lag-ms T] [--latency-cycles N] [--noise-pos S] [--noise-vel S] [--seed N]\n"
+        "                  [--inject KIND@CYCLE[+CYCLES][:JOINT] ...] [--print-config]\n"
+        "  the in-process sim backend's model options (mca/sim_arm.h); KIND: actuator, freeze, silent,\n"
+        "  drop-rx; --print-config prints the arm configuration and exits (no bus needed)\n");
+}
+
+/* "KIND@CYCLE[+CYCLES][:JOINT]" -> one scheduled fault of the simulated firmware. */
+static int parse_inject(const char *s, int n_joints, mca_sim_inject_t *inj) {
+    static const struct {
+        const char *name;
+        int kind;
+    } kinds[] = {{"actuator", MCA_SIM_INJ_ACTUATOR},
+                 {"freeze", MCA_SIM_INJ_FREEZE},
+                 {"silent", MCA_SIM_INJ_SILENT},
+                 {"drop-rx", MCA_SIM_INJ_DROP_RX}};
+    const char *at = strchr(s, '@');
+    memset(inj, 0, sizeof(*inj));
+    for (size_t i = 0; at && i < sizeof(kinds) / sizeof(kinds[0]); i++) {
+        if (strlen(kinds[i].name) == (size_t)(at - s) && strncmp(s, kinds[i].name, (size_t)(at - s)) == 0) {
+            inj->kind = kinds[i].kind;
+        }
+    }
+    char *end = NULL;
+    const char *p = at ? at + 1 : s;
+    errno = 0;
+    unsigned long long v = at ? strtoull(p, &end, 0) : 0;
+    int ok = inj->kind != MCA_SIM_INJ_NONE && end != p && !errno && *p != '-';
+    inj->at_cycle = v;
+    if (ok && *end == '+') {
+        p = end + 1;
+        v = strtoull(p, &end, 0);
+        ok = end != p && !errno && *p != '-';
+        inj->duration = v;
+    }
+    if (ok && *end == ':') {
+        p = end + 1;
+        long j = strtol(p, &end, 0);
+        ok = end != p && j >= 0 && j < n_joints;
+        inj->joint = (int)j;
+    }
+    ok = ok && *end == 0 && (inj->kind != MCA_SIM_INJ_ACTUATOR || strchr(s, ':'));
+    if (!ok) {
+        fprintf(stderr,
+                "mca-armsim: --inject '%s': expected KIND@CYCLE[+CYCLES][:JOINT] with KIND actuator (needs "
+                ":JOINT, 0..%d), freeze, silent or drop-rx\n",
+                s, n_joints - 1);
+        return -1;
+    }
+    return 0;
+}
+
+static void print_config(FILE *f, const mca_sim_arm_config_t *c) {
+    static const char *const kind_names[] = {"none", "actuator", "freeze", "silent", "drop-rx"};
+    fprintf(
+        f,
+        "joints=%d dt=%.9g watchdog_cycles=%d lag_tau=%.9g latency_cycles=%d noise_pos=%.9g noise_vel=%.9g "
+        "seed=%" PRIu64 " injections=%d\n",
+        c->n, c->dt, c->watchdog_cycles, c->lag_tau, c->latency_cycles, c->noise_pos, c->noise_vel, c->seed,
+        c->n_inject);
+    for (int i = 0; i < c->n_inject; i++) {
+        const mca_sim_inject_t *in = &c->inject[i];
+        fprintf(f, "inject %d: kind=%s at_cycle=%" PRIu64 " duration=%" PRIu64 " joint=%d\n", i,
+                kind_names[in->kind], in->at_cycle, in->duration, in->joint);
+    }
+    for (int j = 0; j < c->n; j++) {
+        fprintf(f, "joint %d: q0=%.9g acc_limit=%.9g dec_limit=%.9g vel_limit=%.9g\n", j, c->q0[j],
+                c->acc_limit[j], c->dec_limit[j], c->vel_limit[j]);
+    }
 }
 
 static int parse_long(const char *opt, const char *s, long lo, long hi, long *out) {
@@ -276,7 +345,10 @@ int main(int argc, char **argv) {
     const char *iface = NULL, *robot = NULL, *stats = NULL, *q0s = NULL, *logp = NULL;
     long base = 0x100, wd = 3, period_us = 1000, joints = 0;
     double acc = -1, dec = -1, duration = 0;
-    int lockstep = 0;
+    double lag_ms = 0, noise_pos = 0, noise_vel = 0;
+    long latency = 0, seed = 1;
+    const char *inject_s[MCA_SIM_MAX_INJECT];
+    int n_inject = 0, lockstep = 0, print_cfg = 0;
     static const struct option opts[] = {
         {"iface", required_argument, 0, 'i'},
         {"robot", required_argument, 0, 'r'},
@@ -291,6 +363,13 @@ int main(int argc, char **argv) {
         {"duration", required_argument, 0, 't'},
         {"stats", required_argument, 0, 's'},
         {"log", required_argument, 0, 'L'},
+        {"lag-ms", required_argument, 0, 'g'},
+        {"latency-cycles", required_argument, 0, 'y'},
+        {"noise-pos", required_argument, 0, 'P'},
+        {"noise-vel", required_argument, 0, 'V'},
+        {"seed", required_argument, 0, 'S'},
+        {"inject", required_argument, 0, 'j'},
+        {"print-config", no_argument, 0, 'c'},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0},
     };
@@ -337,6 +416,32 @@ int main(int argc, char **argv) {
         case 'L':
             logp = optarg;
             break;
+        case 'g':
+            bad = parse_double("--lag-ms", optarg, 0, &lag_ms);
+            break;
+        case 'y':
+            bad = parse_long("--latency-cycles", optarg, 0, MCA_SIM_MAX_LATENCY, &latency);
+            break;
+        case 'P':
+            bad = parse_double("--noise-pos", optarg, 0, &noise_pos);
+            break;
+        case 'V':
+            bad = parse_double("--noise-vel", optarg, 0, &noise_vel);
+            break;
+        case 'S':
+            bad = parse_long("--seed", optarg, 0, LONG_MAX, &seed);
+            break;
+        case 'j':
+            if (n_inject == MCA_SIM_MAX_INJECT) {
+                fprintf(stderr, "mca-armsim: --inject: at most %d\n", MCA_SIM_MAX_INJECT);
+                bad = -1;
+            } else {
+                inject_s[n_inject++] = optarg;
+            }
+            break;
+        case 'c':
+            print_cfg = 1;
+            break;
         case 'h':
             usage(stdout);
             return 0;
@@ -348,11 +453,11 @@ int main(int argc, char **argv) {
             return 2;
         }
     }
-    if (optind != argc || !iface || (!robot == !joints)) {
+    if (optind != argc || (!iface && !print_cfg) || (!robot == !joints)) {
         fprintf(stderr, "mca-armsim: %s\n",
-                optind != argc
-                    ? "unexpected argument"
-                    : (!iface ? "--iface is required" : "give exactly one of --robot and --joints"));
+                optind != argc ? "unexpected argument"
+                               : (!iface && !print_cfg ? "--iface is required"
+                                                       : "give exactly one of --robot and --joints"));
         usage(stderr);
         return 2;
     }
@@ -378,6 +483,17 @@ int main(int argc, char **argv) {
     cfg.watchdog_cycles = (int)wd;
     cfg.dt = (double)period_us * 1e-6;
     cfg.stamp_monotonic = 1;
+    cfg.lag_tau = lag_ms * 1e-3;
+    cfg.latency_cycles = (int)latency;
+    cfg.noise_pos = noise_pos;
+    cfg.noise_vel = noise_vel;
+    cfg.seed = (uint64_t)seed;
+    for (int i = 0; i < n_inject; i++) {
+        if (parse_inject(inject_s[i], cfg.n, &cfg.inject[i]) != 0) {
+            return 2;
+        }
+    }
+    cfg.n_inject = n_inject;
     for (int j = 0; j < cfg.n; j++) {
         if (acc > 0) {
             cfg.acc_limit[j] = acc;
@@ -401,6 +517,10 @@ int main(int argc, char **argv) {
     if (mca_sim_arm_init(&s.arm, &cfg, err, sizeof(err)) != MCA_OK) {
         fprintf(stderr, "mca-armsim: arm configuration: %s\n", err);
         return 2;
+    }
+    if (print_cfg) {
+        print_config(stdout, &cfg);
+        return 0;
     }
     s.base = (uint32_t)base;
     s.sent_state = -1;
