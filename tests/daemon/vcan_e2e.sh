@@ -198,6 +198,21 @@ stop_armsims() {
 }
 # task time of the newest row of a CSV being written (a partly flushed last line only reads lower)
 csv_t() { tail -n 1 "$1" 2>/dev/null | cut -d, -f1; }
+
+# candump FILE's process PID runs below the real-time programs and may lag behind: let it drain its socket
+# (FILE stops growing, at most 30 s), then stop it. (tests/can/suite.sh's dump_stop does the same in the
+# CAN suite.)
+candump_stop() {
+    prev=-1 i=0
+    while [ $i -lt 60 ]; do
+        sleep 0.5
+        cur=$(stat -c %s "$1")
+        [ "$cur" = "$prev" ] && break
+        prev=$cur i=$((i + 1))
+    done
+    kill "$2" 2>/dev/null
+    wait "$2" 2>/dev/null
+}
 # mcad's log: exit 0, stopped, no fault, no CSV rows dropped; $1 = phase name, $2 = rc, $3 = log
 check_stopped() {
     f=0
@@ -342,16 +357,7 @@ if echo "$PHASES" | grep -q B; then
     kill -TERM $M
     wait $M
     rc=$?
-    # candump runs below the real-time programs: let it drain (the file stops growing), then stop it
-    prev=-1 i=0
-    while [ $i -lt 60 ]; do
-        sleep 0.5
-        cur=$(stat -c %s "$TMPD/b.candump")
-        [ "$cur" = "$prev" ] && break
-        prev=$cur i=$((i + 1))
-    done
-    kill $CD 2>/dev/null
-    wait $CD 2>/dev/null
+    candump_stop "$TMPD/b.candump" $CD
     stop_armsims B
     cat "$OUT/mcadB.log"
     fB=0
@@ -459,15 +465,7 @@ if echo "$PHASES" | grep -q D; then
     # the watchdog, the ramp (<= 0.1 s at 5 rad/s^2 from <= 0.5 rad/s) and a few WATCHDOG heartbeats
     sleep 2
     stop_armsims D
-    prev=-1 i=0
-    while [ $i -lt 60 ]; do
-        sleep 0.5
-        cur=$(stat -c %s "$TMPD/d.candump")
-        [ "$cur" = "$prev" ] && break
-        prev=$cur i=$((i + 1))
-    done
-    kill $CD 2>/dev/null
-    wait $CD 2>/dev/null
+    candump_stop "$TMPD/d.candump" $CD
     cat "$OUT/mcadD.log"
     fD=0
     [ $rc -eq 137 ] || { echo "E2E FAIL: phase D: mcad exit status $rc, want 137 (SIGKILL)"; fD=1; }
