@@ -344,12 +344,19 @@ if echo "$PHASES" | grep -q B; then
     $PIN2 "$MCAD" --csv "$TMPD/mcadB.csv" "$CELL" 2> "$OUT/mcadB.log" &
     M=$!
     n=0
-    while awk -v t="$(csv_t "$TMPD/mcadB.csv")" -v s="$T_SIG" 'BEGIN { exit !(t + 0 < s - 0.3) }' && [ $n -lt 6000 ]; do
+    while awk -v t="$(csv_t "$TMPD/mcadB.csv")" -v s="$T_SIG" 'BEGIN { exit !(t + 0 < s - 2) }' && [ $n -lt 6000 ]; do
         sleep 0.1; n=$((n + 1))
     done
-    # the emulators' feedback frames (id base + 1) on both buses, from shortly before the stop
+    # the emulators' feedback frames (id base + 1) on both buses, from before the stop. candump is slow to
+    # start in the emulated guest and the lockstep emulators fall silent once mcad has stopped: wait until
+    # its capture has frames (1 kHz on each bus) before the signal can be sent (seen: an empty capture when
+    # it was started 0.3 s of task time before the signal).
     $PIN2 candump -r 33554432 -L vcan0,101:7FF vcan1,101:7FF > "$TMPD/b.candump" 2>/dev/null &
     CD=$!
+    k=0
+    while [ ! -s "$TMPD/b.candump" ] && [ $k -lt 600 ]; do
+        sleep 0.05; k=$((k + 1))
+    done
     while awk -v t="$(csv_t "$TMPD/mcadB.csv")" -v s="$T_SIG" 'BEGIN { exit !(t + 0 < s) }' && [ $n -lt 6000 ]; do
         sleep 0.05; n=$((n + 1))
     done
