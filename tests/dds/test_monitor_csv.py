@@ -17,6 +17,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mca_types as m  # noqa: E402
 
 COUNT = 3000
+FIRST_TICK_SLACK = 100  # ticks (ms): as in tests/daemon/test_monitor_mcad.py
 
 
 def check_rows(rows):
@@ -89,8 +90,12 @@ def main():
             rows = list(csv.DictReader(f))
         if len(rows) != COUNT:
             errors.append(f"CSV has {len(rows)} rows, want {COUNT} (--count)")
-        elif int(rows[0]["tick"]) != 0:
-            errors.append(f"first row is tick {rows[0]['tick']}, the publisher waited for the monitor")
+        elif int(rows[0]["tick"]) > FIRST_TICK_SLACK:
+            # The publisher starts once its writer has matched the monitor's reader, but discovery is
+            # not symmetric: the reader may learn of the writer a few ms later, and a volatile reader
+            # does not get what was written before that (seen: first row tick 1 on a loaded CI run).
+            errors.append(f"first row is tick {rows[0]['tick']} > {FIRST_TICK_SLACK}: the monitor "
+                          "missed the start of a stream that waited for it")
         if rows:
             errors += check_rows(rows)
         if "ALARM" not in mout and "WARN" not in mout and "OK" not in mout:
