@@ -23,8 +23,12 @@
 #      of both buses (tests/daemon/check_watchdog.py on the host) each arm BRAKING in the 3rd firmware cycle
 #      without a command, velocity steps within dec_limit * 4 ms, a ramp of the minimum length, then FAULT
 #      with fault code WATCHDOG; the emulators' counters: one watchdog trip, FAULT.
-#   Phase A also compares mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
-#   env MCA_E2E_PHASES="A B C D" (default) runs a subset (development).
+#   E: task 4, the negative example (two PA10+: 8 joints per frame) on the shipped negative_vcan cell:
+#      the fault PDNN-not-converged named at the same task time as on the sim backend (mca-sim, host),
+#      the trajectory until then within DQ_MAX of it, both arms braked within the limits to 0 and never
+#      below d1, exit status 3 at the cell's stop_after; from the buses both arms end READY at rest.
+#   Phases A and E also compare mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
+#   env MCA_E2E_PHASES="A B C D E" (default) runs a subset (development).
 set -u
 B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
 OUT=$B/tests/daemon/vcan-e2e
@@ -33,7 +37,10 @@ MCAD=$B/daemon/mcad
 MON=$B/tools/mca-monitor/mca-monitor
 SRC_CELL=$S/config/cells/cup_stacking_vcan.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
-PHASES=${MCA_E2E_PHASES:-A B C D}
+# phase E: task 4 (the negative example) on its shipped vcan cell
+SRC_CELL_E=$S/config/cells/negative_vcan.yaml
+SCN_E=$S/config/scenarios/negative.yaml
+PHASES=${MCA_E2E_PHASES:-A B C D E}
 PY=$S/.venv/bin/python3
 [ -x "$PY" ] || PY=python3
 # ---- on the host, after the guest (or the native run): the checks that need mca-sim or python cantools
@@ -75,6 +82,26 @@ host_checks() {
         fi
     elif echo "$PHASES" | grep -q D; then
         echo "E2E FAIL: phase D: no bus capture"; hf=1
+    fi
+    if echo "$PHASES" | grep -q E && [ -s "$OUT/mcadE.csv" ]; then
+        # E: the same task on the sim backend (mca-sim: same controller and fault checks, virtual time):
+        # the fault at the same tick (1 ms), the running rows within DQ_MAX (see phase A)
+        th=$(now)
+        "$B/tools/mca-sim/mca-sim" --scenario "$SCN_E" --scheme mca --csv "$OUT/simE.csv" > "$OUT/simE.txt" 2>&1 ||
+            { cat "$OUT/simE.txt"; echo "E2E FAIL: phase E: mca-sim"; hf=1; }
+        t_sim=$(sed -n 's/.*FAULT pdnn-not-converged at t = \([0-9.]*\) s.*/\1/p' "$OUT/simE.txt")
+        t_can=$(sed -n 's/.*fault at t = \([0-9.]*\) s: braking both arms: PDNN residual.*/\1/p' "$OUT/mcadE.log")
+        set -- $(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simE.csv" "$OUT/mcadE.csv")
+        echo "E2E phase E: vs the sim backend (mca-sim): PDNN-not-converged fault at t = ${t_sim:-?} s there, ${t_can:-?} s over CAN; $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
+        if [ -n "$t_sim" ] && [ "$t_sim" = "$t_can" ] &&
+            awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" -v t="$t_sim" \
+                'BEGIN { exit !(n == int(t * 1000 + 0.5) && a + 0 <= m && b + 0 <= m) }'; then
+            echo "E2E ok: phase E: negative task over vcan: the fault at the sim backend's tick, the same trajectory until then"
+        else
+            echo "E2E FAIL: phase E: fault time or trajectory differs from the sim backend's (bound $DQ_MAX rad)"; hf=1
+        fi
+    elif echo "$PHASES" | grep -q E; then
+        echo "E2E FAIL: phase E: no mcad CSV"; hf=1
     fi
     return $hf
 }
@@ -162,10 +189,10 @@ DT=0.001
 grep -q "arm 0 'jaco2': .*jaco2.urdf, 6 joints.* socketcan vcan0 id_base 0x100" "$OUT/check.txt" &&
     grep -q "arm 1 'mico2': .*mico2.urdf, 6 joints.* socketcan vcan1 id_base 0x100" "$OUT/check.txt" ||
     { cat "$OUT/check.txt"; echo "E2E FAIL: cell: want jaco2 on vcan0, mico2 on vcan1"; exit 1; }
-# arm K's (1-based) urdf and q0 as the scenario gives them (the emulator starts where the task starts)
+# arm K's (1-based) urdf and q0 as the scenario ($3, default task 3's) gives them (the emulator starts where the task starts)
 arm_field() {
     awk -v k="$1" -v f="$2" '/^  - name:/ { n++ } n == k && $1 == f ":" { sub(/^[^:]*: */, ""); sub(/ *#.*/, "");
-        gsub(/[][ ]/, ""); print; exit }' "$SCN"
+        gsub(/[][ ]/, ""); print; exit }' "${3:-$SCN}"
 }
 URDF0=$S/config/scenarios/$(arm_field 1 urdf) Q00=$(arm_field 1 q0)
 URDF1=$S/config/scenarios/$(arm_field 2 urdf) Q01=$(arm_field 2 q0)
@@ -485,6 +512,68 @@ if echo "$PHASES" | grep -q D; then
     done
     echo "E2E phase D: SIGKILL when mcad's CSV showed t = $t_seen s; $(($(now) - t0)) s"
     [ $fD -eq 0 ] || fail=1
+fi
+# ---- phase E: task 4, the negative example, on the shipped negative_vcan cell: two PA10+ (8 joints in every
+# command and feedback frame). Tracking and avoidance contradict; once the tools are close the QP has no
+# solution and the PDNN does not converge: mcad must name that fault, brake both arms within the limits,
+# keep every distance above d1, send zero commands with the servo released, and exit 3 at stop_after (9 s).
+# The host then compares the fault tick and the trajectory with the sim backend's (host_checks).
+if echo "$PHASES" | grep -q E; then
+    t0=$(now)
+    CELL_E=$OUT/negative_vcan_e2e.yaml
+    sed -e "s|\.\./|$S/config/|g" \
+        -e 's/^\(  overrun_limit:\).*/\1 100000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
+        -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$SRC_CELL_E" > "$CELL_E"
+    diff "$SRC_CELL_E" "$CELL_E" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
+    fE=0
+    "$MCAD" --check "$CELL_E" > "$OUT/checkE.txt" 2>&1 || { cat "$OUT/checkE.txt"; echo "E2E FAIL: phase E: mcad --check"; fE=1; }
+    grep -q "arm 0 'left': .*pa10plus.urdf, 8 joints.* socketcan vcan0 id_base 0x100" "$OUT/checkE.txt" &&
+        grep -q "arm 1 'right': .*pa10plus.urdf, 8 joints.* socketcan vcan1 id_base 0x100" "$OUT/checkE.txt" ||
+        { cat "$OUT/checkE.txt"; echo "E2E FAIL: phase E: cell: want the two PA10+ on vcan0 and vcan1"; fE=1; }
+    D1=$(sed -n 's/^d1: *\([0-9.]*\).*/\1/p' "$SCN_E")
+    DEC=$(sed -n 's/^ *dec_limit: *\([0-9.]*\).*/\1/p' "$SRC_CELL_E" | head -n 1)
+    STEP=$(awk -v d="$DEC" -v t="$DT" 'BEGIN { print d * t }')
+    URDF0=$S/config/scenarios/$(arm_field 1 urdf "$SCN_E") Q00=$(arm_field 1 q0 "$SCN_E")
+    URDF1=$S/config/scenarios/$(arm_field 2 urdf "$SCN_E") Q01=$(arm_field 2 q0 "$SCN_E")
+    # the emulators' feedback frames on both buses, from before the start (the lockstep emulators answer
+    # every tick until mcad exits, the arms at rest after the fault)
+    $PIN2 candump -r 33554432 -L vcan0,101:7FF vcan1,101:7FF > "$TMPD/e.candump" 2>/dev/null &
+    CD=$!
+    sleep 0.3
+    armsims E
+    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcadE.csv" "$CELL_E" 2> "$OUT/mcadE.log"
+    rc=$?
+    candump_stop "$TMPD/e.candump" $CD
+    stop_armsims E
+    cat "$OUT/mcadE.log"
+    [ $rc -eq 3 ] || { echo "E2E FAIL: phase E: mcad exit status $rc, want 3 (fault)"; fE=1; }
+    grep -q "fault at t = .* s: braking both arms: PDNN residual" "$OUT/mcadE.log" ||
+        { echo "E2E FAIL: phase E: no PDNN-not-converged fault"; fE=1; }
+    grep -q "all joints commanded to zero at .* state fault" "$OUT/mcadE.log" || { echo "E2E FAIL: phase E: not braked"; fE=1; }
+    grep -q "summary: faults: 1 " "$OUT/mcadE.log" || { echo "E2E FAIL: phase E: want exactly one fault"; fE=1; }
+    set -- $(ramp "$TMPD/mcadE.csv" 5)
+    echo "E2E phase E: fault at t = $2 s with max |commanded qdot| $7 rad/s (joint $8 of 16); all commands 0 at t = $3 s after $4 ticks (minimum $9), max per-tick change $5 rad/s (limit $STEP), violations $6"
+    [ "$1" = 1 ] || { echo "E2E FAIL: phase E: braking ramp outside the deceleration limit, longer than needed or not ending at 0"; fE=1; }
+    dE=$(awk -F, -v d1="$D1" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+        { d = $c["min_d"] + 0; if (!(d > d1)) below++; if (!n++ || d < dm) { dm = d; tm = $1 } }
+        END { printf "%d %.5f %.3f %d\n", below + 0, dm, tm, n }' "$TMPD/mcadE.csv")
+    set -- $dE
+    echo "E2E phase E: $4 CSV rows, minimum distance $2 m at t = $3 s (d1 $D1 m), rows at or below d1: $1"
+    [ "$1" = 0 ] && [ "$4" -ge 8900 ] || { echo "E2E FAIL: phase E: a distance at or below d1, or the run ended early"; fE=1; }
+    # the buses: each arm's last two feedback frames READY, no fault, all 8 velocities 0, positions unchanged
+    # (payload hex: byte 1 = fault << 4 | state, bytes 4-35 positions int32 x 8, bytes 36-51 velocities int16 x 8)
+    for i in 0 1; do
+        set -- $(grep " vcan$i 101##" "$TMPD/e.candump" | tail -n 2 | sed 's/.*##.//' | awk '
+            { n++; p[n] = substr($0, 9, 64); s = substr($0, 3, 2); vel = substr($0, 73, 32) }
+            END { print n + 0, s, (vel == "00000000000000000000000000000000"), (n == 2 && p[1] == p[2]) }')
+        nfb=$(grep -c " vcan$i 101##" "$TMPD/e.candump")
+        echo "E2E phase E: vcan$i: $nfb feedback frames captured, last: state/fault byte 0x$2, velocities zero: $3, positions unchanged: $4"
+        [ "$1" = 2 ] && [ "$2" = 01 ] && [ "$3" = 1 ] && [ "$4" = 1 ] ||
+            { echo "E2E FAIL: phase E: arm on vcan$i not at rest (READY, zero velocity) at the end"; fE=1; }
+    done
+    echo "E2E phase E: $(($(now) - t0)) s"
+    [ $fE -eq 0 ] && echo "E2E ok: phase E: negative task over vcan0/vcan1 (8 joints): PDNN-not-converged fault named, both arms braked within the limits to rest above d1, exit 3"
+    [ $fE -eq 0 ] || fail=1
 fi
 echo "E2E phases $PHASES: $(($(now) - t_all)) s in the guest, exit status $fail"
 exit $fail
