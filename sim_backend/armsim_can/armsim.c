@@ -128,45 +128,11 @@ static void usage(FILE *f) {
         "  drop-rx; --print-config prints the arm configuration and exits (no bus needed)\n");
 }
 
-/* "KIND@CYCLE[+CYCLES][:JOINT]" -> one scheduled fault of the simulated firmware. */
 static int parse_inject(const char *s, int n_joints, mca_sim_inject_t *inj) {
-    static const struct {
-        const char *name;
-        int kind;
-    } kinds[] = {{"actuator", MCA_SIM_INJ_ACTUATOR},
-                 {"freeze", MCA_SIM_INJ_FREEZE},
-                 {"silent", MCA_SIM_INJ_SILENT},
-                 {"drop-rx", MCA_SIM_INJ_DROP_RX}};
-    const char *at = strchr(s, '@');
-    memset(inj, 0, sizeof(*inj));
-    for (size_t i = 0; at && i < sizeof(kinds) / sizeof(kinds[0]); i++) {
-        if (strlen(kinds[i].name) == (size_t)(at - s) && strncmp(s, kinds[i].name, (size_t)(at - s)) == 0) {
-            inj->kind = kinds[i].kind;
-        }
-    }
-    char *end = NULL;
-    const char *p = at ? at + 1 : s;
-    errno = 0;
-    unsigned long long v = at ? strtoull(p, &end, 0) : 0;
-    int ok = inj->kind != MCA_SIM_INJ_NONE && end != p && !errno && *p != '-';
-    inj->at_cycle = v;
-    if (ok && *end == '+') {
-        p = end + 1;
-        v = strtoull(p, &end, 0);
-        ok = end != p && !errno && *p != '-';
-        inj->duration = v;
-    }
-    if (ok && *end == ':') {
-        p = end + 1;
-        long j = strtol(p, &end, 0);
-        ok = end != p && j >= 0 && j < n_joints;
-        inj->joint = (int)j;
-    }
-    ok = ok && *end == 0 && (inj->kind != MCA_SIM_INJ_ACTUATOR || strchr(s, ':'));
-    if (!ok) {
+    if (mca_sim_inject_parse(s, n_joints, inj) != MCA_OK) {
         fprintf(stderr,
-                "mca-armsim: --inject '%s': expected KIND@CYCLE[+CYCLES][:JOINT] with KIND actuator (needs "
-                ":JOINT, 0..%d), freeze, silent or drop-rx\n",
+                "mca-armsim: --inject '%s': expected " MCA_SIM_INJECT_SYNTAX
+                " with KIND actuator (needs :JOINT, 0..%d), freeze, silent or drop-rx\n",
                 s, n_joints - 1);
         return -1;
     }
@@ -174,7 +140,6 @@ static int parse_inject(const char *s, int n_joints, mca_sim_inject_t *inj) {
 }
 
 static void print_config(FILE *f, const mca_sim_arm_config_t *c) {
-    static const char *const kind_names[] = {"none", "actuator", "freeze", "silent", "drop-rx"};
     fprintf(
         f,
         "joints=%d dt=%.9g watchdog_cycles=%d lag_tau=%.9g latency_cycles=%d noise_pos=%.9g noise_vel=%.9g "
@@ -184,7 +149,7 @@ static void print_config(FILE *f, const mca_sim_arm_config_t *c) {
     for (int i = 0; i < c->n_inject; i++) {
         const mca_sim_inject_t *in = &c->inject[i];
         fprintf(f, "inject %d: kind=%s at_cycle=%" PRIu64 " duration=%" PRIu64 " joint=%d\n", i,
-                kind_names[in->kind], in->at_cycle, in->duration, in->joint);
+                mca_sim_inject_kind_name(in->kind), in->at_cycle, in->duration, in->joint);
     }
     for (int j = 0; j < c->n; j++) {
         fprintf(f, "joint %d: q0=%.9g acc_limit=%.9g dec_limit=%.9g vel_limit=%.9g\n", j, c->q0[j],

@@ -3,9 +3,11 @@
  * Everything the two simulated backends share lives here; see mca/sim_arm.h for the model. */
 #include "mca/sim_arm.h"
 
+#include <errno.h>
 #include <math.h>   /* exp, sqrt, log, cos, isfinite, isnan */
 #include <stdio.h>  /* snprintf (start-up messages only) */
-#include <string.h> /* memset, memcpy */
+#include <stdlib.h> /* strtoull, strtol (injection text, start-up only) */
+#include <string.h> /* memset, memcpy, strchr, strncmp */
 #include <time.h>   /* clock_gettime */
 
 #include "mca/err.h"
@@ -536,5 +538,70 @@ int mca_sim_arm_inject_now(mca_sim_arm_t *arm, int kind, uint64_t duration, int 
     }
     cfg->inject[slot] =
         (mca_sim_inject_t){.kind = kind, .at_cycle = arm->cycle, .duration = duration, .joint = joint};
+    return MCA_OK;
+}
+
+static const char *const inject_names[] = {"none", "actuator", "freeze", "silent", "drop-rx"};
+
+const char *mca_sim_inject_kind_name(int kind) {
+    return kind >= MCA_SIM_INJ_ACTUATOR && kind <= MCA_SIM_INJ_DROP_RX ? inject_names[kind] : inject_names[0];
+}
+
+/* an unsigned decimal/hex number at *p (no sign), *p moved past it */
+static int parse_count(const char **p, uint64_t *out) {
+    char *end = NULL;
+    if (**p < '0' || **p > '9') {
+        return MCA_EINVAL;
+    }
+    errno = 0;
+    const unsigned long long v = strtoull(*p, &end, 0);
+    if (errno || end == *p) {
+        return MCA_EINVAL;
+    }
+    *out = v;
+    *p = end;
+    return MCA_OK;
+}
+
+int mca_sim_inject_parse(const char *text, int n_joints, mca_sim_inject_t *out) {
+    if (!out) {
+        return MCA_EINVAL;
+    }
+    memset(out, 0, sizeof(*out));
+    const char *at = text ? strchr(text, '@') : NULL;
+    if (!at) {
+        return MCA_EINVAL;
+    }
+    mca_sim_inject_t in = {0};
+    for (int k = MCA_SIM_INJ_ACTUATOR; k <= MCA_SIM_INJ_DROP_RX; k++) {
+        if (strlen(inject_names[k]) == (size_t)(at - text) &&
+            strncmp(text, inject_names[k], (size_t)(at - text)) == 0) {
+            in.kind = k;
+        }
+    }
+    const char *p = at + 1;
+    if (in.kind == MCA_SIM_INJ_NONE || parse_count(&p, &in.at_cycle) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    if (*p == '+') {
+        p++;
+        if (parse_count(&p, &in.duration) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
+    int has_joint = 0;
+    if (*p == ':') {
+        p++;
+        uint64_t j = 0;
+        if (parse_count(&p, &j) != MCA_OK || j >= (uint64_t)(n_joints > 0 ? n_joints : 0)) {
+            return MCA_EINVAL;
+        }
+        in.joint = (int)j;
+        has_joint = 1;
+    }
+    if (*p != '\0' || (in.kind == MCA_SIM_INJ_ACTUATOR && !has_joint)) {
+        return MCA_EINVAL;
+    }
+    *out = in;
     return MCA_OK;
 }

@@ -786,6 +786,69 @@ static void test_config_errors(void **state) {
     assert_int_equal(g_arm.cycle, 0);
 }
 
+/* The tools' injection text (mca-armsim / mca-simarm-trace --inject): every field lands where it should,
+ * and each malformed form is refused with *out zeroed. */
+static void test_inject_parse(void **state) {
+    (void)state;
+    static const struct {
+        const char *text;
+        int kind;
+        uint64_t at, duration;
+        int joint;
+    } good[] = {
+        {"actuator@5000:1", MCA_SIM_INJ_ACTUATOR, 5000, 0, 1},
+        {"freeze@7000+50", MCA_SIM_INJ_FREEZE, 7000, 50, 0},
+        {"silent@0", MCA_SIM_INJ_SILENT, 0, 0, 0},
+        {"drop-rx@0x10+0x20:2", MCA_SIM_INJ_DROP_RX, 16, 32, 2},
+        {"actuator@18446744073709551615:5", MCA_SIM_INJ_ACTUATOR, UINT64_MAX, 0, 5},
+    };
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        mca_sim_inject_t in;
+        assert_int_equal(mca_sim_inject_parse(good[i].text, 6, &in), MCA_OK);
+        assert_int_equal(in.kind, good[i].kind);
+        assert_true(in.at_cycle == good[i].at);
+        assert_true(in.duration == good[i].duration);
+        assert_int_equal(in.joint, good[i].joint);
+        assert_string_equal(mca_sim_inject_kind_name(in.kind), good[i].text[0] == 'a'   ? "actuator"
+                                                               : good[i].text[0] == 'f' ? "freeze"
+                                                               : good[i].text[0] == 's' ? "silent"
+                                                                                        : "drop-rx");
+    }
+    static const char *const bad[] = {
+        "",
+        "actuator",
+        "actuator@5",
+        "actuator@5:6",
+        "actuator@5:-1",
+        "bogus@1",
+        "drop@1",
+        "freeze@-3",
+        "freeze@+3",
+        "freeze@3+",
+        "freeze@3+-1",
+        "silent@1x",
+        "silent@ 1",
+        "@1",
+        "silent@1:",
+        "silent@1+2:",
+        "FREEZE@1",
+        "silent@99999999999999999999",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        mca_sim_inject_t in = {.kind = 9, .at_cycle = 9, .duration = 9, .joint = 9};
+        if (mca_sim_inject_parse(bad[i], 6, &in) != MCA_EINVAL) {
+            fail_msg("'%s' accepted", bad[i]);
+        }
+        assert_int_equal(in.kind, MCA_SIM_INJ_NONE);
+        assert_true(in.at_cycle == 0 && in.duration == 0 && in.joint == 0);
+    }
+    mca_sim_inject_t in;
+    assert_int_equal(mca_sim_inject_parse(NULL, 6, &in), MCA_EINVAL);
+    assert_int_equal(mca_sim_inject_parse("silent@1", 6, NULL), MCA_EINVAL);
+    assert_string_equal(mca_sim_inject_kind_name(0), "none");
+    assert_string_equal(mca_sim_inject_kind_name(5), "none");
+}
+
 /* Limits from a URDF chain model (filled by hand: the loader is tested elsewhere). */
 static void test_config_from_chain(void **state) {
     (void)state;
@@ -830,6 +893,7 @@ int main(void) {
         cmocka_unit_test(test_torque_model),
         cmocka_unit_test(test_fault_injection),
         cmocka_unit_test(test_inject_now),
+        cmocka_unit_test(test_inject_parse),
         cmocka_unit_test(test_random_invariants),
         cmocka_unit_test(test_config_errors),
         cmocka_unit_test(test_config_from_chain),

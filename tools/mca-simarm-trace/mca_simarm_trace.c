@@ -5,8 +5,9 @@
  *
  * Usage: mca-simarm-trace [--profile step|watchdog|random] [--cycles N] [--joints N] [--lag S]
  *        [--latency K] [--noise-pos S] [--noise-vel S] [--seed N] [--watchdog W] [--vel V] [--acc A]
- *        [--dec D] [--range R] [--inject KIND:AT:DURATION:JOINT]... [-o FILE]
- *   KIND: actuator | freeze | silent | drop.  Joint j gets vel V(1+j/4), acc A(1+j/8), dec D(1-j/16),
+ *        [--dec D] [--range R] [--inject KIND@CYCLE[+CYCLES][:JOINT]]... [-o FILE]
+ *   KIND: actuator | freeze | silent | drop-rx (mca-armsim's syntax: mca_sim_inject_parse()).
+ *   Joint j gets vel V(1+j/4), acc A(1+j/8), dec D(1-j/16),
  *   limits +-R(1+j/10) (R = 0: none). */
 #include <errno.h>
 #include <getopt.h>
@@ -46,28 +47,15 @@ static int parse_long(const char *opt, const char *s, long lo, long hi, long *ou
     return 0;
 }
 
+/* the joint range is checked again once --joints is known (mca_sim_arm_init) */
 static int parse_inject(const char *s, mca_sim_inject_t *in) {
-    char kind[16];
-    unsigned long long at = 0, dur = 0;
-    int joint = 0;
-    if (sscanf(s, "%15[a-z]:%llu:%llu:%d", kind, &at, &dur, &joint) != 4) {
-        fprintf(stderr, "mca-simarm-trace: --inject %s: expected KIND:AT:DURATION:JOINT\n", s);
+    if (mca_sim_inject_parse(s, MCA_MAX_DOF, in) != MCA_OK) {
+        fprintf(stderr,
+                "mca-simarm-trace: --inject %s: expected " MCA_SIM_INJECT_SYNTAX
+                " with KIND actuator (needs :JOINT), freeze, silent or drop-rx\n",
+                s);
         return -1;
     }
-    static const char *names[] = {"", "actuator", "freeze", "silent", "drop"};
-    in->kind = 0;
-    for (int k = 1; k <= 4; k++) {
-        if (strcmp(kind, names[k]) == 0) {
-            in->kind = k;
-        }
-    }
-    if (!in->kind) {
-        fprintf(stderr, "mca-simarm-trace: --inject %s: unknown kind '%s'\n", s, kind);
-        return -1;
-    }
-    in->at_cycle = at;
-    in->duration = dur;
-    in->joint = joint;
     return 0;
 }
 
@@ -213,10 +201,10 @@ int main(int argc, char **argv) {
             out_path = optarg;
             break;
         case 'h':
-            printf(
-                "usage: mca-simarm-trace [--profile step|watchdog|random] [--cycles N] [--joints N] "
-                "[--lag S] [--latency K] [--noise-pos S] [--noise-vel S] [--seed N] [--watchdog W] "
-                "[--vel V] [--acc A] [--dec D] [--range R] [--inject KIND:AT:DURATION:JOINT]... [-o FILE]\n");
+            printf("usage: mca-simarm-trace [--profile step|watchdog|random] [--cycles N] [--joints N] "
+                   "[--lag S] [--latency K] [--noise-pos S] [--noise-vel S] [--seed N] [--watchdog W] "
+                   "[--vel V] [--acc A] [--dec D] [--range R] [--inject " MCA_SIM_INJECT_SYNTAX
+                   "]... [-o FILE]\n");
             return 0;
         default:
             return 2;

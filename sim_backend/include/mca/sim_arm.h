@@ -194,6 +194,21 @@ int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double d
  */
 int mca_sim_arm_inject_now(mca_sim_arm_t *arm, int kind, uint64_t duration, int joint);
 
+/** The text form of one injection, as the tools take it (`mca-armsim --inject`, `mca-simarm-trace --inject`).
+ */
+#define MCA_SIM_INJECT_SYNTAX "KIND@CYCLE[+CYCLES][:JOINT]"
+
+/**
+ * Parse one injection in MCA_SIM_INJECT_SYNTAX: KIND is actuator (needs :JOINT, 0..n_joints-1), freeze,
+ * silent or drop-rx; CYCLE the 0-based cycle where it starts; CYCLES how long (default 0 = until the end).
+ * E.g. "actuator@5000:1", "silent@9000+20". Start-up only; prints nothing (the caller names the option).
+ * @retval MCA_OK, MCA_EINVAL (NULL or bad text: *out zeroed)
+ */
+int mca_sim_inject_parse(const char *text, int n_joints, mca_sim_inject_t *out);
+
+/** KIND's name in MCA_SIM_INJECT_SYNTAX ("actuator", "freeze", "silent", "drop-rx"), "none" otherwise. */
+const char *mca_sim_inject_kind_name(int kind);
+
 /** Noise-free feedback of the current state without running a cycle (e.g. the initial pose). */
 void mca_sim_arm_snapshot(const mca_sim_arm_t *arm, mca_arm_feedback_t *fb);
 
