@@ -36,6 +36,19 @@ typedef struct pair_view {
     mca_dds_Distances last; /* sequences not kept (loaned memory) */
 } pair_view_t;
 
+typedef struct status_view {
+    uint64_t tick;
+    int32_t state;
+    int32_t fault_code;
+    char fault_text[65];
+    uint64_t dropped;
+} status_view_t;
+
+/* Statuses taken but not yet shown: a status is applied to the rows from its own tick on. Status and
+ * distances are two topics with no order between them; a status taken together with a backlog of older
+ * distance samples must not relabel those (seen: tick 2999 shown BRAKING, mcad braked from tick 3000). */
+enum { PENDING_MAX = 32 };
+
 typedef struct monitor {
     int color, tty;
     int lines_drawn;
@@ -45,11 +58,43 @@ typedef struct monitor {
     int32_t fault_code;
     char fault_text[65];
     uint64_t dropped;
+    status_view_t pending[PENDING_MAX];
+    int n_pending;
     FILE *csv;
     uint64_t samples;
     int64_t *lat; /* latency samples [ns] */
     size_t n_lat, cap_lat;
 } monitor_t;
+
+static void apply_oldest_status(monitor_t *m) {
+    const status_view_t *v = &m->pending[0];
+    m->have_status = 1;
+    m->state = v->state;
+    m->fault_code = v->fault_code;
+    m->dropped = v->dropped;
+    memcpy(m->fault_text, v->fault_text, sizeof m->fault_text);
+    memmove(&m->pending[0], &m->pending[1], (size_t)(m->n_pending - 1) * sizeof m->pending[0]);
+    m->n_pending--;
+}
+
+/* Show every pending status up to tick `tick` (UINT64_MAX: all). */
+static void apply_statuses(monitor_t *m, uint64_t tick) {
+    while (m->n_pending > 0 && m->pending[0].tick <= tick) {
+        apply_oldest_status(m);
+    }
+}
+
+static void push_status(monitor_t *m, const mca_dds_ControllerStatus *s) {
+    if (m->n_pending == PENDING_MAX) {
+        apply_oldest_status(m);
+    }
+    status_view_t *v = &m->pending[m->n_pending++];
+    v->tick = s->tick;
+    v->state = s->state;
+    v->fault_code = s->fault_code;
+    v->dropped = s->snapshots_dropped;
+    snprintf(v->fault_text, sizeof v->fault_text, "%s", s->fault_text);
+}
 
 static int64_t now_ns(void) {
     struct timespec ts;
@@ -278,7 +323,7 @@ int main(int argc, char **argv) {
     dds_waitset_attach(ws, cs, rs);
 
     const int64_t t_start = now_ns();
-    int64_t last_draw = 0;
+    int64_t last_draw = 0, last_rx = 0;
     enum { BATCH = 64 };
     void *buf[BATCH];
     dds_sample_info_t info[BATCH];
@@ -288,12 +333,7 @@ int main(int argc, char **argv) {
         int n = dds_take(rs, buf, info, BATCH, BATCH);
         for (int i = 0; i < n; ++i) {
             if (info[i].valid_data) {
-                const mca_dds_ControllerStatus *s = buf[i];
-                m.have_status = 1;
-                m.state = s->state;
-                m.fault_code = s->fault_code;
-                m.dropped = s->snapshots_dropped;
-                snprintf(m.fault_text, sizeof m.fault_text, "%s", s->fault_text);
+                push_status(&m, buf[i]);
             }
         }
         if (n > 0) {
@@ -308,6 +348,7 @@ int main(int argc, char **argv) {
                 continue;
             }
             const mca_dds_Distances *d = buf[i];
+            apply_statuses(&m, d->tick);
             pair_view_t *pv = &m.pair[d->pair_id];
             pv->seen = 1;
             pv->last = *d;
@@ -328,8 +369,12 @@ int main(int argc, char **argv) {
         }
         if (n > 0) {
             dds_return_loan(rd, buf, n);
+            last_rx = rx;
         }
         const int64_t now = now_ns();
+        if (n == 0 && now - last_rx > 50000000LL) {
+            apply_statuses(&m, UINT64_MAX); /* no distances for 50 ms: the newest status is current */
+        }
         const int64_t redraw = m.tty ? 50000000LL : 1000000000LL; /* 20 Hz on a terminal, else 1 Hz */
         if (now - last_draw >= redraw || done) {
             draw(&m);
@@ -340,6 +385,7 @@ int main(int argc, char **argv) {
         }
     }
 out:
+    apply_statuses(&m, UINT64_MAX);
     if (m.csv != NULL && fclose(m.csv) != 0) {
         fprintf(stderr, "mca-monitor: write error on '%s'\n", csv_path);
         rc = 1;
