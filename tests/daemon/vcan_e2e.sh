@@ -24,7 +24,7 @@
 #      without a command, velocity steps within dec_limit * 4 ms, a ramp of the minimum length, then FAULT
 #      with fault code WATCHDOG; the emulators' counters: one watchdog trip, FAULT.
 #   E: task 4, the negative example (two PA10+: 8 joints per frame) on the shipped negative_vcan cell:
-#      the fault PDNN-not-converged named at the same task time as on the sim backend (mca-sim, host),
+#      the fault PDNN-not-converged named at the sim backend's task time (mca-sim, host; within 2 ticks),
 #      the trajectory until then within DQ_MAX of it, both arms braked within the limits to 0 and never
 #      below d1, exit status 3 at the cell's stop_after; from the buses both arms end READY at rest.
 #   Phases A and E also compare mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
@@ -93,10 +93,13 @@ host_checks() {
         t_can=$(sed -n 's/.*fault at t = \([0-9.]*\) s: braking both arms: PDNN residual.*/\1/p' "$OUT/mcadE.log")
         set -- $(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simE.csv" "$OUT/mcadE.csv")
         echo "E2E phase E: vs the sim backend (mca-sim): PDNN-not-converged fault at t = ${t_sim:-?} s there, ${t_can:-?} s over CAN; $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
-        if [ -n "$t_sim" ] && [ "$t_sim" = "$t_can" ] &&
-            awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" -v t="$t_sim" \
-                'BEGIN { exit !(n == int(t * 1000 + 0.5) && a + 0 <= m && b + 0 <= m) }'; then
-            echo "E2E ok: phase E: negative task over vcan: the fault at the sim backend's tick, the same trajectory until then"
+        # the fault tick within 2 ticks of the sim backend's (seen: the same tick; the residual is 2.7e-4
+        # against a fault threshold of 1e-6, but where the QP turns infeasible a 1e-6 rad difference could
+        # move the onset by a tick), and mcad running up to it
+        if [ -n "$t_sim" ] && [ -n "$t_can" ] &&
+            awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" -v t="$t_sim" -v c="$t_can" \
+                'BEGIN { d = t - c; exit !((d < 0 ? -d : d) <= 0.0025 && n == int(c * 1000 + 0.5) && a + 0 <= m && b + 0 <= m) }'; then
+            echo "E2E ok: phase E: negative task over vcan: the fault at the sim backend's task time (within 2 ticks), the same trajectory until then"
         else
             echo "E2E FAIL: phase E: fault time or trajectory differs from the sim backend's (bound $DQ_MAX rad)"; hf=1
         fi
