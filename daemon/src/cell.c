@@ -97,6 +97,7 @@ struct raw_cell {
     struct raw_rt *rt;
     double *stop_after;
     long long *debug_stall_after_ticks;
+    long long *debug_kill_after_ticks;
 };
 
 static const cyaml_strval_t kind_strings[] = {
@@ -201,6 +202,7 @@ static const cyaml_schema_field_t cell_fields[] = {
     CYAML_FIELD_MAPPING_PTR("rt", OPT, struct raw_cell, rt, rt_fields),
     CYAML_FIELD_FLOAT_PTR("stop_after", OPT, struct raw_cell, stop_after),
     CYAML_FIELD_INT_PTR("debug_stall_after_ticks", OPT, struct raw_cell, debug_stall_after_ticks),
+    CYAML_FIELD_INT_PTR("debug_kill_after_ticks", OPT, struct raw_cell, debug_kill_after_ticks),
     CYAML_FIELD_END,
 };
 
@@ -987,6 +989,12 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             FAIL(MCA_ERANGE, top, "debug_stall_after_ticks", "debug_stall_after_ticks: must be >= 0");
         }
         cell->debug_stall_after_ticks = (uint64_t)*raw->debug_stall_after_ticks;
+    }
+    if (raw->debug_kill_after_ticks) {
+        if (*raw->debug_kill_after_ticks < 0) {
+            FAIL(MCA_ERANGE, top, "debug_kill_after_ticks", "debug_kill_after_ticks: must be >= 0");
+        }
+        cell->debug_kill_after_ticks = (uint64_t)*raw->debug_kill_after_ticks;
     }
     *out = *cell;
 out:

@@ -7,6 +7,7 @@
 #include <malloc.h>
 #include <math.h>
 #include <sched.h>
+#include <signal.h> /* raise (test hook) */
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -645,6 +646,11 @@ static void *rt_main(void *arg) {
         }
         const int64_t wake = now_ns();
         const uint64_t ticks = atomic_load_explicit(&d->ticks, memory_order_relaxed);
+        if (d->cell.debug_kill_after_ticks && ticks >= d->cell.debug_kill_after_ticks) {
+            /* test hook: die mid-task at an exact tick, as a crash would (vcan_e2e phase D: only the
+             * arms' own watchdogs brake them); a kill from outside lands late when the host is slow */
+            raise(SIGKILL);
+        }
         if (atomic_load_explicit(&d->stall_request, memory_order_relaxed) ||
             (d->cell.debug_stall_after_ticks && ticks >= d->cell.debug_stall_after_ticks)) {
             /* test hook: stop ticking (the supervisor must notice and stop the watchdog pings) */

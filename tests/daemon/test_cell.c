@@ -168,6 +168,7 @@ static void test_good_cell(void **state) {
     assert_int_equal(cell.rt.lost_feedback_cycles, 6);
     assert_true(cell.stop_after == 1.5);
     assert_true(cell.debug_stall_after_ticks == 0);
+    assert_true(cell.debug_kill_after_ticks == 0);
 }
 
 static void test_missing_file(void **state) {
@@ -251,6 +252,21 @@ static void test_q0_outside_limits(void **state) {
     (void)state;
     const char *p = write_variant("q0lim", "q0: [0.1, 0.3,", "q0: [9.0, 0.3,");
     expect_error(p, MCA_ERANGE, line_of(p, "q0: [9.0"), "arms[1].q0[0] = 9", "outside joint", NULL);
+}
+
+/* The crash hook: set, and refused when negative with the field named. */
+static void test_debug_kill_hook(void **state) {
+    (void)state;
+    const char *p =
+        write_variant("kill_hook", "stop_after: 1.5", "stop_after: 1.5\ndebug_kill_after_ticks: 1500");
+    char err[1024] = "";
+    if (mca_cell_load(p, &cell, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    assert_true(cell.debug_kill_after_ticks == 1500);
+    p = write_variant("kill_hook_neg", "stop_after: 1.5", "stop_after: 1.5\ndebug_kill_after_ticks: -1");
+    expect_error(p, MCA_ERANGE, line_of(p, "debug_kill_after_ticks"), "debug_kill_after_ticks",
+                 "must be >= 0", NULL);
 }
 
 static void test_negative_period(void **state) {
@@ -346,27 +362,17 @@ int main(void) {
         return 1;
     }
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_good_cell),
-        cmocka_unit_test(test_missing_file),
-        cmocka_unit_test(test_yaml_syntax),
-        cmocka_unit_test(test_wrong_type),
-        cmocka_unit_test(test_wrong_type_in_arm),
-        cmocka_unit_test(test_unknown_key),
-        cmocka_unit_test(test_unknown_top_key),
-        cmocka_unit_test(test_missing_required),
-        cmocka_unit_test(test_d1_ge_d2),
-        cmocka_unit_test(test_missing_urdf),
-        cmocka_unit_test(test_unknown_backend),
-        cmocka_unit_test(test_dof_mismatch),
-        cmocka_unit_test(test_q0_outside_limits),
-        cmocka_unit_test(test_negative_period),
-        cmocka_unit_test(test_bad_priority),
-        cmocka_unit_test(test_scenario_missing),
-        cmocka_unit_test(test_socketcan_needs_interface),
-        cmocka_unit_test(test_dds_config_missing),
-        cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_duplicate_arm),
-        cmocka_unit_test(test_shipped_cells),
+        cmocka_unit_test(test_good_cell),          cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_yaml_syntax),        cmocka_unit_test(test_wrong_type),
+        cmocka_unit_test(test_wrong_type_in_arm),  cmocka_unit_test(test_unknown_key),
+        cmocka_unit_test(test_unknown_top_key),    cmocka_unit_test(test_missing_required),
+        cmocka_unit_test(test_d1_ge_d2),           cmocka_unit_test(test_missing_urdf),
+        cmocka_unit_test(test_unknown_backend),    cmocka_unit_test(test_dof_mismatch),
+        cmocka_unit_test(test_q0_outside_limits),  cmocka_unit_test(test_negative_period),
+        cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
+        cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
+        cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
+        cmocka_unit_test(test_duplicate_arm),      cmocka_unit_test(test_shipped_cells),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[300];

@@ -19,7 +19,7 @@
 #   C: the MICO2's emulator is frozen (SIGSTOP) while both arms dwell: lost-feedback fault after the cell's
 #      lost_feedback_cycles, both arms braked within the limits, exit 3 after SIGTERM.
 # usage: vcan_e2e.sh BUILD_DIR SOURCE_DIR [--in-guest]
-#   D: mcad SIGKILLed mid-task (t ~ 1-2 s, arms moving), the emulators on their own 4 ms clock: from the candump
+#   D: mcad SIGKILLed mid-task (tick 1500, arms moving), the emulators on their own 4 ms clock: from the candump
 #      of both buses (tests/daemon/check_watchdog.py on the host) each arm BRAKING in the 3rd firmware cycle
 #      without a command, velocity steps within dec_limit * 4 ms, a ramp of the minimum length, then FAULT
 #      with fault code WATCHDOG; the emulators' counters: one watchdog trip, FAULT.
@@ -178,9 +178,11 @@ PIN="taskset -c $LOOP_CPU" PIN2="taskset -c $OTHER_CPU"
 $PIN true 2>/dev/null || PIN="" PIN2=""
 # The shipped cell, with the real-time tolerances of an emulated CPU: deadlines are missed all the time
 # under TCG (the lockstep arms do not care: task time advances per tick), and the emulator answers late.
+# overrun_limit counts missed periods in a row, and when every tick overruns that run never ends: a busy
+# host once gave 135301 in 27 s of task (a limit of 100000 faulted phase A), so the limit is out of reach.
 CELL=$OUT/cup_stacking_vcan_e2e.yaml
 sed -e "s|\.\./|$S/config/|g" \
-    -e 's/^\(  overrun_limit:\).*/\1 100000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
+    -e 's/^\(  overrun_limit:\).*/\1 2000000000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
     -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$SRC_CELL" > "$CELL"
 diff "$SRC_CELL" "$CELL" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
 D1=$(sed -n 's/^d1: *\([0-9.]*\).*/\1/p' "$SCN")
@@ -482,23 +484,20 @@ fi
 if echo "$PHASES" | grep -q D; then
     t0=$(now)
     # the first segment's quintic (3 s to above the first cup): joint speeds > 0.15 rad/s from 0.5 to 2.5 s,
-    # 0.59 at 1.5 s. The kill lands 0.5-1.8 s of task time after the CSV shows T_KILL (the CSV lags the loop
-    # and this polling is slow under TCG): the arm's speed at the kill is checked from the bus (>= 0.1 rad/s).
-    T_KILL=0.5
+    # 0.59 at 1.5 s. mcad kills itself (SIGKILL: nothing brakes, nothing is flushed) at tick K_KILL, the
+    # cell's test hook debug_kill_after_ticks: a kill from this shell, timed by polling the CSV, landed at
+    # 2.1-3 s of task time when the host was busy (the arms at < 0.1 rad/s). The arm's speed at the kill is
+    # checked from the bus (>= 0.1 rad/s).
+    K_KILL=1500
+    CELL_D=$OUT/cup_stacking_vcan_e2e_D.yaml
+    { cat "$CELL"; echo "debug_kill_after_ticks: $K_KILL   # vcan_e2e.sh phase D: mcad dies at tick $K_KILL"; } > "$CELL_D"
     $PIN2 candump -r 33554432 -L vcan0,100:7F0 vcan1,100:7F0 > "$TMPD/d.candump" 2>/dev/null &
     CD=$!
     sleep 0.3
     armsims D clocked
-    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcadD.csv" "$CELL" 2> "$OUT/mcadD.log" &
-    M=$!
-    n=0
-    while awk -v t="$(csv_t "$TMPD/mcadD.csv")" -v s="$T_KILL" 'BEGIN { exit !(t + 0 < s) }' && [ $n -lt 6000 ]; do
-        sleep 0.05; n=$((n + 1))
-    done
-    t_seen=$(csv_t "$TMPD/mcadD.csv")
-    kill -KILL $M
-    wait $M
+    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcadD.csv" "$CELL_D" 2> "$OUT/mcadD.log"
     rc=$?
+    t_seen=$(csv_t "$TMPD/mcadD.csv")
     # the watchdog, the ramp (<= 0.1 s at 5 rad/s^2 from <= 0.5 rad/s) and a few WATCHDOG heartbeats
     sleep 2
     stop_armsims D
@@ -513,7 +512,7 @@ if echo "$PHASES" | grep -q D; then
         echo "E2E phase D: vcan$i: $(grep -c " vcan$i 10[0-3]##" "$TMPD/d.candump") frames captured; emulator: ${st:-?}"
         [ "$st" = "FAULT fault 1 watchdog trips 1" ] || { echo "E2E FAIL: phase D: emulator on vcan$i not in FAULT WATCHDOG after one trip"; fD=1; }
     done
-    echo "E2E phase D: SIGKILL when mcad's CSV showed t = $t_seen s; $(($(now) - t0)) s"
+    echo "E2E phase D: mcad SIGKILLed itself at tick $K_KILL (its CSV, not flushed, reached t = ${t_seen:-?} s); $(($(now) - t0)) s"
     [ $fD -eq 0 ] || fail=1
 fi
 # ---- phase E: task 4, the negative example, on the shipped negative_vcan cell: two PA10+ (8 joints in every
@@ -525,7 +524,7 @@ if echo "$PHASES" | grep -q E; then
     t0=$(now)
     CELL_E=$OUT/negative_vcan_e2e.yaml
     sed -e "s|\.\./|$S/config/|g" \
-        -e 's/^\(  overrun_limit:\).*/\1 100000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
+        -e 's/^\(  overrun_limit:\).*/\1 2000000000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
         -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$SRC_CELL_E" > "$CELL_E"
     diff "$SRC_CELL_E" "$CELL_E" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
     fE=0
