@@ -79,18 +79,9 @@ chrt -f 50 true 2>/dev/null && RT="chrt -f 50"
 TMPD=$(mktemp -d /dev/shm/mca-can.XXXXXX 2>/dev/null || mktemp -d)
 # the arm's id block plus every error frame (#FFFFFFFF: error mask)
 dump_start() { DUMPF=$1; candump -r 33554432 -L "$IF,100:7F0,#FFFFFFFF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
-# candump runs below the real-time programs and may lag far behind: let it drain its socket (the file
-# stops growing once the bus is quiet) before stopping it.
-dump_stop() {
-    prev=-1 i=0
-    while [ $i -lt 240 ]; do
-        sleep 0.5
-        cur=$(stat -c %s "$TMPD/dump")
-        [ "$cur" = "$prev" ] && break
-        prev=$cur i=$((i + 1))
-    done
-    kill "$DUMP" 2>/dev/null; wait "$DUMP" 2>/dev/null; cp "$TMPD/dump" "$DUMPF"
-}
+# candump runs below the real-time programs and may lag far behind: let it drain (up to 120 s), stop it
+. "$S/tests/can/candump_stop.sh"
+dump_stop() { candump_stop "$TMPD/dump" "$DUMP" 240; cp "$TMPD/dump" "$DUMPF"; }
 # wait until N frames of an id were seen (programs start slowly in the guest); fails after 60 s
 seen() { timeout 60 candump -n "$2" "$IF,$1:7FF" >/dev/null; }
 # one current frame of an id, payload hex (bounded: never hang the suite)

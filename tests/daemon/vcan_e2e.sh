@@ -231,20 +231,8 @@ stop_armsims() {
 # task time of the newest row of a CSV being written (a partly flushed last line only reads lower)
 csv_t() { tail -n 1 "$1" 2>/dev/null | cut -d, -f1; }
 
-# candump FILE's process PID runs below the real-time programs and may lag behind: let it drain its socket
-# (FILE stops growing, at most 30 s), then stop it. (tests/can/suite.sh's dump_stop does the same in the
-# CAN suite.)
-candump_stop() {
-    prev=-1 i=0
-    while [ $i -lt 60 ]; do
-        sleep 0.5
-        cur=$(stat -c %s "$1")
-        [ "$cur" = "$prev" ] && break
-        prev=$cur i=$((i + 1))
-    done
-    kill "$2" 2>/dev/null
-    wait "$2" 2>/dev/null
-}
+# candump_stop FILE PID: let candump drain (at most 30 s), then stop it (shared with tests/can/suite.sh)
+. "$S/tests/can/candump_stop.sh"
 # mcad's log: exit 0, stopped, no fault, no CSV rows dropped; $1 = phase name, $2 = rc, $3 = log
 check_stopped() {
     f=0
