@@ -27,8 +27,11 @@
 #      the fault PDNN-not-converged named at the sim backend's task time (mca-sim, host; within 2 ticks),
 #      the trajectory until then within DQ_MAX of it, both arms braked within the limits to 0 and never
 #      below d1, exit status 3 at the cell's stop_after; from the buses both arms end READY at rest.
-#   Phases A and E also compare mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
-#   env MCA_E2E_PHASES="A B C D E" (default) runs a subset (development).
+#   F: task 1, the paper's cross circles (two PA10+) on the shipped cross_circles_vcan cell: the whole
+#      10 s above d1, exit 0 stopped at stop_after, no fault, both buses at rest, the trajectory within
+#      DQ_MAX of the sim backend's.
+#   Phases A, E and F also compare mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
+#   env MCA_E2E_PHASES="A B C D E F" (default) runs a subset (development).
 set -u
 B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
 OUT=$B/tests/daemon/vcan-e2e
@@ -37,10 +40,12 @@ MCAD=$B/daemon/mcad
 MON=$B/tools/mca-monitor/mca-monitor
 SRC_CELL=$S/config/cells/cup_stacking_vcan.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
-# phase E: task 4 (the negative example) on its shipped vcan cell
+# phases E and F: task 4 (the negative example) and task 1 (cross circles) on their shipped vcan cells
 SRC_CELL_E=$S/config/cells/negative_vcan.yaml
 SCN_E=$S/config/scenarios/negative.yaml
-PHASES=${MCA_E2E_PHASES:-A B C D E}
+SRC_CELL_F=$S/config/cells/cross_circles_vcan.yaml
+SCN_F=$S/config/scenarios/cross_circles.yaml
+PHASES=${MCA_E2E_PHASES:-A B C D E F}
 PY=$S/.venv/bin/python3
 [ -x "$PY" ] || PY=python3
 # ---- on the host, after the guest (or the native run): the checks that need mca-sim or python cantools
@@ -105,6 +110,22 @@ host_checks() {
         fi
     elif echo "$PHASES" | grep -q E; then
         echo "E2E FAIL: phase E: no mcad CSV"; hf=1
+    fi
+    if echo "$PHASES" | grep -q F && [ -s "$OUT/mcadF.csv" ]; then
+        # F: the whole task against the sim backend, tick by tick over its 10 s (mcad holds the last point
+        # until stop_after: those rows have no sim row)
+        th=$(now)
+        "$B/tools/mca-sim/mca-sim" --scenario "$SCN_F" --scheme mca --csv "$OUT/simF.csv" > "$OUT/simF.txt" 2>&1 ||
+            { cat "$OUT/simF.txt"; echo "E2E FAIL: phase F: mca-sim"; hf=1; }
+        set -- $(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simF.csv" "$OUT/mcadF.csv")
+        echo "E2E phase F: vs the sim backend (mca-sim): $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
+        if awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" 'BEGIN { exit !(n >= 9990 && a + 0 <= m && b + 0 <= m) }'; then
+            echo "E2E ok: phase F: cross circles over vcan: the sim backend's trajectory within $DQ_MAX rad"
+        else
+            echo "E2E FAIL: phase F: joint trajectory differs from the sim backend's by more than $DQ_MAX rad (or too few ticks)"; hf=1
+        fi
+    elif echo "$PHASES" | grep -q F; then
+        echo "E2E FAIL: phase F: no mcad CSV"; hf=1
     fi
     return $hf
 }
@@ -503,67 +524,87 @@ if echo "$PHASES" | grep -q D; then
     echo "E2E phase D: mcad SIGKILLed itself at tick $K_KILL (its CSV, not flushed, reached t = ${t_seen:-?} s); $(($(now) - t0)) s"
     [ $fD -eq 0 ] || fail=1
 fi
-# ---- phase E: task 4, the negative example, on the shipped negative_vcan cell: two PA10+ (8 joints in every
-# command and feedback frame). Tracking and avoidance contradict; once the tools are close the QP has no
-# solution and the PDNN does not converge: mcad must name that fault, brake both arms within the limits,
-# keep every distance above d1, send zero commands with the servo released, and exit 3 at stop_after (9 s).
-# The host then compares the fault tick and the trajectory with the sim backend's (host_checks).
-if echo "$PHASES" | grep -q E; then
+# ---- phases E and F: a shipped two-PA10+ cell (8 joints in every command and feedback frame) run whole
+# over vcan0/vcan1 with lockstep emulators; the host then compares the trajectory (and E's fault tick) with
+# the sim backend's (host_checks).
+#   E: task 4, the negative example (negative_vcan). Tracking and avoidance contradict; once the tools are
+#      close the QP has no solution and the PDNN does not converge: mcad must name that fault, brake both
+#      arms within the limits, keep every distance above d1, send zero commands with the servo released,
+#      and exit 3 at stop_after (9 s).
+#   F: task 1, the paper's cross circles (cross_circles_vcan): the whole 10 s, every distance above d1,
+#      exit 0 stopped at stop_after (11 s) with no fault.
+# $1 = phase letter, $2 = shipped cell, $3 = its scenario, $4 = fault | stopped (how the run must end)
+pa10_phase() {
     t0=$(now)
-    CELL_E=$OUT/negative_vcan_e2e.yaml
+    tag=$1 want=$4
+    cell=$OUT/$(basename "$2" .yaml)_e2e.yaml
     sed -e "s|\.\./|$S/config/|g" \
         -e 's/^\(  overrun_limit:\).*/\1 2000000000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
-        -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$SRC_CELL_E" > "$CELL_E"
-    diff "$SRC_CELL_E" "$CELL_E" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
-    fE=0
-    "$MCAD" --check "$CELL_E" > "$OUT/checkE.txt" 2>&1 || { cat "$OUT/checkE.txt"; echo "E2E FAIL: phase E: mcad --check"; fE=1; }
-    grep -q "arm 0 'left': .*pa10plus.urdf, 8 joints.* socketcan vcan0 id_base 0x100" "$OUT/checkE.txt" &&
-        grep -q "arm 1 'right': .*pa10plus.urdf, 8 joints.* socketcan vcan1 id_base 0x100" "$OUT/checkE.txt" ||
-        { cat "$OUT/checkE.txt"; echo "E2E FAIL: phase E: cell: want the two PA10+ on vcan0 and vcan1"; fE=1; }
-    D1=$(sed -n 's/^d1: *\([0-9.]*\).*/\1/p' "$SCN_E")
-    DEC=$(sed -n 's/^ *dec_limit: *\([0-9.]*\).*/\1/p' "$SRC_CELL_E" | head -n 1)
+        -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$2" > "$cell"
+    diff "$2" "$cell" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
+    fp=0
+    "$MCAD" --check "$cell" > "$OUT/check$tag.txt" 2>&1 || { cat "$OUT/check$tag.txt"; echo "E2E FAIL: phase $tag: mcad --check"; fp=1; }
+    grep -q "arm 0 'left': .*pa10plus.urdf, 8 joints.* socketcan vcan0 id_base 0x100" "$OUT/check$tag.txt" &&
+        grep -q "arm 1 'right': .*pa10plus.urdf, 8 joints.* socketcan vcan1 id_base 0x100" "$OUT/check$tag.txt" ||
+        { cat "$OUT/check$tag.txt"; echo "E2E FAIL: phase $tag: cell: want the two PA10+ on vcan0 and vcan1"; fp=1; }
+    D1=$(sed -n 's/^d1: *\([0-9.]*\).*/\1/p' "$3")
+    DEC=$(sed -n 's/^ *dec_limit: *\([0-9.]*\).*/\1/p' "$2" | head -n 1)
     STEP=$(awk -v d="$DEC" -v t="$DT" 'BEGIN { print d * t }')
-    URDF0=$S/config/scenarios/$(arm_field 1 urdf "$SCN_E") Q00=$(arm_field 1 q0 "$SCN_E")
-    URDF1=$S/config/scenarios/$(arm_field 2 urdf "$SCN_E") Q01=$(arm_field 2 q0 "$SCN_E")
+    stop_t=$(sed -n 's/^stop_after: *\([0-9.]*\).*/\1/p' "$2")
+    URDF0=$S/config/scenarios/$(arm_field 1 urdf "$3") Q00=$(arm_field 1 q0 "$3")
+    URDF1=$S/config/scenarios/$(arm_field 2 urdf "$3") Q01=$(arm_field 2 q0 "$3")
     # the emulators' feedback frames on both buses, from before the start (the lockstep emulators answer
-    # every tick until mcad exits, the arms at rest after the fault)
-    $PIN2 candump -r 33554432 -L vcan0,101:7FF vcan1,101:7FF > "$TMPD/e.candump" 2>/dev/null &
+    # every tick until mcad exits)
+    $PIN2 candump -r 33554432 -L vcan0,101:7FF vcan1,101:7FF > "$TMPD/$tag.candump" 2>/dev/null &
     CD=$!
     sleep 0.3
-    armsims E
-    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcadE.csv" "$CELL_E" 2> "$OUT/mcadE.log"
+    armsims "$tag"
+    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcad$tag.csv" "$cell" 2> "$OUT/mcad$tag.log"
     rc=$?
-    candump_stop "$TMPD/e.candump" $CD
-    stop_armsims E
-    cat "$OUT/mcadE.log"
-    [ $rc -eq 3 ] || { echo "E2E FAIL: phase E: mcad exit status $rc, want 3 (fault)"; fE=1; }
-    grep -q "fault at t = .* s: braking both arms: PDNN residual" "$OUT/mcadE.log" ||
-        { echo "E2E FAIL: phase E: no PDNN-not-converged fault"; fE=1; }
-    grep -q "all joints commanded to zero at .* state fault" "$OUT/mcadE.log" || { echo "E2E FAIL: phase E: not braked"; fE=1; }
-    grep -q "summary: faults: 1 " "$OUT/mcadE.log" || { echo "E2E FAIL: phase E: want exactly one fault"; fE=1; }
-    set -- $(ramp "$TMPD/mcadE.csv" 5)
-    echo "E2E phase E: fault at t = $2 s with max |commanded qdot| $7 rad/s (joint $8 of 16); all commands 0 at t = $3 s after $4 ticks (minimum $9), max per-tick change $5 rad/s (limit $STEP), violations $6"
-    [ "$1" = 1 ] || { echo "E2E FAIL: phase E: braking ramp outside the deceleration limit, longer than needed or not ending at 0"; fE=1; }
-    dE=$(awk -F, -v d1="$D1" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+    candump_stop "$TMPD/$tag.candump" $CD
+    stop_armsims "$tag"
+    cat "$OUT/mcad$tag.log"
+    if [ "$want" = fault ]; then
+        [ $rc -eq 3 ] || { echo "E2E FAIL: phase $tag: mcad exit status $rc, want 3 (fault)"; fp=1; }
+        grep -q "fault at t = .* s: braking both arms: PDNN residual" "$OUT/mcad$tag.log" ||
+            { echo "E2E FAIL: phase $tag: no PDNN-not-converged fault"; fp=1; }
+        grep -q "all joints commanded to zero at .* state fault" "$OUT/mcad$tag.log" || { echo "E2E FAIL: phase $tag: not braked"; fp=1; }
+        grep -q "summary: faults: 1 " "$OUT/mcad$tag.log" || { echo "E2E FAIL: phase $tag: want exactly one fault"; fp=1; }
+        set -- $(ramp "$TMPD/mcad$tag.csv" 5)
+        echo "E2E phase $tag: fault at t = $2 s with max |commanded qdot| $7 rad/s (joint $8 of 16); all commands 0 at t = $3 s after $4 ticks (minimum $9), max per-tick change $5 rad/s (limit $STEP), violations $6"
+        [ "$1" = 1 ] || { echo "E2E FAIL: phase $tag: braking ramp outside the deceleration limit, longer than needed or not ending at 0"; fp=1; }
+    else
+        check_stopped "phase $tag" $rc "$OUT/mcad$tag.log" || fp=1
+    fi
+    set -- $(awk -F, -v d1="$D1" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
         { d = $c["min_d"] + 0; if (!(d > d1)) below++; if (!n++ || d < dm) { dm = d; tm = $1 } }
-        END { printf "%d %.5f %.3f %d\n", below + 0, dm, tm, n }' "$TMPD/mcadE.csv")
-    set -- $dE
-    echo "E2E phase E: $4 CSV rows, minimum distance $2 m at t = $3 s (d1 $D1 m), rows at or below d1: $1"
-    [ "$1" = 0 ] && [ "$4" -ge 8900 ] || { echo "E2E FAIL: phase E: a distance at or below d1, or the run ended early"; fE=1; }
+        END { printf "%d %.5f %.3f %d %.4f\n", below + 0, dm, tm, n, $1 }' "$TMPD/mcad$tag.csv")
+    echo "E2E phase $tag: $4 CSV rows to t = $5 s, minimum distance $2 m at t = $3 s (d1 $D1 m), rows at or below d1: $1"
+    awk -v n="$4" -v s="$stop_t" 'BEGIN { exit !(n >= s * 1000) }' && [ "$1" = 0 ] ||
+        { echo "E2E FAIL: phase $tag: a distance at or below d1, or the run ended before stop_after ($stop_t s)"; fp=1; }
     # the buses: each arm's last two feedback frames READY, no fault, all 8 velocities 0, positions unchanged
     # (payload hex: byte 1 = fault << 4 | state, bytes 4-35 positions int32 x 8, bytes 36-51 velocities int16 x 8)
     for i in 0 1; do
-        set -- $(grep " vcan$i 101##" "$TMPD/e.candump" | tail -n 2 | sed 's/.*##.//' | awk '
+        set -- $(grep " vcan$i 101##" "$TMPD/$tag.candump" | tail -n 2 | sed 's/.*##.//' | awk '
             { n++; p[n] = substr($0, 9, 64); s = substr($0, 3, 2); vel = substr($0, 73, 32) }
             END { print n + 0, s, (vel == "00000000000000000000000000000000"), (n == 2 && p[1] == p[2]) }')
-        nfb=$(grep -c " vcan$i 101##" "$TMPD/e.candump")
-        echo "E2E phase E: vcan$i: $nfb feedback frames captured, last: state/fault byte 0x$2, velocities zero: $3, positions unchanged: $4"
+        nfb=$(grep -c " vcan$i 101##" "$TMPD/$tag.candump")
+        echo "E2E phase $tag: vcan$i: $nfb feedback frames captured, last: state/fault byte 0x$2, velocities zero: $3, positions unchanged: $4"
         [ "$1" = 2 ] && [ "$2" = 01 ] && [ "$3" = 1 ] && [ "$4" = 1 ] ||
-            { echo "E2E FAIL: phase E: arm on vcan$i not at rest (READY, zero velocity) at the end"; fE=1; }
+            { echo "E2E FAIL: phase $tag: arm on vcan$i not at rest (READY, zero velocity) at the end"; fp=1; }
     done
-    echo "E2E phase E: $(($(now) - t0)) s"
-    [ $fE -eq 0 ] && echo "E2E ok: phase E: negative task over vcan0/vcan1 (8 joints): PDNN-not-converged fault named, both arms braked within the limits to rest above d1, exit 3"
-    [ $fE -eq 0 ] || fail=1
+    echo "E2E phase $tag: $(($(now) - t0)) s"
+    return $fp
+}
+if echo "$PHASES" | grep -q E; then
+    pa10_phase E "$SRC_CELL_E" "$SCN_E" fault &&
+        echo "E2E ok: phase E: negative task over vcan0/vcan1 (8 joints): PDNN-not-converged fault named, both arms braked within the limits to rest above d1, exit 3" ||
+        fail=1
+fi
+if echo "$PHASES" | grep -q F; then
+    pa10_phase F "$SRC_CELL_F" "$SCN_F" stopped &&
+        echo "E2E ok: phase F: cross circles over vcan0/vcan1 (8 joints): the whole task above d1, stopped, no fault, both arms at rest" ||
+        fail=1
 fi
 echo "E2E phases $PHASES: $(($(now) - t_all)) s in the guest, exit status $fail"
 exit $fail
