@@ -50,6 +50,13 @@ PY=$S/.venv/bin/python3
 [ -x "$PY" ] || PY=python3
 # ---- on the host, after the guest (or the native run): the checks that need mca-sim or python cantools
 # (cheap here, slow under TCG). $1 = exit status of the guest part; prints E2E lines, returns the status.
+# mca-sim (the sim backend, virtual time) on scenario $2 into $OUT/sim$1.csv, then vcan_e2e_dq.awk's
+# comparison with mcad's $OUT/mcad$1.csv on stdout; a failing mca-sim is reported on stderr, status 1
+sim_dq() {
+    "$B/tools/mca-sim/mca-sim" --scenario "$2" --scheme mca --csv "$OUT/sim$1.csv" > "$OUT/sim$1.txt" 2>&1 ||
+        { cat "$OUT/sim$1.txt" >&2; echo "E2E FAIL: phase $1: mca-sim" >&2; return 1; }
+    awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/sim$1.csv" "$OUT/mcad$1.csv"
+}
 host_checks() {
     hf=$1
     if echo "$PHASES" | grep -q A && [ -s "$OUT/mcadA.csv" ]; then
@@ -57,9 +64,7 @@ host_checks() {
         # the in-process sim backend in virtual time (mca-sim: same controller, same tick order: tick k uses
         # the feedback of command k-1), row by row at the same tick, over the running rows
         th=$(now)
-        "$B/tools/mca-sim/mca-sim" --scenario "$SCN" --scheme mca --csv "$OUT/simA.csv" > "$OUT/simA.txt" 2>&1 ||
-            { cat "$OUT/simA.txt"; echo "E2E FAIL: phase A: mca-sim"; hf=1; }
-        res=$(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simA.csv" "$OUT/mcadA.csv")
+        res=$(sim_dq A "$SCN") || hf=1
         sup=$(sed -n 's/.* cmd_superseded=\([0-9]*\) .*/\1/p' "$OUT/armsim0A.txt" "$OUT/armsim1A.txt" 2>/dev/null | tr '\n' ' ')
         set -- $res
         echo "E2E phase A: joint trajectory vs the sim backend (mca-sim, $2 ticks compared, $3 without a sim row): JACO2 max |dq| $4 rad at tick $5 (joint $6), MICO2 max |dq| $7 rad at tick $8 (joint $9); commands superseded at the emulators: ${sup:-?}; $(($(now) - th)) s on the host"
@@ -92,11 +97,10 @@ host_checks() {
         # E: the same task on the sim backend (mca-sim: same controller and fault checks, virtual time):
         # the fault at the same tick (1 ms), the running rows within DQ_MAX (see phase A)
         th=$(now)
-        "$B/tools/mca-sim/mca-sim" --scenario "$SCN_E" --scheme mca --csv "$OUT/simE.csv" > "$OUT/simE.txt" 2>&1 ||
-            { cat "$OUT/simE.txt"; echo "E2E FAIL: phase E: mca-sim"; hf=1; }
+        res=$(sim_dq E "$SCN_E") || hf=1
         t_sim=$(sed -n 's/.*FAULT pdnn-not-converged at t = \([0-9.]*\) s.*/\1/p' "$OUT/simE.txt")
         t_can=$(sed -n 's/.*fault at t = \([0-9.]*\) s: braking both arms: PDNN residual.*/\1/p' "$OUT/mcadE.log")
-        set -- $(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simE.csv" "$OUT/mcadE.csv")
+        set -- $res
         echo "E2E phase E: vs the sim backend (mca-sim): PDNN-not-converged fault at t = ${t_sim:-?} s there, ${t_can:-?} s over CAN; $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
         # the fault tick within 2 ticks of the sim backend's (seen: the same tick; the residual is 2.7e-4
         # against a fault threshold of 1e-6, but where the QP turns infeasible a 1e-6 rad difference could
@@ -115,9 +119,8 @@ host_checks() {
         # F: the whole task against the sim backend, tick by tick over its 10 s (mcad holds the last point
         # until stop_after: those rows have no sim row)
         th=$(now)
-        "$B/tools/mca-sim/mca-sim" --scenario "$SCN_F" --scheme mca --csv "$OUT/simF.csv" > "$OUT/simF.txt" 2>&1 ||
-            { cat "$OUT/simF.txt"; echo "E2E FAIL: phase F: mca-sim"; hf=1; }
-        set -- $(awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/simF.csv" "$OUT/mcadF.csv")
+        res=$(sim_dq F "$SCN_F") || hf=1
+        set -- $res
         echo "E2E phase F: vs the sim backend (mca-sim): $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
         if awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" 'BEGIN { exit !(n >= 9990 && a + 0 <= m && b + 0 <= m) }'; then
             echo "E2E ok: phase F: cross circles over vcan: the sim backend's trajectory within $DQ_MAX rad"
