@@ -30,8 +30,9 @@
 #   F: task 1, the paper's cross circles (two PA10+) on the shipped cross_circles_vcan cell: the whole
 #      10 s above d1, exit 0 stopped at stop_after, no fault, both buses at rest, the trajectory within
 #      DQ_MAX of the sim backend's.
-#   Phases A, E and F also compare mcad's joint trajectory with the sim backend's (mca-sim, on the host afterwards).
-#   env MCA_E2E_PHASES="A B C D E F" (default) runs a subset (development).
+#   G: task 2, the character "Hui" (two PA10+) on the shipped hui_vcan cell, the same checks as F over 32 s.
+#   Phases A, E, F and G also compare mcad's joint trajectory with the sim backend's (mca-sim, on the host
+#   afterwards). env MCA_E2E_PHASES="A B C D E F G" (default) runs a subset (development).
 set -u
 B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
 OUT=$B/tests/daemon/vcan-e2e
@@ -45,7 +46,9 @@ SRC_CELL_E=$S/config/cells/negative_vcan.yaml
 SCN_E=$S/config/scenarios/negative.yaml
 SRC_CELL_F=$S/config/cells/cross_circles_vcan.yaml
 SCN_F=$S/config/scenarios/cross_circles.yaml
-PHASES=${MCA_E2E_PHASES:-A B C D E F}
+SRC_CELL_G=$S/config/cells/hui_vcan.yaml
+SCN_G=$S/config/scenarios/hui.yaml
+PHASES=${MCA_E2E_PHASES:-A B C D E F G}
 PY=$S/.venv/bin/python3
 [ -x "$PY" ] || PY=python3
 # ---- on the host, after the guest (or the native run): the checks that need mca-sim or python cantools
@@ -115,21 +118,25 @@ host_checks() {
     elif echo "$PHASES" | grep -q E; then
         echo "E2E FAIL: phase E: no mcad CSV"; hf=1
     fi
-    if echo "$PHASES" | grep -q F && [ -s "$OUT/mcadF.csv" ]; then
-        # F: the whole task against the sim backend, tick by tick over its 10 s (mcad holds the last point
-        # until stop_after: those rows have no sim row)
-        th=$(now)
-        res=$(sim_dq F "$SCN_F") || hf=1
-        set -- $res
-        echo "E2E phase F: vs the sim backend (mca-sim): $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
-        if awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" 'BEGIN { exit !(n >= 9990 && a + 0 <= m && b + 0 <= m) }'; then
-            echo "E2E ok: phase F: cross circles over vcan: the sim backend's trajectory within $DQ_MAX rad"
-        else
-            echo "E2E FAIL: phase F: joint trajectory differs from the sim backend's by more than $DQ_MAX rad (or too few ticks)"; hf=1
+    # F, G: the whole task against the sim backend, tick by tick over the task (mcad holds the last point
+    # until stop_after: those rows have no sim row); $1 = phase, $2 = scenario, $3 = task name
+    for fg in "F $SCN_F cross-circles" "G $SCN_G Hui"; do
+        set -- $fg
+        if echo "$PHASES" | grep -q "$1" && [ -s "$OUT/mcad$1.csv" ]; then
+            th=$(now) ph=$1 task=$3
+            want=$(awk -v d="$(sed -n 's/^duration: *\([0-9.]*\).*/\1/p' "$2")" 'BEGIN { print d * 1000 - 10 }')
+            res=$(sim_dq "$1" "$2") || hf=1
+            set -- $res
+            echo "E2E phase $ph: vs the sim backend (mca-sim): $2 running ticks compared ($3 without a sim row): left max |dq| $4 rad at tick $5 (joint $6), right $7 rad at tick $8 (joint $9); $(($(now) - th)) s on the host"
+            if awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" -v w="$want" 'BEGIN { exit !(n >= w && a + 0 <= m && b + 0 <= m) }'; then
+                echo "E2E ok: phase $ph: $task over vcan: the sim backend's trajectory within $DQ_MAX rad"
+            else
+                echo "E2E FAIL: phase $ph: joint trajectory differs from the sim backend's by more than $DQ_MAX rad (or fewer than $want ticks)"; hf=1
+            fi
+        elif echo "$PHASES" | grep -q "$1"; then
+            echo "E2E FAIL: phase $1: no mcad CSV"; hf=1
         fi
-    elif echo "$PHASES" | grep -q F; then
-        echo "E2E FAIL: phase F: no mcad CSV"; hf=1
-    fi
+    done
     return $hf
 }
 now() { date +%s; }
@@ -153,7 +160,7 @@ if [ "${3:-}" != "--in-guest" ]; then
     job=$OUT/job.sh
     printf '#!/bin/sh\nexport MCA_IN_GUEST=1 MCA_E2E_PHASES="%s" MCA_E2E_D_PERIOD_US=%s PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin HOME=/root\nexec sh %s %s %s --in-guest\n' \
         "$PHASES" "$D_PERIOD_US" "$S/tests/daemon/vcan_e2e.sh" "$B" "$S" > "$job"
-    MCA_GUEST_LOG=$OUT/console.log sh "$S/tools/vcan-guest/run.sh" "$B/tests/daemon/vcan-guest-cache" "$job" 1200 >/dev/null
+    MCA_GUEST_LOG=$OUT/console.log sh "$S/tools/vcan-guest/run.sh" "$B/tests/daemon/vcan-guest-cache" "$job" 1800 >/dev/null
     rc=$?
     grep -a 'E2E\|MCA-GUEST\|mcad:\|mca-monitor:\|^[-+]  ' "$OUT/console.log" | tr -d '\r'
     echo "vcan_e2e: guest exit status $rc after $(($(date +%s) - start)) s (guest boot included)"
@@ -536,6 +543,7 @@ fi
 #      and exit 3 at stop_after (9 s).
 #   F: task 1, the paper's cross circles (cross_circles_vcan): the whole 10 s, every distance above d1,
 #      exit 0 stopped at stop_after (11 s) with no fault.
+#   G: task 2, the character "Hui" (hui_vcan): the same over its 32 s (stop_after 33 s).
 # $1 = phase letter, $2 = shipped cell, $3 = its scenario, $4 = fault | stopped (how the run must end)
 pa10_phase() {
     t0=$(now)
@@ -607,6 +615,11 @@ fi
 if echo "$PHASES" | grep -q F; then
     pa10_phase F "$SRC_CELL_F" "$SCN_F" stopped &&
         echo "E2E ok: phase F: cross circles over vcan0/vcan1 (8 joints): the whole task above d1, stopped, no fault, both arms at rest" ||
+        fail=1
+fi
+if echo "$PHASES" | grep -q G; then
+    pa10_phase G "$SRC_CELL_G" "$SCN_G" stopped &&
+        echo "E2E ok: phase G: Hui over vcan0/vcan1 (8 joints): the whole task above d1, stopped, no fault, both arms at rest" ||
         fail=1
 fi
 echo "E2E phases $PHASES: $(($(now) - t_all)) s in the guest, exit status $fail"
