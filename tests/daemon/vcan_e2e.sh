@@ -264,6 +264,17 @@ csv_t() { tail -n 1 "$1" 2>/dev/null | cut -d, -f1; }
 
 # candump_stop FILE PID: let candump drain (at most 30 s), then stop it (shared with tests/can/suite.sh)
 . "$S/tests/can/candump_stop.sh"
+# The end of an arm's feedback on vcan$2 in the candump capture $1, for an arm of $3 joints (payload hex:
+# byte 1 = fault << 4 | state, bytes 4.. positions int32 x N, bytes 36.. velocities int16 x N). Prints:
+# frames_captured, frames_looked_at (the last two), state/fault byte of the last, its velocities all zero,
+# its positions equal to the frame before.
+last_feedback() {
+    nfb=$(grep -c " vcan$2 101##" "$1")
+    grep " vcan$2 101##" "$1" | tail -n 2 | sed 's/.*##.//' | awk -v nj="$3" -v total="$nfb" '
+        { n++; p[n] = substr($0, 9, 8 * nj); s = substr($0, 3, 2); vel = substr($0, 73, 4 * nj) }
+        END { print total, n + 0, (s == "" ? "-" : s), (length(vel) == 4 * nj && vel !~ /[^0]/),
+                    (n == 2 && p[1] == p[2]) }'
+}
 # mcad's log: exit 0, stopped, no fault, no CSV rows dropped; $1 = phase name, $2 = rc, $3 = log
 check_stopped() {
     f=0
@@ -437,17 +448,13 @@ if echo "$PHASES" | grep -q B; then
     awk -v v="$7" -v t="$2" -v s="$T_SIG" 'BEGIN { exit !(v > 0.3 && t >= s) }' ||
         { echo "E2E FAIL: phase B: want the stop after $T_SIG s with the arms moving fast (> 0.3 rad/s)"; fB=1; }
     # the emulators' side: the last feedback frame of each bus says READY, no fault, every joint velocity 0,
-    # and the same positions as the frame before (payload hex: byte 1 = fault << 4 | state, bytes 4-27
-    # positions int32 x 6, bytes 36-47 velocities int16 x 6); the emulators' counters: state READY, no fault
+    # and the same positions as the frame before (last_feedback, 6 joints); the emulators' counters: state
+    # READY, no fault
     for i in 0 1; do
-        res=$(grep " vcan$i 101##" "$TMPD/b.candump" | tail -n 2 | sed 's/.*##.//' | awk '
-            { n++; p[n] = substr($0, 9, 48); s = substr($0, 3, 2); vel = substr($0, 73, 24) }
-            END { print n, s, (vel == "000000000000000000000000"), (n == 2 && p[1] == p[2]) }')
-        set -- $res
+        set -- $(last_feedback "$TMPD/b.candump" $i 6)
         st=$(cat "$TMPD/armsim$i""B.txt" 2>/dev/null | sed -n 's/.* watchdog_trips=\([0-9]*\) state=\([A-Z]*\) fault_code=\([0-9]*\).*/\2 fault \3 watchdog trips \1/p')
-        nfb=$(grep -c " vcan$i 101##" "$TMPD/b.candump")
-        echo "E2E phase B: vcan$i: $nfb feedback frames captured, last: state/fault byte 0x$2, velocities zero: $3, positions unchanged: $4; emulator: ${st:-?}"
-        [ "$1" = 2 ] && [ "$2" = 01 ] && [ "$3" = 1 ] && [ "$4" = 1 ] && [ "$st" = "READY fault 0 watchdog trips 0" ] ||
+        echo "E2E phase B: vcan$i: $1 feedback frames captured, last: state/fault byte 0x$3, velocities zero: $4, positions unchanged: $5; emulator: ${st:-?}"
+        [ "$2" = 2 ] && [ "$3" = 01 ] && [ "$4" = 1 ] && [ "$5" = 1 ] && [ "$st" = "READY fault 0 watchdog trips 0" ] ||
             { echo "E2E FAIL: phase B: arm on vcan$i not at rest (READY, zero velocity) after the stop"; fB=1; }
     done
     echo "E2E phase B: $(($(now) - t0)) s"
@@ -594,14 +601,10 @@ pa10_phase() {
     awk -v n="$4" -v s="$stop_t" 'BEGIN { exit !(n >= s * 1000) }' && [ "$1" = 0 ] ||
         { echo "E2E FAIL: phase $tag: a distance at or below d1, or the run ended before stop_after ($stop_t s)"; fp=1; }
     # the buses: each arm's last two feedback frames READY, no fault, all 8 velocities 0, positions unchanged
-    # (payload hex: byte 1 = fault << 4 | state, bytes 4-35 positions int32 x 8, bytes 36-51 velocities int16 x 8)
     for i in 0 1; do
-        set -- $(grep " vcan$i 101##" "$TMPD/$tag.candump" | tail -n 2 | sed 's/.*##.//' | awk '
-            { n++; p[n] = substr($0, 9, 64); s = substr($0, 3, 2); vel = substr($0, 73, 32) }
-            END { print n + 0, s, (vel == "00000000000000000000000000000000"), (n == 2 && p[1] == p[2]) }')
-        nfb=$(grep -c " vcan$i 101##" "$TMPD/$tag.candump")
-        echo "E2E phase $tag: vcan$i: $nfb feedback frames captured, last: state/fault byte 0x$2, velocities zero: $3, positions unchanged: $4"
-        [ "$1" = 2 ] && [ "$2" = 01 ] && [ "$3" = 1 ] && [ "$4" = 1 ] ||
+        set -- $(last_feedback "$TMPD/$tag.candump" $i 8)
+        echo "E2E phase $tag: vcan$i: $1 feedback frames captured, last: state/fault byte 0x$3, velocities zero: $4, positions unchanged: $5"
+        [ "$2" = 2 ] && [ "$3" = 01 ] && [ "$4" = 1 ] && [ "$5" = 1 ] ||
             { echo "E2E FAIL: phase $tag: arm on vcan$i not at rest (READY, zero velocity) at the end"; fp=1; }
     done
     echo "E2E phase $tag: $(($(now) - t0)) s"
