@@ -439,6 +439,21 @@ static void gather(mca_pdnn_t *s, int n, int to_blocks) {
     }
 }
 
+/* Block b of the split problem as the Eigen side takes it: its slices of ws_B, ws_Bq, Omega and the row
+ * factors (filled by split()). */
+static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b) {
+    const int *bl = s->ws_blk[b];
+    const mca_pdnn__problem_t p = {bl[1],
+                                   bl[3],
+                                   &s->ws_B[bl[4]],
+                                   &s->ws_Bq[bl[2]],
+                                   &s->ws_Blo[bl[0] + bl[2]],
+                                   &s->ws_Bhi[bl[0] + bl[2]],
+                                   &s->ws_Bf[bl[2]],
+                                   &s->ws_Bfi[bl[2]]};
+    return p;
+}
+
 typedef struct pdnn_run {
     double r_true, kappa;
     int steps, total, diverged;
@@ -456,14 +471,7 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
     for (int pass = 0; pass < 8; pass++) {
         for (int b = 0; b < s->ws_nblk; b++) {
             const int *bl = s->ws_blk[b];
-            const mca_pdnn__problem_t p = {bl[1],
-                                           bl[3],
-                                           &s->ws_B[bl[4]],
-                                           &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]],
-                                           &s->ws_Bhi[bl[0] + bl[2]],
-                                           &s->ws_Bf[bl[2]],
-                                           &s->ws_Bfi[bl[2]]};
+            const mca_pdnn__problem_t p = block_problem(s, b);
             mca_pdnn_result_t it;
             mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b],
                               !prm->no_rescue, &it);
@@ -549,15 +557,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
     for (int b = 0; b < s->ws_nblk; b++) {
         kfix[b] = prm.kappa;
         if (prm.kappa > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
-            const int *bl = s->ws_blk[b];
-            const mca_pdnn__problem_t p = {bl[1],
-                                           bl[3],
-                                           &s->ws_B[bl[4]],
-                                           &s->ws_Bq[bl[2]],
-                                           &s->ws_Blo[bl[0] + bl[2]],
-                                           &s->ws_Bhi[bl[0] + bl[2]],
-                                           NULL,
-                                           NULL};
+            const mca_pdnn__problem_t p = block_problem(s, b);
             /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in
              * s */
             const double s2 = mca_pdnn__norm_sq_bound(&p);
