@@ -49,7 +49,37 @@ typedef enum mca_scheme_kind {
     MCA_SCHEME_MCA = 0, /**< QP (25)-(28) with collision rows, solved by the LVI-PDNN */
     MCA_SCHEME_MVN = 1, /**< QP (25)-(27), no collision rows */
     MCA_SCHEME_APF = 2, /**< artificial potential field baseline (40)-(46) */
+    /** MCA with path-time scaling (docs/scheme.md "mca-ts"): per arm a path clock tau_a advancing at a rate
+     *  sigma_a that is a QP variable, elastic tracking (a heavily weighted slack), stoppability-bounded
+     *  collision rows, priorities and a named deadlock resolution. The default for cells. */
+    MCA_SCHEME_MCA_TS = 3,
 } mca_scheme_kind_t;
+
+/** Short constant name of a scheme ("mca", "mvn", "apf", "mca-ts"); "unknown" otherwise. */
+const char *mca_scheme_name(int scheme);
+
+/** Scheme from its name. @retval MCA_OK, MCA_EINVAL (unknown name) */
+int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out);
+
+/** Path-time scaling parameters (mca-ts only; defaults in mca_controller_default_config()). */
+typedef struct mca_timescale_params {
+    double w_sigma;        /**< weight of (sigma - 1)^2 against |qdot|^2 (1e2) */
+    double w_slack;        /**< weight of the tracking slack |e|^2 (1e4) */
+    double sigma_max;      /**< most path rate when catching up (1.0: never faster than the path) */
+    double priority[MCA_MAX_ARMS]; /**< higher keeps its path; lower yields first and backs off (1) */
+    double deadlock_time;  /**< every moving arm's sigma below deadlock_sigma this long: deadlock [s] (0.5) */
+    double deadlock_sigma; /**< (0.05) */
+    double back_off_time;  /**< the yielding arm runs its path backwards this long [s] (1.0) */
+    double dec_limit[MCA_MAX_ARMS]; /**< least joint deceleration of each arm for the stoppability bound
+                                         [rad/s^2] (0: bound off) */
+} mca_timescale_params_t;
+
+/** Deadlock state (info->deadlock). */
+typedef enum mca_deadlock_state {
+    MCA_DEADLOCK_NONE = 0,
+    MCA_DEADLOCK_BACK_OFF = 1, /**< the lowest-priority blocked arm runs its path backwards */
+    MCA_DEADLOCK_WAIT = 2,     /**< it then holds (sigma <= 0) until the others have moved on */
+} mca_deadlock_state_t;
 
 /** Run-time fault codes (info->fault). */
 typedef enum mca_ctrl_fault {
@@ -78,6 +108,7 @@ typedef struct mca_controller_config {
     double fault_residual;         /**< PDNN residual that is a fault at the step cap (1e-6) */
     double eq_tol;                 /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
     int fault_distance;            /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
+    mca_timescale_params_t ts;     /**< mca-ts only */
 } mca_controller_config_t;
 
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
@@ -115,9 +146,18 @@ typedef struct mca_tick_info {
     double ee[MCA_MAX_ARMS][3]; /**< actual end effector */
     double ee_desired[MCA_MAX_ARMS][3];
     double ee_error[MCA_MAX_ARMS]; /**< |r_d - r| [m] */
+    /* path time (mca-ts; the other schemes: tau = task_t, sigma = 1) */
+    double tau[MCA_MAX_ARMS];   /**< path clock of each arm [s] */
+    double sigma[MCA_MAX_ARMS]; /**< path rate commanded this tick */
+    double slack;               /**< largest |tracking slack| this tick [m/s] */
+    int paths_done;             /**< 1: every arm's path clock has reached its path's end */
+    int deadlock;               /**< mca_deadlock_state_t */
+    int deadlock_arm;           /**< the arm that backs off (-1: none) */
+    int deadlocks;              /**< deadlocks detected since the task started */
     /* outcome */
     int fault; /**< mca_ctrl_fault_t */
     char fault_text[160];
+    int brake_fallback; /**< braking: 1 when this tick used the scale-the-whole-vector fallback */
     int64_t compute_ns; /**< CLOCK_MONOTONIC time spent in the tick */
 } mca_tick_info_t;
 
@@ -139,6 +179,18 @@ typedef struct mca_controller {
     double min_distance_prev;
     int has_prev;
     uint64_t ticks;
+    /* mca-ts */
+    double tau[MCA_MAX_ARMS];   /**< path clocks */
+    double sigma[MCA_MAX_ARMS]; /**< last path rates */
+    double path_end[MCA_MAX_ARMS];
+    double t_prev;              /**< last tick's t (tau advances by sigma (t - t_prev)) */
+    double stall_time;          /**< how long every unfinished arm's sigma has been below deadlock_sigma */
+    int deadlock, deadlock_arm, deadlocks;
+    double deadlock_until;      /**< back-off ends at this task time */
+    double wait_tau[MCA_MAX_ARMS]; /**< WAIT: the others' clocks when it began */
+    /* braking QP (kept apart from the tick's so a fault does not disturb the last tick's dump) */
+    mca_qp_t brake_qp;
+    mca_pdnn_t brake_pdnn;
 } mca_controller_t;
 
 /** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
@@ -172,6 +224,25 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
  */
 int mca_controller_observe(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
                            mca_tick_info_t *info);
+
+/**
+ * One braking tick (real-time safe): the velocities closest to zero inside the deceleration box
+ * v_last +- dec_limit dt, the joint limits and the collision rows (mca and mca-ts; none for the baselines),
+ * solved by the PDNN. When that QP has no answer (the box and the rows contradict, or the solver misses its
+ * tolerance) each arm keeps its direction of motion: its whole velocity vector is scaled by one factor so
+ * that no joint changes by more than dec_limit dt. Works whatever the fault latched.
+ * @param v_last     v_last[a]: the velocity commanded last tick
+ * @param dec_limit  dec_limit[a][j] [rad/s^2] (> 0)
+ * @param[out] qdot  this tick's command
+ * @param[out] info  distances (as mca_controller_observe) and info->brake_fallback
+ * @retval 1 every commanded velocity is zero (at rest), 0 still braking, MCA_EINVAL (NULL, non-finite q)
+ */
+int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
+                         const double *const v_last[MCA_MAX_ARMS], const double *const dec_limit[MCA_MAX_ARMS],
+                         double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info);
+
+/** Latch a fault from outside the tick (a test's injected fault, a backend fault). RT safe. */
+void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text);
 
 /** Last QP assembled and the PDNN's phi (for --dump-qp; not meaningful for APF). */
 const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi);
