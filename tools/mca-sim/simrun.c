@@ -51,11 +51,18 @@ static void csv_header(FILE *f, const mca_controller_config_t *cfg) {
                 a, a, a, a, a);
     }
     fprintf(f, ",min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,active_rows,binding_rows,"
-               "pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault\n");
+               "pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault");
+    /* three or more arms: the distance of every pair too (min_d is only the smallest of them) */
+    for (int a = 0; cfg->n_arms >= 3 && a < cfg->n_arms; a++) {
+        for (int b = a + 1; b < cfg->n_arms; b++) {
+            fprintf(f, ",d_%d_%d", a, b);
+        }
+    }
+    fprintf(f, "\n");
 }
 
-static void csv_row(FILE *f, const mca_controller_config_t *cfg, double t, double q[][MCA_MAX_DOF],
-                    const mca_tick_info_t *in) {
+static void csv_row(FILE *f, const mca_controller_config_t *cfg, const mca_controller_t *ctrl, double t,
+                    double q[][MCA_MAX_DOF], const mca_tick_info_t *in) {
     fprintf(f, "%.4f", t);
     for (int a = 0; a < cfg->n_arms; a++) {
         for (int j = 0; j < cfg->chain[a].dof; j++) {
@@ -68,11 +75,17 @@ static void csv_row(FILE *f, const mca_controller_config_t *cfg, double t, doubl
                 in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
                 in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
     }
-    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d\n",
+    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d",
             in->min_distance, in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0],
             in->min_p[1], in->min_p[2], in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows,
             in->binding_rows, in->pdnn_steps, in->pdnn_residual, in->eq_residual, (long long)in->compute_ns,
             in->fault);
+    for (int a = 0; cfg->n_arms >= 3 && a < cfg->n_arms; a++) {
+        for (int b = a + 1; b < cfg->n_arms; b++) {
+            fprintf(f, ",%.9g", ctrl->dist[a][b].min.d);
+        }
+    }
+    fprintf(f, "\n");
 }
 
 int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
@@ -243,7 +256,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             }
         }
         if (csv) {
-            csv_row(csv, cfg, t, q, &info);
+            csv_row(csv, cfg, ctrl, t, q, &info);
         }
         /* the ticks --dump-every picks: every Nth, and every N/5th with binding rows */
         const int every = o->dump_every > 0 ? o->dump_every : 1;
