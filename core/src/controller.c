@@ -28,6 +28,30 @@ const char *mca_ctrl_fault_name(int fault) {
     return fault_names[fault];
 }
 
+static const char *const scheme_names[] = {
+    [MCA_SCHEME_MCA] = "mca",
+    [MCA_SCHEME_MVN] = "mvn",
+    [MCA_SCHEME_APF] = "apf",
+    [MCA_SCHEME_MCA_TS] = "mca-ts",
+};
+
+const char *mca_scheme_name(int scheme) {
+    if (scheme < 0 || scheme >= (int)(sizeof scheme_names / sizeof scheme_names[0])) {
+        return "unknown";
+    }
+    return scheme_names[scheme];
+}
+
+int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out) {
+    for (int k = 0; name && k < (int)(sizeof scheme_names / sizeof scheme_names[0]); k++) {
+        if (strcmp(name, scheme_names[k]) == 0) {
+            *out = (mca_scheme_kind_t)k;
+            return MCA_OK;
+        }
+    }
+    return MCA_EINVAL;
+}
+
 void mca_controller_default_config(mca_controller_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->scheme = MCA_SCHEME_MCA;
@@ -40,6 +64,20 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->fault_residual = 1e-6;
     cfg->eq_tol = 1e-4;
     cfg->fault_distance = 1;
+    cfg->ts.w_sigma = 1e2;
+    cfg->ts.w_slack = 1e4;
+    cfg->ts.sigma_max = 1.0;
+    cfg->ts.deadlock_time = 0.5;
+    cfg->ts.deadlock_sigma = 0.05;
+    cfg->ts.back_off_time = 1.0;
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        cfg->ts.priority[a] = 1.0;
+    }
+}
+
+/* Schemes with collision rows (and the distance fault). */
+static int uses_rows(mca_scheme_kind_t scheme) {
+    return scheme == MCA_SCHEME_MCA || scheme == MCA_SCHEME_MCA_TS;
 }
 
 int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
@@ -70,7 +108,7 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
         mca_chain_set_base(&cfg->chain[a], sa->base_xyz, sa->base_rpy);
         cfg->path[a] = sa->path;
     }
-    cfg->sp.collision = scheme == MCA_SCHEME_MCA;
+    cfg->sp.collision = uses_rows(scheme);
     cfg->sp.form = (mca_collision_form_t)scn->params.form;
     cfg->sp.d1 = scn->params.d1;
     cfg->sp.d2 = scn->params.d2;
@@ -80,7 +118,7 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
     cfg->sp.v_floor = scn->params.v_floor;
     cfg->dt = scn->params.dt;
     /* The baselines are run to show what happens without the scheme: no distance fault for them. */
-    cfg->fault_distance = scheme == MCA_SCHEME_MCA;
+    cfg->fault_distance = uses_rows(scheme);
     return MCA_OK;
 }
 
@@ -88,7 +126,11 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     if (!ctrl || !cfg || cfg->n_arms < 1 || cfg->n_arms > MCA_MAX_ARMS || !(cfg->dt > 0.0) ||
         !(cfg->sp.d1 >= 0.0) || !(cfg->sp.d1 < cfg->sp.d2) || !(cfg->sp.epsilon > 0.0) ||
         !(cfg->sp.K >= 0.0) || !(cfg->sp.big > 0.0) || cfg->scheme < MCA_SCHEME_MCA ||
-        cfg->scheme > MCA_SCHEME_APF) {
+        cfg->scheme > MCA_SCHEME_MCA_TS ||
+        (cfg->scheme == MCA_SCHEME_MCA_TS &&
+         (!(cfg->ts.w_sigma > 0.0) || !(cfg->ts.w_slack > 0.0) || !(cfg->ts.sigma_max >= 1.0) ||
+          !(cfg->ts.deadlock_time > 0.0) || !(cfg->ts.deadlock_sigma >= 0.0) ||
+          !(cfg->ts.back_off_time >= 0.0)))) {
         return MCA_EINVAL;
     }
     for (int a = 0; a < cfg->n_arms; a++) {
@@ -98,8 +140,16 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     }
     memset(ctrl, 0, sizeof *ctrl);
     ctrl->cfg = *cfg;
-    ctrl->cfg.sp.collision = cfg->scheme == MCA_SCHEME_MCA;
+    ctrl->cfg.sp.collision = uses_rows(cfg->scheme);
+    if (cfg->scheme == MCA_SCHEME_MCA_TS) {
+        ctrl->cfg.sp.form =
+            MCA_FORM_NORMAL; /* the stoppability bound is a bound on the normal approach speed */
+    }
+    for (int a = 0; a < cfg->n_arms; a++) {
+        ctrl->path_end[a] = mca_path_end_time(&cfg->path[a]);
+    }
     mca_pdnn_init(&ctrl->pdnn);
+    mca_pdnn_init(&ctrl->brake_pdnn);
     mca_controller_reset(ctrl);
     return MCA_OK;
 }
@@ -115,6 +165,15 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     mca_scheme_state_reset(&ctrl->sstate);
     memset(ctrl->phi, 0, sizeof ctrl->phi);
     memset(ctrl->phi_prev, 0, sizeof ctrl->phi_prev);
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        ctrl->tau[a] = 0.0;
+        ctrl->sigma[a] = 1.0;
+    }
+    ctrl->stall_time = 0.0;
+    ctrl->deadlock = MCA_DEADLOCK_NONE;
+    ctrl->deadlock_arm = -1;
+    ctrl->deadlocks = 0;
+    ctrl->brake_pdnn.h = 0;
 }
 
 void mca_controller_clear_fault(mca_controller_t *ctrl) {
@@ -140,6 +199,8 @@ static int64_t now_ns(void) {
 }
 
 /* Latch a fault (the first cause wins) with a message; snprintf into a fixed buffer does not allocate. */
+static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...) {
     if (ctrl->fault != MCA_CTRL_FAULT_NONE) {
         return;
@@ -149,6 +210,10 @@ static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...) 
     va_start(ap, fmt);
     vsnprintf(ctrl->fault_text, sizeof ctrl->fault_text, fmt, ap);
     va_end(ap);
+}
+
+void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text) {
+    raise_fault(ctrl, code, "%s", text ? text : "");
 }
 
 /* Per link of every arm: the closest link of any other arm, and the global minimum. */
@@ -298,6 +363,129 @@ int mca_controller_observe(mca_controller_t *ctrl, double t, const double *const
     return distances(ctrl, info);
 }
 
+/* 1 when some active collision row is exceeded by more than tol. */
+static int rows_violated(const mca_qp_t *qp, const double *phi, double big, double tol) {
+    for (int i = 0; i < qp->n_ineq; i++) {
+        if (qp->beta[i] < big) {
+            double s = 0.0;
+            for (int j = 0; j < qp->n; j++) {
+                s += qp->U[i][j] * phi[j];
+            }
+            if (!(s <= qp->beta[i] + tol)) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Catching up: the rate an arm aims at grows with its lag behind task time (1/s per s of lag). */
+#define MCA_TS_CATCH_UP_GAIN 1.0
+
+/* mca-ts, before the solve: each arm's target rate and rate bounds from the deadlock state. */
+static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], double lo[], double hi[]) {
+    const mca_timescale_params_t *tp = &ctrl->cfg.ts;
+    const int na = ctrl->cfg.n_arms;
+    if (ctrl->deadlock == MCA_DEADLOCK_BACK_OFF && task_t >= ctrl->deadlock_until) {
+        ctrl->deadlock = MCA_DEADLOCK_WAIT;
+        for (int a = 0; a < na; a++) {
+            ctrl->wait_tau[a] = ctrl->tau[a];
+        }
+        ctrl->deadlock_until = task_t + 4.0 * tp->back_off_time + tp->deadlock_time;
+    }
+    if (ctrl->deadlock == MCA_DEADLOCK_WAIT) {
+        /* the others have moved on (each advanced by the back-off time, or finished), or time is up */
+        int moved = 1;
+        for (int a = 0; a < na; a++) {
+            if (a != ctrl->deadlock_arm && ctrl->tau[a] < ctrl->path_end[a] &&
+                ctrl->tau[a] - ctrl->wait_tau[a] < tp->back_off_time) {
+                moved = 0;
+            }
+        }
+        if (moved || task_t >= ctrl->deadlock_until) {
+            ctrl->deadlock = MCA_DEADLOCK_NONE;
+            ctrl->deadlock_arm = -1;
+            ctrl->stall_time = 0.0;
+        }
+    }
+    for (int a = 0; a < na; a++) {
+        const double lag = fmax(0.0, task_t - ctrl->tau[a]);
+        target[a] = fmin(tp->sigma_max, 1.0 + MCA_TS_CATCH_UP_GAIN * lag);
+        lo[a] = 0.0;
+        hi[a] = tp->sigma_max;
+        if (a == ctrl->deadlock_arm && ctrl->deadlock == MCA_DEADLOCK_BACK_OFF) {
+            target[a] = -1.0;
+            lo[a] = ctrl->tau[a] > 0.0 ? -1.0 : 0.0;
+            hi[a] = 0.0;
+        } else if (a == ctrl->deadlock_arm && ctrl->deadlock == MCA_DEADLOCK_WAIT) {
+            target[a] = lo[a] = hi[a] = 0.0;
+        }
+    }
+}
+
+/* mca-ts, after the solve: read each arm's rate, advance its clock, watch for a deadlock. */
+static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int ts_off[],
+                       const double rdot_d[][3]) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const mca_timescale_params_t *tp = &cfg->ts;
+    const int na = cfg->n_arms;
+    double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS];
+    ts_plan(ctrl, info->task_t, target, lo, hi); /* idempotent: the same targets the QP was built with */
+    const double rs = 1.0 / sqrt(tp->w_sigma), re = 1.0 / sqrt(tp->w_slack);
+    int unfinished = 0, progressing = 0, victim = -1;
+    double slack = 0.0;
+    for (int a = 0; a < na; a++) {
+        double sigma = target[a] + rs * ctrl->phi[ts_off[a]];
+        sigma = fmax(lo[a], fmin(hi[a], sigma));
+        const double speed = mca_v3_norm(rdot_d[a]);
+        for (int i = 0; i < MCA_TASK_DIM; i++) {
+            slack = fmax(slack, fabs(re * ctrl->phi[ts_off[a] + 1 + i]));
+        }
+        ctrl->sigma[a] = sigma;
+        ctrl->tau[a] = fmax(0.0, fmin(ctrl->path_end[a], ctrl->tau[a] + sigma * cfg->dt));
+        if (ctrl->tau[a] < ctrl->path_end[a]) {
+            unfinished++;
+            /* an arm whose path does not move here (a dwell, the start of a circle) is not held up */
+            if (sigma >= tp->deadlock_sigma || speed < 1e-6) {
+                progressing++;
+            } else if (victim < 0 || tp->priority[a] <= tp->priority[victim]) {
+                victim = a; /* the lowest priority of the blocked arms (the last one on a tie) */
+            }
+        }
+    }
+    info->slack = slack;
+    if (ctrl->deadlock == MCA_DEADLOCK_NONE && unfinished > 0 && progressing == 0) {
+        ctrl->stall_time += cfg->dt;
+        if (ctrl->stall_time >= tp->deadlock_time && victim >= 0) {
+            ctrl->deadlock = MCA_DEADLOCK_BACK_OFF;
+            ctrl->deadlock_arm = victim;
+            ctrl->deadlock_until = info->task_t + tp->back_off_time;
+            ctrl->deadlocks++;
+        }
+    } else if (progressing > 0) {
+        ctrl->stall_time = 0.0;
+    }
+}
+
+/* Path-time figures of the tick report (the schemes without path-time scaling run on task time). */
+static void fill_path_info(mca_controller_t *ctrl, mca_tick_info_t *info) {
+    const int ts = ctrl->cfg.scheme == MCA_SCHEME_MCA_TS;
+    int done = 1;
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        if (!ts) {
+            ctrl->tau[a] = fmin(info->task_t, ctrl->path_end[a]);
+            ctrl->sigma[a] = 1.0;
+        }
+        info->tau[a] = ctrl->tau[a];
+        info->sigma[a] = ctrl->sigma[a];
+        done &= ctrl->tau[a] >= ctrl->path_end[a];
+    }
+    info->paths_done = done;
+    info->deadlock = ctrl->deadlock;
+    info->deadlock_arm = ctrl->deadlock_arm;
+    info->deadlocks = ctrl->deadlocks;
+}
+
 int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
                         double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info_out) {
     const int64_t t_enter = now_ns();
@@ -317,6 +505,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->pdnn_residual = 0.0;
     info->pdnn_converged = 0;
     info->eq_residual = 0.0;
+    info->slack = 0.0;
+    info->brake_fallback = 0;
     info->task_t = ctrl && ctrl->started ? t - ctrl->t_start : 0.0;
     info->min_distance = INFINITY;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
@@ -360,10 +550,11 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     }
     info->task_t = t - ctrl->t_start;
 
-    /* 2. desired paths */
+    /* 2. desired paths (mca-ts: at each arm's path clock) */
+    const int ts = cfg->scheme == MCA_SCHEME_MCA_TS;
     double r_d[MCA_MAX_ARMS][3], rdot_d[MCA_MAX_ARMS][3];
     for (int a = 0; a < na; a++) {
-        mca_path_eval(&cfg->path[a], info->task_t, r_d[a], rdot_d[a]);
+        mca_path_eval(&cfg->path[a], ts ? ctrl->tau[a] : info->task_t, r_d[a], rdot_d[a]);
         mca_v3_set(info->ee[a], ctrl->kin[a].ee);
         mca_v3_set(info->ee_desired[a], r_d[a]);
         info->ee_error[a] = mca_v3_dist(r_d[a], ctrl->kin[a].ee);
@@ -408,6 +599,21 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             goto fault;
         }
         info->brake = si.brake;
+        int ts_off[MCA_MAX_ARMS] = {0};
+        if (ts) {
+            double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS];
+            ts_plan(ctrl, info->task_t, target, lo, hi);
+            mca_scheme_shape_rows(&ctrl->qp, &si, na, chains,
+                                  (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit, &cfg->sp,
+                                  cfg->ts.dec_limit, cfg->ts.priority);
+            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack};
+            rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
+                                          ts_off);
+            if (rc != MCA_OK) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+                goto fault;
+            }
+        }
         info->active_rows = si.active_rows;
         mca_pdnn_result_t pr = {0};
         rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &cfg->pdnn, ctrl->phi, &pr);
@@ -434,7 +640,18 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             eq = fmax(eq, fabs(s));
         }
         info->eq_residual = eq;
-        if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
+        if (ts) {
+            /* Tracking is elastic here, so only the hard rows decide: an answer that misses the PDNN's
+             * tolerance is still used when it keeps every collision row (the box holds by projection). */
+            if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual) &&
+                rows_violated(&ctrl->qp, ctrl->phi, cfg->sp.big, 1e-6)) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_NOT_CONVERGED,
+                            "PDNN residual %.2e after %d steps and a collision row not met", pr.residual,
+                            pr.steps);
+                goto fault;
+            }
+            ts_advance(ctrl, info, ts_off, (const double(*)[3])rdot_d);
+        } else if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
             /* an infeasible QP (tracking against avoidance) never converges: name it as the paper does */
             if (eq > cfg->eq_tol) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
@@ -448,7 +665,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             }
             goto fault;
         }
-        if (eq > cfg->eq_tol) {
+        if (!ts && eq > cfg->eq_tol) {
             raise_fault(
                 ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
                 "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance", eq,
@@ -492,6 +709,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     ctrl->ticks++;
     info->fault = MCA_CTRL_FAULT_NONE;
     info->fault_text[0] = 0;
+    fill_path_info(ctrl, info);
     info->compute_ns = now_ns() - t_enter;
     return MCA_OK;
 
@@ -503,6 +721,137 @@ fault:
     ctrl->ticks++;
     info->fault = ctrl->fault;
     memcpy(info->fault_text, ctrl->fault_text, sizeof info->fault_text);
+    if (ctrl->started) {
+        fill_path_info(ctrl, info);
+    }
     info->compute_ns = now_ns() - t_enter;
     return MCA_EFAULT;
+}
+
+/* Braking fallback: every arm's whole velocity vector scaled by one factor, the largest that keeps each
+ * joint's change within dec dt, so the arm keeps its direction of motion while it slows. */
+static void brake_scale(const mca_controller_t *ctrl, const double *const v_last[MCA_MAX_ARMS],
+                        const double *const dec[MCA_MAX_ARMS], double dt, double *const qdot[MCA_MAX_ARMS]) {
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        const int dof = ctrl->cfg.chain[a].dof;
+        double f = 1.0;
+        for (int j = 0; j < dof; j++) {
+            const double v = fabs(v_last[a][j]);
+            if (v > 0.0) {
+                f = fmin(f, 1.0 - dec[a][j] * dt / v);
+            }
+        }
+        f = fmax(f, 0.0);
+        for (int j = 0; j < dof; j++) {
+            qdot[a][j] = isfinite(v_last[a][j]) ? f * v_last[a][j] : 0.0;
+        }
+    }
+}
+
+/* The braking QP: min 1/2 |qdot|^2 s.t. the deceleration box around v_last, the joint bounds and one
+ * normal-form collision row per link (approach speed <= S(d) v_normal, and <= the stoppability bound
+ * under mca-ts). No equality: the task is over. @retval MCA_OK with qdot written, or an error (no answer). */
+static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
+                    const double *const v_last[MCA_MAX_ARMS], const double *const dec[MCA_MAX_ARMS],
+                    double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const int na = cfg->n_arms;
+    const double dt = cfg->dt;
+    mca_scheme_params_t sp = cfg->sp;
+    sp.collision = 1;
+    sp.form = MCA_FORM_NORMAL;
+    const mca_chain_t *chains[MCA_MAX_ARMS];
+    double r_d[MCA_MAX_ARMS][3] = {{0}}, rdot_d[MCA_MAX_ARMS][3] = {{0}};
+    for (int a = 0; a < na; a++) {
+        chains[a] = &cfg->chain[a];
+    }
+    mca_scheme_state_t st; /* the normal form keeps no memory */
+    mca_scheme_info_t si;
+    mca_qp_t *qp = &ctrl->brake_qp;
+    int rc = mca_scheme_assemble(&sp, na, chains, ctrl->kin, q, (const double(*)[3])r_d,
+                                 (const double(*)[3])rdot_d,
+                                 (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit, NULL, &st, qp, &si);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    qp->n_eq = 0;
+    if (cfg->scheme == MCA_SCHEME_MCA_TS) {
+        mca_scheme_shape_rows(qp, &si, na, chains, (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
+                              &sp, cfg->ts.dec_limit, cfg->ts.priority);
+    }
+    for (int a = 0; a < na; a++) {
+        for (int j = 0; j < cfg->chain[a].dof; j++) {
+            const int k = si.var_off[a] + j;
+            const double v = v_last[a][j], step = dec[a][j] * dt;
+            if (!isfinite(v) || !(step > 0.0)) {
+                return MCA_EINVAL;
+            }
+            qp->lb[k] = fmax(qp->lb[k], v - step);
+            qp->ub[k] = fmin(qp->ub[k], v + step);
+            if (!(qp->lb[k] <= qp->ub[k])) {
+                return MCA_EINFEASIBLE; /* a joint is carried past its limit band faster than it can stop */
+            }
+        }
+    }
+    mca_pdnn_result_t pr = {0};
+    double phi[MCA_QP_MAX_VARS];
+    rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &cfg->pdnn, phi, &pr);
+    info->pdnn_steps = pr.steps;
+    info->pdnn_residual = pr.residual;
+    info->pdnn_converged = pr.converged;
+    if (rc == MCA_EINVAL || (rc != MCA_OK && !(pr.residual <= cfg->fault_residual))) {
+        return rc == MCA_OK ? MCA_ENOTCONV : rc;
+    }
+    for (int i = 0; i < qp->n_ineq; i++) {
+        double s = 0.0;
+        for (int j = 0; j < qp->n; j++) {
+            s += qp->U[i][j] * phi[j];
+        }
+        if (!(s <= qp->beta[i] + 1e-6)) {
+            return MCA_ENOTCONV;
+        }
+    }
+    for (int a = 0; a < na; a++) {
+        for (int j = 0; j < cfg->chain[a].dof; j++) {
+            const int k = si.var_off[a] + j;
+            /* the PDNN's answer lies in the box up to rounding; clamp so the dec limit holds exactly */
+            qdot[a][j] = fmax(qp->lb[k], fmin(qp->ub[k], phi[k]));
+        }
+    }
+    return MCA_OK;
+}
+
+int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
+                         const double *const v_last[MCA_MAX_ARMS],
+                         const double *const dec_limit[MCA_MAX_ARMS], double *const qdot[MCA_MAX_ARMS],
+                         mca_tick_info_t *info) {
+    const int64_t t_enter = now_ns();
+    if (!ctrl || !q || !v_last || !dec_limit || !qdot || !info) {
+        return MCA_EINVAL;
+    }
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        if (!v_last[a] || !dec_limit[a] || !qdot[a]) {
+            return MCA_EINVAL;
+        }
+    }
+    const int rc = mca_controller_observe(ctrl, t, q, info);
+    info->brake_fallback = 0;
+    if (rc != MCA_OK || brake_qp(ctrl, q, v_last, dec_limit, qdot, info) != MCA_OK) {
+        /* no distances or no QP answer: keep each arm's direction, slow it as fast as allowed */
+        brake_scale(ctrl, v_last, dec_limit, ctrl->cfg.dt, qdot);
+        info->brake_fallback = 1;
+        ctrl->brake_pdnn.h = 0;
+    }
+    int at_rest = 1;
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        for (int j = 0; j < ctrl->cfg.chain[a].dof; j++) {
+            if (fabs(qdot[a][j]) <= 1e-9) {
+                qdot[a][j] = 0.0;
+            } else {
+                at_rest = 0;
+            }
+        }
+    }
+    info->compute_ns = now_ns() - t_enter;
+    return at_rest;
 }

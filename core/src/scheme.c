@@ -215,3 +215,69 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
     }
     return bounds_rc;
 }
+
+void mca_scheme_shape_rows(mca_qp_t *qp, const mca_scheme_info_t *si, int n_arms,
+                           const mca_chain_t *const chain[], const mca_link_critical_t crit[][MCA_MAX_LINKS],
+                           const mca_scheme_params_t *p, const double *dec, const double *priority) {
+    if (si->rows_per_link != 1) {
+        return; /* the componentwise form keeps the paper's bounds */
+    }
+    for (int a = 0; a < n_arms; a++) {
+        double t_stop = 0.0; /* longest stop of arm a from its fastest joint speed */
+        if (dec && dec[a] > 0.0) {
+            for (int j = 0; j < chain[a]->dof; j++) {
+                t_stop = fmax(t_stop, chain[a]->joint[j].vel_limit / dec[a]);
+            }
+        }
+        for (int l = 0; l <= chain[a]->dof; l++) {
+            const int r = si->row_off[a] + l;
+            const mca_link_critical_t *c = &crit[a][l];
+            if (!c->valid || !(qp->beta[r] < p->big)) {
+                continue;
+            }
+            const int b = c->other_arm;
+            const double pa = priority ? priority[a] : 1.0, pb = priority ? priority[b] : 1.0;
+            const double share = pa + pb > 0.0 ? 2.0 * pa / (pa + pb) : 1.0;
+            double bound = qp->beta[r];
+            if (t_stop > 0.0) {
+                bound = fmin(bound, fmax(0.0, c->d - p->d1) / t_stop);
+            }
+            qp->beta[r] = share * bound;
+        }
+    }
+}
+
+int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
+                             const double *sigma_lo, const double *sigma_hi, const mca_timescale_weights_t *w,
+                             int ts_off[]) {
+    if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !w || !ts_off || !(w->w_sigma > 0.0) ||
+        !(w->w_slack > 0.0) || n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
+        return MCA_EINVAL;
+    }
+    if (qp->n + MCA_TS_VARS * n_arms > MCA_QP_MAX_VARS) {
+        return MCA_ERANGE;
+    }
+    const double rs = 1.0 / sqrt(w->w_sigma), re = 1.0 / sqrt(w->w_slack);
+    for (int a = 0; a < n_arms; a++) {
+        const int o = qp->n;
+        ts_off[a] = o;
+        qp->n += MCA_TS_VARS;
+        for (int i = 0; i < MCA_TASK_DIM; i++) {
+            const int row = MCA_TASK_DIM * a + i;
+            /* the assembly wrote alpha = rdot + K (r_d - r): the path term now runs at the target rate */
+            qp->alpha[row] += (target[a] - 1.0) * rdot_d[a][i];
+            qp->G[row][o] = -rdot_d[a][i] * rs;
+            qp->G[row][o + 1 + i] = -re;
+            qp->lb[o + 1 + i] = -INFINITY;
+            qp->ub[o + 1 + i] = INFINITY;
+        }
+        for (int k = 0; k < qp->n_ineq; k++) {
+            for (int v = 0; v < MCA_TS_VARS; v++) {
+                qp->U[k][o + v] = 0.0;
+            }
+        }
+        qp->lb[o] = (sigma_lo[a] - target[a]) / rs;
+        qp->ub[o] = (sigma_hi[a] - target[a]) / rs;
+    }
+    return MCA_OK;
+}

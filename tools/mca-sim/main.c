@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* mca-sim: run a scenario in virtual time through the controller tick and print a Table-I style report.
- *   mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR] [--dump-every N]
+ *   mca-sim --scenario FILE [--scheme mca|mca-ts|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR] [--dump-every N]
  *           [--dump-max N] [--form componentwise|normal] [--euler] [--duration S] [--summary FILE]
  */
 #include <errno.h>
@@ -16,7 +16,7 @@
 static void usage(FILE *f) {
     fprintf(
         f,
-        "usage: mca-sim --scenario FILE [--scheme mca|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
+        "usage: mca-sim --scenario FILE [--scheme mca|mca-ts|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
         "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm]\n"
@@ -152,26 +152,21 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
-    mca_scheme_kind_t list[3];
+    mca_scheme_kind_t list[4];
     int n_list = 0;
     {
         char buf[64];
         snprintf(buf, sizeof buf, "%s", schemes);
         for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-            if (n_list == 3) {
-                fprintf(stderr, "mca-sim: --scheme: at most 3 schemes\n");
+            if (n_list == 4) {
+                fprintf(stderr, "mca-sim: --scheme: at most 4 schemes\n");
                 return 2;
             }
-            if (!strcmp(tok, "mca")) {
-                list[n_list++] = MCA_SCHEME_MCA;
-            } else if (!strcmp(tok, "mvn")) {
-                list[n_list++] = MCA_SCHEME_MVN;
-            } else if (!strcmp(tok, "apf")) {
-                list[n_list++] = MCA_SCHEME_APF;
-            } else {
-                fprintf(stderr, "mca-sim: --scheme: '%s' is not mca, mvn or apf\n", tok);
+            if (mca_scheme_from_name(tok, &list[n_list]) != MCA_OK) {
+                fprintf(stderr, "mca-sim: --scheme: '%s' is not mca, mca-ts, mvn or apf\n", tok);
                 return 2;
             }
+            n_list++;
         }
     }
     if (dump && mkdir(dump, 0755) != 0 && errno != EEXIST) {
@@ -185,7 +180,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "mca-sim: %s\n", err);
         return 1;
     }
-    static mca_simrun_result_t res[3];
+    static mca_simrun_result_t res[4];
     for (int s = 0; s < n_list; s++) {
         char csvp[1024];
         o.scheme = list[s];
@@ -289,7 +284,8 @@ int main(int argc, char **argv) {
                 fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
                         isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);
             }
-            fprintf(f, "]}");
+            fprintf(f, "],\"completed\":%d,\"path_time_lost_s\":%.6g,\"deadlocks\":%d,\"max_slack\":%.3g}",
+                    r->completed, r->path_time_lost_s, r->deadlocks, r->max_slack);
         }
         fprintf(f, "]}\n");
         fclose(f);

@@ -13,21 +13,14 @@
 #include "mca/sim_backend.h"
 
 const char *mca_simrun_scheme_name(mca_scheme_kind_t s) {
-    switch (s) {
-    case MCA_SCHEME_MCA:
-        return "mca";
-    case MCA_SCHEME_MVN:
-        return "mvn";
-    case MCA_SCHEME_APF:
-        return "apf";
-    }
-    return "?";
+    return mca_scheme_name(s);
 }
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     memset(o, 0, sizeof *o);
     o->scheme = MCA_SCHEME_MCA;
     o->form = -1;
+    o->overtime = -1.0;
     o->use_backend = 1;
     o->dump_every = 1;
     o->settle = 0.2;
@@ -121,6 +114,14 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     if (o->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = o->pdnn_max_steps;
     }
+    for (int a = 0; a < cfg->n_arms; a++) {
+        mca_sim_arm_config_t sc; /* the stoppability bound uses the (simulated) arm's deceleration */
+        mca_sim_arm_config_from_chain(&sc, &cfg->chain[a]);
+        cfg->ts.dec_limit[a] = sc.dec_limit[0];
+        for (int j = 1; j < cfg->chain[a].dof; j++) {
+            cfg->ts.dec_limit[a] = fmin(cfg->ts.dec_limit[a], sc.dec_limit[j]);
+        }
+    }
     rc = mca_controller_init(ctrl, cfg);
     if (rc != MCA_OK) {
         snprintf(err, errlen, "%s: controller init failed: %s", scn->source, mca_strerror(rc));
@@ -130,7 +131,15 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     const double dt = cfg->dt;
     const double duration = o->duration > 0.0 ? o->duration : scn->duration;
     const int n_ticks = (int)llround(duration / dt) + 1;
-    const int max_ticks = n_ticks + (int)llround((o->settle + 5.0) / dt);
+    const double overtime =
+        o->scheme == MCA_SCHEME_MCA_TS ? (o->overtime < 0.0 ? duration : o->overtime) : 0.0;
+    const int n_ticks_ts = n_ticks + (int)llround(overtime / dt);
+    const int max_ticks = n_ticks_ts + (int)llround((o->settle + 5.0) / dt);
+    double nominal_end = 0.0;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        nominal_end = fmax(nominal_end, mca_path_end_time(&cfg->path[a]));
+    }
+    nominal_end = fmin(nominal_end, duration);
     cns = calloc((size_t)max_ticks, sizeof *cns);
     cpu = calloc((size_t)max_ticks, sizeof *cpu);
     if (!cns || !cpu) {
@@ -196,7 +205,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     int k;
     for (k = 0; k < max_ticks; k++) {
         const double t = k * dt;
-        if (!r->fault && k >= n_ticks) {
+        if (!r->fault && k >= n_ticks &&
+            (o->scheme != MCA_SCHEME_MCA_TS || info.paths_done || k >= n_ticks_ts)) {
             break;
         }
         struct timespec c0, c1;
@@ -210,6 +220,15 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             rc = trc;
             goto out;
         }
+        if (!r->fault && !r->completed && info.paths_done) {
+            r->completed = 1;
+            r->path_time_lost_s = fmax(0.0, info.task_t - nominal_end);
+        }
+        if (!r->completed) {
+            r->path_time_lost_s = fmax(0.0, info.task_t - nominal_end);
+        }
+        r->deadlocks = info.deadlocks;
+        r->max_slack = fmax(r->max_slack, info.slack);
         if (info.min_distance < r->min_distance) {
             r->min_distance = info.min_distance;
             r->min_distance_t = t;

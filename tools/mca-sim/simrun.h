@@ -31,6 +31,8 @@ typedef struct mca_simrun_opts {
     double v_normal;    /**< > 0: override the scenario's */
     double v_floor;     /**< >= 0: override the scenario's (< 0: keep) */
     int dist_lsdm;      /**< 1: the paper's LSDM for the distances instead of the closed form */
+    double overtime;    /**< mca-ts: run on after the duration until the path clocks end, this long at most
+                             (< 0: the duration again) */
 } mca_simrun_opts_t;
 
 typedef struct mca_simrun_result {
@@ -58,6 +60,10 @@ typedef struct mca_simrun_result {
     int64_t cpu_p50, cpu_p99, cpu_max;             /**< thread CPU time of the tick call (no preemption) */
     int dumped, dumped_binding;
     int dump_skipped_capped; /**< ticks --dump-every picked but not dumped: PDNN at its cap (not converged) */
+    int completed;           /**< 1: every arm's path clock reached its path's end (no fault) */
+    double path_time_lost_s; /**< task time at completion (or at the end) minus the paths' nominal end */
+    int deadlocks;           /**< mca-ts deadlocks detected */
+    double max_slack;        /**< mca-ts: largest tracking slack [m/s] */
 } mca_simrun_result_t;
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);

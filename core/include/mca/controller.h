@@ -63,9 +63,9 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out);
 
 /** Path-time scaling parameters (mca-ts only; defaults in mca_controller_default_config()). */
 typedef struct mca_timescale_params {
-    double w_sigma;        /**< weight of (sigma - 1)^2 against |qdot|^2 (1e2) */
-    double w_slack;        /**< weight of the tracking slack |e|^2 (1e4) */
-    double sigma_max;      /**< most path rate when catching up (1.0: never faster than the path) */
+    double w_sigma;                /**< weight of (sigma - 1)^2 against |qdot|^2 (1e2) */
+    double w_slack;                /**< weight of the tracking slack |e|^2 (1e4) */
+    double sigma_max;              /**< most path rate when catching up (1.0: never faster than the path) */
     double priority[MCA_MAX_ARMS]; /**< higher keeps its path; lower yields first and backs off (1) */
     double deadlock_time;  /**< every moving arm's sigma below deadlock_sigma this long: deadlock [s] (0.5) */
     double deadlock_sigma; /**< (0.05) */
@@ -183,10 +183,10 @@ typedef struct mca_controller {
     double tau[MCA_MAX_ARMS];   /**< path clocks */
     double sigma[MCA_MAX_ARMS]; /**< last path rates */
     double path_end[MCA_MAX_ARMS];
-    double t_prev;              /**< last tick's t (tau advances by sigma (t - t_prev)) */
-    double stall_time;          /**< how long every unfinished arm's sigma has been below deadlock_sigma */
+    double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
+    double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
     int deadlock, deadlock_arm, deadlocks;
-    double deadlock_until;      /**< back-off ends at this task time */
+    double deadlock_until;         /**< back-off ends at this task time */
     double wait_tau[MCA_MAX_ARMS]; /**< WAIT: the others' clocks when it began */
     /* braking QP (kept apart from the tick's so a fault does not disturb the last tick's dump) */
     mca_qp_t brake_qp;
@@ -238,8 +238,9 @@ int mca_controller_observe(mca_controller_t *ctrl, double t, const double *const
  * @retval 1 every commanded velocity is zero (at rest), 0 still braking, MCA_EINVAL (NULL, non-finite q)
  */
 int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],
-                         const double *const v_last[MCA_MAX_ARMS], const double *const dec_limit[MCA_MAX_ARMS],
-                         double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info);
+                         const double *const v_last[MCA_MAX_ARMS],
+                         const double *const dec_limit[MCA_MAX_ARMS], double *const qdot[MCA_MAX_ARMS],
+                         mca_tick_info_t *info);
 
 /** Latch a fault from outside the tick (a test's injected fault, a backend fault). RT safe. */
 void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text);

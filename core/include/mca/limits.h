@@ -17,9 +17,12 @@
 /** Task-space dimension of the end-effector constraint (position only). */
 #define MCA_TASK_DIM 3
 
-/** QP sizes: phi = all joint velocities, one 3-row equality per arm, and per link of every arm
- *  one critical point of up to 3 rows (componentwise form) against the other arms. */
-#define MCA_QP_MAX_VARS (MCA_MAX_ARMS * MCA_MAX_DOF)
+/** Extra QP variables per arm under path-time scaling (mca-ts): the path rate and a 3-vector tracking slack.
+ */
+#define MCA_TS_VARS (1 + MCA_TASK_DIM)
+/** QP sizes: phi = all joint velocities (and the mca-ts variables), one 3-row equality per arm, and per
+ *  link of every arm one critical point of up to 3 rows (componentwise form) against the other arms. */
+#define MCA_QP_MAX_VARS (MCA_MAX_ARMS * (MCA_MAX_DOF + MCA_TS_VARS))
 #define MCA_QP_MAX_EQ (MCA_MAX_ARMS * MCA_TASK_DIM)
 #define MCA_QP_MAX_INEQ (MCA_MAX_ARMS * MCA_MAX_LINKS * 3)
 /** Primal-dual vector length h = vars + eq + ineq. */
