@@ -3,7 +3,8 @@
 
 usage: plot_run.py --out PREFIX [--d1 D1 --d2 D2] [--title T] LABEL=run.csv [LABEL=run.csv ...]
 Writes
-  PREFIX-distance.png  minimum distance vs time with d1, d2 (paper Fig. 10), one curve per run;
+  PREFIX-distance.png  minimum distance vs time with d1, d2 (paper Fig. 10), one curve per run; with three
+                       or more arms (CSV columns d_<a>_<b>) one curve per pair of arms instead;
   PREFIX-error.png     end-effector tracking error |r_d - r| per arm vs time (paper Fig. 11), per run;
   PREFIX-paths.png     both arms' end-effector paths in 3-D, desired dashed (paper Fig. 8), per run.
 Example:
@@ -38,6 +39,12 @@ def n_arms(d):
     return a
 
 
+def pairs(d):
+    """(a, b) of every per-pair distance column d_<a>_<b> (mca-sim writes them for three or more arms)."""
+    return sorted(tuple(int(x) for x in h[2:].split("_")) for h in d
+                  if h.startswith("d_") and h[2:].replace("_", "").isdigit())
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True)
@@ -55,7 +62,12 @@ def main():
 
     fig, ax = plt.subplots(figsize=(8, 4))
     for label, d in runs:
-        ax.plot(d["t"], d["min_d"], label=label)
+        pp = pairs(d)
+        if pp:
+            for a_, b_ in pp:
+                ax.plot(d["t"], d["d_%d_%d" % (a_, b_)], lw=1, label="%s: arms %d-%d" % (label, a_, b_))
+        else:
+            ax.plot(d["t"], d["min_d"], label=label)
         if "fault" in d and np.any(d["fault"] > 0):
             k = int(np.argmax(d["fault"] > 0))
             ax.axvline(d["t"][k], color="k", ls=":", lw=0.8)
@@ -66,7 +78,8 @@ def main():
         ax.axhline(a.d2, color="orange", ls="--", lw=1, label="d2 = %.3f m" % a.d2)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("minimum distance [m]")
-    ax.set_title((a.title + ": " if a.title else "") + "minimum distance between the arms")
+    ax.set_title((a.title + ": " if a.title else "") + "minimum distance between the arms" +
+                 (" (per pair)" if any(pairs(d) for _, d in runs) else ""))
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()
