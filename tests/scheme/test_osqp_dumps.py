@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """PDNN == OSQP within 1e-6 on >= 1000 QPs dumped by mca-sim from tasks 1-3 (MCA scheme, both collision
-forms), of which >= 1000 have binding collision rows (and every task some). Ticks where the PDNN stopped at
+forms; or, with SCHEME mca-ts, the path-time-scaled QPs of tasks 1-4 in the normal form the scheme uses), of
+which >= 1000 have binding collision rows (and every task some). Ticks where the PDNN stopped at
 its step cap are not dumped (their accepted phi may be more than 1e-6 from the exact one): printed per run.
 
-usage: test_osqp_dumps.py MCA_SIM SCENARIO_DIR OSQP_CHECK PYTHON WORK_DIR
+usage: test_osqp_dumps.py MCA_SIM SCENARIO_DIR OSQP_CHECK PYTHON WORK_DIR [SCHEME]
 """
 import glob
 import json
@@ -20,6 +21,7 @@ MIN_BINDING_PER_RUN = 50  # every task contributes binding QPs (task 3, the fewe
 
 def main():
     sim, sdir, checker, py, work = sys.argv[1:6]
+    scheme = sys.argv[6] if len(sys.argv) > 6 else "mca"
     shutil.rmtree(work, ignore_errors=True)
     qpdir = os.path.join(work, "qp")  # the dumps only (osqp_check reads every *.json under it)
     os.makedirs(qpdir)
@@ -28,12 +30,17 @@ def main():
     # to 1e-12; see docs/scheme.md)
     runs = [("cross_circles", "normal", 20, []), ("cross_circles", "componentwise", 40, ["--v-floor", "0.02"]),
             ("hui", "normal", 40, []), ("cup_stacking", "normal", 50, [])]
+    if scheme == "mca-ts":
+        # mca-ts always uses the normal form (its stoppability bound bounds the normal approach speed); the
+        # negative task is where path time stops and the tracking slack carries the contradiction
+        runs = [("cross_circles", "normal", 10, []), ("hui", "normal", 20, []), ("cup_stacking", "normal", 25, []),
+                ("negative", "normal", 10, [])]
     failed = False
     capped_total = 0
     for name, form, every, extra in runs:
         d = os.path.join(qpdir, "%s-%s" % (name, form))
         summary = os.path.join(work, "%s-%s.summary.json" % (name, form))
-        p = subprocess.run([sim, "--scenario", os.path.join(sdir, name + ".yaml"), "--scheme", "mca", "--form",
+        p = subprocess.run([sim, "--scenario", os.path.join(sdir, name + ".yaml"), "--scheme", scheme, "--form",
                             form, "--dump-qp", d, "--dump-every", str(every), "--summary", summary] + extra,
                            capture_output=True, text=True, timeout=600)
         if p.returncode != 0:
