@@ -1026,5 +1026,13 @@ int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *
         cfg->fault_residual = cell->fault_residual;
     }
     cfg->dt = (double)cell->rt.period_ns * 1e-9;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        /* the stoppability bound (mca-ts) assumes the least deceleration of the arm's joints */
+        double dec = INFINITY;
+        for (int j = 0; j < cfg->chain[a].dof; j++) {
+            dec = fmin(dec, cell->arm[a].dec_limit[j]);
+        }
+        cfg->ts.dec_limit[a] = isfinite(dec) && dec > 0.0 ? dec : 0.0;
+    }
     return MCA_OK;
 }

@@ -50,7 +50,19 @@ struct mca_daemon {
     mca_arm_command_t cmd[MCA_MAX_ARMS];
     double q[MCA_MAX_ARMS][MCA_MAX_DOF];
     double qdot[MCA_MAX_ARMS][MCA_MAX_DOF];
-    double vcmd[MCA_MAX_ARMS][MCA_MAX_DOF]; /* velocity last commanded (the brake ramp starts here) */
+    double vcmd[MCA_MAX_ARMS][MCA_MAX_DOF]; /* velocity last commanded (braking starts here) */
+    double dec[MCA_MAX_ARMS][MCA_MAX_DOF];  /* braking deceleration per joint (cell dec_limit) */
+    /* braking (mca_controller_brake): one stop at most per run */
+    int brake_active;        /* braking started (brake_t0, brake_deadline valid) */
+    double brake_t0;         /* task time braking began */
+    double brake_deadline;   /* from here on the keep-direction scale-down is forced */
+    double brake_rest_t;     /* task time all commands reached zero (-1: not yet) */
+    uint64_t brake_fallback; /* braking ticks that used the keep-direction fallback (QP or forced) */
+    uint64_t brake_forced;   /* of those, ticks past brake_deadline */
+    int brake_fallback_logged;
+    double brake_max_dv; /* max over braking ticks and joints of |dv| / (dec dt) */
+    /* mca-ts deadlock state as last seen */
+    int deadlock, deadlock_arm, deadlocks;
     uint32_t frame_id;
     int fault; /* mca_daemon_fault_t; latched */
     int ctrl_fault;
@@ -237,7 +249,12 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     for (int a = 0; a < d->n_arms; a++) {
         d->dof[a] = d->ccfg.chain[a].dof;
         d->cmd[a].n = d->dof[a];
+        for (int j = 0; j < d->dof[a]; j++) {
+            d->dec[a][j] = cell->arm[a].dec_limit[j] > 0.0 ? cell->arm[a].dec_limit[j] : 10.0;
+        }
     }
+    d->brake_rest_t = -1.0;
+    d->deadlock_arm = -1;
     for (int a = 0; a < d->n_arms && rc == MCA_OK; a++) {
         rc = open_arm(d, a, err, errlen);
     }
@@ -400,24 +417,100 @@ static void read_feedback(mca_daemon_t *d, double t) {
     }
 }
 
-/* Ramp every commanded velocity towards 0 at the arm's deceleration limit. @return 1 when all are 0. */
-static int brake_ramp(mca_daemon_t *d) {
+/* Keep-direction scale-down: each arm's whole velocity vector times one factor, so that no joint changes
+ * by more than dec dt (reaches 0 within ceil(max_j |v_j| / (dec_j dt)) ticks). @return 1 when all are 0. */
+static int brake_scale_down(mca_daemon_t *d) {
     const double dt = (double)d->cell.rt.period_ns * 1e-9;
     int all_zero = 1;
     for (int a = 0; a < d->n_arms; a++) {
+        /* joint j changes by (1 - s) |v_j| <= dec_j dt for every j: the joint slowest to stop sets s */
+        double s = 0.0;
+        int finite = 1;
         for (int j = 0; j < d->dof[a]; j++) {
-            const double step = d->cell.arm[a].dec_limit[j] * dt;
-            double v = d->vcmd[a][j];
-            if (!isfinite(v) || fabs(v) <= step) {
-                v = 0.0;
-            } else {
-                v -= v > 0 ? step : -step;
-                all_zero = 0;
+            const double v = fabs(d->vcmd[a][j]);
+            if (!isfinite(v)) {
+                finite = 0;
+            } else if (v > 0.0) {
+                s = fmax(s, 1.0 - d->dec[a][j] * dt / v);
             }
-            d->qdot[a][j] = v;
+        }
+        for (int j = 0; j < d->dof[a]; j++) {
+            const double v = finite ? s * d->vcmd[a][j] : 0.0;
+            d->qdot[a][j] = fabs(v) <= 1e-9 ? 0.0 : v;
+            all_zero &= d->qdot[a][j] == 0.0;
         }
     }
     return all_zero;
+}
+
+/* One braking tick: mca_controller_brake (velocities closest to zero inside last command +- dec dt, the
+ * joint limits and the collision rows; its own fallback keeps each arm's direction) until the deadline
+ * set when braking began (max_j |v_j| / dec_j, plus half of that and 20 periods), then the keep-direction
+ * scale-down alone: a stop never lasts for ever. Measures the distances (as mca_controller_observe).
+ * @return 1 when every command is zero. */
+static int brake_tick(mca_daemon_t *d, double t, const double *const qp[MCA_MAX_ARMS]) {
+    const double dt = (double)d->cell.rt.period_ns * 1e-9;
+    if (!d->brake_active) {
+        double tmax = 0.0;
+        for (int a = 0; a < d->n_arms; a++) {
+            for (int j = 0; j < d->dof[a]; j++) {
+                const double v = fabs(d->vcmd[a][j]);
+                tmax = isfinite(v) ? fmax(tmax, v / d->dec[a][j]) : tmax;
+            }
+        }
+        d->brake_active = 1;
+        d->brake_t0 = t;
+        d->brake_deadline = t + 1.5 * tmax + 20.0 * dt;
+        d->brake_rest_t = -1.0;
+    }
+    const double *vl[MCA_MAX_ARMS], *dl[MCA_MAX_ARMS];
+    double *qd[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        vl[a] = d->vcmd[a];
+        dl[a] = d->dec[a];
+        qd[a] = d->qdot[a];
+    }
+    int done, fallback = 0;
+    if (t < d->brake_deadline) {
+        const int rc = mca_controller_brake(&d->ctrl, t, qp, vl, dl, qd, &d->info);
+        if (rc < 0) {
+            done = brake_scale_down(d);
+            fallback = 1;
+        } else {
+            done = rc;
+            fallback = d->info.brake_fallback;
+        }
+    } else {
+        if (d->brake_forced++ == 0) {
+            LOGN(d, MCA_LOG_WARNING,
+                 "braking not at rest %.3f s after it began (t = %.3f s): forcing the keep-direction "
+                 "scale-down",
+                 2, t - d->brake_t0, t, 0, 0, NULL);
+        }
+        mca_controller_observe(&d->ctrl, t, qp, &d->info);
+        done = brake_scale_down(d);
+        fallback = 1;
+    }
+    d->info.brake_fallback = fallback;
+    if (fallback) {
+        d->brake_fallback++;
+        if (!d->brake_fallback_logged) {
+            d->brake_fallback_logged = 1;
+            LOGN(d, MCA_LOG_WARNING,
+                 "braking at t = %.3f s: no braking QP answer: each arm keeps its direction (whole velocity "
+                 "scaled down)",
+                 1, t, 0, 0, 0, NULL);
+        }
+    }
+    for (int a = 0; a < d->n_arms; a++) {
+        for (int j = 0; j < d->dof[a]; j++) {
+            const double dv = fabs(d->qdot[a][j] - d->vcmd[a][j]) / (d->dec[a][j] * dt);
+            if (isfinite(dv)) {
+                d->brake_max_dv = fmax(d->brake_max_dv, dv);
+            }
+        }
+    }
+    return done;
 }
 
 static void send_commands(mca_daemon_t *d, int servo) {
@@ -566,9 +659,9 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         } else {
             send_commands(d, 1);
         }
-    } else if (mca_controller_observe(&d->ctrl, t, qp, &d->info) == MCA_OK) {
-        /* braking, stopped or in fault: the arms may still move, so the distances are still measured
-         * (and published; the minimum covers the braking). The solver figures stay the last tick's. */
+    } else if (state != MCA_DAEMON_BRAKING && mca_controller_observe(&d->ctrl, t, qp, &d->info) == MCA_OK) {
+        /* stopped or in fault: the arms may still move, so the distances are still measured (and
+         * published). The solver figures stay the last tick's. */
         if (d->info.min_distance < d->min_d) {
             d->min_d = d->info.min_distance;
             d->min_d_t = t;
@@ -576,15 +669,23 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         }
     }
     if (state == MCA_DAEMON_BRAKING) {
-        const int done = brake_ramp(d);
+        /* braking measures the distances too (the minimum covers the braking) */
+        const int done = brake_tick(d, t, qp);
+        if (isfinite(d->info.min_distance) && d->info.min_distance < d->min_d) {
+            d->min_d = d->info.min_distance;
+            d->min_d_t = t;
+            d->min_d_stamp = stamp_ns;
+        }
         send_commands(d, 1);
         if (done) {
             state =
                 d->stop_pending && d->fault == MCA_DAEMON_FAULT_NONE ? MCA_DAEMON_STOPPED : MCA_DAEMON_FAULT;
             atomic_store(&d->state, state);
+            d->brake_rest_t = t;
             LOGN(d, state == MCA_DAEMON_FAULT ? MCA_LOG_ERR : MCA_LOG_NOTICE,
-                 "all joints commanded to zero at t = %.3f s: state %s", 1, t, 0, 0, 0,
-                 mca_daemon_state_name(state));
+                 "all joints commanded to zero at t = %.3f s after %.3f s of braking (%g fallback ticks): "
+                 "state %s",
+                 3, t, t - d->brake_t0, (double)d->brake_fallback, 0, mca_daemon_state_name(state));
         }
     } else if (state == MCA_DAEMON_STOPPED || state == MCA_DAEMON_FAULT) {
         /* zero velocity, servo released: the arms' brakes hold */
@@ -879,6 +980,14 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
         mca_ring_stats(&d->csv_ring, &rs);
         s->csv_dropped = rs.dropped;
     }
+    s->brake_t = d->brake_active ? d->brake_t0 : -1.0;
+    s->stop_duration_s = d->brake_active && d->brake_rest_t >= 0.0 ? d->brake_rest_t - d->brake_t0 : -1.0;
+    s->brake_fallback_ticks = d->brake_fallback;
+    s->brake_forced_ticks = d->brake_forced;
+    s->max_dv_over_dt_dec = d->brake_max_dv;
+    s->deadlock = d->deadlock;
+    s->deadlock_arm = d->deadlock_arm;
+    s->deadlocks = d->deadlocks;
     s->sched_fifo = d->sched_fifo;
     s->mem_locked = d->mem_locked;
     s->dma_latency_held = d->dma_fd >= 0 || (d->sched_fifo && d->cell.rt.dma_latency && !d->opts.no_rt);
@@ -930,6 +1039,22 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
                 s->min_distance_t);
     } else {
         fprintf(f, "<6>mcad: summary: minimum distance n/a\n");
+    }
+    if (s->brake_t >= 0.0) {
+        fprintf(f,
+                "<%d>mcad: summary: braking from t = %.3f s, %s %.3f s, keep-direction fallback ticks %llu "
+                "(past the deadline %llu), max |dv|/(dec dt) %.4f\n",
+                s->brake_fallback_ticks ? 4 : 6, s->brake_t,
+                s->stop_duration_s >= 0.0 ? "at rest after" : "not at rest after",
+                s->stop_duration_s >= 0.0 ? s->stop_duration_s : 0.0,
+                (unsigned long long)s->brake_fallback_ticks, (unsigned long long)s->brake_forced_ticks,
+                s->max_dv_over_dt_dec);
+    }
+    if (s->deadlocks || s->deadlock) {
+        fprintf(f, "<6>mcad: summary: deadlocks %d (state now %s)\n", s->deadlocks,
+                s->deadlock == MCA_DEADLOCK_BACK_OFF ? "back-off"
+                : s->deadlock == MCA_DEADLOCK_WAIT   ? "wait"
+                                                     : "none");
     }
     if (s->fault) {
         fprintf(f, "<3>mcad: summary: faults: 1 (at t = %.3f s: %s)\n", s->fault_t, s->fault_text);

@@ -96,7 +96,18 @@ typedef struct mca_daemon_summary {
     char fault_text[160];
     double fault_t;
     uint64_t log_dropped, csv_dropped;
-    int sched_fifo; /**< 1 when the loop ran SCHED_FIFO */
+    /* braking (SIGTERM or a fault; through mca_controller_brake) */
+    double brake_t;                /**< task time braking began (-1: never braked) */
+    double stop_duration_s;        /**< from brake_t to every command at zero (-1: not at rest yet) */
+    uint64_t brake_fallback_ticks; /**< braking ticks with the keep-direction fallback (QP had no answer
+                                        or the stop's deadline had passed) */
+    uint64_t brake_forced_ticks;   /**< of those, ticks past the deadline (max_j |v_j|/dec_j + margin) */
+    double max_dv_over_dt_dec;     /**< braking: largest per-tick |commanded velocity change| / (dec dt) */
+    /* mca-ts path-time scaling */
+    int deadlock;     /**< mca_deadlock_state_t now */
+    int deadlock_arm; /**< the arm backing off (-1: none) */
+    int deadlocks;    /**< deadlocks detected so far */
+    int sched_fifo;   /**< 1 when the loop ran SCHED_FIFO */
     int mem_locked;
     int dma_latency_held;
 } mca_daemon_summary_t;
