@@ -1,0 +1,511 @@
+#!/usr/bin/env python3
+"""Seeded random-task sweep through mca-sim (issue 11, "yield instead of fault").
+
+usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three[,...]] [--n N] [--seed S] [--only ID[,ID...]]
+                    [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT] [--table OUT]
+                    [--lost-threshold 0.1] [--no-stop] [--dec-limit X] [--max-err 0.005] [--keep]
+
+For each kind (pa10: two PA10+ as in cross_circles.yaml; jaco-mico: JACO2 + MICO2 as in cup_stacking.yaml;
+three: JACO2, MICO2, JACO2 as in three_arms.yaml) N tasks are drawn, task i of kind K from the random
+generator seeded with "S:K:i" alone, so `--seed S --kind K --only K:i` repeats one task whatever N is.
+A task: base placements and initial configurations jittered around the shipped scenario's; a first short
+mca-sim run (hold paths, 2 ticks) gives the tool tips and the start distance (redrawn while < d2); then
+every arm gets a tool-tip path (a circle through its start, or relative waypoints out and back) whose far
+point lies towards another arm's tool tip (closer to it than the start).
+Reachable: plain MVN (each arm's QP is its own: every arm alone) tracks every path with error < --max-err and
+no fault; the others are counted apart as unreachable (with MVN's fault name).
+Every reachable task runs under each scheme, and again with a stop request at a random instant
+(mca-sim --stop-at, when this mca-sim has it). Each run is classified:
+  unsafe     some tick below d1, during the task or while braking (for mvn the expected collision);
+  completed  every path clock reached its end (summary `completed`) with <= --lost-threshold s lost;
+  late       completed, more path time lost;
+  safe-stop  a named fault, the stop request or an unresolved deadlock, and >= d1 all the way.
+Prints one table (rows scheme x {task, with stop}; counts and % of the reachable tasks), the unreachable
+count, the deadlock count and the fault names, and writes --json OUT with every task's details.
+Summary fields this mca-sim does not write (completed, path_time_lost_s, deadlocks) are reported "n/a";
+without them a run "completes" when it ran its duration without fault.
+"""
+import argparse
+import concurrent.futures as cf
+import csv
+import json
+import math
+import os
+import random
+import re
+import shutil
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROBOTS = os.path.join(ROOT, "config", "robots")
+CLASSES = ("completed", "late", "safe-stop", "unsafe")
+
+# Kinova home (deg [275, 167.5, 57.5, 240, 82.5, 75]); joint 1 turns the arm about its base
+KINOVA_HOME = [4.7997, 2.9234, 1.0036, 4.1888, 1.4399, 1.3090]
+PA10_LEFT = [0.0, math.pi / 4, 0.0, -math.pi / 2, 0.0, math.pi / 4, 0.0, math.pi / 4]
+PA10_RIGHT = [-math.pi / 2, -math.pi / 4, 0.0, math.pi / 2, 0.0, -math.pi / 4, 0.0, -math.pi / 4]
+
+# per kind: d1, d2, and a function rng -> list of arms (name, urdf, base_xyz, q0 nominal, q0 jitter [rad])
+KINDS = {
+    "pa10": dict(d1=0.05, d2=0.12),
+    "jaco-mico": dict(d1=0.07, d2=0.12),
+    "three": dict(d1=0.05, d2=0.12),
+}
+
+
+def joint_limits(urdf):
+    """[(lower, upper)] of the moving joints in file order (continuous: None)."""
+    lims = []
+    for j in ET.parse(urdf).getroot().iter("joint"):
+        if j.get("type") in ("revolute", "continuous", "prismatic"):
+            lim = j.find("limit")
+            if j.get("type") == "continuous" or lim is None or lim.get("lower") is None:
+                lims.append(None)
+            else:
+                lims.append((float(lim.get("lower")), float(lim.get("upper"))))
+    return lims
+
+
+_LIMITS = {}
+
+
+def jitter_q(rng, urdf, q, sigma):
+    if urdf not in _LIMITS:
+        _LIMITS[urdf] = joint_limits(os.path.join(ROBOTS, urdf))
+    lims = _LIMITS[urdf]
+    out = []
+    for j, x in enumerate(q):
+        y = x + rng.gauss(0.0, sigma)
+        if j < len(lims) and lims[j] is not None:
+            lo, hi = lims[j]
+            margin = 0.1 * (hi - lo)
+            y = min(max(y, lo + margin), hi - margin)
+        out.append(round(y, 5))
+    return out
+
+
+def draw_arms(kind, rng):
+    """Bases and initial configurations around the shipped scenario's."""
+    if kind == "pa10":
+        return [
+            dict(name="left", urdf="pa10plus.urdf", base=[0.0, 0.0, 0.0], q0=jitter_q(rng, "pa10plus.urdf", PA10_LEFT, 0.2)),
+            dict(name="right", urdf="pa10plus.urdf",
+                 base=[round(0.45 + rng.uniform(-0.1, 0.1), 4), round(-0.5 + rng.uniform(-0.1, 0.1), 4), 0.0],
+                 q0=jitter_q(rng, "pa10plus.urdf", PA10_RIGHT, 0.2)),
+        ]
+    if kind == "jaco-mico":
+        mico = list(KINOVA_HOME)
+        mico[0] = 6.4228  # turned by joint 1 to face the JACO2 (cup_stacking.yaml)
+        return [
+            dict(name="jaco2", urdf="jaco2.urdf", base=[0.0, 0.0, 0.0], q0=jitter_q(rng, "jaco2.urdf", KINOVA_HOME, 0.15)),
+            dict(name="mico2", urdf="mico2.urdf",
+                 base=[round(0.78 + rng.uniform(-0.1, 0.05), 4), round(rng.uniform(-0.1, 0.1), 4), 0.0],
+                 q0=jitter_q(rng, "mico2.urdf", mico, 0.15)),
+        ]
+    if kind == "three":
+        arms = []
+        for i, (name, urdf) in enumerate((("jaco2_a", "jaco2.urdf"), ("mico2", "mico2.urdf"), ("jaco2_b", "jaco2.urdf"))):
+            th = math.radians(90 + 120 * i + rng.uniform(-10, 10))
+            r = rng.uniform(0.5, 0.6)
+            q = list(KINOVA_HOME)
+            # joint 1: the tool tip towards the table's centre (three_arms.yaml)
+            q[0] = math.radians((45 - math.degrees(th)) % 360)
+            arms.append(dict(name=name, urdf=urdf, base=[round(r * math.cos(th), 4), round(r * math.sin(th), 4), 0.0],
+                             q0=jitter_q(rng, urdf, q, 0.12)))
+        return arms
+    raise ValueError("unknown kind " + kind)
+
+
+def fmt(v):
+    return "[" + ", ".join("%.6g" % x for x in v) + "]"
+
+
+def scenario_yaml(name, kind, arms, duration, paths=None):
+    d = KINDS[kind]
+    s = ["# generated by tools/mca-sweep/mca_sweep.py", "name: %s" % name, "duration: %.3f" % duration,
+         "dt: 0.001", "d1: %g" % d["d1"], "d2: %g" % d["d2"], "K: 20", "epsilon: 5", "arms:"]
+    for i, a in enumerate(arms):
+        s += ["  - name: %s" % a["name"], "    urdf: %s" % os.path.join(ROBOTS, a["urdf"]), "    tip_link: tool_tip",
+              "    base_xyz: %s" % fmt(a["base"]), "    q0: %s" % fmt(a["q0"]), "    path:"]
+        p = paths[i] if paths else {"kind": "hold"}
+        s.append("      kind: %s" % p["kind"])
+        if p["kind"] == "circle":
+            s += ["      radius: %.4f" % p["radius"], "      period: %.3f" % p["period"], "      u: %s" % fmt(p["u"]),
+                  "      v: %s" % fmt(p["v"])]
+        elif p["kind"] == "waypoints":
+            s += ["      relative: true", "      points:"]
+            s += ["        - %s" % fmt(pt) for pt in p["points"]]
+            s.append("      durations: %s" % fmt(p["durations"]))
+    return "\n".join(s) + "\n"
+
+
+def norm(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return [x / n for x in v] if n > 0 else v
+
+
+def sub(a, b):
+    return [x - y for x, y in zip(a, b)]
+
+
+def dist(a, b):
+    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+
+
+def draw_path(rng, start, other_tip):
+    """A path from start whose far point is closer to other_tip than start is; (path, far point, time)."""
+    to = sub(other_tip, start)
+    gap = math.sqrt(sum(x * x for x in to))
+    for _ in range(50):
+        u = norm([x / gap + rng.gauss(0.0, 0.35) for x in to])
+        reach = rng.uniform(0.35, 0.85) * gap
+        reach = min(max(reach, 0.08), 0.30)
+        far = [s + reach * x for s, x in zip(start, u)]
+        if dist(far, other_tip) < gap and far[2] > 0.08:
+            break
+    else:
+        return None
+    if rng.random() < 0.4:
+        # circle through the start: centre = start - R u_c, far point = start - 2 R u_c
+        r = reach / 2.0
+        w = norm([rng.gauss(0, 1) for _ in range(3)])
+        v = norm(sub(w, [sum(a * b for a, b in zip(w, u)) * x for x in u]))
+        period = round(max(4.0, 2 * math.pi * r / 0.1), 2)
+        return dict(kind="circle", radius=r, period=period, u=[-x for x in u], v=v), far, period
+    # waypoints (relative): optional start delay, out (optionally through a side point), dwell, back
+    pts, durs = [], []
+    delay = round(rng.uniform(0.0, 1.5), 2)
+    if delay > 0.05:
+        pts.append([0.0, 0.0, 0.0])
+        durs.append(delay)
+    off = [reach * x for x in u]
+    seg = lambda d: round(max(1.5, 1.875 * d / 0.12), 2)  # quintic peak speed <= 0.12 m/s
+    if rng.random() < 0.5:
+        side = norm([rng.gauss(0, 1) for _ in range(3)])
+        mid = [0.5 * o + 0.3 * reach * s for o, s in zip(off, side)]
+        pts += [mid, off]
+        durs += [seg(dist(mid, [0, 0, 0])), seg(dist(mid, off))]
+    else:
+        pts.append(off)
+        durs.append(seg(reach))
+    pts += [off, [0.0, 0.0, 0.0]]
+    durs += [round(rng.uniform(0.2, 1.0), 2), seg(reach)]
+    return dict(kind="waypoints", points=[[round(x, 4) for x in p] for p in pts], durations=durs), far, sum(durs)
+
+
+class Sim:
+    def __init__(self, path):
+        self.path = path
+        h = subprocess.run([path, "--help"], capture_output=True, text=True).stdout
+        self.help = h
+        m = re.search(r"--scheme ([a-z|\-]+)", h)
+        self.schemes = m.group(1).split("|") if m else ["mca", "mvn", "apf"]
+        self.stop_at = "--stop-at" in h
+        self.fault_at = "--fault-at" in h
+        self.dec_limit = "--dec-limit" in h
+        self.fields = set()  # the issue-11 summary fields this mca-sim writes
+
+    def run(self, scn, summary, schemes, extra=(), csv_out=None):
+        """mca-sim on schemes (in groups of 3); {scheme: run dict}, plus the error text of a failed run."""
+        runs, errs = {}, []
+        for i in range(0, len(schemes), 3):
+            part = schemes[i:i + 3]
+            cmd = [self.path, "--scenario", scn, "--scheme", ",".join(part), "--summary", summary] + list(extra)
+            if csv_out:
+                cmd += ["--csv", csv_out]
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+            if p.returncode != 0:
+                errs.append("%s: exit %d: %s" % (" ".join(cmd[-6:]), p.returncode, p.stderr.strip()[-300:]))
+                continue
+            with open(summary) as f:
+                s = json.load(f)
+            for r in s["runs"]:
+                runs[r["scheme"]] = r
+                self.fields.update(k for k in ("completed", "path_time_lost_s", "deadlocks") if k in r)
+        return runs, errs
+
+
+def min_distance_all(r):
+    """Minimum over the task and the braking: every min_distance* field of the summary."""
+    vals = [r["min_distance"]]
+    for k, v in r.items():
+        if k.startswith("min_distance") and not k.endswith("_t") and k != "min_distance" and isinstance(v, (int, float)):
+            if k == "min_distance_after_fault" and (not r.get("fault") or v == -1):
+                continue
+            vals.append(v)
+    return min(vals)
+
+
+def classify(r, d1, duration, lost_thr, stop_t=None):
+    """(class, reason, details) of one run's summary."""
+    dmin = min_distance_all(r)
+    has_c = "completed" in r
+    if has_c:
+        completed = bool(r["completed"])
+    else:
+        completed = not r.get("fault") and r.get("ticks", 0) >= int(round(duration / 0.001))
+    lost = r.get("path_time_lost_s")
+    fault = r.get("fault_name", "none")
+    det = dict(min_d=round(dmin, 6), fault=fault, fault_t=r.get("fault_t"), completed=int(completed) if has_c else None,
+               lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
+               max_err=r.get("max_err"))
+    if dmin < d1:
+        return "unsafe", fault if fault != "none" else "below-d1", det
+    if completed:
+        if lost is not None and lost > lost_thr:
+            return "late", "lost %.2f s" % lost, det
+        return "completed", "", det
+    if fault != "none":
+        return "safe-stop", fault, det
+    if stop_t is not None:
+        return "safe-stop", "stop", det
+    if r.get("deadlocks"):
+        return "safe-stop", "deadlock-unresolved", det
+    return "safe-stop", "not-completed", det
+
+
+def probe(sim, wd, name, kind, arms):
+    """Tool tips and start distance: two ticks with hold paths."""
+    scn = os.path.join(wd, "probe.yaml")
+    with open(scn, "w") as f:
+        f.write(scenario_yaml(name + "_probe", kind, arms, 0.002))
+    out = os.path.join(wd, "probe.csv")
+    runs, errs = sim.run(scn, os.path.join(wd, "probe.json"), ["mvn"], csv_out=out)
+    if errs:
+        return None, None, errs[0]
+    with open(out, newline="") as f:
+        row = next(csv.DictReader(f))
+    tips = [[float(row["ee%d_%s" % (a, c)]) for c in "xyz"] for a in range(len(arms))]
+    return tips, float(row["min_d"]), None
+
+
+def make_task(sim, kind, seed, i, work):
+    """Draw task i of kind (seeded by 'seed:kind:i'), write its scenario; a dict describing it."""
+    rng = random.Random("%d:%s:%d" % (seed, kind, i))
+    tid = "%s:%d" % (kind, i)
+    name = "sweep_%s_%d" % (kind.replace("-", "_"), i)
+    wd = os.path.join(work, name)
+    os.makedirs(wd, exist_ok=True)
+    d2 = KINDS[kind]["d2"]
+    tries = 0
+    while True:
+        tries += 1
+        arms = draw_arms(kind, rng)
+        tips, d0, err = probe(sim, wd, name, kind, arms)
+        if err:
+            if tries >= 20:
+                return dict(id=tid, error="probe failed: " + err)
+            continue
+        if d0 < d2 and tries < 20:
+            continue
+        paths, fars, times, ok = [], [], [], True
+        for a in range(len(arms)):
+            others = [b for b in range(len(arms)) if b != a]
+            b = others[rng.randrange(len(others))]
+            p = draw_path(rng, tips[a], tips[b])
+            if p is None:
+                ok = False
+                break
+            paths.append(p[0])
+            fars.append(dict(towards=b, start_gap=round(dist(tips[a], tips[b]), 4),
+                             far_gap=round(dist(p[1], tips[b]), 4)))
+            times.append(p[2])
+        if ok or tries >= 20:
+            break
+    if not ok:
+        return dict(id=tid, error="no path towards the other arm in 20 draws")
+    duration = round(max(times) + 0.5, 2)
+    scn = os.path.join(wd, "scenario.yaml")
+    with open(scn, "w") as f:
+        f.write(scenario_yaml(name, kind, arms, duration, paths))
+    stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
+    return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
+                draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2,
+                paths=[p["kind"] for p in paths], towards=fars)
+
+
+def run_task(sim, kind, seed, i, a):
+    t0 = time.time()
+    task = make_task(sim, kind, seed, i, a.work)
+    if "error" in task:
+        task.update(reachable=False, unreachable="generation: " + task["error"], runs={}, seconds=time.time() - t0)
+        return task
+    wd = os.path.dirname(task["scenario"])
+    schemes = ["mvn"] + [s for s in a.schemes if s != "mvn"]
+    extra = ["--dec-limit", str(a.dec_limit)] if a.dec_limit and sim.dec_limit else []
+    runs, errs = sim.run(task["scenario"], os.path.join(wd, "task.json"), schemes, extra)
+    task["errors"] = errs
+    mvn = runs.get("mvn")
+    if mvn is None:
+        task.update(reachable=False, unreachable="mvn run failed", runs={}, seconds=time.time() - t0)
+        return task
+    reach = mvn.get("fault", 0) == 0 and mvn["max_err"] < a.max_err
+    task["mvn_max_err"] = mvn["max_err"]
+    task["reachable"] = reach
+    if not reach:
+        task["unreachable"] = mvn.get("fault_name") if mvn.get("fault") else "max err %.3g m" % mvn["max_err"]
+        task["runs"] = {}
+        task["seconds"] = round(time.time() - t0, 3)
+        return task
+    res = {}
+    for s in a.schemes:
+        if s in runs:
+            c, why, det = classify(runs[s], task["d1"], task["duration"], a.lost_threshold)
+            res[s] = {"task": dict(det, cls=c, reason=why)}
+        else:
+            res[s] = {"task": dict(cls="n/a", reason="scheme not run")}
+    if sim.stop_at and not a.no_stop:
+        sruns, serrs = sim.run(task["scenario"], os.path.join(wd, "stop.json"), list(a.schemes),
+                               extra + ["--stop-at", "%.3f" % task["stop_at"]])
+        task["errors"] += serrs
+        for s in a.schemes:
+            if s in sruns:
+                c, why, det = classify(sruns[s], task["d1"], task["duration"], a.lost_threshold, task["stop_at"])
+                res[s]["stop"] = dict(det, cls=c, reason=why)
+            else:
+                res[s]["stop"] = dict(cls="n/a", reason="scheme not run")
+    task["runs"] = res
+    task["seconds"] = round(time.time() - t0, 3)
+    if not a.keep and reach:
+        for f in ("probe.csv",):
+            try:
+                os.remove(os.path.join(wd, f))
+            except OSError:
+                pass
+    return task
+
+
+def table(tasks, schemes, sim, a):
+    reach = [t for t in tasks if t.get("reachable")]
+    nr = len(reach)
+    lines = []
+    kinds = sorted({t["id"].split(":")[0] for t in tasks})
+    lines.append("mca-sweep: seed %d, kinds %s, %d tasks, %d reachable, %d unreachable%s" % (
+        a.seed, ",".join(kinds), len(tasks), nr, len(tasks) - nr,
+        "" if sim.stop_at else "; this mca-sim has no --stop-at: the stop rows are n/a"))
+    hdr = "%-8s %-9s" % ("scheme", "run") + "".join(" %15s" % c for c in CLASSES) + " %10s %9s" % ("deadlocks", "lost p50")
+    lines.append(hdr)
+    lines.append("-" * len(hdr))
+    summary = {}
+    for s in schemes:
+        for mode in ("task", "stop"):
+            rs = [t["runs"][s][mode] for t in reach if mode in t["runs"].get(s, {}) and t["runs"][s][mode]["cls"] != "n/a"]
+            if not rs:
+                lines.append("%-8s %-9s" % (s, "task" if mode == "task" else "with stop") +
+                             "".join(" %15s" % "n/a" for _ in CLASSES) + " %10s %9s" % ("n/a", "n/a"))
+                summary["%s/%s" % (s, mode)] = None
+                continue
+            cnt = {c: sum(1 for r in rs if r["cls"] == c) for c in CLASSES}
+            dl = [r.get("deadlocks") for r in rs]
+            dls = "n/a" if all(x is None for x in dl) else str(sum(1 for x in dl if x))
+            lost = sorted(r["lost"] for r in rs if r.get("lost") is not None)
+            lp = "n/a" if not lost else "%.2f s" % lost[len(lost) // 2]
+            lines.append("%-8s %-9s" % (s, "task" if mode == "task" else "with stop") +
+                         "".join(" %6d (%5.1f%%)" % (cnt[c], 100.0 * cnt[c] / nr) for c in CLASSES) + " %10s %9s" % (dls, lp))
+            faults = {}
+            for r in rs:
+                if r["cls"] in ("safe-stop", "unsafe") and r.get("reason"):
+                    faults[r["reason"]] = faults.get(r["reason"], 0) + 1
+            summary["%s/%s" % (s, mode)] = dict(cnt, n=len(rs), reachable=nr, tasks_with_deadlocks=None if dls == "n/a" else int(dls),
+                                                reasons=faults)
+    lines.append("")
+    un = {}
+    for t in tasks:
+        if not t.get("reachable"):
+            un[t.get("unreachable", "?")] = un.get(t.get("unreachable", "?"), 0) + 1
+    lines.append("unreachable (MVN cannot track alone): %d %s" % (len(tasks) - nr, json.dumps(un, sort_keys=True)))
+    for s in schemes:
+        for mode in ("task", "stop"):
+            v = summary.get("%s/%s" % (s, mode))
+            if v and v["reasons"]:
+                lines.append("reasons %-6s %-9s %s" % (s, "task" if mode == "task" else "with stop",
+                                                     json.dumps(v["reasons"], sort_keys=True)))
+    secs = sorted(t.get("seconds", 0) for t in tasks)
+    if secs:
+        lines.append("runtime per task (all its mca-sim runs): median %.2f s, max %.2f s" % (secs[len(secs) // 2], secs[-1]))
+    return "\n".join(lines), summary
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sim", default=os.path.join(ROOT, "build", "tools", "mca-sim", "mca-sim"))
+    ap.add_argument("--kind", default="pa10", help="pa10, jaco-mico, three, comma-separated")
+    ap.add_argument("--n", default="50", help="tasks per kind (one number, or one per kind: 500,500,200)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--only", default="", help="task ids KIND:I[,KIND:I...] (or plain I for the first kind)")
+    ap.add_argument("--schemes", default="mvn,mca,mca-ts")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--work", default="")
+    ap.add_argument("--json", default="")
+    ap.add_argument("--table", default="", help="also write the table to this file")
+    ap.add_argument("--lost-threshold", type=float, default=0.1, help="s of path time lost that still count as completed")
+    ap.add_argument("--max-err", type=float, default=0.005, help="MVN tracking error that makes a task unreachable [m]")
+    ap.add_argument("--no-stop", action="store_true", help="no second run with a stop request")
+    ap.add_argument("--dec-limit", type=float, default=0.0, help="pass --dec-limit X to mca-sim (when it has it)")
+    ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
+    a = ap.parse_args()
+    if not os.access(a.sim, os.X_OK):
+        sys.exit("mca-sweep: %s: no mca-sim there (--sim)" % a.sim)
+    sim = Sim(a.sim)
+    kinds = [k for k in a.kind.split(",") if k]
+    for k in kinds:
+        if k not in KINDS:
+            sys.exit("mca-sweep: unknown kind '%s' (pa10, jaco-mico, three)" % k)
+    ns = [int(x) for x in a.n.split(",")]
+    if len(ns) == 1:
+        ns = ns * len(kinds)
+    if len(ns) != len(kinds):
+        sys.exit("mca-sweep: --n: one count, or one per kind")
+    schemes = [s for s in a.schemes.split(",") if s]
+    missing = [s for s in schemes if s not in sim.schemes]
+    if missing:
+        print("mca-sweep: this mca-sim has no scheme %s (it has %s): left out" % (",".join(missing), "|".join(sim.schemes)))
+        schemes = [s for s in schemes if s in sim.schemes]
+    a.schemes = schemes
+    todo = []
+    if a.only:
+        for x in a.only.split(","):
+            k, _, i = x.rpartition(":")
+            todo.append((k or kinds[0], int(i)))
+    else:
+        for k, n in zip(kinds, ns):
+            todo += [(k, i) for i in range(n)]
+    tmp = not a.work
+    if tmp:
+        import tempfile
+        a.work = tempfile.mkdtemp(prefix="mca-sweep-")
+    os.makedirs(a.work, exist_ok=True)
+    t0 = time.time()
+    tasks = []
+    with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        futs = {ex.submit(run_task, sim, k, a.seed, i, a): (k, i) for k, i in todo}
+        for n, f in enumerate(cf.as_completed(futs)):
+            tasks.append(f.result())
+            if (n + 1) % 50 == 0:
+                print("mca-sweep: %d/%d tasks, %.0f s" % (n + 1, len(todo), time.time() - t0), file=sys.stderr)
+    order = {kd: i for i, kd in enumerate(todo)}
+    tasks.sort(key=lambda t: order[(t["id"].rsplit(":", 1)[0], int(t["id"].rsplit(":", 1)[1]))])
+    txt, summ = table(tasks, schemes, sim, a)
+    txt += "\nwall time %.1f s with --jobs %d; repeat one task: --seed %d --kind K --only K:I" % (time.time() - t0, a.jobs, a.seed)
+    print(txt)
+    if a.table:
+        with open(a.table, "w") as f:
+            f.write(txt + "\n")
+    if a.json:
+        out = dict(seed=a.seed, kinds=kinds, n=ns, only=a.only, schemes=schemes, sim=a.sim,
+                   features=dict(stop_at=sim.stop_at, fault_at=sim.fault_at, dec_limit=sim.dec_limit,
+                                 summary_fields=sorted(sim.fields)),
+                   lost_threshold=a.lost_threshold, max_err=a.max_err, summary=summ,
+                   reachable=sum(1 for t in tasks if t.get("reachable")), tasks=tasks, wall_s=round(time.time() - t0, 2))
+        with open(a.json, "w") as f:
+            json.dump(out, f, indent=1)
+    if tmp and not a.keep:
+        shutil.rmtree(a.work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
