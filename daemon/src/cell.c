@@ -52,6 +52,7 @@ struct raw_arm {
     double *q0;
     unsigned q0_count;
     double *dec_limit;
+    double *priority;
     struct raw_sim *sim;
     struct raw_path *path;
 };
@@ -66,6 +67,7 @@ struct raw_solver {
     enum raw_form *form;
     int *pdnn_max_steps;
     double *pdnn_tol, *eq_tol, *fault_residual;
+    double *deadlock_time, *back_off_time;
 };
 
 struct raw_dds {
@@ -143,6 +145,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
     CYAML_FIELD_SEQUENCE("q0", OPT | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1, MCA_MAX_DOF),
     CYAML_FIELD_FLOAT_PTR("dec_limit", OPT, struct raw_arm, dec_limit),
+    CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
     CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
     CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, path_fields),
     CYAML_FIELD_END,
@@ -168,6 +171,8 @@ static const cyaml_schema_field_t solver_fields[] = {
     CYAML_FIELD_FLOAT_PTR("pdnn_tol", OPT, struct raw_solver, pdnn_tol),
     CYAML_FIELD_FLOAT_PTR("eq_tol", OPT, struct raw_solver, eq_tol),
     CYAML_FIELD_FLOAT_PTR("fault_residual", OPT, struct raw_solver, fault_residual),
+    CYAML_FIELD_FLOAT_PTR("deadlock_time", OPT, struct raw_solver, deadlock_time),
+    CYAML_FIELD_FLOAT_PTR("back_off_time", OPT, struct raw_solver, back_off_time),
     CYAML_FIELD_END,
 };
 
@@ -645,18 +650,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         scn->duration = *raw->task.duration;
     }
 
-    cell->scheme = MCA_SCHEME_MCA;
-    if (raw->scheme) {
-        if (strcmp(raw->scheme, "mca") == 0) {
-            cell->scheme = MCA_SCHEME_MCA;
-        } else if (strcmp(raw->scheme, "mvn") == 0) {
-            cell->scheme = MCA_SCHEME_MVN;
-        } else if (strcmp(raw->scheme, "apf") == 0) {
-            cell->scheme = MCA_SCHEME_APF;
-        } else {
-            FAIL(MCA_ERANGE, top, "scheme", "scheme: unknown scheme '%s' (known: mca, mvn, apf)",
-                 raw->scheme);
-        }
+    cell->scheme = MCA_SCHEME_MCA_TS; /* the default for cells (issue 11) */
+    if (raw->scheme && mca_scheme_from_name(raw->scheme, &cell->scheme) != MCA_OK) {
+        FAIL(MCA_ERANGE, top, "scheme", "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
+             raw->scheme);
     }
     if (raw->d1) {
         scn->params.d1 = *raw->d1;
@@ -672,9 +669,24 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
 
     cell->pdnn_max_steps = 0;
     cell->pdnn_tol = cell->eq_tol = cell->fault_residual = -1.0;
+    cell->deadlock_time = cell->back_off_time = -1.0;
     if (raw->solver) {
         const struct raw_solver *s = raw->solver;
         const struct where ws = {path, "solver", -1};
+        if (s->deadlock_time) {
+            if (!finite_pos(s->deadlock_time)) {
+                FAIL(MCA_ERANGE, ws, "deadlock_time", "solver.deadlock_time: must be > 0 s (got %g)",
+                     *s->deadlock_time);
+            }
+            cell->deadlock_time = *s->deadlock_time;
+        }
+        if (s->back_off_time) {
+            if (!finite_pos(s->back_off_time)) {
+                FAIL(MCA_ERANGE, ws, "back_off_time", "solver.back_off_time: must be > 0 s (got %g)",
+                     *s->back_off_time);
+            }
+            cell->back_off_time = *s->back_off_time;
+        }
         if (s->K) {
             if (!(isfinite(*s->K) && *s->K >= 0.0)) {
                 FAIL(MCA_ERANGE, ws, "K", "solver.K: must be >= 0 (got %g)", *s->K);
@@ -865,6 +877,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         for (int j = 0; j < MCA_MAX_DOF; j++) {
             ca->dec_limit[j] = dec;
         }
+        ca->priority = 0.0;
+        if (ra->priority) {
+            if (!finite_pos(ra->priority)) {
+                FAIL(MCA_ERANGE, wa, "priority", "arms[%d].priority: must be > 0 (got %g)", ai,
+                     *ra->priority);
+            }
+            ca->priority = *ra->priority;
+        }
         if (ra->sim) {
             if (ra->sim->lag_tau) {
                 if (!(isfinite(*ra->sim->lag_tau) && *ra->sim->lag_tau >= 0.0)) {
@@ -1033,6 +1053,15 @@ int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *
             dec = fmin(dec, cell->arm[a].dec_limit[j]);
         }
         cfg->ts.dec_limit[a] = isfinite(dec) && dec > 0.0 ? dec : 0.0;
+        if (cell->arm[a].priority > 0.0) {
+            cfg->ts.priority[a] = cell->arm[a].priority;
+        }
+    }
+    if (cell->deadlock_time > 0.0) {
+        cfg->ts.deadlock_time = cell->deadlock_time;
+    }
+    if (cell->back_off_time > 0.0) {
+        cfg->ts.back_off_time = cell->back_off_time;
     }
     return MCA_OK;
 }

@@ -302,6 +302,11 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
                     fprintf(d->csv, ",qdot%d_%d", a, j);
                 }
             }
+            /* mca-ts path clocks and deadlock state; braking fallback (appended: older readers unaffected) */
+            for (int a = 0; a < d->n_arms; a++) {
+                fprintf(d->csv, ",tau%d,sigma%d", a, a);
+            }
+            fprintf(d->csv, ",deadlock,deadlock_arm,deadlocks,brake_fallback");
             fprintf(d->csv, "\n");
         }
     }
@@ -618,6 +623,27 @@ static void push_csv(mca_daemon_t *d, double t, int state) {
     mca_ring_push(&d->csv_ring, r);
 }
 
+/* mca-ts: log deadlocks as they start, change and end (the state is in the summary, STATUS and CSV). */
+static void deadlock_watch(mca_daemon_t *d, double t) {
+    const mca_tick_info_t *in = &d->info;
+    if (in->deadlock != d->deadlock) {
+        if (in->deadlock == MCA_DEADLOCK_BACK_OFF) {
+            LOGN(d, MCA_LOG_NOTICE,
+                 "deadlock %g at t = %.3f s: every arm stalled on its path: arm %g backs off along its path",
+                 3, in->deadlocks, t, in->deadlock_arm, 0, NULL);
+        } else if (in->deadlock == MCA_DEADLOCK_WAIT) {
+            LOGN(d, MCA_LOG_NOTICE, "deadlock %g at t = %.3f s: arm %g holds until the others have moved on",
+                 3, in->deadlocks, t, in->deadlock_arm, 0, NULL);
+        } else {
+            LOGN(d, MCA_LOG_NOTICE, "deadlock %g resolved at t = %.3f s (arm %g back on its path)", 3,
+                 in->deadlocks, t, d->deadlock_arm, 0, NULL);
+        }
+    }
+    d->deadlock = in->deadlock;
+    d->deadlock_arm = in->deadlock ? in->deadlock_arm : -1;
+    d->deadlocks = in->deadlocks;
+}
+
 int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
     if (state == MCA_DAEMON_READY) {
@@ -659,6 +685,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         } else {
             send_commands(d, 1);
         }
+        deadlock_watch(d, t);
     } else if (state != MCA_DAEMON_BRAKING && mca_controller_observe(&d->ctrl, t, qp, &d->info) == MCA_OK) {
         /* stopped or in fault: the arms may still move, so the distances are still measured (and
          * published). The solver figures stay the last tick's. */
@@ -915,6 +942,10 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
             fprintf(f, ",%.6g", r->qdot_cmd[a][j]);
         }
     }
+    for (int a = 0; a < d->n_arms; a++) {
+        fprintf(f, ",%.6f,%.6g", in->tau[a], in->sigma[a]);
+    }
+    fprintf(f, ",%d,%d,%d,%d", in->deadlock, in->deadlock_arm, in->deadlocks, in->brake_fallback);
     fputc('\n', f);
 }
 

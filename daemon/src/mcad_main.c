@@ -41,9 +41,8 @@ static double mono_s(void) {
 }
 
 static void print_cell(const mca_cell_t *c) {
-    static const char *schemes[] = {"mca", "mvn", "apf"};
     printf("cell %s (%s): scheme %s, task '%s' %.3g s, d1 %.3g m, d2 %.3g m\n", c->name, c->source,
-           schemes[c->scheme], c->scn.name, c->scn.duration, c->scn.params.d1, c->scn.params.d2);
+           mca_scheme_name(c->scheme), c->scn.name, c->scn.duration, c->scn.params.d1, c->scn.params.d2);
     for (int a = 0; a < c->scn.n_arms; a++) {
         const mca_scenario_arm_t *sa = &c->scn.arm[a];
         printf("  arm %d '%s': %s, %d joints, base [%g %g %g], backend %s", a, sa->name, sa->urdf, sa->n_q0,
@@ -236,9 +235,13 @@ int main(int argc, char **argv) {
         if (now >= next_status) {
             mca_daemon_summary_t s;
             mca_daemon_summary(d, &s);
-            sd_notifyf(0, "STATUS=%s: ticks %llu, overruns %llu, min distance %.4f m%s%s",
+            sd_notifyf(0, "STATUS=%s: ticks %llu, overruns %llu, min distance %.4f m, deadlocks %d%s%s%s",
                        mca_daemon_state_name(s.state), (unsigned long long)s.ticks,
                        (unsigned long long)s.overruns, isfinite(s.min_distance) ? s.min_distance : -1.0,
+                       s.deadlocks,
+                       s.deadlock == MCA_DEADLOCK_BACK_OFF ? " (now: backing off)"
+                       : s.deadlock == MCA_DEADLOCK_WAIT   ? " (now: waiting)"
+                                                           : "",
                        s.fault ? ", fault: " : "", s.fault ? s.fault_text : "");
             next_status = now + 1.0;
         }

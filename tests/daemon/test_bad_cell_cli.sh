@@ -124,7 +124,7 @@ expect socketcan_no_interface "    interface: vcan1$NL" "" "backend: socketcan" 
     "required with backend socketcan"
 expect dds_config_missing "  domain: 7$NL" "  domain: 7$NL  config: nowhere/cyclone.xml$NL" "config: nowhere" \
     "dds.config" "nowhere/cyclone.xml' not found"
-expect unknown_scheme "scheme: mvn" "scheme: magic" "scheme: magic" "scheme" "unknown scheme 'magic' (known: mca, mvn, apf)"
+expect unknown_scheme "scheme: mvn" "scheme: magic" "scheme: magic" "scheme" "unknown scheme 'magic' (known: mca-ts, mca, mvn, apf)"
 expect duplicate_arm "  - name: right" "  - name: left" "backend: socketcan" "arms[1].name" "'left' used twice" -1
 
 # the good cell itself passes the check (so the failures above are the variants')

@@ -306,6 +306,38 @@ static void test_unknown_scheme(void **state) {
     expect_error(p, MCA_ERANGE, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
 }
 
+/* mca-ts (issue 11): the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
+ * solver.back_off_time reach the controller config; bad values name file, line and field. */
+static void test_mca_ts_keys(void **state) {
+    (void)state;
+    const char *p = write_variant("ts", "scheme: mvn\n", "");
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    assert_int_equal(cell.scheme, MCA_SCHEME_MCA_TS);
+    p = write_variant("ts2", "scheme: mvn\nd1: 0.04\n", "scheme: mca-ts\nd1: 0.04\n");
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    assert_int_equal(cell.scheme, MCA_SCHEME_MCA_TS);
+    p = write_variant("ts3", "  pdnn_max_steps: 321\n",
+                      "  pdnn_max_steps: 321\n  deadlock_time: 0.25\n  back_off_time: 0.75\n");
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    p = write_variant("ts4", "    dec_limit: 4.0\n", "    dec_limit: 4.0\n    priority: 3\n");
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    assert_true(cell.arm[0].priority == 3.0 && cell.arm[1].priority == 0.0);
+    static mca_controller_config_t cfg;
+    /* socketcan arm: the controller config does not open it */
+    if (mca_cell_controller_config(&cell, &cfg, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    assert_true(cfg.ts.priority[0] == 3.0 && cfg.ts.priority[1] == 1.0);
+    assert_true(cfg.ts.dec_limit[0] == 4.0 && cfg.ts.dec_limit[1] == 10.0);
+    p = write_variant("ts5", "    dec_limit: 4.0\n", "    dec_limit: 4.0\n    priority: 0\n");
+    expect_error(p, MCA_ERANGE, line_of(p, "priority: 0"), "arms[0].priority", "must be > 0", NULL);
+    p = write_variant("ts6", "  pdnn_max_steps: 321\n", "  pdnn_max_steps: 321\n  deadlock_time: -1\n");
+    expect_error(p, MCA_ERANGE, line_of(p, "deadlock_time: -1"), "solver.deadlock_time", "must be > 0", NULL);
+    p = write_variant("ts7", "  pdnn_max_steps: 321\n", "  pdnn_max_steps: 321\n  back_off_time: 0\n");
+    expect_error(p, MCA_ERANGE, line_of(p, "back_off_time: 0"), "solver.back_off_time", "must be > 0", NULL);
+}
+
 static void test_duplicate_arm(void **state) {
     (void)state;
     const char *p = write_variant("dup", "  - name: right", "  - name: left");
@@ -374,6 +406,7 @@ int main(void) {
         cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
         cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
         cmocka_unit_test(test_duplicate_arm),      cmocka_unit_test(test_shipped_cells),
+        cmocka_unit_test(test_mca_ts_keys),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[300];

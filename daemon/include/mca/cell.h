@@ -36,6 +36,7 @@ typedef struct mca_cell_arm {
     char interface[32];            /**< socketcan: "vcan0", "can0" */
     uint32_t id_base;              /**< socketcan: the arm's CAN id block */
     double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
+    double priority;               /**< mca-ts: higher keeps its path, lower yields first (0: default 1) */
     /* sim backend model */
     double sim_lag_tau;     /**< first-order velocity lag [s] */
     int sim_latency_cycles; /**< command transport delay [cycles] */
@@ -72,6 +73,9 @@ typedef struct mca_cell {
     double pdnn_tol;
     double eq_tol;
     double fault_residual;
+    double deadlock_time; /**< mca-ts: all arms stalled this long is a deadlock [s] (<= 0: default) */
+    double
+        back_off_time; /**< mca-ts: the yielding arm runs its path backwards this long [s] (<= 0: default) */
     mca_cell_dds_t dds;
     mca_cell_rt_t rt;
     double stop_after;                /**< [s] of running after which the daemon stops by itself; 0 = never */
