@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Issue 11 checks (ctest -L sweep).
+
+usage: test_sweep.py pa10 MCA_SIM MCA_SWEEP_PY WORK_DIR
+         50 seeded random two-PA10+ tasks through tools/mca-sweep (seed 11): the tasks exercise the scheme
+         (>= 70 % reachable, MVN below d1 on >= 5 of them) and mca-ts has no run below d1 (task, and with a
+         stop request when mca-sim has --stop-at) and completes >= 95 % of the reachable tasks;
+       test_sweep.py three MCA_SIM THREE_ARMS_YAML WORK_DIR
+         the three-arm task: MVN goes below d1; mca-ts keeps every pair (CSV d_<a>_<b>) >= d1 at every tick,
+         braking included, and completes.
+Exit 77 (ctest SKIP) when this mca-sim has no scheme mca-ts.
+"""
+import csv
+import json
+import os
+import re
+import subprocess
+import sys
+
+FAILS = []
+
+
+def check(cond, msg):
+    print(("ok   " if cond else "FAIL ") + msg)
+    if not cond:
+        FAILS.append(msg)
+
+
+def has_ts(sim):
+    h = subprocess.run([sim, "--help"], capture_output=True, text=True).stdout
+    m = re.search(r"--scheme ([a-z|\-]+)", h)
+    return bool(m) and "mca-ts" in m.group(1).split("|")
+
+
+def sweep(sim, tool, work):
+    os.makedirs(work, exist_ok=True)
+    out = os.path.join(work, "sweep.json")
+    cmd = [sys.executable, tool, "--sim", sim, "--kind", "pa10", "--n", "50", "--seed", "11", "--jobs", "2",
+           "--schemes", "mvn,mca,mca-ts", "--work", os.path.join(work, "tasks"), "--json", out]
+    print(" ".join(cmd))
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=400)
+    print(p.stdout)
+    if p.returncode != 0:
+        print(p.stderr)
+        sys.exit("mca_sweep.py failed (exit %d)" % p.returncode)
+    d = json.load(open(out))
+    nr = d["reachable"]
+    n = len(d["tasks"])
+    check(n == 50, "50 tasks drawn (%d)" % n)
+    check(nr >= 35, "reachable tasks %d >= 35 of %d" % (nr, n))
+    mvn = d["summary"]["mvn/task"]
+    check(mvn is not None and mvn["unsafe"] >= 5, "MVN goes below d1 on %s >= 5 tasks (the sweep exercises the "
+          "scheme)" % (mvn and mvn["unsafe"]))
+    ts = d["summary"]["mca-ts/task"]
+    check(ts is not None, "mca-ts ran")
+    if ts:
+        bad = [t["id"] for t in d["tasks"] if t.get("reachable") and t["runs"]["mca-ts"]["task"]["cls"] == "unsafe"]
+        check(ts["unsafe"] == 0, "mca-ts: %d runs below d1 (want 0) %s" % (ts["unsafe"], " ".join(bad)))
+        done = ts["completed"] + ts["late"]
+        check(done >= 0.95 * nr, "mca-ts completes %d of %d reachable tasks (%.1f %%, want >= 95 %%; %d within "
+              "%.2f s of path time)" % (done, nr, 100.0 * done / max(nr, 1), ts["completed"], d["lost_threshold"]))
+    st = d["summary"].get("mca-ts/stop")
+    if d["features"]["stop_at"] and st:
+        check(st["unsafe"] == 0, "mca-ts with a stop request: %d runs below d1 (want 0)" % st["unsafe"])
+    else:
+        print("note: this mca-sim has no --stop-at: no stop runs checked")
+
+
+def three(sim, scn, work):
+    os.makedirs(work, exist_ok=True)
+    summ = os.path.join(work, "three.json")
+    base = os.path.join(work, "three")
+    cmd = [sim, "--scenario", scn, "--scheme", "mvn,mca-ts", "--summary", summ, "--csv", base]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=100)
+    print(p.stdout)
+    if p.returncode != 0:
+        print(p.stderr)
+        sys.exit("mca-sim failed")
+    s = json.load(open(summ))
+    d1 = s["d1"]
+    r = {x["scheme"]: x for x in s["runs"]}
+    check(r["mvn"]["min_distance"] < d1, "three arms: MVN min distance %.5f m < d1 %.3f (at %.3f s)" %
+          (r["mvn"]["min_distance"], d1, r["mvn"]["min_distance_t"]))
+    ts = r["mca-ts"]
+    with open(base + "-mca-ts.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    pairs = [k for k in rows[0] if re.fullmatch(r"d_\d+_\d+", k)]
+    check(pairs == ["d_0_1", "d_0_2", "d_1_2"], "the CSV has the three pair distances (%s)" % ",".join(pairs))
+    for k in pairs:
+        m = min(float(x[k]) for x in rows)
+        check(m >= d1, "three arms: mca-ts pair %s min %.5f m >= d1 at every tick" % (k[2:], m))
+    mins = [ts["min_distance"]] + [v for k, v in ts.items() if k.startswith("min_distance") and not k.endswith("_t")
+                                   and k != "min_distance" and not (k == "min_distance_after_fault" and v == -1)]
+    check(min(mins) >= d1, "three arms: mca-ts min distance over the task and any braking %.5f m >= d1" % min(mins))
+    check(ts.get("completed") == 1, "three arms: mca-ts completes (completed %s, fault %s, %s s path time lost, "
+          "%s deadlocks)" % (ts.get("completed"), ts["fault_name"], ts.get("path_time_lost_s"), ts.get("deadlocks")))
+
+
+def main():
+    mode, sim = sys.argv[1], sys.argv[2]
+    if not has_ts(sim):
+        print("SKIP: %s has no scheme mca-ts (mca-sim --help lists the schemes)" % sim)
+        return 77
+    if mode == "pa10":
+        sweep(sim, sys.argv[3], sys.argv[4])
+    elif mode == "three":
+        three(sim, sys.argv[3], sys.argv[4])
+    else:
+        sys.exit("unknown mode " + mode)
+    if FAILS:
+        print("%d check(s) failed" % len(FAILS))
+        return 1
+    print("all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
