@@ -48,11 +48,11 @@ KINOVA_HOME = [4.7997, 2.9234, 1.0036, 4.1888, 1.4399, 1.3090]
 PA10_LEFT = [0.0, math.pi / 4, 0.0, -math.pi / 2, 0.0, math.pi / 4, 0.0, math.pi / 4]
 PA10_RIGHT = [-math.pi / 2, -math.pi / 4, 0.0, math.pi / 2, 0.0, -math.pi / 4, 0.0, -math.pi / 4]
 
-# per kind: d1, d2, and a function rng -> list of arms (name, urdf, base_xyz, q0 nominal, q0 jitter [rad])
+# vmax: peak tool-tip speed of the drawn paths [m/s] (the Kinova arms' joints are slower: 0.63-0.84 rad/s)
 KINDS = {
-    "pa10": dict(d1=0.05, d2=0.12),
-    "jaco-mico": dict(d1=0.07, d2=0.12),
-    "three": dict(d1=0.05, d2=0.12),
+    "pa10": dict(d1=0.05, d2=0.12, vmax=0.25, reach=0.40),
+    "jaco-mico": dict(d1=0.07, d2=0.12, vmax=0.12, reach=0.30),
+    "three": dict(d1=0.05, d2=0.12, vmax=0.12, reach=0.30),
 }
 
 
@@ -155,14 +155,14 @@ def dist(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
 
 
-def draw_path(rng, start, other_tip):
+def draw_path(rng, start, other_tip, vmax, max_reach):
     """A path from start whose far point is closer to other_tip than start is; (path, far point, time)."""
     to = sub(other_tip, start)
     gap = math.sqrt(sum(x * x for x in to))
     for _ in range(50):
         u = norm([x / gap + rng.gauss(0.0, 0.35) for x in to])
-        reach = rng.uniform(0.35, 0.85) * gap
-        reach = min(max(reach, 0.08), 0.30)
+        reach = rng.uniform(0.45, 0.95) * gap
+        reach = min(max(reach, 0.08), max_reach)
         far = [s + reach * x for s, x in zip(start, u)]
         if dist(far, other_tip) < gap and far[2] > 0.08:
             break
@@ -173,16 +173,16 @@ def draw_path(rng, start, other_tip):
         r = reach / 2.0
         w = norm([rng.gauss(0, 1) for _ in range(3)])
         v = norm(sub(w, [sum(a * b for a, b in zip(w, u)) * x for x in u]))
-        period = round(max(4.0, 2 * math.pi * r / 0.1), 2)
+        period = round(max(3.0, 2 * 2 * math.pi * r / vmax), 2)  # sin^2 phase: peak = 2 x mean speed
         return dict(kind="circle", radius=r, period=period, u=[-x for x in u], v=v), far, period
     # waypoints (relative): optional start delay, out (optionally through a side point), dwell, back
     pts, durs = [], []
-    delay = round(rng.uniform(0.0, 1.5), 2)
+    delay = round(rng.uniform(0.0, 1.0), 2)
     if delay > 0.05:
         pts.append([0.0, 0.0, 0.0])
         durs.append(delay)
     off = [reach * x for x in u]
-    seg = lambda d: round(max(1.5, 1.875 * d / 0.12), 2)  # quintic peak speed <= 0.12 m/s
+    seg = lambda d: round(max(1.0, 1.875 * d / vmax), 2)  # quintic peak speed 1.875 d / T <= vmax
     if rng.random() < 0.5:
         side = norm([rng.gauss(0, 1) for _ in range(3)])
         mid = [0.5 * o + 0.3 * reach * s for o, s in zip(off, side)]
@@ -305,7 +305,7 @@ def make_task(sim, kind, seed, i, work):
         for a in range(len(arms)):
             others = [b for b in range(len(arms)) if b != a]
             b = others[rng.randrange(len(others))]
-            p = draw_path(rng, tips[a], tips[b])
+            p = draw_path(rng, tips[a], tips[b], KINDS[kind]["vmax"], KINDS[kind]["reach"])
             if p is None:
                 ok = False
                 break
