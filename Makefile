@@ -11,7 +11,7 @@ DEB_PKGS  := $(shell grep -v '^\#' tools/deps/debian-packages.txt)
 STAMP_DEB := .deps-debian.stamp
 STAMP_PY  := $(VENV)/.deps-python.stamp
 
-.PHONY: all deps build test asan-test demo bench format format-check clean
+.PHONY: all deps build test asan-test demo bench sweep format format-check clean
 
 all: build
 
@@ -54,6 +54,10 @@ demo: build
 
 bench: build
 	bash bench/run.sh $(BUILD)
+
+# the random-task sweep of issue 11 alone (1000 two-arm + 200 three-arm tasks): out/bench/sweep.txt, sweep.json
+sweep: build
+	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
 
 SOURCES_CMD = find core firmware_iface dds sim_backend daemon tools bench tests \
 	  \( -name '*.c' -o -name '*.h' -o -name '*.cpp' \) -print0
