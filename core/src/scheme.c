@@ -144,11 +144,12 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
             for (int k = 0; k < rpl; k++) {
                 qp->beta[r0 + k] = p->big; /* U rows already zero: inactive */
             }
-            if (!c->valid || c->d >= p->d2) {
+            const double d_on = p->form == MCA_FORM_NORMAL ? fmax(p->d2, p->d_active) : p->d2;
+            if (!c->valid || c->d >= d_on) {
                 st->in_band[a][l] = 0;
                 continue;
             }
-            if (l > 0 && crit[a][l - 1].valid && crit[a][l - 1].d < p->d2 &&
+            if (l > 0 && crit[a][l - 1].valid && crit[a][l - 1].d < d_on &&
                 mca_v3_dist(crit[a][l - 1].p, c->p) < 1e-12 && mca_v3_dist(crit[a][l - 1].e, c->e) < 1e-12) {
                 /* same critical pair as the previous link (a zero-length link next to its neighbour):
                  * a duplicate row adds nothing and makes the QP degenerate */
@@ -238,11 +239,12 @@ void mca_scheme_shape_rows(mca_qp_t *qp, const mca_scheme_info_t *si, int n_arms
             const int b = c->other_arm;
             const double pa = priority ? priority[a] : 1.0, pb = priority ? priority[b] : 1.0;
             const double share = pa + pb > 0.0 ? 2.0 * pa / (pa + pb) : 1.0;
-            double bound = qp->beta[r];
+            /* beyond d2 only the stop bound limits the approach (S(d) = 1 there) */
+            double bound = c->d < p->d2 ? qp->beta[r] : p->big;
             if (t_stop > 0.0) {
                 bound = fmin(bound, fmax(0.0, c->d - p->d1) / t_stop);
             }
-            qp->beta[r] = share * bound;
+            qp->beta[r] = bound < p->big ? share * bound : p->big;
         }
     }
 }

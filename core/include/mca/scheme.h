@@ -43,6 +43,8 @@ typedef struct mca_scheme_params {
     double v_normal; /**< normal form: approach speed allowed at d >= d2 [m/s] */
     double v_floor;  /**< componentwise: least allowed approach speed per axis [m/s] */
     double big;      /**< bound of an inactive row (the PDNN's varpi or less) */
+    double d_active; /**< normal form: rows are active below max(d2, d_active) [m] (0: d2, the paper's band;
+                          mca-ts: +inf, so the stoppability bound holds at any distance) */
 } mca_scheme_params_t;
 
 /** Critical point of one link against the closest link of the other arms. */
