@@ -100,6 +100,7 @@ struct raw_cell {
     double *stop_after;
     long long *debug_stall_after_ticks;
     long long *debug_kill_after_ticks;
+    bool *debug_start_in_fault;
 };
 
 static const cyaml_strval_t kind_strings[] = {
@@ -208,6 +209,7 @@ static const cyaml_schema_field_t cell_fields[] = {
     CYAML_FIELD_FLOAT_PTR("stop_after", OPT, struct raw_cell, stop_after),
     CYAML_FIELD_INT_PTR("debug_stall_after_ticks", OPT, struct raw_cell, debug_stall_after_ticks),
     CYAML_FIELD_INT_PTR("debug_kill_after_ticks", OPT, struct raw_cell, debug_kill_after_ticks),
+    CYAML_FIELD_BOOL_PTR("debug_start_in_fault", OPT, struct raw_cell, debug_start_in_fault),
     CYAML_FIELD_END,
 };
 
@@ -1016,6 +1018,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
         cell->debug_kill_after_ticks = (uint64_t)*raw->debug_kill_after_ticks;
     }
+    cell->debug_start_in_fault = raw->debug_start_in_fault && *raw->debug_start_in_fault;
     *out = *cell;
 out:
     free(cell);

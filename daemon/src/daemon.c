@@ -146,6 +146,15 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
             sc.noise_pos = ca->sim_noise_pos;
             sc.seed = 1 + (uint64_t)a;
             sc.stamp_monotonic = 1;
+            if (d->cell.debug_start_in_fault) {
+                /* test hook: the firmware latches a fault in its first cycle (INIT -> FAULT), as a fault
+                 * left from an earlier run would be */
+                sc.init_cycles = sc.init_cycles > 0 ? sc.init_cycles : 1;
+                sc.n_inject = 1;
+                sc.inject[0].kind = MCA_SIM_INJ_ACTUATOR;
+                sc.inject[0].at_cycle = 0;
+                sc.inject[0].joint = 0;
+            }
             rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
         }
     } else {
@@ -161,7 +170,9 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
     return MCA_OK;
 }
 
-/* Wait (start-up, up to 2 s) until arm a answers; a FAULT left over from an earlier run is cleared. */
+/* Wait (start-up, up to 2 s) until arm a answers. A FAULT latched in the arm (left from an earlier run) is
+ * cleared only when the operator asked (opts.clear_faults, mcad --clear-faults); else start-up fails
+ * naming the arm and the fault. */
 static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
     const int64_t deadline = now_ns() + 2 * NS_PER_S;
     int cleared = 0;
@@ -172,8 +183,20 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
         mca_arm_feedback_t fb;
         const int rc = mca_arm_read(d->arm[a], &fb);
         if (rc == MCA_OK || rc == MCA_EFAULT) {
+            if (fb.state == MCA_ARM_FAULT && !d->opts.clear_faults) {
+                if (err && errlen) {
+                    snprintf(
+                        err, errlen,
+                        "arm '%s' reports FAULT %s at start (latched in its firmware, left from an earlier "
+                        "run): not starting; check the arm, then start with --clear-faults to clear it",
+                        d->cell.scn.arm[a].name, mca_arm_fault_name(fb.fault_code));
+                }
+                return MCA_EFAULT;
+            }
             if (fb.state == MCA_ARM_FAULT && cleared < 3) {
-                fprintf(d->opts.log, "<5>mcad: arm '%s' reports FAULT (%s) at start: clearing it\n",
+                fprintf(d->opts.log,
+                        "<5>mcad: arm '%s' reports FAULT (%s) at start: clearing it (--clear-faults: the "
+                        "operator asked)\n",
                         d->cell.scn.arm[a].name, mca_arm_fault_name(fb.fault_code));
                 for (int j = 0; j < c.n; j++) {
                     c.flags[j] = MCA_ACT_CLEAR_FAULT;

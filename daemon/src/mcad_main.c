@@ -26,6 +26,8 @@ static void usage(FILE *f) {
             "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
             "  --no-dds           do not publish on DDS\n"
             "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
+            "  --clear-faults     clear a FAULT an arm reports at start-up (latched from an earlier run;\n"
+            "                     logged); without it mcad refuses to start (exit 1)\n"
             "  --dds-ab N         DDS cost benchmark: publish only in every other block of N ticks and\n"
             "                     print the whole tick's time with publishing off and on (one run)\n"
             "  -h, --help\n"
@@ -66,6 +68,7 @@ int main(int argc, char **argv) {
         {"stop-after", required_argument, NULL, 's'},
         {"no-dds", no_argument, NULL, 'D'},
         {"no-rt", no_argument, NULL, 'R'},
+        {"clear-faults", no_argument, NULL, 'F'},
         {"dds-ab", required_argument, NULL, 'A'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
@@ -99,6 +102,9 @@ int main(int argc, char **argv) {
             break;
         case 'R':
             opts.no_rt = 1;
+            break;
+        case 'F':
+            opts.clear_faults = 1;
             break;
         case 'A': {
             char *end;

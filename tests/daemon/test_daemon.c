@@ -240,6 +240,47 @@ static void test_arm_fault_is_a_fault(void **state) {
     free(cell);
 }
 
+/* Issue 11: an arm FAULT latched at start-up (left from an earlier run; the cell's test hook makes the sim
+ * firmware latch one in its first cycle) stops the start naming the arm and the fault, unless the operator
+ * asked for --clear-faults (opts.clear_faults): then it is cleared and the task runs. */
+static void test_start_in_fault(void **state) {
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    FILE *f = fopen(cell_path, "a");
+    assert_non_null(f);
+    fputs("debug_start_in_fault: true\n", f);
+    fclose(f);
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
+    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = stderr};
+    mca_daemon_t *d = NULL;
+    const int rc = mca_daemon_open(&d, cell, &o, err, sizeof err);
+    print_message("  without --clear-faults: %s (%s)\n", err, mca_strerror(rc));
+    assert_int_equal(rc, MCA_EFAULT);
+    assert_null(d);
+    assert_non_null(strstr(err, "arm 'left' reports FAULT INJECTED"));
+    assert_non_null(strstr(err, "--clear-faults"));
+    o.clear_faults = 1;
+    err[0] = 0;
+    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+        fail_msg("with --clear-faults: %s", err);
+    }
+    assert_int_equal(mca_daemon_state(d), MCA_DAEMON_READY);
+    double t = 0.0;
+    int st = MCA_DAEMON_READY;
+    for (int k = 0; k < 300; k++, t += 0.001) {
+        st = mca_daemon_step(d, t, 0);
+    }
+    assert_int_equal(st, MCA_DAEMON_RUNNING);
+    for (int a = 0; a < 2; a++) {
+        const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, a));
+        assert_int_equal(fw->state, MCA_ARM_SERVOING);
+    }
+    mca_daemon_close(d);
+    free(cell);
+}
+
 static void test_arm_not_servoing_is_a_fault(void **state) {
     (void)state;
     write_cell(NULL, "[0.0, 0.6, 0.0]");
@@ -617,6 +658,7 @@ int main(void) {
         cmocka_unit_test(test_stop_brakes_within_limits),
         cmocka_unit_test(test_lost_feedback_faults_and_brakes),
         cmocka_unit_test(test_arm_fault_is_a_fault),
+        cmocka_unit_test(test_start_in_fault),
         cmocka_unit_test(test_arm_not_servoing_is_a_fault),
         cmocka_unit_test(test_distance_fault),
         cmocka_unit_test(test_bus_error_keeps_feedback),

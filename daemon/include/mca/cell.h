@@ -80,6 +80,8 @@ typedef struct mca_cell {
     mca_cell_rt_t rt;
     double stop_after;                /**< [s] of running after which the daemon stops by itself; 0 = never */
     uint64_t debug_stall_after_ticks; /**< test hook: the loop stalls after this many ticks; 0 = never */
+    int debug_start_in_fault;         /**< test hook: sim backend arms start with a latched firmware fault
+                                           (INJECTED), as if left from an earlier run (mcad --clear-faults) */
     uint64_t debug_kill_after_ticks;  /**< test hook: the daemon dies (SIGKILL, nothing braked) after this
                                            many ticks, as a crash would; 0 = never */
 } mca_cell_t;

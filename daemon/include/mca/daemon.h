@@ -66,6 +66,7 @@ typedef struct mca_daemon_opts {
     uint32_t dds_ab_block; /**< > 0: DDS cost benchmark: publish only in every other block of this many
                             *   ticks and time the whole tick of both kinds of block (summary dds_ab_*) */
     FILE *log;             /**< where log lines go (stderr) */
+    int clear_faults;      /**< 1: clear an arm FAULT latched at start-up (logged); 0: refuse to start */
 } mca_daemon_opts_t;
 
 /** One CSV row (rt -> writer ring). */
