@@ -76,8 +76,6 @@ static void branch(mca_controller_t *c, double t, double q[MCA_MAX_ARMS][MCA_MAX
         for (int a = 0; a < cfg->n_arms; a++) {
             for (int j = 0; j < cfg->chain[a].dof; j++) {
                 f->max_dv_ratio = fmax(f->max_dv_ratio, fabs(cmd[a][j] - v[a][j]) / (dec * dt));
-                fprintf(stderr, "t %.3f k %d a %d j %d v %.6f cmd %.6f fb %d\n", t, k, a, j, v[a][j],
-                        cmd[a][j], info.brake_fallback);
                 v[a][j] = cmd[a][j];
                 q[a][j] += cmd[a][j] * dt;
             }
