@@ -66,7 +66,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->fault_distance = 1;
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e4;
-    cfg->ts.sigma_max = 1.0;
+    cfg->ts.sigma_max = 1.5;
     cfg->ts.deadlock_time = 0.5;
     cfg->ts.deadlock_sigma = 0.05;
     cfg->ts.back_off_time = 1.0;

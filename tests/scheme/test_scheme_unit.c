@@ -639,6 +639,229 @@ static void test_controller_n_arms(void **state) {
     free(c);
 }
 
+/* ------------------------------------------------------------------ mca-ts (issue 11) */
+
+/* Run a scenario under mca-ts with the arms integrated exactly (q += qdot dt); calls back every tick. */
+typedef void (*ts_tick_fn)(const mca_controller_t *c, const mca_tick_info_t *info, void *user);
+
+static void run_ts(const char *scenario, double seconds, ts_tick_fn fn, void *user, mca_tick_info_t *last) {
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    char err[512];
+    assert_int_equal(mca_scenario_load(scenario, &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
+                     MCA_OK);
+    for (int a = 0; a < cfg.n_arms; a++) {
+        cfg.ts.dec_limit[a] = 5.0;
+    }
+    mca_controller_t *c = malloc(sizeof *c);
+    assert_non_null(c);
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
+    const double *qs[MCA_MAX_ARMS];
+    double *qds[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qs[a] = q[a];
+        qds[a] = qd[a];
+        memcpy(q[a], s.arm[a].q0, sizeof q[a]);
+    }
+    const long n = lround(seconds / cfg.dt);
+    for (long k = 0; k <= n; k++) {
+        assert_int_equal(mca_controller_tick(c, k * cfg.dt, qs, qds, last), MCA_OK);
+        fn(c, last, user);
+        for (int a = 0; a < cfg.n_arms; a++) {
+            for (int j = 0; j < cfg.chain[a].dof; j++) {
+                q[a][j] += qd[a][j] * cfg.dt;
+            }
+        }
+    }
+    free(c);
+}
+
+typedef struct ts_seen {
+    double min_d, d1, max_stand_still_err;
+    int back_off_ticks, backed_off_neg_sigma, qps;
+} ts_seen_t;
+
+/* docs/scheme.md: standing still (qdot = 0, sigma = 0, the slack taking up the feedback term) is a point of
+ * every mca-ts QP; check it on the QP of every tick. */
+static void check_tick(const mca_controller_t *c, const mca_tick_info_t *info, void *user) {
+    ts_seen_t *seen = user;
+    seen->min_d = fmin(seen->min_d, info->min_distance);
+    const mca_qp_t *qp = mca_controller_last_qp(c, NULL);
+    const int na = c->cfg.n_arms;
+    int nj = 0;
+    for (int a = 0; a < na; a++) {
+        nj += c->cfg.chain[a].dof;
+    }
+    assert_int_equal(qp->n, nj + MCA_TS_VARS * na);
+    double phi[MCA_QP_MAX_VARS] = {0};
+    const double rs = 1.0 / sqrt(c->cfg.ts.w_sigma), re = 1.0 / sqrt(c->cfg.ts.w_slack);
+    for (int a = 0; a < na; a++) {
+        const int o = nj + MCA_TS_VARS * a;
+        /* sigma = target + rs u, bounded to [lo, hi] with lo = 0 (running, waiting) or -1 (backing off: then
+         * hi = 0, a width of exactly 1; running has hi = sigma_max = 1.5): sigma = 0 is u = ub while backing
+         * off, u = lb otherwise, and always inside the bounds */
+        assert_true(c->cfg.ts.sigma_max != 1.0);
+        const double u = fabs((qp->ub[o] - qp->lb[o]) * rs - 1.0) < 1e-9 ? qp->ub[o] : qp->lb[o];
+        phi[o] = u;
+        for (int i = 0; i < 3; i++) {
+            /* G phi = alpha with qdot = 0: the slack takes up the rest */
+            phi[o + 1 + i] = -(qp->alpha[3 * a + i] - qp->G[3 * a + i][o] * u) / re;
+        }
+    }
+    for (int i = 0; i < qp->n_eq; i++) {
+        double r = -qp->alpha[i];
+        for (int j = 0; j < qp->n; j++) {
+            r += qp->G[i][j] * phi[j];
+        }
+        seen->max_stand_still_err = fmax(seen->max_stand_still_err, fabs(r));
+    }
+    for (int i = 0; i < qp->n_ineq; i++) {
+        assert_true(qp->beta[i] >= 0.0); /* U 0 = 0 <= beta */
+    }
+    for (int j = 0; j < nj; j++) {
+        assert_true(qp->lb[j] <= 0.0 && qp->ub[j] >= 0.0); /* inside the joint limits: zero is in the box */
+    }
+    seen->qps++;
+    if (info->deadlock == MCA_DEADLOCK_BACK_OFF) {
+        seen->back_off_ticks++;
+        seen->backed_off_neg_sigma += info->sigma[info->deadlock_arm] < 0.0;
+    }
+}
+
+static void test_timescale_stand_still_feasible(void **state) {
+    (void)state;
+    ts_seen_t seen = {INFINITY, 0, 0, 0, 0, 0};
+    mca_tick_info_t last;
+    run_ts(SCN("cross_circles.yaml"), 10.5, check_tick, &seen, &last);
+    print_message("cross_circles mca-ts: %d QPs, |G phi0 - alpha| <= %.2e, min d %.4f, tau %.3f/%.3f\n",
+                  seen.qps, seen.max_stand_still_err, seen.min_d, last.tau[0], last.tau[1]);
+    assert_true(seen.max_stand_still_err < 1e-9);
+    assert_true(seen.min_d >= 0.05);
+    assert_int_equal(last.paths_done, 1); /* the clocks caught up with the lag they lost */
+    assert_int_equal(last.deadlocks, 0);
+}
+
+/* The paper's negative task (tracking and avoidance contradict): mca-ts yields instead of faulting, names
+ * the deadlock, and the arm that backs off runs its path backwards while every distance stays >= d1. */
+static void test_timescale_deadlock(void **state) {
+    (void)state;
+    ts_seen_t seen = {INFINITY, 0, 0, 0, 0, 0};
+    mca_tick_info_t last;
+    run_ts(SCN("negative.yaml"), 12.0, check_tick, &seen, &last);
+    print_message("negative mca-ts: min d %.4f, %d deadlocks, %d back-off ticks (%d with sigma < 0)\n",
+                  seen.min_d, last.deadlocks, seen.back_off_ticks, seen.backed_off_neg_sigma);
+    assert_true(seen.min_d >= 0.05);
+    assert_true(seen.max_stand_still_err < 1e-9);
+    assert_true(last.deadlocks >= 1);
+    assert_true(seen.back_off_ticks > 100);
+    assert_true(seen.backed_off_neg_sigma > seen.back_off_ticks / 2);
+    assert_int_equal(last.paths_done, 0);
+}
+
+/* Row shaping against its closed form: priority shares and the stoppability bound (d - d1) / T. */
+static void test_shape_rows(void **state) {
+    (void)state;
+    mca_chain_t ch;
+    char err[256];
+    assert_int_equal(mca_chain_load_urdf(&ch, PA10, NULL, err, sizeof err), MCA_OK);
+    const mca_chain_t *chains[2] = {&ch, &ch};
+    static mca_qp_t qp;
+    mca_scheme_params_t p;
+    mca_scheme_default_params(&p);
+    mca_scheme_info_t si = {0};
+    si.rows_per_link = 1;
+    si.row_off[0] = 0;
+    si.row_off[1] = ch.dof + 1;
+    assert_int_equal(mca_qp_reset(&qp, 2 * ch.dof, 6, 2 * (ch.dof + 1)), MCA_OK);
+    mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    memset(crit, 0, sizeof crit);
+    const double d_in = 0.08, d_far = 0.5;
+    crit[0][2] = (mca_link_critical_t){1, 1, 3, d_in, {0}, {0}};
+    crit[1][3] = (mca_link_critical_t){1, 0, 2, d_far, {0}, {0}};
+    for (int i = 0; i < qp.n_ineq; i++) {
+        qp.beta[i] = p.big;
+    }
+    qp.beta[2] = mca_brake_s(d_in, p.d1, p.d2) * p.v_normal;
+    qp.beta[si.row_off[1] + 3] = p.v_normal; /* beyond d2: active row with S = 1 */
+    const double dec[2] = {2.0, 2.0}, prio[2] = {3.0, 1.0};
+    double t_stop = 0.0;
+    for (int j = 0; j < ch.dof; j++) {
+        t_stop = fmax(t_stop, ch.joint[j].vel_limit / 2.0);
+    }
+    mca_scheme_shape_rows(&qp, &si, 2, chains, (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, &p, dec,
+                          prio);
+    const double expect_a =
+        2.0 * 0.75 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / t_stop);
+    const double expect_b = 2.0 * 0.25 * ((d_far - p.d1) / t_stop);
+    assert_true(fabs(qp.beta[2] - expect_a) < 1e-15);
+    assert_true(fabs(qp.beta[si.row_off[1] + 3] - expect_b) < 1e-15);
+    assert_true(qp.beta[0] == p.big); /* no critical point: untouched */
+}
+
+/* Braking: every tick within dec dt of the last, at rest in the time the fastest joint needs; the fallback
+ * (no distances: non-finite joint input) keeps each arm's direction. */
+static void test_controller_brake(void **state) {
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    char err[512];
+    assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
+                     MCA_OK);
+    mca_controller_t *c = malloc(sizeof *c);
+    assert_non_null(c);
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    double q[2][MCA_MAX_DOF], v[2][MCA_MAX_DOF] = {{0}}, cmd[2][MCA_MAX_DOF], dec[2][MCA_MAX_DOF];
+    memcpy(q[0], s.arm[0].q0, sizeof q[0]);
+    memcpy(q[1], s.arm[1].q0, sizeof q[1]);
+    double vmax = 0.0;
+    for (int a = 0; a < 2; a++) {
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            v[a][j] = (a ? -0.1 : 0.1) * (j + 1) * (j % 2 ? -1 : 1) * (j < 8);
+            dec[a][j] = 2.0;
+            vmax = fmax(vmax, fabs(v[a][j]));
+        }
+    }
+    const double *qs[MCA_MAX_ARMS] = {q[0], q[1]}, *vs[MCA_MAX_ARMS] = {v[0], v[1]},
+                 *ds[MCA_MAX_ARMS] = {dec[0], dec[1]};
+    double *cs[MCA_MAX_ARMS] = {cmd[0], cmd[1]};
+    mca_tick_info_t info;
+    const int bound = (int)ceil(vmax / (2.0 * cfg.dt)) + 2;
+    int k, rc = 0;
+    for (k = 0; k < 10 * bound && rc == 0; k++) {
+        rc = mca_controller_brake(c, k * cfg.dt, qs, vs, ds, cs, &info);
+        assert_true(rc == 0 || rc == 1);
+        for (int a = 0; a < 2; a++) {
+            for (int j = 0; j < 8; j++) {
+                assert_true(fabs(cmd[a][j] - v[a][j]) <= 2.0 * cfg.dt * (1 + 1e-12));
+                v[a][j] = cmd[a][j];
+                q[a][j] += cmd[a][j] * cfg.dt;
+            }
+        }
+    }
+    assert_int_equal(rc, 1);
+    assert_true(k <= bound);
+    /* fallback: one factor per arm, the joint that needs longest to stop changes by exactly dec dt */
+    for (int j = 0; j < 8; j++) {
+        v[0][j] = 0.2 * (j + 1);
+        v[1][j] = -0.05;
+    }
+    q[1][2] = NAN;
+    rc = mca_controller_brake(c, 1.0, qs, vs, ds, cs, &info);
+    assert_int_equal(rc, 0);
+    assert_int_equal(info.brake_fallback, 1);
+    const double f0 = cmd[0][0] / v[0][0], f1 = cmd[1][0] / v[1][0];
+    for (int j = 0; j < 8; j++) {
+        assert_true(fabs(cmd[0][j] / v[0][j] - f0) < 1e-12);
+        assert_true(fabs(cmd[1][j] / v[1][j] - f1) < 1e-12);
+    }
+    assert_true(fabs((v[0][7] - cmd[0][7]) - 2.0 * cfg.dt) < 1e-12);
+    assert_true(fabs(fabs(v[1][0] - cmd[1][0]) - 2.0 * cfg.dt) < 1e-12);
+    free(c);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_brake_values),
@@ -650,6 +873,10 @@ int main(void) {
         cmocka_unit_test(test_scenario_files),
         cmocka_unit_test(test_controller_faults),
         cmocka_unit_test(test_controller_n_arms),
+        cmocka_unit_test(test_timescale_stand_still_feasible),
+        cmocka_unit_test(test_timescale_deadlock),
+        cmocka_unit_test(test_shape_rows),
+        cmocka_unit_test(test_controller_brake),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -63,9 +63,9 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out);
 
 /** Path-time scaling parameters (mca-ts only; defaults in mca_controller_default_config()). */
 typedef struct mca_timescale_params {
-    double w_sigma;                /**< weight of (sigma - 1)^2 against |qdot|^2 (1e2) */
-    double w_slack;                /**< weight of the tracking slack |e|^2 (1e4) */
-    double sigma_max;              /**< most path rate when catching up (1.0: never faster than the path) */
+    double w_sigma;   /**< weight of (sigma - 1)^2 against |qdot|^2 (1e2) */
+    double w_slack;   /**< weight of the tracking slack |e|^2 (1e4) */
+    double sigma_max; /**< most path rate when catching up (1.5; 1: never faster than the path) */
     double priority[MCA_MAX_ARMS]; /**< higher keeps its path; lower yields first and backs off (1) */
     double deadlock_time;  /**< every moving arm's sigma below deadlock_sigma this long: deadlock [s] (0.5) */
     double deadlock_sigma; /**< (0.05) */
