@@ -1026,6 +1026,35 @@ out:
     return rc;
 }
 
+int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_scheme_kind_t scheme) {
+    if (!cell || !scn || !(scn->params.dt > 0.0) || !(scn->params.dt < 10.0)) {
+        return MCA_EINVAL;
+    }
+    memset(cell, 0, sizeof *cell);
+    snprintf(cell->name, sizeof cell->name, "%s", scn->name);
+    snprintf(cell->source, sizeof cell->source, "%s", scn->source);
+    cell->scn = *scn;
+    cell->scheme = scheme;
+    for (int a = 0; a < scn->n_arms; a++) {
+        cell->arm[a].backend = MCA_CELL_BACKEND_SIM;
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            cell->arm[a].dec_limit[j] = 10.0;
+        }
+    }
+    cell->pdnn_tol = cell->eq_tol = cell->fault_residual = -1.0;
+    cell->deadlock_time = cell->back_off_time = -1.0;
+    cell->dds.enabled = 0;
+    cell->dds.publish_divisor = 1;
+    cell->rt.period_ns = llround(scn->params.dt * 1e9);
+    if (cell->rt.period_ns <= 0 || fabs((double)cell->rt.period_ns * 1e-9 - scn->params.dt) > 1e-15) {
+        return MCA_EINVAL;
+    }
+    cell->rt.cpu = -1;
+    cell->rt.overrun_limit = 10;
+    cell->rt.lost_feedback_cycles = 10;
+    return MCA_OK;
+}
+
 int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err,
                                size_t errlen) {
     if (!cell || !cfg) {

@@ -145,7 +145,16 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
             sc.latency_cycles = ca->sim_latency_cycles;
             sc.noise_pos = ca->sim_noise_pos;
             sc.seed = 1 + (uint64_t)a;
-            sc.stamp_monotonic = 1;
+            sc.stamp_monotonic = !d->opts.virtual_time;
+            if (ca->sim_ideal) {
+                /* mca-sim --euler: q += v dt with v the command, nothing limited */
+                sc.ideal = 1;
+                for (int j = 0; j < sc.n; j++) {
+                    sc.lower[j] = -INFINITY;
+                    sc.upper[j] = INFINITY;
+                    sc.vel_limit[j] = 1e300;
+                }
+            }
             if (d->cell.debug_start_in_fault) {
                 /* test hook: the firmware latches a fault in its first cycle (INIT -> FAULT), as a fault
                  * left from an earlier run would be */
@@ -222,8 +231,10 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
         for (int j = 0; j < c.n; j++) {
             c.flags[j] = 0;
         }
-        struct timespec ts = {0, d->cell.rt.period_ns};
-        nanosleep(&ts, NULL);
+        if (!d->opts.virtual_time) {
+            struct timespec ts = {0, d->cell.rt.period_ns};
+            nanosleep(&ts, NULL);
+        }
     }
     set_err(err, errlen, "arm '%s' (%s): no answer within 2 s", d->cell.scn.arm[a].name,
             mca_cell_backend_name(d->cell.arm[a].backend));
@@ -258,6 +269,9 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     d->min_d = INFINITY;
     d->min_d_t = 0.0;
     int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
+    if (rc == MCA_OK && opts->config_hook) {
+        opts->config_hook(&d->ccfg, opts->config_hook_arg);
+    }
     if (rc == MCA_OK) {
         rc = mca_controller_init(&d->ctrl, &d->ccfg);
         if (rc != MCA_OK) {
@@ -1173,6 +1187,22 @@ void mca_daemon_close(mca_daemon_t *d) {
         close(d->dma_fd);
     }
     free(d);
+}
+
+const mca_tick_info_t *mca_daemon_tick_info(const mca_daemon_t *d) {
+    return &d->info;
+}
+
+const mca_controller_t *mca_daemon_controller(const mca_daemon_t *d) {
+    return &d->ctrl;
+}
+
+const double *mca_daemon_positions(const mca_daemon_t *d, int a) {
+    return a >= 0 && a < d->n_arms ? d->q[a] : NULL;
+}
+
+void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, const char *text) {
+    mca_controller_raise_fault(&d->ctrl, ctrl_fault, text);
 }
 
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a) {

@@ -452,7 +452,10 @@ int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double d
     for (int j = 0; j < n; j++) {
         const double v0 = arm->v[j];
         double v1 = 0.0;
-        if (arm->state == MCA_ARM_SERVOING) {
+        if (arm->state == MCA_ARM_SERVOING && cfg->ideal) {
+            arm->r[j] = arm->u[j];
+            v1 = arm->u[j];
+        } else if (arm->state == MCA_ARM_SERVOING) {
             arm->r[j] += (arm->u[j] - arm->r[j]) * lag;
             v1 = rate_limit(v0, arm->r[j], cfg->acc_limit[j], cfg->dec_limit[j], dt);
         } else if (arm->state == MCA_ARM_BRAKING) {
@@ -464,7 +467,8 @@ int mca_sim_arm_cycle(mca_sim_arm_t *arm, const mca_arm_command_t *cmd, double d
             arm->r[j] = 0.0;
             arm->u[j] = 0.0;
         }
-        double q1 = arm->q[j] + 0.5 * dt * (v0 + v1);
+        double q1 = cfg->ideal && arm->state == MCA_ARM_SERVOING ? arm->q[j] + v1 * dt
+                                                                 : arm->q[j] + 0.5 * dt * (v0 + v1);
         if (q1 > cfg->upper[j]) {
             q1 = cfg->upper[j];
             v1 = 0.0;

@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: MIT */
-/* mca-sim: run a scenario in virtual time through the controller tick and print a Table-I style report.
+/* mca-sim: run a scenario in virtual time through mcad's tick (mca_daemon_step: the same controller tick,
+ * fault latching and braking) and print a Table-I style report.
  *   mca-sim --scenario FILE [--scheme mca|mca-ts|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR] [--dump-every N]
  *           [--dump-max N] [--form componentwise|normal] [--euler] [--duration S] [--summary FILE]
+ *           [--stop-at T] [--fault-at T:KIND] [--dec-limit X]
  */
 #include <errno.h>
 #include <math.h>
@@ -10,6 +12,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "mca/daemon.h"
 #include "mca/err.h"
 #include "simrun.h"
 
@@ -19,12 +22,20 @@ static void usage(FILE *f) {
         "usage: mca-sim --scenario FILE [--scheme mca|mca-ts|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR]\n"
         "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
-        "               [--pdnn-max-steps N] [--dist closed|lsdm]\n"
+        "               [--pdnn-max-steps N] [--dist closed|lsdm] [--stop-at T] [--fault-at T:KIND]\n"
+        "               [--dec-limit X]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows)\n"
         "  --euler        integrate qdot directly instead of the in-process sim backend\n"
-        "  --summary F    JSON summary of every run (for tests)\n");
+        "  --summary F    JSON summary of every run (for tests)\n"
+        "  --stop-at T    stop request at task time T s, as SIGTERM to mcad (brakes through the controller)\n"
+        "  --fault-at T:KIND  latch controller fault KIND at T s (pdnn-not-converged, fake-attractor, "
+        "distance,\n"
+        "                 nan, infeasible, input), then brake as mcad does on that fault\n"
+        "  --dec-limit X  every joint's deceleration limit [rad/s^2]: the daemon's braking and the sim "
+        "arm's\n"
+        "                 (default 10)\n");
 }
 
 static int parse_int(const char *s, int *out) {
@@ -116,6 +127,31 @@ int main(int argc, char **argv) {
             } else {
                 o.v_floor = x;
             }
+        } else if (!strcmp(a, "--stop-at") || !strcmp(a, "--dec-limit")) {
+            char *end;
+            const double x = strtod(v, &end);
+            if (*end || !isfinite(x) || (a[2] == 's' ? !(x >= 0.0) : !(x > 0.0))) {
+                fprintf(stderr, "mca-sim: %s: bad value '%s'\n", a, v);
+                return 2;
+            }
+            if (a[2] == 's') {
+                o.stop_at = x;
+            } else {
+                o.dec_limit = x;
+            }
+        } else if (!strcmp(a, "--fault-at")) {
+            char *end;
+            const double x = strtod(v, &end);
+            if (*end != ':' || !isfinite(x) || !(x >= 0.0) ||
+                (o.fault_kind = mca_simrun_fault_from_name(end + 1)) < 0) {
+                fprintf(
+                    stderr,
+                    "mca-sim: --fault-at: bad value '%s' (want T:KIND, KIND one of nan, pdnn-not-converged, "
+                    "infeasible, distance, fake-attractor, input)\n",
+                    v);
+                return 2;
+            }
+            o.fault_at = x;
         } else if (!strcmp(a, "--duration")) {
             char *end;
             o.duration = strtod(v, &end);
@@ -284,8 +320,16 @@ int main(int argc, char **argv) {
                 fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
                         isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);
             }
-            fprintf(f, "],\"completed\":%d,\"path_time_lost_s\":%.6g,\"deadlocks\":%d,\"max_slack\":%.3g}",
+            fprintf(f, "],\"completed\":%d,\"path_time_lost_s\":%.6g,\"deadlocks\":%d,\"max_slack\":%.3g",
                     r->completed, r->path_time_lost_s, r->deadlocks, r->max_slack);
+            fprintf(
+                f,
+                ",\"stop_requested\":%d,\"brake_t\":%.6g,\"brake_fallback_ticks\":%d,\"brake_forced_ticks\":%"
+                "d,"
+                "\"stop_duration_s\":%.6g,\"max_dv_over_dt_dec\":%.9g,\"dec_limit\":%.6g,\"state\":\"%s\"}",
+                r->stop_requested, r->brake_t, r->brake_fallback_ticks, r->brake_forced_ticks,
+                r->stop_duration_s, r->max_dv_over_dt_dec, o.dec_limit > 0.0 ? o.dec_limit : 10.0,
+                mca_daemon_state_name(r->daemon_state));
         }
         fprintf(f, "]}\n");
         fclose(f);

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* Virtual-time runner of a scenario through mca_controller_tick; see simrun.h. */
+/* Virtual-time runner of a scenario through mcad's tick (mca_daemon_step); see simrun.h. */
 #include "simrun.h"
 
 #include <math.h>
@@ -9,6 +9,8 @@
 #include <time.h>
 
 #include "mca/arm.h"
+#include "mca/cell.h"
+#include "mca/daemon.h"
 #include "mca/err.h"
 #include "mca/sim_backend.h"
 
@@ -25,6 +27,8 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     o->dump_every = 1;
     o->settle = 0.2;
     o->v_floor = -1.0;
+    o->stop_at = -1.0;
+    o->fault_at = -1.0;
 }
 
 static int cmp_i64(const void *a, const void *b) {
@@ -81,24 +85,9 @@ static void csv_row(FILE *f, const mca_controller_config_t *cfg, const mca_contr
     fprintf(f, "\n");
 }
 
-int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
-               size_t errlen) {
-    memset(r, 0, sizeof *r);
-    snprintf(r->scheme, sizeof r->scheme, "%s", mca_simrun_scheme_name(o->scheme));
-    mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
-    mca_controller_t *ctrl = calloc(1, sizeof *ctrl);
-    mca_arm_t *arm[MCA_MAX_ARMS] = {0};
-    int64_t *cns = NULL, *cpu = NULL;
-    FILE *csv = NULL;
-    int rc = MCA_OK;
-    if (!cfg || !ctrl) {
-        rc = MCA_ENOMEM;
-        goto out;
-    }
-    rc = mca_controller_config_from_scenario(cfg, scn, o->scheme, err, errlen);
-    if (rc != MCA_OK) {
-        goto out;
-    }
+/* mca-sim's solver overrides, applied to the controller config the daemon builds from its cell. */
+static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
+    const mca_simrun_opts_t *o = arg;
     if (o->form >= 0) {
         cfg->sp.form = (mca_collision_form_t)o->form;
     }
@@ -114,19 +103,60 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     if (o->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = o->pdnn_max_steps;
     }
-    for (int a = 0; a < cfg->n_arms; a++) {
-        mca_sim_arm_config_t sc; /* the stoppability bound uses the (simulated) arm's deceleration */
-        mca_sim_arm_config_from_chain(&sc, &cfg->chain[a]);
-        cfg->ts.dec_limit[a] = sc.dec_limit[0];
-        for (int j = 1; j < cfg->chain[a].dof; j++) {
-            cfg->ts.dec_limit[a] = fmin(cfg->ts.dec_limit[a], sc.dec_limit[j]);
+}
+
+int mca_simrun_fault_from_name(const char *name) {
+    for (int f = 1; f <= MCA_CTRL_FAULT_INPUT; f++) {
+        if (strcmp(name, mca_ctrl_fault_name(f)) == 0) {
+            return f;
         }
     }
-    rc = mca_controller_init(ctrl, cfg);
-    if (rc != MCA_OK) {
-        snprintf(err, errlen, "%s: controller init failed: %s", scn->source, mca_strerror(rc));
+    return -1;
+}
+
+/* The run is mcad's pipeline in virtual time: a cell around the scenario (sim backend arms), the daemon
+ * opened without thread, DDS or real-time settings, and mca_daemon_step once per tick (the same tick,
+ * fault latching and braking through mca_controller_brake as mcad). This function only drives it (stop
+ * and fault injection at their instants, the end of the run) and collects the figures. */
+int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
+               size_t errlen) {
+    memset(r, 0, sizeof *r);
+    snprintf(r->scheme, sizeof r->scheme, "%s", mca_simrun_scheme_name(o->scheme));
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    mca_daemon_t *d = NULL;
+    int64_t *cns = NULL, *cpu = NULL;
+    FILE *csv = NULL;
+    int rc = MCA_OK;
+    if (!cell) {
+        rc = MCA_ENOMEM;
         goto out;
     }
+    rc = mca_cell_from_scenario(cell, scn, o->scheme);
+    if (rc != MCA_OK) {
+        snprintf(err, errlen, "%s: dt %g s is not a whole number of ns", scn->source, scn->params.dt);
+        goto out;
+    }
+    for (int a = 0; a < scn->n_arms; a++) {
+        cell->arm[a].sim_ideal = !o->use_backend;
+        if (o->dec_limit > 0.0) {
+            for (int j = 0; j < MCA_MAX_DOF; j++) {
+                cell->arm[a].dec_limit[j] = o->dec_limit;
+            }
+        }
+    }
+    mca_daemon_opts_t dopts = {.no_dds = 1,
+                               .no_rt = 1,
+                               .virtual_time = 1,
+                               .log = stderr,
+                               .config_hook = apply_overrides,
+                               .config_hook_arg = (void *)o};
+    rc = mca_daemon_open(&d, cell, &dopts, err, errlen);
+    if (rc != MCA_OK) {
+        goto out;
+    }
+    const mca_controller_t *ctrl = mca_daemon_controller(d);
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const mca_tick_info_t *ip = mca_daemon_tick_info(d);
     const int na = cfg->n_arms;
     const double dt = cfg->dt;
     const double duration = o->duration > 0.0 ? o->duration : scn->duration;
@@ -135,6 +165,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         o->scheme == MCA_SCHEME_MCA_TS ? (o->overtime < 0.0 ? duration : o->overtime) : 0.0;
     const int n_ticks_ts = n_ticks + (int)llround(overtime / dt);
     const int max_ticks = n_ticks_ts + (int)llround((o->settle + 5.0) / dt);
+    const int stop_k = o->stop_at >= 0.0 ? (int)llround(o->stop_at / dt) : -1;
+    const int fault_k = o->fault_at >= 0.0 && o->fault_kind > 0 ? (int)llround(o->fault_at / dt) : -1;
     double nominal_end = 0.0;
     for (int a = 0; a < cfg->n_arms; a++) {
         nominal_end = fmax(nominal_end, mca_path_end_time(&cfg->path[a]));
@@ -145,43 +177,6 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     if (!cns || !cpu) {
         rc = MCA_ENOMEM;
         goto out;
-    }
-    double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
-    const double *qp_[MCA_MAX_ARMS];
-    double *qdp[MCA_MAX_ARMS];
-    for (int a = 0; a < MCA_MAX_ARMS; a++) {
-        qp_[a] = q[a];
-        qdp[a] = qd[a];
-    }
-    mca_arm_command_t cmd[MCA_MAX_ARMS];
-    memset(cmd, 0, sizeof cmd);
-    for (int a = 0; a < na; a++) {
-        const int dof = cfg->chain[a].dof;
-        for (int j = 0; j < dof; j++) {
-            q[a][j] = scn->arm[a].q0[j];
-        }
-        if (o->use_backend) {
-            mca_sim_arm_config_t sc;
-            mca_sim_arm_config_from_chain(&sc, &cfg->chain[a]);
-            for (int j = 0; j < dof; j++) {
-                sc.q0[j] = q[a][j];
-            }
-            sc.dt = dt;
-            rc = mca_sim_backend_open(&arm[a], &sc, err, errlen);
-            if (rc != MCA_OK) {
-                goto out;
-            }
-            mca_arm_feedback_t fb;
-            if (mca_arm_read(arm[a], &fb) == MCA_OK) {
-                for (int j = 0; j < dof; j++) {
-                    q[a][j] = fb.position[j];
-                }
-            }
-        }
-        cmd[a].n = dof;
-        for (int j = 0; j < dof; j++) {
-            cmd[a].flags[j] = MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE;
-        }
     }
     if (o->csv_path) {
         csv = fopen(o->csv_path, "w");
@@ -194,143 +189,146 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     }
     r->min_distance = INFINITY;
     r->min_distance_after_fault = INFINITY;
+    r->brake_t = -1.0;
+    r->stop_duration_s = -1.0;
     r->n_samples = scn->n_sample_times;
     for (int i = 0; i < scn->n_sample_times; i++) {
         r->sample_t[i] = scn->sample_times[i];
         r->sample_d[i] = NAN;
     }
     double steps_sum = 0.0;
-    int steps_n = 0, stopped_ticks = 0;
-    mca_tick_info_t info;
+    int steps_n = 0, stopped_ticks = 0, ended = 0;
     int k;
     for (k = 0; k < max_ticks; k++) {
         const double t = k * dt;
-        if (!r->fault && k >= n_ticks &&
-            (o->scheme != MCA_SCHEME_MCA_TS || info.paths_done || k >= n_ticks_ts)) {
+        if (!ended && k >= n_ticks && (o->scheme != MCA_SCHEME_MCA_TS || ip->paths_done || k >= n_ticks_ts)) {
             break;
+        }
+        if (k == stop_k) {
+            mca_daemon_request_stop(d); /* as SIGTERM */
+            r->stop_requested = 1;
+        }
+        if (k == fault_k) {
+            char txt[96];
+            snprintf(txt, sizeof txt, "injected fault %s at t = %.3f s (mca-sim --fault-at)",
+                     mca_ctrl_fault_name(o->fault_kind), t);
+            mca_daemon_inject_fault(d, o->fault_kind, txt);
         }
         struct timespec c0, c1;
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
-        const int trc = mca_controller_tick(ctrl, t, qp_, qdp, &info);
+        const int state = mca_daemon_step(d, t, (int64_t)llround(t * 1e9));
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+        mca_daemon_service(d);
         cpu[k] = (int64_t)(c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec);
-        cns[k] = info.compute_ns;
-        if (trc != MCA_OK && trc != MCA_EFAULT) {
-            snprintf(err, errlen, "tick failed: %s", mca_strerror(trc));
-            rc = trc;
-            goto out;
+        cns[k] = ip->compute_ns;
+        const int running = state == MCA_DAEMON_RUNNING;
+        if (!running && !ended) {
+            ended = 1; /* braking from a stop or a fault: the run ends once the arms are at rest */
+            mca_daemon_summary_t s;
+            mca_daemon_summary(d, &s);
+            r->brake_t = s.brake_t >= 0.0 ? s.brake_t : t;
+            if (s.fault) {
+                r->fault =
+                    s.fault == MCA_DAEMON_FAULT_CONTROLLER && ip->fault ? ip->fault : MCA_CTRL_FAULT_INPUT;
+                r->fault_t = t;
+                r->fault_distance = ip->min_distance;
+                snprintf(r->fault_text, sizeof r->fault_text, "%s", s.fault_text);
+                if (o->dump_dir && o->scheme != MCA_SCHEME_APF &&
+                    (ip->fault == MCA_CTRL_FAULT_NOT_CONVERGED ||
+                     ip->fault == MCA_CTRL_FAULT_FAKE_ATTRACTOR)) {
+                    /* the QP that failed, for a look with OSQP (phi is zeroed after a fault: none written) */
+                    char path[1024];
+                    snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json.fault", o->dump_dir, scn->name,
+                             r->scheme, k);
+                    mca_qp_dump_json(mca_controller_last_qp(ctrl, NULL), NULL, ip->pdnn_steps,
+                                     ip->pdnn_residual, "fault", path);
+                }
+            }
         }
-        if (!r->fault && !r->completed && info.paths_done) {
+        if (running && !r->completed && ip->paths_done) {
             r->completed = 1;
-            r->path_time_lost_s = fmax(0.0, info.task_t - nominal_end);
+            r->path_time_lost_s = fmax(0.0, ip->task_t - nominal_end);
         }
-        if (!r->completed) {
-            r->path_time_lost_s = fmax(0.0, info.task_t - nominal_end);
+        if (running && !r->completed) {
+            r->path_time_lost_s = fmax(0.0, ip->task_t - nominal_end);
         }
-        r->deadlocks = info.deadlocks;
-        r->max_slack = fmax(r->max_slack, info.slack);
-        if (info.min_distance < r->min_distance) {
-            r->min_distance = info.min_distance;
+        r->deadlocks = ip->deadlocks;
+        r->max_slack = fmax(r->max_slack, ip->slack);
+        if (ip->min_distance < r->min_distance) {
+            r->min_distance = ip->min_distance;
             r->min_distance_t = t;
         }
         for (int i = 0; i < r->n_samples; i++) {
             if (fabs(t - r->sample_t[i]) < 0.5 * dt) {
-                r->sample_d[i] = info.min_distance;
+                r->sample_d[i] = ip->min_distance;
             }
-        }
-        if (info.fault && !r->fault) {
-            if (o->dump_dir && o->scheme != MCA_SCHEME_APF &&
-                (info.fault == MCA_CTRL_FAULT_NOT_CONVERGED || info.fault == MCA_CTRL_FAULT_FAKE_ATTRACTOR)) {
-                /* the QP that failed, for a look with OSQP (phi is zeroed after a fault: none written) */
-                char path[1024];
-                snprintf(path, sizeof path, "%s/%s-%s-fault-%06d.json.fault", o->dump_dir, scn->name,
-                         r->scheme, k);
-                mca_qp_dump_json(mca_controller_last_qp(ctrl, NULL), NULL, info.pdnn_steps,
-                                 info.pdnn_residual, "fault", path);
-            }
-            r->fault = info.fault;
-            r->fault_t = t;
-            r->fault_distance = info.min_distance;
-            memcpy(r->fault_text, info.fault_text, sizeof r->fault_text);
         }
         if (r->fault) {
-            r->min_distance_after_fault = fmin(r->min_distance_after_fault, info.min_distance);
-        } else {
+            r->min_distance_after_fault = fmin(r->min_distance_after_fault, ip->min_distance);
+        } else if (running) {
             for (int a = 0; a < na; a++) {
-                r->max_err = fmax(r->max_err, info.ee_error[a]);
-                if (info.binding_rows == 0) {
-                    r->max_err_free = fmax(r->max_err_free, info.ee_error[a]);
+                r->max_err = fmax(r->max_err, ip->ee_error[a]);
+                if (ip->binding_rows == 0) {
+                    r->max_err_free = fmax(r->max_err_free, ip->ee_error[a]);
                 }
-                if (info.brake >= 1.0) {
-                    r->max_err_nobrake = fmax(r->max_err_nobrake, info.ee_error[a]);
+                if (ip->brake >= 1.0) {
+                    r->max_err_nobrake = fmax(r->max_err_nobrake, ip->ee_error[a]);
                 }
             }
-            r->binding_ticks += info.binding_rows > 0;
+            r->binding_ticks += ip->binding_rows > 0;
             if (o->scheme != MCA_SCHEME_APF) {
-                r->pdnn_steps_max = info.pdnn_steps > r->pdnn_steps_max ? info.pdnn_steps : r->pdnn_steps_max;
-                r->pdnn_residual_max = fmax(r->pdnn_residual_max, info.pdnn_residual);
-                r->eq_residual_max = fmax(r->eq_residual_max, info.eq_residual);
-                steps_sum += info.pdnn_steps;
+                r->pdnn_steps_max = ip->pdnn_steps > r->pdnn_steps_max ? ip->pdnn_steps : r->pdnn_steps_max;
+                r->pdnn_residual_max = fmax(r->pdnn_residual_max, ip->pdnn_residual);
+                r->eq_residual_max = fmax(r->eq_residual_max, ip->eq_residual);
+                steps_sum += ip->pdnn_steps;
                 steps_n++;
             }
         }
         if (csv) {
-            csv_row(csv, cfg, ctrl, t, q, &info);
+            double q[MCA_MAX_ARMS][MCA_MAX_DOF];
+            for (int a = 0; a < na; a++) {
+                memcpy(q[a], mca_daemon_positions(d, a), sizeof q[a]);
+            }
+            csv_row(csv, cfg, ctrl, t, q, ip);
         }
         /* the ticks --dump-every picks: every Nth, and every N/5th with binding rows */
         const int every = o->dump_every > 0 ? o->dump_every : 1;
         const int every_b = every / 5 > 0 ? every / 5 : 1;
-        const int picked = k % every == 0 || (info.binding_rows > 0 && k % every_b == 0);
-        if (!info.fault && o->scheme != MCA_SCHEME_APF && !info.pdnn_converged) {
+        const int picked = k % every == 0 || (ip->binding_rows > 0 && k % every_b == 0);
+        if (running && o->scheme != MCA_SCHEME_APF && !ip->pdnn_converged) {
             r->pdnn_capped++;
             r->dump_skipped_capped += o->dump_dir != NULL && picked;
         }
         /* only converged answers are dumped: at the step cap the controller accepts residuals up to
          * fault_residual, whose phi may differ from the exact solution by more than the check's 1e-6 */
-        if (o->dump_dir && !info.fault && info.pdnn_converged && o->scheme != MCA_SCHEME_APF &&
+        if (o->dump_dir && running && ip->pdnn_converged && o->scheme != MCA_SCHEME_APF &&
             (o->dump_max <= 0 || r->dumped < o->dump_max)) {
             if (picked) {
                 char path[1024], tag[128];
                 snprintf(path, sizeof path, "%s/%s-%s-%06d.json", o->dump_dir, scn->name, r->scheme, k);
                 snprintf(tag, sizeof tag, "%s %s t=%.3f binding=%d", scn->name, r->scheme, t,
-                         info.binding_rows);
+                         ip->binding_rows);
                 const double *phi;
                 const mca_qp_t *qpp = mca_controller_last_qp(ctrl, &phi);
-                if (mca_qp_dump_json(qpp, phi, info.pdnn_steps, info.pdnn_residual, tag, path) == MCA_OK) {
+                if (mca_qp_dump_json(qpp, phi, ip->pdnn_steps, ip->pdnn_residual, tag, path) == MCA_OK) {
                     r->dumped++;
-                    r->dumped_binding += info.binding_rows > 0;
+                    r->dumped_binding += ip->binding_rows > 0;
                 }
             }
         }
-        /* apply the command */
-        int moving = 0;
-        for (int a = 0; a < na; a++) {
-            const int dof = cfg->chain[a].dof;
-            if (o->use_backend) {
-                cmd[a].frame_id++;
-                for (int j = 0; j < dof; j++) {
-                    cmd[a].velocity[j] = qd[a][j];
-                    cmd[a].position_ref[j] = q[a][j];
-                }
-                mca_arm_write(arm[a], &cmd[a]);
-                mca_arm_feedback_t fb;
-                const int frc = mca_arm_read(arm[a], &fb);
-                if (frc == MCA_OK || frc == MCA_EFAULT) {
-                    for (int j = 0; j < dof; j++) {
-                        q[a][j] = fb.position[j];
-                        moving |= fabs(fb.velocity[j]) > 1e-9;
-                    }
-                }
-            } else {
-                for (int j = 0; j < dof; j++) {
-                    q[a][j] += qd[a][j] * dt;
+        if (ended) {
+            /* at rest: every simulated joint's true velocity zero after this tick's cycle */
+            int moving = 0;
+            for (int a = 0; a < na; a++) {
+                const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, a));
+                for (int j = 0; fw && j < fw->cfg.n; j++) {
+                    moving |= fabs(fw->v[j]) > 1e-9;
                 }
             }
-        }
-        if (r->fault) {
             if (!moving && !r->stopped) {
                 r->stopped = 1;
                 r->stop_t = t + dt;
+                r->stop_duration_s = r->stop_t - r->brake_t;
             }
             if (r->stopped && ++stopped_ticks > (int)llround(o->settle / dt)) {
                 k++;
@@ -340,6 +338,14 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     }
     r->ticks = k;
     r->pdnn_steps_mean = steps_n ? steps_sum / steps_n : 0.0;
+    {
+        mca_daemon_summary_t s;
+        mca_daemon_summary(d, &s);
+        r->brake_fallback_ticks = (int)s.brake_fallback_ticks;
+        r->brake_forced_ticks = (int)s.brake_forced_ticks;
+        r->max_dv_over_dt_dec = s.max_dv_over_dt_dec;
+        r->daemon_state = s.state;
+    }
     qsort(cns, (size_t)k, sizeof *cns, cmp_i64);
     if (k > 0) {
         r->compute_p50 = cns[k / 2];
@@ -354,12 +360,9 @@ out:
     if (csv) {
         fclose(csv);
     }
-    for (int a = 0; a < MCA_MAX_ARMS; a++) {
-        mca_arm_close(arm[a]);
-    }
+    mca_daemon_close(d);
     free(cns);
     free(cpu);
-    free(ctrl);
-    free(cfg);
+    free(cell);
     return rc;
 }

@@ -1,8 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /** @file simrun.h
- * Run one scenario in virtual time through the controller tick (the same mca_controller_tick the daemon
- * runs), the arms simulated by the in-process sim backend (mca_sim_backend_open) or by plain Euler
- * integration of qdot. Used by mca-sim and by tests/scheme. Not real-time code (it writes CSV/JSON).
+ * Run one scenario in virtual time through mcad's own pipeline: a cell around the scenario (every arm on
+ * the in-process sim backend), mca_daemon_open in virtual time (no thread, no DDS) and mca_daemon_step
+ * per tick, so the tick, the fault latching and the braking (mca_controller_brake) are the daemon's.
+ * --euler makes the sim arms ideal integrators (q += qdot dt). Used by mca-sim and by tests/scheme. Not
+ * real-time code (it writes CSV/JSON).
  */
 #ifndef MCA_SIMRUN_H
 #define MCA_SIMRUN_H
@@ -33,6 +35,11 @@ typedef struct mca_simrun_opts {
     int dist_lsdm;      /**< 1: the paper's LSDM for the distances instead of the closed form */
     double overtime;    /**< mca-ts: run on after the duration until the path clocks end, this long at most
                              (< 0: the duration again) */
+    double stop_at;     /**< >= 0: stop request at this task time, as SIGTERM to mcad (< 0: none) */
+    double fault_at;    /**< >= 0: inject fault_kind at this task time (< 0: none) */
+    int fault_kind;     /**< mca_ctrl_fault_t to inject (mca_simrun_fault_from_name) */
+    double dec_limit;   /**< > 0: every joint's dec_limit [rad/s^2], the daemon's braking and the sim arm's
+                             (0: the cell default, 10) */
 } mca_simrun_opts_t;
 
 typedef struct mca_simrun_result {
@@ -64,6 +71,13 @@ typedef struct mca_simrun_result {
     double path_time_lost_s; /**< task time at completion (or at the end) minus the paths' nominal end */
     int deadlocks;           /**< mca-ts deadlocks detected */
     double max_slack;        /**< mca-ts: largest tracking slack [m/s] */
+    int stop_requested;      /**< 1: --stop-at fired */
+    double brake_t;          /**< task time braking began (stop or fault; -1: none) */
+    double stop_duration_s;  /**< from brake_t until every simulated joint is at rest (-1: not at rest) */
+    int brake_fallback_ticks;  /**< braking ticks with the keep-direction fallback */
+    int brake_forced_ticks;    /**< of those, past the stop's deadline */
+    double max_dv_over_dt_dec; /**< braking: largest per-tick |commanded velocity change| / (dec dt) */
+    int daemon_state;          /**< mca_daemon_state_t at the end */
 } mca_simrun_result_t;
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);
@@ -71,6 +85,9 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o);
 /** Run. @retval MCA_OK (the run happened; faults are in the result), or an error (err says why). */
 int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
                size_t errlen);
+
+/** Controller fault code from its name (mca_ctrl_fault_name, "pdnn-not-converged"), -1 if unknown. */
+int mca_simrun_fault_from_name(const char *name);
 
 /** Scheme name ("mca", "mvn", "apf"). */
 const char *mca_simrun_scheme_name(mca_scheme_kind_t s);

@@ -41,6 +41,8 @@ typedef struct mca_cell_arm {
     double sim_lag_tau;     /**< first-order velocity lag [s] */
     int sim_latency_cycles; /**< command transport delay [cycles] */
     double sim_noise_pos;   /**< measurement noise sigma [rad] */
+    int sim_ideal;          /**< not in cell files (mca-sim --euler): the sim arm follows the command exactly,
+                                 q += v dt, no limits, lag or rate limits */
 } mca_cell_arm_t;
 
 /** DDS publishing. */
@@ -104,6 +106,13 @@ int mca_cell_load(const char *path, mca_cell_t *cell, char *err, size_t errlen);
  */
 int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err,
                                size_t errlen);
+
+/**
+ * A cell around a loaded scenario (mca-sim): every arm on the sim backend with the defaults of a cell file
+ * (dec_limit 10 rad/s^2, no lag/latency/noise), period = the scenario's dt, DDS off, no real-time settings.
+ * @retval MCA_OK, MCA_EINVAL (NULL, dt not a whole number of ns > 0)
+ */
+int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_scheme_kind_t scheme);
 
 /** "sim" / "socketcan". */
 const char *mca_cell_backend_name(mca_cell_backend_t b);

@@ -67,6 +67,13 @@ typedef struct mca_daemon_opts {
                             *   ticks and time the whole tick of both kinds of block (summary dds_ab_*) */
     FILE *log;             /**< where log lines go (stderr) */
     int clear_faults;      /**< 1: clear an arm FAULT latched at start-up (logged); 0: refuse to start */
+    /** 1: virtual time (mca-sim): the caller drives mca_daemon_step (never mca_daemon_start), sim backend
+     *  arms stamp virtual time k dt, start-up does not sleep between handshake reads. */
+    int virtual_time;
+    /** Start-up: called with the controller config built from the cell, before the controller's init
+     *  (mca-sim's solver overrides). NULL: none. */
+    void (*config_hook)(mca_controller_config_t *cfg, void *arg);
+    void *config_hook_arg;
 } mca_daemon_opts_t;
 
 /** One CSV row (rt -> writer ring). */
@@ -159,6 +166,17 @@ void mca_daemon_close(mca_daemon_t *d);
  * @return the state after the tick
  */
 int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns);
+
+/** The last tick's report (the controller's; while braking/stopped its distances are current, its solver
+ *  figures the last running tick's). Not while the loop thread runs. */
+const mca_tick_info_t *mca_daemon_tick_info(const mca_daemon_t *d);
+/** The controller (per-pair distances, last QP). Not while the loop thread runs. */
+const mca_controller_t *mca_daemon_controller(const mca_daemon_t *d);
+/** Joint positions of arm a the last tick used (NULL if a is out of range). Not while the loop runs. */
+const double *mca_daemon_positions(const mca_daemon_t *d, int a);
+/** Latch a controller fault (mca_ctrl_fault_t) as if the next tick had found it: RUNNING -> BRAKING ->
+ *  FAULT through the same path (mca-sim --fault-at; rt safe, from the thread that steps). */
+void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, const char *text);
 
 /** Last command sent to arm a (tests). NULL if a is out of range. */
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);

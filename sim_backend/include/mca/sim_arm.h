@@ -107,7 +107,9 @@ typedef struct mca_sim_arm_config {
     double vel_fault_ratio;        /**< |cmd| > ratio * vel_limit raises FAULT_VELOCITY; 0 = never
                                         (commands are only saturated) */
     int stamp_monotonic;           /**< 1: fb.stamp_ns = CLOCK_MONOTONIC; 0: virtual time k*dt */
-    int n_inject;                  /**< entries used in inject[] */
+    int ideal;    /**< 1: SERVOING follows the setpoint exactly, q += u dt (explicit Euler: no lag, no rate
+                       limit; mca-sim --euler, which also lifts the position and velocity limits) */
+    int n_inject; /**< entries used in inject[] */
     mca_sim_inject_t inject[MCA_SIM_MAX_INJECT];
 } mca_sim_arm_config_t;
 
