@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* No heap allocation inside mca_controller_tick: malloc, calloc, realloc, free, posix_memalign,
+/* No heap allocation inside mca_controller_tick (every scheme, mca-ts with its deadlock back-off) and
+ * mca_controller_brake (the braking QP and its fallback): malloc, calloc, realloc, free, posix_memalign,
  * aligned_alloc and C++ operator new/delete are wrapped at link time (-Wl,--wrap) and counted while a
  * tick runs. Runs the cross-circles task (2 x 8-DOF PA10+: MCA with binding collision rows in both forms,
  * MVN, APF, and the NaN, not-converged and fake-attractor faults), the cup-stacking task (6-DOF JACO2 +
@@ -70,8 +71,9 @@ void __wrap__ZdaPv(void *p) {
     __real__ZdaPv(p);
 }
 
-enum { CROSS_CIRCLES, CUP_STACKING, N_SCENARIOS };
-static const char *const scenario_file[N_SCENARIOS] = {"cross_circles.yaml", "cup_stacking.yaml"};
+enum { CROSS_CIRCLES, CUP_STACKING, NEGATIVE, N_SCENARIOS };
+static const char *const scenario_file[N_SCENARIOS] = {"cross_circles.yaml", "cup_stacking.yaml",
+                                                       "negative.yaml"};
 
 struct variant {
     const char *what;
@@ -146,6 +148,35 @@ static int run(const char *path, const struct variant *v, long *ticks_faulted, l
             }
         }
     }
+    /* then a stop: the braking QP from the last command to rest, and one fallback tick (NaN input) */
+    double vl[MCA_MAX_ARMS][MCA_MAX_DOF], dec[MCA_MAX_ARMS][MCA_MAX_DOF];
+    const double *vls[MCA_MAX_ARMS], *ds[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            vl[a][j] = qd[a][j];
+            dec[a][j] = 2.0;
+        }
+        vls[a] = vl[a];
+        ds[a] = dec[a];
+    }
+    for (int k = 0; k < 2000; k++) {
+        if (k == 1999) {
+            q[0][0] = NAN;
+        }
+        counting = 1;
+        const int rc = mca_controller_brake(c, (v->ticks + k) * cfg.dt, qs, vls, ds, qds, &info);
+        counting = 0;
+        if (rc < 0) {
+            free(c);
+            return -1;
+        }
+        for (int a = 0; a < s.n_arms; a++) {
+            for (int j = 0; j < cfg.chain[a].dof; j++) {
+                vl[a][j] = qd[a][j];
+                q[a][j] += qd[a][j] * cfg.dt;
+            }
+        }
+    }
     free(c);
     return 0;
 }
@@ -193,6 +224,11 @@ int main(int argc, char **argv) {
         {"cup_stacking apf", CUP_STACKING, MCA_DIST_CLOSED, 0, MCA_SCHEME_APF, -1, -1, 0, 0, -1, 200},
         {"cross_circles mca componentwise lsdm", CROSS_CIRCLES, MCA_DIST_LSDM, 1, MCA_SCHEME_MCA,
          MCA_FORM_COMPONENTWISE, 0.0, 0, 0, -1, 300},
+        {"cross_circles mca-ts", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MCA_TS, -1, -1, 0, 0, -1,
+         3000},
+        {"cross_circles mca-ts capped", CROSS_CIRCLES, MCA_DIST_CLOSED, 0, MCA_SCHEME_MCA_TS, -1, -1, 0, 1,
+         -1, 300},
+        {"negative mca-ts deadlock", NEGATIVE, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA_TS, -1, -1, 0, 0, -1, 8000},
         {"cup_stacking mca normal lsdm", CUP_STACKING, MCA_DIST_LSDM, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1,
          16000},
     };
