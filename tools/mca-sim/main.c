@@ -62,6 +62,21 @@ static void csv_name(char *out, size_t len, const char *base, const char *scheme
     }
 }
 
+/* s as the inside of a JSON string (quotes and backslashes escaped, control characters dropped). */
+static const char *json_text(char *out, size_t len, const char *s) {
+    size_t k = 0;
+    for (; *s && k + 3 < len; s++) {
+        if (*s == '"' || *s == '\\') {
+            out[k++] = '\\';
+            out[k++] = *s;
+        } else if ((unsigned char)*s >= 0x20) {
+            out[k++] = *s;
+        }
+    }
+    out[k] = 0;
+    return out;
+}
+
 static void print_dist(double d) {
     if (isnan(d)) {
         printf(" %12s", "-");
@@ -299,6 +314,7 @@ int main(int argc, char **argv) {
         fprintf(f, "{\"scenario\":\"%s\",\"d1\":%.9g,\"d2\":%.9g,\"runs\":[", scn.name, d1, d2);
         for (int s = 0; s < n_list; s++) {
             const mca_simrun_result_t *r = &res[s];
+            char jt[400];
             fprintf(f,
                     "%s{\"scheme\":\"%s\",\"ticks\":%d,\"min_distance\":%.9g,\"min_distance_t\":%.6g,"
                     "\"max_err\":%.6g,\"max_err_free\":%.6g,\"max_err_nobrake\":%.6g,\"fault\":%d,"
@@ -324,12 +340,13 @@ int main(int argc, char **argv) {
                     r->completed, r->path_time_lost_s, r->deadlocks, r->max_slack);
             fprintf(
                 f,
-                ",\"stop_requested\":%d,\"brake_t\":%.6g,\"brake_fallback_ticks\":%d,\"brake_forced_ticks\":%"
+                ",\"fault_text\":\"%s\",\"stop_requested\":%d,\"brake_t\":%.6g,\"brake_fallback_ticks\":%d,"
+                "\"brake_forced_ticks\":%"
                 "d,"
                 "\"stop_duration_s\":%.6g,\"max_dv_over_dt_dec\":%.9g,\"dec_limit\":%.6g,\"state\":\"%s\"}",
-                r->stop_requested, r->brake_t, r->brake_fallback_ticks, r->brake_forced_ticks,
-                r->stop_duration_s, r->max_dv_over_dt_dec, o.dec_limit > 0.0 ? o.dec_limit : 10.0,
-                mca_daemon_state_name(r->daemon_state));
+                json_text(jt, sizeof jt, r->fault_text), r->stop_requested, r->brake_t,
+                r->brake_fallback_ticks, r->brake_forced_ticks, r->stop_duration_s, r->max_dv_over_dt_dec,
+                o.dec_limit > 0.0 ? o.dec_limit : 10.0, mca_daemon_state_name(r->daemon_state));
         }
         fprintf(f, "]}\n");
         fclose(f);
