@@ -489,6 +489,13 @@ def main():
     order = {kd: i for i, kd in enumerate(todo)}
     tasks.sort(key=lambda t: order[(t["id"].rsplit(":", 1)[0], int(t["id"].rsplit(":", 1)[1]))])
     txt, summ = table(tasks, schemes, sim, a)
+    by_kind = {}
+    if len(kinds) > 1:
+        for k in kinds:
+            kt = [t for t in tasks if t["id"].rsplit(":", 1)[0] == k]
+            if kt:
+                ktxt, by_kind[k] = table(kt, schemes, sim, a)
+                txt += "\n\n" + ktxt
     txt += "\nwall time %.1f s with --jobs %d; repeat one task: --seed %d --kind K --only K:I" % (time.time() - t0, a.jobs, a.seed)
     print(txt)
     if a.table:
@@ -498,7 +505,7 @@ def main():
         out = dict(seed=a.seed, kinds=kinds, n=ns, only=a.only, schemes=schemes, sim=a.sim,
                    features=dict(stop_at=sim.stop_at, fault_at=sim.fault_at, dec_limit=sim.dec_limit,
                                  summary_fields=sorted(sim.fields)),
-                   lost_threshold=a.lost_threshold, max_err=a.max_err, summary=summ,
+                   lost_threshold=a.lost_threshold, max_err=a.max_err, summary=summ, summary_by_kind=by_kind,
                    reachable=sum(1 for t in tasks if t.get("reachable")), tasks=tasks, wall_s=round(time.time() - t0, 2))
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)
