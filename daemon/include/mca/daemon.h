@@ -9,9 +9,12 @@
  *   RUNNING --(fault)--> BRAKING --(all commands at 0)--> FAULT
  * Faults: controller fault (NaN, infeasible/not converged QP, distance below d1, fake attractor),
  * rt.overrun_limit consecutive overruns, no new feedback from an arm for rt.lost_feedback_cycles,
- * an arm reporting FAULT/BRAKING on its own, a bus error burst. BRAKING ramps every joint's
- * commanded velocity down at the arm's dec_limit (cell), then STOPPED/FAULT command zero velocity
- * with the servo released (the arm's brakes take over). The reason is logged and published.
+ * an arm reporting FAULT/BRAKING on its own, a bus error burst. BRAKING runs mca_controller_brake each
+ * tick (velocities closest to zero inside last command +- dec_limit dt, the joint limits and the collision
+ * rows; without a QP answer each arm's whole velocity vector is scaled down, keeping its direction); after
+ * 1.5 max_j |v_j|/dec_j + 20 periods from its start only that scale-down is used, so a stop is bounded.
+ * Then STOPPED/FAULT command zero velocity with the servo released (the arm's brakes take over). The
+ * reason is logged and published.
  *
  * Context: open/close and mca_daemon_start/join are start-up/shut-down; mca_daemon_step is rt (no
  * allocation, no locks, no blocking I/O; logs via mca/rtlog.h); the request/read-out functions are
