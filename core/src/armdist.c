@@ -75,6 +75,7 @@ int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const 
                 return rc; /* unreachable: inputs validated above */
             }
             ds = sd.d - chain_a->link_radius[i] - chain_b->link_radius[j];
+            set_pair(&out->pair[i][j], i, j, ds, sd.d, sd.p, sd.e);
             if (ds < out->a_to_b[i].d) {
                 set_pair(&out->a_to_b[i], i, j, ds, sd.d, sd.p, sd.e);
             }

@@ -65,7 +65,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->eq_tol = 1e-4;
     cfg->fault_distance = 1;
     cfg->ts.w_sigma = 1e2;
-    cfg->ts.w_slack = 1e4;
+    cfg->ts.w_slack = 1e3;
     cfg->ts.sigma_max = 1.5;
     cfg->ts.deadlock_time = 0.5;
     cfg->ts.deadlock_sigma = 0.05;
@@ -144,7 +144,6 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;
-        ctrl->cfg.sp.d_active = INFINITY;
     }
     for (int a = 0; a < cfg->n_arms; a++) {
         ctrl->path_end[a] = mca_path_end_time(&cfg->path[a]);
@@ -213,8 +212,62 @@ static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...) 
     va_end(ap);
 }
 
+void mca_controller_set_velocity(mca_controller_t *ctrl, const double *const v[MCA_MAX_ARMS]) {
+    int k = 0, ok = 1;
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        for (int j = 0; j < ctrl->cfg.chain[a].dof; j++, k++) {
+            ctrl->v_meas[k] = v && v[a] ? v[a][j] : NAN;
+            ok &= isfinite(ctrl->v_meas[k]);
+        }
+    }
+    ctrl->has_v_meas = ok;
+}
+
 void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text) {
     raise_fault(ctrl, code, "%s", text ? text : "");
+}
+
+/* Insert a pair into a link's list of its MCA_NEAR_LINKS nearest (sorted by d). */
+static void near_insert(mca_link_critical_t list[MCA_NEAR_LINKS], int other_arm, const mca_link_pair_t *lp,
+                        int flip) {
+    int k = MCA_NEAR_LINKS;
+    while (k > 0 && (!list[k - 1].valid || lp->d < list[k - 1].d)) {
+        k--;
+    }
+    if (k >= MCA_NEAR_LINKS) {
+        return;
+    }
+    memmove(&list[k + 1], &list[k], (size_t)(MCA_NEAR_LINKS - 1 - k) * sizeof list[0]);
+    mca_link_critical_t *c = &list[k];
+    c->valid = 1;
+    c->other_arm = other_arm;
+    c->other_link = flip ? lp->link : lp->other_link;
+    c->d = lp->d;
+    mca_v3_set(c->p, flip ? lp->e : lp->p);
+    mca_v3_set(c->e, flip ? lp->p : lp->e);
+}
+
+/* Per link of every arm: its MCA_NEAR_LINKS nearest links of the other arms (mca-ts rows, braking). */
+static void near_links(mca_controller_t *ctrl) {
+    const int na = ctrl->cfg.n_arms;
+    for (int a = 0; a < na; a++) {
+        for (int l = 0; l < MCA_MAX_LINKS; l++) {
+            for (int k = 0; k < MCA_NEAR_LINKS; k++) {
+                ctrl->near[a][l][k].valid = 0;
+            }
+        }
+    }
+    for (int a = 0; a < na; a++) {
+        for (int b = a + 1; b < na; b++) {
+            const mca_arm_distances_t *ad = &ctrl->dist[a][b];
+            for (int i = 0; i < ad->n_links_a; i++) {
+                for (int j = 0; j < ad->n_links_b; j++) {
+                    near_insert(ctrl->near[a][i], b, &ad->pair[i][j], 0);
+                    near_insert(ctrl->near[b][j], a, &ad->pair[i][j], 1);
+                }
+            }
+        }
+    }
 }
 
 /* Per link of every arm: the closest link of any other arm, and the global minimum. */
@@ -269,6 +322,7 @@ static int distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
             info->link_distance[a][l] = ctrl->crit[a][l].d;
         }
     }
+    near_links(ctrl);
     return MCA_OK;
 }
 
@@ -391,6 +445,30 @@ static void scale_into_rows(const mca_qp_t *qp, double *phi, const mca_scheme_in
     }
 }
 
+/* mca-ts: commands the arm can follow. Each joint's command stays within dec_limit dt of the last one, the
+ * rate an arm at its limits follows exactly, so the rows hold for the arm and not only for the command.
+ * Where the last command lies beyond a joint-limit bound by more than that, the joint limit wins. */
+static void accel_box(mca_controller_t *ctrl, const mca_scheme_info_t *si, int na) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    mca_qp_t *qp = &ctrl->qp;
+    for (int a = 0; a < na; a++) {
+        const double step = cfg->ts.dec_limit[a] * cfg->dt;
+        if (!(step > 0.0)) {
+            continue;
+        }
+        for (int j = 0; j < cfg->chain[a].dof; j++) {
+            const int k = si->var_off[a] + j;
+            const double v = ctrl->has_v_meas ? ctrl->v_meas[k] : ctrl->has_prev ? ctrl->phi_prev[k] : 0.0;
+            double lo = fmax(qp->lb[k], v - step), hi = fmin(qp->ub[k], v + step);
+            if (lo > hi) {
+                lo = hi = v - step > qp->ub[k] ? qp->ub[k] : qp->lb[k];
+            }
+            qp->lb[k] = lo;
+            qp->ub[k] = hi;
+        }
+    }
+}
+
 /* Catching up: the rate an arm aims at grows with its lag behind task time (1/s per s of lag). */
 #define MCA_TS_CATCH_UP_GAIN 1.0
 
@@ -443,11 +521,11 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
     const int na = cfg->n_arms;
     double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS];
     ts_plan(ctrl, info->task_t, target, lo, hi); /* idempotent: the same targets the QP was built with */
-    const double rs = 1.0 / sqrt(tp->w_sigma), re = 1.0 / sqrt(tp->w_slack);
+    const double re = 1.0 / sqrt(tp->w_slack);
     int unfinished = 0, progressing = 0, victim = -1;
     double slack = 0.0;
     for (int a = 0; a < na; a++) {
-        double sigma = target[a] + rs * ctrl->phi[ts_off[a]];
+        double sigma = target[a] + ctrl->phi[ts_off[a]] / ctrl->ts_scale[a];
         sigma = fmax(lo[a], fmin(hi[a], sigma));
         const double speed = mca_v3_norm(rdot_d[a]);
         for (int i = 0; i < MCA_TASK_DIM; i++) {
@@ -597,7 +675,9 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             chains[a] = &cfg->chain[a];
         }
         mca_scheme_info_t si;
-        int rc = mca_scheme_assemble(&cfg->sp, na, chains, ctrl->kin, q, (const double(*)[3])r_d,
+        mca_scheme_params_t sp = cfg->sp;
+        sp.collision = cfg->sp.collision && !ts; /* mca-ts builds its own rows (mca_scheme_near_rows) */
+        int rc = mca_scheme_assemble(&sp, na, chains, ctrl->kin, q, (const double(*)[3])r_d,
                                      (const double(*)[3])rdot_d,
                                      (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
                                      ctrl->has_prev ? ctrl->phi_prev : NULL, &ctrl->sstate, &ctrl->qp, &si);
@@ -615,12 +695,18 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (ts) {
             double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS];
             ts_plan(ctrl, info->task_t, target, lo, hi);
-            mca_scheme_shape_rows(&ctrl->qp, &si, na, chains,
-                                  (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit, &cfg->sp,
-                                  cfg->ts.dec_limit, cfg->ts.priority);
+            rc = mca_scheme_near_rows(&ctrl->qp, &si, na, chains, ctrl->kin,
+                                      (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])ctrl->near,
+                                      &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
+            if (rc != MCA_OK) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+                goto fault;
+            }
+            info->brake = si.brake;
+            accel_box(ctrl, &si, na);
             const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack};
             rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
-                                          ts_off);
+                                          ts_off, ctrl->ts_scale);
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
                 goto fault;
@@ -718,6 +804,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->fault = MCA_CTRL_FAULT_NONE;
     info->fault_text[0] = 0;
     fill_path_info(ctrl, info);
+    ctrl->has_v_meas = 0;
     info->compute_ns = now_ns() - t_enter;
     return MCA_OK;
 
@@ -732,6 +819,7 @@ fault:
     if (ctrl->started) {
         fill_path_info(ctrl, info);
     }
+    ctrl->has_v_meas = 0;
     info->compute_ns = now_ns() - t_enter;
     return MCA_EFAULT;
 }
@@ -767,8 +855,7 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     const int na = cfg->n_arms;
     const double dt = cfg->dt;
     mca_scheme_params_t sp = cfg->sp;
-    sp.collision = 1;
-    sp.form = MCA_FORM_NORMAL;
+    sp.collision = 0; /* the rows: mca_scheme_near_rows below */
     const mca_chain_t *chains[MCA_MAX_ARMS];
     double r_d[MCA_MAX_ARMS][3] = {{0}}, rdot_d[MCA_MAX_ARMS][3] = {{0}};
     for (int a = 0; a < na; a++) {
@@ -784,9 +871,13 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
         return rc;
     }
     qp->n_eq = 0;
-    if (cfg->scheme == MCA_SCHEME_MCA_TS) {
-        mca_scheme_shape_rows(qp, &si, na, chains, (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
-                              &sp, cfg->ts.dec_limit, cfg->ts.priority);
+    /* every scheme brakes with the near rows; the stop bound and priorities are mca-ts's */
+    const int ts = cfg->scheme == MCA_SCHEME_MCA_TS;
+    rc = mca_scheme_near_rows(qp, &si, na, chains, ctrl->kin,
+                              (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])ctrl->near, &sp,
+                              ts ? cfg->ts.dec_limit : NULL, ts ? cfg->ts.priority : NULL);
+    if (rc != MCA_OK) {
+        return rc;
     }
     for (int a = 0; a < na; a++) {
         for (int j = 0; j < cfg->chain[a].dof; j++) {

@@ -144,12 +144,11 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
             for (int k = 0; k < rpl; k++) {
                 qp->beta[r0 + k] = p->big; /* U rows already zero: inactive */
             }
-            const double d_on = p->form == MCA_FORM_NORMAL ? fmax(p->d2, p->d_active) : p->d2;
-            if (!c->valid || c->d >= d_on) {
+            if (!c->valid || c->d >= p->d2) {
                 st->in_band[a][l] = 0;
                 continue;
             }
-            if (l > 0 && crit[a][l - 1].valid && crit[a][l - 1].d < d_on &&
+            if (l > 0 && crit[a][l - 1].valid && crit[a][l - 1].d < p->d2 &&
                 mca_v3_dist(crit[a][l - 1].p, c->p) < 1e-12 && mca_v3_dist(crit[a][l - 1].e, c->e) < 1e-12) {
                 /* same critical pair as the previous link (a zero-length link next to its neighbour):
                  * a duplicate row adds nothing and makes the QP degenerate */
@@ -217,51 +216,117 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
     return bounds_rc;
 }
 
-void mca_scheme_shape_rows(mca_qp_t *qp, const mca_scheme_info_t *si, int n_arms,
-                           const mca_chain_t *const chain[], const mca_link_critical_t crit[][MCA_MAX_LINKS],
-                           const mca_scheme_params_t *p, const double *dec, const double *priority) {
-    if (si->rows_per_link != 1) {
-        return; /* the componentwise form keeps the paper's bounds */
+/* Same critical pair (P and E) as any row of the previous link: a duplicate row adds nothing and makes the
+ * QP degenerate. */
+static int repeats_previous(const mca_link_critical_t near[][MCA_NEAR_LINKS], int l,
+                            const mca_link_critical_t *c) {
+    if (l == 0) {
+        return 0;
+    }
+    for (int k = 0; k < MCA_NEAR_LINKS; k++) {
+        const mca_link_critical_t *o = &near[l - 1][k];
+        if (o->valid && mca_v3_dist(o->p, c->p) < 1e-12 && mca_v3_dist(o->e, c->e) < 1e-12) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
+                         const mca_kin_t kin[],
+                         const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_LINKS],
+                         const mca_scheme_params_t *p, const double *dec, const double *priority) {
+    if (!qp || !si || !chain || !kin || !near || !p || n_arms < 1 || n_arms > MCA_MAX_ARMS) {
+        return MCA_EINVAL;
+    }
+    int n_ineq = 0;
+    for (int a = 0; a < n_arms; a++) {
+        si->row_off[a] = n_ineq;
+        n_ineq += MCA_NEAR_LINKS * (chain[a]->dof + 1);
+    }
+    if (n_ineq > MCA_QP_MAX_INEQ) {
+        return MCA_ERANGE;
+    }
+    for (int i = 0; i < n_ineq; i++) {
+        memset(qp->U[i], 0, sizeof qp->U[i]);
+        qp->beta[i] = p->big;
+    }
+    qp->n_ineq = n_ineq;
+    si->rows_per_link = MCA_NEAR_LINKS;
+    si->active_rows = 0;
+    si->brake = 1.0;
+    for (int a = n_arms; a < MCA_MAX_ARMS; a++) {
+        si->row_off[a] = n_ineq;
     }
     for (int a = 0; a < n_arms; a++) {
+        const int dof = chain[a]->dof, vo = si->var_off[a];
         double t_stop = 0.0; /* longest stop of arm a from its fastest joint speed */
         if (dec && dec[a] > 0.0) {
-            for (int j = 0; j < chain[a]->dof; j++) {
+            for (int j = 0; j < dof; j++) {
                 t_stop = fmax(t_stop, chain[a]->joint[j].vel_limit / dec[a]);
             }
         }
-        for (int l = 0; l <= chain[a]->dof; l++) {
-            const int r = si->row_off[a] + l;
-            const mca_link_critical_t *c = &crit[a][l];
-            if (!c->valid || !(qp->beta[r] < p->big)) {
-                continue;
+        for (int l = 0; l <= dof; l++) {
+            for (int k = 0; k < MCA_NEAR_LINKS; k++) {
+                const mca_link_critical_t *c = &near[a][l][k];
+                const int r = si->row_off[a] + MCA_NEAR_LINKS * l + k;
+                if (!c->valid || repeats_previous(near[a], l, c)) {
+                    continue;
+                }
+                double r_pe[3];
+                mca_v3_sub(r_pe, c->e, c->p);
+                const double nrm = mca_v3_norm(r_pe);
+                if (!(nrm > 1e-12)) {
+                    continue; /* axes touch: no direction; the distance fault handles it */
+                }
+                double bound = p->big;
+                if (c->d < p->d2) {
+                    const double s = mca_brake_s(c->d, p->d1, p->d2);
+                    si->brake = fmin(si->brake, s);
+                    bound = s * p->v_normal;
+                }
+                if (t_stop > 0.0) {
+                    bound = fmin(bound, fmax(0.0, c->d - p->d1) / t_stop);
+                }
+                if (!(bound < p->big)) {
+                    continue; /* beyond d2 with no stop bound: inactive */
+                }
+                const double pa = priority ? priority[a] : 1.0, pb = priority ? priority[c->other_arm] : 1.0;
+                const double share = pa + pb > 0.0 ? 2.0 * pa / (pa + pb) : 1.0;
+                double Jp[3][MCA_MAX_DOF];
+                const int rc = mca_jacobian_point(&kin[a], l, c->p, Jp);
+                if (rc != MCA_OK) {
+                    return rc;
+                }
+                for (int j = 0; j < dof; j++) {
+                    qp->U[r][vo + j] = (r_pe[0] * Jp[0][j] + r_pe[1] * Jp[1][j] + r_pe[2] * Jp[2][j]) / nrm;
+                }
+                qp->beta[r] = share * bound;
+                si->active_rows++;
             }
-            const int b = c->other_arm;
-            const double pa = priority ? priority[a] : 1.0, pb = priority ? priority[b] : 1.0;
-            const double share = pa + pb > 0.0 ? 2.0 * pa / (pa + pb) : 1.0;
-            /* beyond d2 only the stop bound limits the approach (S(d) = 1 there) */
-            double bound = c->d < p->d2 ? qp->beta[r] : p->big;
-            if (t_stop > 0.0) {
-                bound = fmin(bound, fmax(0.0, c->d - p->d1) / t_stop);
-            }
-            qp->beta[r] = bound < p->big ? share * bound : p->big;
         }
     }
+    return MCA_OK;
 }
 
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
                              const double *sigma_lo, const double *sigma_hi, const mca_timescale_weights_t *w,
-                             int ts_off[]) {
-    if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !w || !ts_off || !(w->w_sigma > 0.0) ||
-        !(w->w_slack > 0.0) || n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
+                             int ts_off[], double sigma_scale[]) {
+    if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !w || !ts_off || !sigma_scale ||
+        !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
         return MCA_EINVAL;
     }
     if (qp->n + MCA_TS_VARS * n_arms > MCA_QP_MAX_VARS) {
         return MCA_ERANGE;
     }
-    const double rs = 1.0 / sqrt(w->w_sigma), re = 1.0 / sqrt(w->w_slack);
+    const double re = 1.0 / sqrt(w->w_slack);
     for (int a = 0; a < n_arms; a++) {
         const int o = qp->n;
+        /* u = m (sigma - target), m = sqrt(w_sigma). (Scaling m with |rdot|, so that the column has the same
+         * length at any path speed, was tried: no fewer unsafe runs in the sweep and more deadlocks.) */
+        const double m = sqrt(w->w_sigma);
+        const double rs = 1.0 / m;
+        sigma_scale[a] = m;
         ts_off[a] = o;
         qp->n += MCA_TS_VARS;
         for (int i = 0; i < MCA_TASK_DIM; i++) {

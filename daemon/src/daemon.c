@@ -707,6 +707,11 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         for (int a = 0; a < MCA_MAX_ARMS; a++) {
             qdp[a] = d->qdot[a];
         }
+        const double *vm[MCA_MAX_ARMS] = {NULL};
+        for (int a = 0; a < d->n_arms; a++) {
+            vm[a] = d->have_fb[a] ? d->fb[a].velocity : NULL;
+        }
+        mca_controller_set_velocity(&d->ctrl, vm); /* mca-ts: the next command starts from the real motion */
         const int rc = mca_controller_tick(&d->ctrl, t, qp, qdp, &d->info);
         mca_hist_record(&d->ctrl_time, d->info.compute_ns);
         if (isfinite(d->info.min_distance) && d->info.min_distance < d->min_d) {

@@ -680,7 +680,7 @@ static void run_ts(const char *scenario, double seconds, ts_tick_fn fn, void *us
 
 typedef struct ts_seen {
     double min_d, d1, max_stand_still_err;
-    int back_off_ticks, backed_off_neg_sigma, qps;
+    int back_off_ticks, backed_off_neg_sigma, qps, zero_in_box;
 } ts_seen_t;
 
 /* docs/scheme.md: standing still (qdot = 0, sigma = 0, the slack taking up the feedback term) is a point of
@@ -696,13 +696,14 @@ static void check_tick(const mca_controller_t *c, const mca_tick_info_t *info, v
     }
     assert_int_equal(qp->n, nj + MCA_TS_VARS * na);
     double phi[MCA_QP_MAX_VARS] = {0};
-    const double rs = 1.0 / sqrt(c->cfg.ts.w_sigma), re = 1.0 / sqrt(c->cfg.ts.w_slack);
+    const double re = 1.0 / sqrt(c->cfg.ts.w_slack);
     for (int a = 0; a < na; a++) {
         const int o = nj + MCA_TS_VARS * a;
         /* sigma = target + rs u, bounded to [lo, hi] with lo = 0 (running, waiting) or -1 (backing off: then
          * hi = 0, a width of exactly 1; running has hi = sigma_max = 1.5): sigma = 0 is u = ub while backing
          * off, u = lb otherwise, and always inside the bounds */
         assert_true(c->cfg.ts.sigma_max != 1.0);
+        const double rs = 1.0 / c->ts_scale[a]; /* sigma = target + u / m */
         const double u = fabs((qp->ub[o] - qp->lb[o]) * rs - 1.0) < 1e-9 ? qp->ub[o] : qp->lb[o];
         phi[o] = u;
         for (int i = 0; i < 3; i++) {
@@ -720,9 +721,14 @@ static void check_tick(const mca_controller_t *c, const mca_tick_info_t *info, v
     for (int i = 0; i < qp->n_ineq; i++) {
         assert_true(qp->beta[i] >= 0.0); /* U 0 = 0 <= beta */
     }
+    /* the joint box is the joint limits within dec_limit dt of the last command: zero lies in it whenever the
+     * arm is that slow, and then the point above is feasible; otherwise the box alone excludes standing
+     * still (the equality never does: any qdot is completed by the slack) */
+    int zero_in_box = 1;
     for (int j = 0; j < nj; j++) {
-        assert_true(qp->lb[j] <= 0.0 && qp->ub[j] >= 0.0); /* inside the joint limits: zero is in the box */
+        zero_in_box &= qp->lb[j] <= 0.0 && qp->ub[j] >= 0.0;
     }
+    seen->zero_in_box += zero_in_box;
     seen->qps++;
     if (info->deadlock == MCA_DEADLOCK_BACK_OFF) {
         seen->back_off_ticks++;
@@ -732,11 +738,14 @@ static void check_tick(const mca_controller_t *c, const mca_tick_info_t *info, v
 
 static void test_timescale_stand_still_feasible(void **state) {
     (void)state;
-    ts_seen_t seen = {INFINITY, 0, 0, 0, 0, 0};
+    ts_seen_t seen = {INFINITY, 0, 0, 0, 0, 0, 0};
     mca_tick_info_t last;
     run_ts(SCN("cross_circles.yaml"), 10.5, check_tick, &seen, &last);
-    print_message("cross_circles mca-ts: %d QPs, |G phi0 - alpha| <= %.2e, min d %.4f, tau %.3f/%.3f\n",
-                  seen.qps, seen.max_stand_still_err, seen.min_d, last.tau[0], last.tau[1]);
+    print_message(
+        "cross_circles mca-ts: %d QPs (%d with zero in the joint box), |G phi0 - alpha| <= %.2e, min d "
+        "%.4f, tau %.3f/%.3f\n",
+        seen.qps, seen.zero_in_box, seen.max_stand_still_err, seen.min_d, last.tau[0], last.tau[1]);
+    assert_true(seen.zero_in_box > 100);
     assert_true(seen.max_stand_still_err < 1e-9);
     assert_true(seen.min_d >= 0.05);
     assert_int_equal(last.paths_done, 1); /* the clocks caught up with the lag they lost */
@@ -747,7 +756,7 @@ static void test_timescale_stand_still_feasible(void **state) {
  * the deadlock, and the arm that backs off runs its path backwards while every distance stays >= d1. */
 static void test_timescale_deadlock(void **state) {
     (void)state;
-    ts_seen_t seen = {INFINITY, 0, 0, 0, 0, 0};
+    ts_seen_t seen = {INFINITY, 0, 0, 0, 0, 0, 0};
     mca_tick_info_t last;
     run_ts(SCN("negative.yaml"), 12.0, check_tick, &seen, &last);
     print_message("negative mca-ts: min d %.4f, %d deadlocks, %d back-off ticks (%d with sigma < 0)\n",
@@ -760,44 +769,68 @@ static void test_timescale_deadlock(void **state) {
     assert_int_equal(last.paths_done, 0);
 }
 
-/* Row shaping against its closed form: priority shares and the stoppability bound (d - d1) / T. */
-static void test_shape_rows(void **state) {
+/* mca-ts rows against their closed form: priority shares, the stoppability bound (d - d1) / T beyond the
+ * band too, one row per near link, and a pair repeated from the previous link left inactive. */
+static void test_near_rows(void **state) {
     (void)state;
     mca_chain_t ch;
     char err[256];
     assert_int_equal(mca_chain_load_urdf(&ch, PA10, NULL, err, sizeof err), MCA_OK);
     const mca_chain_t *chains[2] = {&ch, &ch};
+    mca_kin_t kin[2];
+    const double q[MCA_MAX_DOF] = {0.1, 0.4, 0.0, 0.8, 0.0, 0.3, 0.0, 0.0};
+    assert_int_equal(mca_fk(&ch, q, &kin[0]), MCA_OK);
+    kin[1] = kin[0];
     static mca_qp_t qp;
     mca_scheme_params_t p;
     mca_scheme_default_params(&p);
     mca_scheme_info_t si = {0};
-    si.rows_per_link = 1;
-    si.row_off[0] = 0;
-    si.row_off[1] = ch.dof + 1;
-    assert_int_equal(mca_qp_reset(&qp, 2 * ch.dof, 6, 2 * (ch.dof + 1)), MCA_OK);
-    mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
-    memset(crit, 0, sizeof crit);
+    si.var_off[1] = ch.dof;
+    assert_int_equal(mca_qp_reset(&qp, 2 * ch.dof, 6, 0), MCA_OK);
+    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_LINKS];
+    memset(near, 0, sizeof near);
     const double d_in = 0.08, d_far = 0.5;
-    crit[0][2] = (mca_link_critical_t){1, 1, 3, d_in, {0}, {0}};
-    crit[1][3] = (mca_link_critical_t){1, 0, 2, d_far, {0}, {0}};
-    for (int i = 0; i < qp.n_ineq; i++) {
-        qp.beta[i] = p.big;
-    }
-    qp.beta[2] = mca_brake_s(d_in, p.d1, p.d2) * p.v_normal;
-    qp.beta[si.row_off[1] + 3] = p.v_normal; /* beyond d2: active row with S = 1 */
+    /* arm 0, link 4: two near links of arm 1 (one inside the band, one far); link 5 repeats link 4's first */
+    near[0][4][0] = (mca_link_critical_t){1, 1, 3, d_in, {0.3, 0.0, 0.9}, {0.3, 0.1, 0.9}};
+    near[0][4][1] = (mca_link_critical_t){1, 1, 6, d_far, {0.3, 0.0, 0.9}, {0.8, 0.0, 0.9}};
+    near[0][5][0] = near[0][4][0];
+    near[1][3][0] = (mca_link_critical_t){1, 0, 4, d_in, {0.3, 0.1, 0.9}, {0.3, 0.0, 0.9}};
     const double dec[2] = {2.0, 2.0}, prio[2] = {3.0, 1.0};
     double t_stop = 0.0;
     for (int j = 0; j < ch.dof; j++) {
         t_stop = fmax(t_stop, ch.joint[j].vel_limit / 2.0);
     }
-    mca_scheme_shape_rows(&qp, &si, 2, chains, (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, &p, dec,
-                          prio);
-    const double expect_a =
-        2.0 * 0.75 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / t_stop);
-    const double expect_b = 2.0 * 0.25 * ((d_far - p.d1) / t_stop);
-    assert_true(fabs(qp.beta[2] - expect_a) < 1e-15);
-    assert_true(fabs(qp.beta[si.row_off[1] + 3] - expect_b) < 1e-15);
-    assert_true(qp.beta[0] == p.big); /* no critical point: untouched */
+    assert_int_equal(mca_scheme_near_rows(&qp, &si, 2, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])near,
+                                          &p, dec, prio),
+                     MCA_OK);
+    const int R = MCA_NEAR_LINKS;
+    assert_int_equal(qp.n_ineq, 2 * R * (ch.dof + 1));
+    assert_int_equal(si.rows_per_link, R);
+    assert_int_equal(si.row_off[1], R * (ch.dof + 1));
+    const double in_a = 2.0 * 0.75 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / t_stop);
+    const double far_a = 2.0 * 0.75 * (d_far - p.d1) / t_stop; /* beyond d2: the stop bound alone */
+    const double in_b = 2.0 * 0.25 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / t_stop);
+    assert_true(fabs(qp.beta[R * 4 + 0] - in_a) < 1e-15);
+    assert_true(fabs(qp.beta[R * 4 + 1] - far_a) < 1e-15);
+    assert_true(qp.beta[R * 4 + 2] == p.big); /* no third near link */
+    assert_true(qp.beta[R * 5 + 0] == p.big); /* repeats link 4's pair */
+    assert_true(fabs(qp.beta[si.row_off[1] + R * 3] - in_b) < 1e-15);
+    assert_int_equal(si.active_rows, 3);
+    /* the row is the approach speed of P towards E: n = +y here, so the row is J_P's y row */
+    double Jp[3][MCA_MAX_DOF];
+    assert_int_equal(mca_jacobian_point(&kin[0], 4, near[0][4][0].p, Jp), MCA_OK);
+    for (int j = 0; j < ch.dof; j++) {
+        assert_true(fabs(qp.U[R * 4][j] - Jp[1][j]) < 1e-12);
+        assert_true(qp.U[R * 4][ch.dof + j] == 0.0);
+    }
+    /* without dec and priorities: the paper's band only */
+    assert_int_equal(mca_scheme_near_rows(&qp, &si, 2, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])near,
+                                          &p, NULL, NULL),
+                     MCA_OK);
+    assert_true(fabs(qp.beta[R * 4] - mca_brake_s(d_in, p.d1, p.d2) * p.v_normal) < 1e-15);
+    assert_true(qp.beta[R * 4 + 1] == p.big);
 }
 
 /* Braking: every tick within dec dt of the last, at rest in the time the fastest joint needs; the fallback
@@ -875,7 +908,7 @@ int main(void) {
         cmocka_unit_test(test_controller_n_arms),
         cmocka_unit_test(test_timescale_stand_still_feasible),
         cmocka_unit_test(test_timescale_deadlock),
-        cmocka_unit_test(test_shape_rows),
+        cmocka_unit_test(test_near_rows),
         cmocka_unit_test(test_controller_brake),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

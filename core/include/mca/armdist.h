@@ -35,7 +35,9 @@ typedef struct mca_arm_distances {
     mca_link_pair_t a_to_b[MCA_MAX_LINKS]; /**< per link of A: closest link of B (p on A, e on B) */
     mca_link_pair_t b_to_a[MCA_MAX_LINKS]; /**< per link of B: closest link of A (p on B, e on A) */
     mca_link_pair_t min;                   /**< global minimum, seen from A (p on A, e on B) */
-    int iterations;                        /**< total LSDM iterations (0 for the closed form) */
+    mca_link_pair_t pair[MCA_MAX_LINKS]
+                        [MCA_MAX_LINKS]; /**< [i][j]: link i of A against link j of B (p on A) */
+    int iterations;                      /**< total LSDM iterations (0 for the closed form) */
 } mca_arm_distances_t;
 
 /**

@@ -63,8 +63,8 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out);
 
 /** Path-time scaling parameters (mca-ts only; defaults in mca_controller_default_config()). */
 typedef struct mca_timescale_params {
-    double w_sigma;   /**< weight of (sigma - 1)^2 against |qdot|^2 (1e2) */
-    double w_slack;   /**< weight of the tracking slack |e|^2 (1e4) */
+    double w_sigma;   /**< weight of (sigma - target)^2 against |qdot|^2 (1e2) */
+    double w_slack;   /**< weight of the tracking slack |e|^2 (1e3) */
     double sigma_max; /**< most path rate when catching up (1.5; 1: never faster than the path) */
     double priority[MCA_MAX_ARMS]; /**< higher keeps its path; lower yields first and backs off (1) */
     double deadlock_time;  /**< every moving arm's sigma below deadlock_sigma this long: deadlock [s] (0.5) */
@@ -171,6 +171,8 @@ typedef struct mca_controller {
     mca_kin_t kin[MCA_MAX_ARMS];
     mca_arm_distances_t dist[MCA_MAX_ARMS][MCA_MAX_ARMS]; /**< [a][b], a < b */
     mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS]
+                            [MCA_NEAR_LINKS]; /**< nearest links (mca-ts, braking) */
     mca_scheme_state_t sstate;
     mca_qp_t qp;
     mca_pdnn_t pdnn;
@@ -186,8 +188,11 @@ typedef struct mca_controller {
     double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
     double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
     int deadlock, deadlock_arm, deadlocks;
-    double deadlock_until;         /**< back-off ends at this task time */
-    double wait_tau[MCA_MAX_ARMS]; /**< WAIT: the others' clocks when it began */
+    double deadlock_until;          /**< back-off ends at this task time */
+    double wait_tau[MCA_MAX_ARMS];  /**< WAIT: the others' clocks when it began */
+    double ts_scale[MCA_MAX_ARMS];  /**< u = ts_scale (sigma - target) in the last QP */
+    double v_meas[MCA_QP_MAX_VARS]; /**< measured joint velocities for the next tick (phi layout) */
+    int has_v_meas;
     /* braking QP (kept apart from the tick's so a fault does not disturb the last tick's dump) */
     mca_qp_t brake_qp;
     mca_pdnn_t brake_pdnn;
@@ -241,6 +246,13 @@ int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q
                          const double *const v_last[MCA_MAX_ARMS],
                          const double *const dec_limit[MCA_MAX_ARMS], double *const qdot[MCA_MAX_ARMS],
                          mca_tick_info_t *info);
+
+/**
+ * Measured joint velocities for the next tick (mca-ts; RT safe). The next command then stays within
+ * dec_limit dt of what each joint really does, not of the last command, so an arm that could not follow a
+ * command is not assumed to have. Used by one tick, then forgotten (without it: the last command).
+ */
+void mca_controller_set_velocity(mca_controller_t *ctrl, const double *const v[MCA_MAX_ARMS]);
 
 /** Latch a fault from outside the tick (a test's injected fault, a backend fault). RT safe. */
 void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text);

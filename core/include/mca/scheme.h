@@ -43,8 +43,6 @@ typedef struct mca_scheme_params {
     double v_normal; /**< normal form: approach speed allowed at d >= d2 [m/s] */
     double v_floor;  /**< componentwise: least allowed approach speed per axis [m/s] */
     double big;      /**< bound of an inactive row (the PDNN's varpi or less) */
-    double d_active; /**< normal form: rows are active below max(d2, d_active) [m] (0: d2, the paper's band;
-                          mca-ts: +inf, so the stoppability bound holds at any distance) */
 } mca_scheme_params_t;
 
 /** Critical point of one link against the closest link of the other arms. */
@@ -121,17 +119,25 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
                         const double *phi_prev, mca_scheme_state_t *st, mca_qp_t *qp,
                         mca_scheme_info_t *info);
 
+/** Collision rows per link under mca-ts: one per each of the link's nearest links of the other arms. */
+#define MCA_NEAR_LINKS 3
+
 /**
- * mca-ts row shaping (normal form, on a QP from mca_scheme_assemble; real-time safe). Each active row of
- * arm a against arm b gets
- *   beta = 2 w_a min{ S(d) v_normal, (d - d1) / T_a },   w_a = priority_a / (priority_a + priority_b),
- *   T_a = max_j qdot_max,j / dec_a (the longest stop of arm a from its fastest joint speed),
+ * The collision rows of mca-ts (normal form; on a QP assembled without collision rows; real-time safe).
+ * Per arm a, per link l, one row per near pair near[a][l][k] (the link's MCA_NEAR_LINKS nearest links of
+ * the other arms, so that a pair approaching while neither link has it as its closest is bounded too):
+ *   n^T J_P qdot_a <= 2 w_a min{ S(d) v_normal (d < d2 only), (d - d1) / T_a },
+ *   w_a = priority_a / (priority_a + priority_b),  T_a = max_j qdot_max,j / dec_a,
  * so the pair's approach speeds sum to at most what both arms can brake away before d1 (docs/scheme.md,
- * "Stoppability"). dec NULL or dec[a] <= 0: no stop bound for arm a; priority NULL: equal shares.
+ * "Stoppability"). dec NULL or dec[a] <= 0: no stop bound for arm a; priority NULL: equal shares. Rows
+ * without a pair, or repeating a pair of the previous link (a shared joint), keep beta = big.
+ * Sets qp->n_ineq and si's row layout, active_rows and brake.
+ * @retval MCA_OK, MCA_EINVAL, MCA_ERANGE (rows above the maximum)
  */
-void mca_scheme_shape_rows(mca_qp_t *qp, const mca_scheme_info_t *si, int n_arms,
-                           const mca_chain_t *const chain[], const mca_link_critical_t crit[][MCA_MAX_LINKS],
-                           const mca_scheme_params_t *p, const double *dec, const double *priority);
+int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
+                         const mca_kin_t kin[],
+                         const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_LINKS],
+                         const mca_scheme_params_t *p, const double *dec, const double *priority);
 
 /** Path-time scaling weights (see mca_scheme_add_timescale). */
 typedef struct mca_timescale_weights {
@@ -141,18 +147,19 @@ typedef struct mca_timescale_weights {
 
 /**
  * Append the mca-ts variables of every arm (real-time safe): after the joint velocities, per arm a
- * u_a = sqrt(w_sigma) (sigma_a - target_a) and s_a = sqrt(w_slack) e_a (3 values), so the identity Hessian
- * of the PDNN is the objective |qdot|^2 + w_sigma (sigma - target)^2 + w_slack |e|^2. Tracking row (26)
- * becomes J_a qdot_a - sigma_a rdot_a - e_a = K (r_a - f(q_a)):
- *   J_a qdot_a - rdot_a / sqrt(w_sigma) u_a - s_a / sqrt(w_slack) = target_a rdot_a + K (r_a - f(q_a)).
+ * u_a = m (sigma_a - target_a), m = sqrt(w_sigma), and s_a = sqrt(w_slack) e_a (3 values), so the identity
+ * Hessian of the PDNN is the objective |qdot|^2 + w_sigma (sigma - target)^2 + w_slack |e|^2. Tracking
+ * row (26) becomes J_a qdot_a - sigma_a rdot_a - e_a = K (r_a - f(q_a)):
+ *   J_a qdot_a - rdot_a / m u_a - s_a / sqrt(w_slack) = target_a rdot_a + K (r_a - f(q_a)).
  * sigma_a is bounded to [sigma_lo[a], sigma_hi[a]]; the slack is free.
  * @param rdot_d  path velocity of each arm at its path clock (d r / d tau)
- * @param[out] ts_off  first added variable of each arm
+ * @param[out] ts_off       first added variable of each arm
+ * @param[out] sigma_scale  m of each arm (sigma = target + u / m)
  * @retval MCA_OK, MCA_ERANGE (too many variables), MCA_EINVAL
  */
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
                              const double *sigma_lo, const double *sigma_hi, const mca_timescale_weights_t *w,
-                             int ts_off[]);
+                             int ts_off[], double sigma_scale[]);
 
 #ifdef __cplusplus
 }
