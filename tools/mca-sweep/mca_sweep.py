@@ -336,6 +336,8 @@ def run_task(sim, kind, seed, i, a):
     wd = os.path.dirname(task["scenario"])
     schemes = ["mvn"] + [s for s in a.schemes if s != "mvn"]
     extra = ["--dec-limit", str(a.dec_limit)] if a.dec_limit and sim.dec_limit else []
+    if a.ideal_arms:
+        extra.append("--euler")  # arms that realise every command exactly (no rate limit)
     runs, errs = sim.run(task["scenario"], os.path.join(wd, "task.json"), schemes, extra)
     task["errors"] = errs
     mvn = runs.get("mvn")
@@ -445,6 +447,9 @@ def main():
     ap.add_argument("--max-err", type=float, default=0.005, help="MVN tracking error that makes a task unreachable [m]")
     ap.add_argument("--no-stop", action="store_true", help="no second run with a stop request")
     ap.add_argument("--dec-limit", type=float, default=0.0, help="pass --dec-limit X to mca-sim (when it has it)")
+    ap.add_argument("--ideal-arms", action="store_true",
+                    help="mca-sim --euler: arms realise each command exactly (default: the sim backend's "
+                         "rate-limited firmware model)")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
     if not os.access(a.sim, os.X_OK):
