@@ -318,6 +318,16 @@ def main():
                      f"mca_controller_tick alone, from mcad's summary; whole tick incl. arm I/O p50 "
                      f"{fmt(jit_m['compute_p50_us'])} us"))
 
+    ts_a = mcad_summary(read(os.path.join(raw, "mcad_scheme_mca.log")))
+    ts_b = mcad_summary(read(os.path.join(raw, "mcad_scheme_mca-ts.log")))
+    if ts_a and ts_b and ts_a.get("ctrl_p99_us") and ts_b.get("ctrl_p99_us"):
+        rows.append(("1c. tick compute inside mcad, mca-ts vs mca (task 1, same run length)",
+                     f"p50 {fmt(ts_b['ctrl_p50_us'])} / p99 {fmt(ts_b['ctrl_p99_us'])} us",
+                     f"p50 {fmt(ts_a['ctrl_p50_us'])} / p99 {fmt(ts_a['ctrl_p99_us'])} us",
+                     f"{ratio(ts_b['ctrl_p50_us'], ts_a['ctrl_p50_us'])} / "
+                     f"{ratio(ts_b['ctrl_p99_us'], ts_a['ctrl_p99_us'])}",
+                     "issue 11 asks p99 <= 1.3x; mca_controller_tick alone, from mcad's summary"))
+
     # 2
     R["osqp"] = {}
     for key in ("cross_circles", "cup_stacking"):

@@ -117,6 +117,18 @@ if have "$MCAD" && command -v cyclictest >/dev/null; then
     wait $cyc
 fi
 
+# 4c. mca-ts against mca in mcad's real 1 kHz loop, same task (issue 11: tick p99 within 1.3x)
+if have "$MCAD"; then
+    for sch in mca mca-ts; do
+        step "scheme: mcad $JIT s, cell cross_circles_sim with scheme $sch (no DDS)"
+        cell_s=$RAW/cell_scheme_$sch.yaml
+        sed -e "s#scenario: \.\./#scenario: $ROOT/config/#" -e "s#config: \.\./#config: $ROOT/config/#" \
+            -e "s#^\( *\)scheme: .*#\1scheme: $sch#" "$CELL" >"$cell_s"
+        "$MCAD" --no-dds --stop-after "$JIT" "$cell_s" >"$RAW/mcad_scheme_$sch.out" 2>"$RAW/mcad_scheme_$sch.log"
+        echo "exit $?" >>"$RAW/mcad_scheme_$sch.log"
+    done
+fi
+
 # 5. DDS publishing on vs off
 MON=$B/tools/mca-monitor/mca-monitor
 if have "$MCAD" && have "$MON"; then

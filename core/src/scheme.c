@@ -298,8 +298,16 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                 if (rc != MCA_OK) {
                     return rc;
                 }
+                double reach =
+                    0.0; /* the fastest approach the joint limits allow: a row above it never binds */
                 for (int j = 0; j < dof; j++) {
-                    qp->U[r][vo + j] = (r_pe[0] * Jp[0][j] + r_pe[1] * Jp[1][j] + r_pe[2] * Jp[2][j]) / nrm;
+                    const double u = (r_pe[0] * Jp[0][j] + r_pe[1] * Jp[1][j] + r_pe[2] * Jp[2][j]) / nrm;
+                    qp->U[r][vo + j] = u;
+                    reach += fabs(u) * chain[a]->joint[j].vel_limit;
+                }
+                if (share * bound >= reach) {
+                    memset(qp->U[r], 0, sizeof qp->U[r]); /* inactive: the same QP, fewer rows to iterate */
+                    continue;
                 }
                 qp->beta[r] = share * bound;
                 si->active_rows++;
