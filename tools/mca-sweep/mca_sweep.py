@@ -370,6 +370,16 @@ def run_task(sim, kind, seed, i, a):
             else:
                 res[s]["stop"] = dict(cls="n/a", reason="scheme not run")
     task["runs"] = res
+    if a.stopcheck:
+        # stops branched off the task every 20 ms at each dec limit (tools/mca-stopcheck, mca-ts)
+        sj = os.path.join(wd, "stopcheck.json")
+        p = subprocess.run([a.stopcheck, "--scenario", task["scenario"], "--scheme", "mca-ts", "--every", "0.02",
+                            "--dec", a.stop_decs, "--json", sj], capture_output=True, text=True, timeout=1800)
+        try:
+            task["stopcheck"] = json.load(open(sj))["runs"]
+        except (OSError, ValueError, KeyError):
+            task["stopcheck"] = None
+            task["errors"].append("mca-stopcheck exit %d: %s" % (p.returncode, p.stderr[-300:]))
     task["seconds"] = round(time.time() - t0, 3)
     if not a.keep and reach:
         for f in ("probe.csv",):
@@ -425,6 +435,19 @@ def table(tasks, schemes, sim, a):
             if v and v["reasons"]:
                 lines.append("reasons %-6s %-9s %s" % (s, "task" if mode == "task" else "with stop",
                                                      json.dumps(v["reasons"], sort_keys=True)))
+    sc = [r for t in tasks if t.get("reachable") and t.get("stopcheck") for r in t["stopcheck"]]
+    if a.stopcheck:
+        for dec in sorted({r["dec"] for r in sc}):
+            rs = [r for r in sc if r["dec"] == dec]
+            lines.append("stops every 20 ms, mca-ts, dec %.3g rad/s^2: %d tasks, %d stops, %d below d1 (%d tasks), "
+                         "least distance %.4f m over task and brakes, max |dv|/(dec dt) %.4f, longest stop %.3f s, "
+                         "fallback ticks %d of %d"
+                         % (dec, len(rs), sum(r["stops"] for r in rs), sum(r["below_d1"] for r in rs),
+                            sum(1 for r in rs if r["below_d1"] or r["min_distance_task"] < 0),
+                            min(min(r["min_distance_task"], r["min_distance_brake"]) for r in rs),
+                            max(r["max_dv_ratio"] for r in rs), max(r["longest_stop_s"] for r in rs),
+                            sum(r["fallback_ticks"] for r in rs), sum(r["brake_ticks"] for r in rs)))
+        summary["stopcheck"] = sc and {"stops": sum(r["stops"] for r in sc), "below_d1": sum(r["below_d1"] for r in sc)}
     secs = sorted(t.get("seconds", 0) for t in tasks)
     if secs:
         lines.append("runtime per task (all its mca-sim runs): median %.2f s, max %.2f s" % (secs[len(secs) // 2], secs[-1]))
@@ -447,6 +470,9 @@ def main():
     ap.add_argument("--max-err", type=float, default=0.005, help="MVN tracking error that makes a task unreachable [m]")
     ap.add_argument("--no-stop", action="store_true", help="no second run with a stop request")
     ap.add_argument("--dec-limit", type=float, default=0.0, help="pass --dec-limit X to mca-sim (when it has it)")
+    ap.add_argument("--stopcheck", default="", help="path of mca-stopcheck: also branch stops off every "
+                    "reachable task every 20 ms (mca-ts, arms integrated as commanded)")
+    ap.add_argument("--stop-decs", default="0.5,2,5", help="dec limits for --stopcheck [rad/s^2]")
     ap.add_argument("--ideal-arms", action="store_true",
                     help="mca-sim --euler: arms realise each command exactly (default: the sim backend's "
                          "rate-limited firmware model)")
