@@ -188,10 +188,11 @@ typedef struct mca_controller {
     double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
     double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
     int deadlock, deadlock_arm, deadlocks;
-    double deadlock_until;          /**< back-off ends at this task time */
-    double wait_tau[MCA_MAX_ARMS];  /**< WAIT: the others' clocks when it began */
-    double ts_scale[MCA_MAX_ARMS];  /**< u = ts_scale (sigma - target) in the last QP */
-    double v_meas[MCA_QP_MAX_VARS]; /**< measured joint velocities for the next tick (phi layout) */
+    double deadlock_until;              /**< back-off ends at this task time */
+    double wait_tau[MCA_MAX_ARMS];      /**< WAIT: the others' clocks when it began */
+    double ts_scale[MCA_MAX_ARMS];      /**< u = ts_scale (sigma - target) in the last QP */
+    double v_meas[MCA_QP_MAX_VARS];     /**< measured joint velocities for the next tick (phi layout) */
+    double box_center[MCA_QP_MAX_VARS]; /**< the joint velocities the acceleration box was centred on */
     int has_v_meas;
     /* braking QP (kept apart from the tick's so a fault does not disturb the last tick's dump) */
     mca_qp_t brake_qp;
