@@ -236,7 +236,7 @@ int main(int argc, char **argv) {
         char csvp[1024];
         o.scheme = list[s];
         if (csv) {
-            csv_name(csvp, sizeof csvp, csv, mca_simrun_scheme_name(list[s]), n_list > 1);
+            csv_name(csvp, sizeof csvp, csv, mca_scheme_name(list[s]), n_list > 1);
             o.csv_path = csvp;
         }
         o.dump_dir = dump;

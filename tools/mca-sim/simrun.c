@@ -14,10 +14,6 @@
 #include "mca/err.h"
 #include "mca/sim_backend.h"
 
-const char *mca_simrun_scheme_name(mca_scheme_kind_t s) {
-    return mca_scheme_name(s);
-}
-
 void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     memset(o, 0, sizeof *o);
     o->scheme = MCA_SCHEME_MCA;
@@ -121,7 +117,7 @@ int mca_simrun_fault_from_name(const char *name) {
 int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
                size_t errlen) {
     memset(r, 0, sizeof *r);
-    snprintf(r->scheme, sizeof r->scheme, "%s", mca_simrun_scheme_name(o->scheme));
+    snprintf(r->scheme, sizeof r->scheme, "%s", mca_scheme_name(o->scheme));
     mca_cell_t *cell = calloc(1, sizeof *cell);
     mca_daemon_t *d = NULL;
     int64_t *cns = NULL, *cpu = NULL;

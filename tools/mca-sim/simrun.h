@@ -89,9 +89,6 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
 /** Controller fault code from its name (mca_ctrl_fault_name, "pdnn-not-converged"), -1 if unknown. */
 int mca_simrun_fault_from_name(const char *name);
 
-/** Scheme name ("mca", "mvn", "apf"). */
-const char *mca_simrun_scheme_name(mca_scheme_kind_t s);
-
 #ifdef __cplusplus
 }
 #endif
