@@ -70,6 +70,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->ts.deadlock_time = 0.5;
     cfg->ts.deadlock_sigma = 0.05;
     cfg->ts.back_off_time = 1.0;
+    cfg->ts.d1_margin = 0.005;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         cfg->ts.priority[a] = 1.0;
     }
@@ -130,7 +131,7 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
         (cfg->scheme == MCA_SCHEME_MCA_TS &&
          (!(cfg->ts.w_sigma > 0.0) || !(cfg->ts.w_slack > 0.0) || !(cfg->ts.sigma_max >= 1.0) ||
           !(cfg->ts.deadlock_time > 0.0) || !(cfg->ts.deadlock_sigma >= 0.0) ||
-          !(cfg->ts.back_off_time >= 0.0)))) {
+          !(cfg->ts.back_off_time >= 0.0) || !(cfg->ts.d1_margin >= 0.0)))) {
         return MCA_EINVAL;
     }
     for (int a = 0; a < cfg->n_arms; a++) {
@@ -144,6 +145,7 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;
+        ctrl->cfg.sp.d1_margin = cfg->ts.d1_margin;
     }
     for (int a = 0; a < cfg->n_arms; a++) {
         ctrl->path_end[a] = mca_path_end_time(&cfg->path[a]);

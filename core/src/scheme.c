@@ -258,6 +258,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     for (int a = n_arms; a < MCA_MAX_ARMS; a++) {
         si->row_off[a] = n_ineq;
     }
+    const double d1m = fmin(p->d1 + p->d1_margin, 0.5 * (p->d1 + p->d2)); /* the rows aim above d1 */
     for (int a = 0; a < n_arms; a++) {
         const int dof = chain[a]->dof, vo = si->var_off[a];
         double t_stop = 0.0; /* longest stop of arm a from its fastest joint speed */
@@ -281,12 +282,12 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                 }
                 double bound = p->big;
                 if (c->d < p->d2) {
-                    const double s = mca_brake_s(c->d, p->d1, p->d2);
+                    const double s = mca_brake_s(c->d, d1m, p->d2);
                     si->brake = fmin(si->brake, s);
                     bound = s * p->v_normal;
                 }
                 if (t_stop > 0.0) {
-                    bound = fmin(bound, fmax(0.0, c->d - p->d1) / t_stop);
+                    bound = fmin(bound, fmax(0.0, c->d - d1m) / t_stop);
                 }
                 if (!(bound < p->big)) {
                     continue; /* beyond d2 with no stop bound: inactive */

@@ -70,6 +70,9 @@ typedef struct mca_timescale_params {
     double deadlock_time;  /**< every moving arm's sigma below deadlock_sigma this long: deadlock [s] (0.5) */
     double deadlock_sigma; /**< (0.05) */
     double back_off_time;  /**< the yielding arm runs its path backwards this long [s] (1.0) */
+    double d1_margin; /**< the rows brake towards d1 + d1_margin (at most halfway to d2) [m] (0.005): what
+                           the arms overshoot the rows by (rate limits, a capped solve, a turning normal)
+                           stays above d1, where the distance fault still is */
     double dec_limit[MCA_MAX_ARMS]; /**< least joint deceleration of each arm for the stoppability bound
                                          [rad/s^2] (0: bound off) */
 } mca_timescale_params_t;

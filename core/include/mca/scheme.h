@@ -37,12 +37,14 @@ typedef enum mca_collision_form {
 typedef struct mca_scheme_params {
     int collision; /**< 1: collision rows (MCA), 0: none (MVN (25)-(27)) */
     mca_collision_form_t form;
-    double d1, d2;   /**< safety thresholds [m], 0 <= d1 < d2 */
-    double K;        /**< position feedback gain [1/s] */
-    double epsilon;  /**< joint-limit gain of (19) [1/s] */
-    double v_normal; /**< normal form: approach speed allowed at d >= d2 [m/s] */
-    double v_floor;  /**< componentwise: least allowed approach speed per axis [m/s] */
-    double big;      /**< bound of an inactive row (the PDNN's varpi or less) */
+    double d1, d2;    /**< safety thresholds [m], 0 <= d1 < d2 */
+    double K;         /**< position feedback gain [1/s] */
+    double epsilon;   /**< joint-limit gain of (19) [1/s] */
+    double v_normal;  /**< normal form: approach speed allowed at d >= d2 [m/s] */
+    double v_floor;   /**< componentwise: least allowed approach speed per axis [m/s] */
+    double big;       /**< bound of an inactive row (the PDNN's varpi or less) */
+    double d1_margin; /**< mca-ts rows (mca_scheme_near_rows) brake towards d1 + d1_margin, at most halfway to
+                         d2 [m]; the distance fault stays at d1 (0 here; the controller sets it for mca-ts) */
 } mca_scheme_params_t;
 
 /** Critical point of one link against the closest link of the other arms. */
