@@ -43,18 +43,32 @@ static int all_finite(const double *v, int len) {
     return 1;
 }
 
-static int check_qp(const mca_qp_t *qp) {
+/* Finite, and whether all zero (an inactive row), in one pass. */
+static int scan_row(const double *v, int len, unsigned char *zero) {
+    int nz = 0;
+    for (int i = 0; i < len; i++) {
+        if (!isfinite(v[i])) {
+            return 0;
+        }
+        nz |= v[i] != 0.0;
+    }
+    *zero = (unsigned char)!nz;
+    return 1;
+}
+
+/* Also marks the all-zero rows in zero[] (equality rows first, as in N). */
+static int check_qp(const mca_qp_t *qp, unsigned char *zero) {
     if (qp->n < 1 || qp->n > MCA_QP_MAX_VARS || qp->n_eq < 0 || qp->n_eq > MCA_QP_MAX_EQ || qp->n_ineq < 0 ||
         qp->n_ineq > MCA_QP_MAX_INEQ) {
         return MCA_EINVAL;
     }
     for (int i = 0; i < qp->n_eq; i++) {
-        if (!all_finite(qp->G[i], qp->n)) {
+        if (!scan_row(qp->G[i], qp->n, &zero[i])) {
             return MCA_EINVAL;
         }
     }
     for (int i = 0; i < qp->n_ineq; i++) {
-        if (!all_finite(qp->U[i], qp->n)) {
+        if (!scan_row(qp->U[i], qp->n, &zero[qp->n_eq + i])) {
             return MCA_EINVAL;
         }
     }
@@ -147,7 +161,8 @@ static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm
     for (int i = 0; i < m; i++) {
         double sign, qi;
         const double *row = orig_row(qp, i, &sign, &qi);
-        for (int j = 0; j < n; j++) {
+        /* a zero inequality row's N is never read (ws_zero); equality rows feed orth_equalities */
+        for (int j = 0; j < n && (i < ne || !s->ws_zero[i]); j++) {
             s->ws_N[i * n + j] = sign * row[j];
         }
         s->ws_q[i] = qi;
@@ -165,6 +180,9 @@ static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm
         }
     }
     for (int i = (pre == MCA_PDNN_PRECOND_ORTH ? ne : 0); i < m; i++) {
+        if (s->ws_zero[i]) {
+            continue; /* an inactive collision row: every step below would leave it as it is */
+        }
         double *Ni = &s->ws_N[i * n];
         const double norm0 = sqrt(dot(Ni, Ni, n));
         if (pre == MCA_PDNN_PRECOND_ORTH) {
@@ -208,8 +226,9 @@ static int setup(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *prm
         const double tau = PDNN_FAR_SLACK * (1.0 + sqrt(dot(x, x, n)));
         for (int i = ne; i < m; i++) {
             double *Ni = &s->ws_N[i * n];
-            if (s->y[n + i] < 1e-6 && dot(Ni, x, n) + s->ws_q[i] > tau) { /* v_i ~ 0 within the tolerance */
-                for (int j = 0; j < n; j++) {
+            if (s->y[n + i] < 1e-6 && (s->ws_zero[i] ? 0.0 : dot(Ni, x, n)) + s->ws_q[i] > tau) {
+                /* v_i ~ 0 within the tolerance */
+                for (int j = 0; j < n && !s->ws_zero[i]; j++) {
                     Ni[j] *= w;
                 }
                 s->ws_q[i] *= w;
@@ -303,7 +322,7 @@ static double true_residual(const mca_qp_t *qp, const mca_pdnn_t *s, double big,
     for (int i = 0; i < ne + qp->n_ineq; i++) {
         double sign, qi;
         const double *row = orig_row(qp, i, &sign, &qi);
-        const double b = sign * dot(row, y, n) + qi, v = y[n + i];
+        const double b = (s->ws_zero[i] ? 0.0 : sign * dot(row, y, n)) + qi, v = y[n + i];
         r = fmax(r, fabs(clampd(v - b, i < ne ? -big : 0.0, big) - v));
     }
     return r;
@@ -332,7 +351,7 @@ static void split(mca_pdnn_t *s, int n, int m, int ne, const double *eqf, int no
     for (int i = 0; i < m; i++) {
         const double *Ni = &s->ws_N[i * n];
         int first = -1;
-        for (int j = 0; j < n; j++) {
+        for (int j = 0; j < n && !s->ws_zero[i]; j++) {
             if (Ni[j] != 0.0) {
                 const int r = uf_find(par, j);
                 if (first < 0) {
@@ -507,7 +526,8 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         mca_pdnn_default_params(&defaults);
         params = &defaults;
     }
-    if (s == NULL || qp == NULL || phi == NULL || check_qp(qp) != MCA_OK || check_params(params) != MCA_OK) {
+    if (s == NULL || qp == NULL || phi == NULL || check_qp(qp, s->ws_zero) != MCA_OK ||
+        check_params(params) != MCA_OK) {
         return MCA_EINVAL;
     }
     mca_pdnn_params_t prm = *params;

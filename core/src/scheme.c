@@ -247,8 +247,9 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     if (n_ineq > MCA_QP_MAX_INEQ) {
         return MCA_ERANGE;
     }
+    const size_t row_bytes = sizeof(double) * (size_t)qp->n; /* only the QP's columns are ever read */
     for (int i = 0; i < n_ineq; i++) {
-        memset(qp->U[i], 0, sizeof qp->U[i]);
+        memset(qp->U[i], 0, row_bytes);
         qp->beta[i] = p->big;
     }
     qp->n_ineq = n_ineq;
@@ -307,7 +308,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                     reach += fabs(u) * chain[a]->joint[j].vel_limit;
                 }
                 if (share * bound >= reach) {
-                    memset(qp->U[r], 0, sizeof qp->U[r]); /* inactive: the same QP, fewer rows to iterate */
+                    memset(qp->U[r], 0, row_bytes); /* inactive: the same QP, fewer rows to iterate */
                     continue;
                 }
                 qp->beta[r] = share * bound;

@@ -96,7 +96,8 @@ typedef struct mca_pdnn {
     double ws_By[MCA_QP_MAX_H], ws_Blo[MCA_QP_MAX_H], ws_Bhi[MCA_QP_MAX_H]; /**< per block [x_b; w_b] */
     int ws_pv[MCA_QP_MAX_VARS], ws_pr[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ];     /**< block order of vars, rows */
     int ws_nblk, ws_nzero;                                                  /**< blocks, all-zero rows */
-    int ws_blk[MCA_QP_MAX_VARS][5]; /**< c0, nc, r0, nr, offset in B */
+    unsigned char ws_zero[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< row i of the QP as given is all zero */
+    int ws_blk[MCA_QP_MAX_VARS][5];                         /**< c0, nc, r0, nr, offset in B */
 } mca_pdnn_t;
 
 /** Defaults: kappa from the rule (adaptive), tol 1e-9, max_steps 20000, big 1e10, gamma 1.9, ORTH,
