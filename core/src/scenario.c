@@ -359,6 +359,13 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         set_err(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
         return MCA_EPARSE;
     }
+    if (!raw) {
+        /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
+         * no data */
+        set_err(err, errlen, "%s: empty document (no YAML mapping: the file is empty or only comments)",
+                path);
+        return MCA_EPARSE;
+    }
 
     mca_scenario_t scn;
     int rc = MCA_OK;

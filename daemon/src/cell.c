@@ -610,6 +610,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         cell_parse_error(path, &ls, cerr, err, errlen);
         return MCA_EPARSE;
     }
+    if (!raw) {
+        /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
+         * no data */
+        set_err(err, errlen,
+                "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)",
+                path);
+        return MCA_EPARSE;
+    }
 
     mca_cell_t *cell = calloc(1, sizeof *cell);
     int rc = MCA_OK;

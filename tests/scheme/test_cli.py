@@ -41,6 +41,11 @@ def main():
         expect([sim, "--scenario", bad], 1, ["q0", "7 values"])
         open(bad, "w").write("name: x\nduration: [\n")
         expect([sim, "--scenario", bad], 1, [bad])
+        # issue 16: an empty or comment-only file was a NULL dereference (SIGSEGV)
+        open(bad, "w").write("")
+        expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
+        open(bad, "w").write("# a scenario\n\n  # to be written\n")
+        expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
     # --csv naming: one scheme writes OUT as given; several write OUT-<scheme>.csv, with or without a .csv
     # suffix on OUT (docs/scheme.md section 6)
     with tempfile.TemporaryDirectory() as tmp:

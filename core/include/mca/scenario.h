@@ -104,7 +104,8 @@ void mca_scenario_defaults(mca_scenario_t *scn);
  * Parse a scenario YAML file (start-up only; allocates inside libcyaml and frees before returning).
  * @param[out] scn  filled on success (unchanged on error)
  * @param[out] err  message naming the file, the line when known, and the field at fault
- * @retval MCA_OK, MCA_ENOENT (file missing), MCA_EPARSE (bad YAML, unknown/missing field),
+ * @retval MCA_OK, MCA_ENOENT (file missing), MCA_EPARSE (bad YAML, unknown/missing field, empty or
+ *         comment-only file: "FILE: empty document ..."),
  *         MCA_ERANGE (value out of range: too many arms/points, d1 >= d2, non-positive duration, ...)
  */
 int mca_scenario_load(const char *path, mca_scenario_t *scn, char *err, size_t errlen);
