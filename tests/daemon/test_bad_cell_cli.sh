@@ -136,6 +136,11 @@ expect socketcan_no_interface "    interface: vcan1$NL" "" "backend: socketcan" 
 expect dds_config_missing "  domain: 7$NL" "  domain: 7$NL  config: nowhere/cyclone.xml$NL" "config: nowhere" \
     "dds.config" "nowhere/cyclone.xml' not found"
 expect unknown_scheme "scheme: mvn" "scheme: magic" "scheme: magic" "scheme" "unknown scheme 'magic' (known: mca-ts, mca, mvn, apf)"
+# issue 16: a URDF nested 50 000 deep overflowed the stack in TinyXML's recursive parser
+{ printf '<?xml version="1.0"?>\n<robot name="deep">\n'; for ((i = 0; i < 50000; i++)); do printf '<a>'; done; } \
+    > "$tmp/deep.urdf"
+expect deep_urdf "$URDF${NL}    base_xyz: [0.0, -0.6" "$tmp/deep.urdf${NL}    base_xyz: [0.0, -0.6" "deep.urdf" \
+    "arms[0].urdf" "deep.urdf: line 3: elements nested deeper than 256 levels"
 expect duplicate_arm "  - name: right" "  - name: left" "backend: socketcan" "arms[1].name" "'left' used twice" -1
 
 # the good cell itself passes the check (so the failures above are the variants')
