@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "mca/err.h"
@@ -276,10 +277,11 @@ static int key_line(const char *path, const char *key, int nth) {
     if (!f) {
         return 0;
     }
-    char buf[1024];
+    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
+    size_t cap = 0;
     int line = 0, found = 0, seen = 0;
     const size_t kl = strlen(key);
-    while (fgets(buf, sizeof buf, f)) {
+    while (getline(&buf, &cap, f) != -1) {
         line++;
         const char *c = buf;
         while (*c == ' ' || *c == '-') {
@@ -292,6 +294,7 @@ static int key_line(const char *path, const char *key, int nth) {
             }
         }
     }
+    free(buf);
     fclose(f);
     return found;
 }

@@ -297,10 +297,11 @@ static int find_key_from(const char *path, int from, const char *key) {
     if (!f) {
         return 0;
     }
-    char buf[1024];
+    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
+    size_t cap = 0;
     int line = 0, found = 0;
     const size_t kl = strlen(key);
-    while (fgets(buf, sizeof buf, f)) {
+    while (getline(&buf, &cap, f) != -1) {
         if (++line < from) {
             continue;
         }
@@ -313,6 +314,7 @@ static int find_key_from(const char *path, int from, const char *key) {
             break;
         }
     }
+    free(buf);
     fclose(f);
     return found;
 }
@@ -418,9 +420,10 @@ static int locate(const char *path, const char *sec, int idx, const char *key) {
     if (!f) {
         return 0;
     }
-    char buf[1024];
+    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
+    size_t cap = 0;
     int line = 0, found = 0, in_sec = 0, sec_line = 0, item = -1, item_indent = -1, item_line = 0;
-    while (fgets(buf, sizeof buf, f)) {
+    while (getline(&buf, &cap, f) != -1) {
         line++;
         const int ind = indent_of(buf);
         if (buf[ind] == '#' || buf[ind] == '\n' || buf[ind] == 0) {
@@ -467,6 +470,7 @@ static int locate(const char *path, const char *sec, int idx, const char *key) {
             break;
         }
     }
+    free(buf);
     fclose(f);
     if (found) {
         return found;

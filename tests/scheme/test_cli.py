@@ -17,8 +17,21 @@ def expect(args, code, words):
         FAILS.append(args)
 
 
+def expect_at(path, text, needle, words):
+    """Write text to path; mca-sim must exit 1 with an error naming path:LINE: (LINE: the first line holding
+    needle, counted here) and every word."""
+    open(path, "w").write(text)
+    line = next(i + 1 for i, l in enumerate(text.split("\n")) if needle in l)
+    expect([sim_bin, "--scenario", path], 1, ["%s:%d: " % (path, line)] + words)
+
+
+sim_bin = None
+
+
 def main():
+    global sim_bin
     sim, sdir = sys.argv[1:3]
+    sim_bin = sim
     good = os.path.join(sdir, "negative.yaml")
     expect([sim], 2, ["--scenario is required"])
     expect([sim, "--scenario"], 2, ["needs a value"])
@@ -46,6 +59,8 @@ def main():
         expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
         open(bad, "w").write("# a scenario\n\n  # to be written\n")
         expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
+        # issue 16: a line over 1023 characters (fgets split it) shifted the line numbers of range errors
+        expect_at(bad, "# " + "x" * 3000 + "\n" + text.replace("d2: 0.12", "d2: 0.01"), "d2: 0.01", ["d1/d2"])
     # --csv naming: one scheme writes OUT as given; several write OUT-<scheme>.csv, with or without a .csv
     # suffix on OUT (docs/scheme.md section 6)
     with tempfile.TemporaryDirectory() as tmp:
