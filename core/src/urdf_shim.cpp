@@ -389,9 +389,9 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
                 return cx.fail(MCA_EPARSE, "%s: %s joint has no <limit> (its velocity limit is needed)",
                                ref.c_str(), type_name(j->type));
             }
-            if (!(j->limits->velocity > 0.0) || !std::isfinite(j->limits->velocity)) {
-                return cx.fail(MCA_EPARSE, "%s: <limit velocity> must be finite and > 0 (got %g)",
-                               ref.c_str(), j->limits->velocity);
+            if (!(j->limits->velocity > 0.0 && j->limits->velocity <= MCA_JOINT_VEL_MAX)) {
+                return cx.fail(MCA_EPARSE, "%s: <limit velocity> must be in (0, %g] rad/s (got %.15g)",
+                               ref.c_str(), MCA_JOINT_VEL_MAX, j->limits->velocity);
             }
             jm->vel_limit = j->limits->velocity;
             if (j->type == urdf::Joint::CONTINUOUS) {

@@ -90,6 +90,15 @@ static void test_zero_velocity_limit(void **state) {
     assert_error(&l, MCA_EPARSE, "joint 'j1'", "velocity");
 }
 
+/* issue 16: velocity="1e300" switched the velocity bounds off; limits are in (0, MCA_JOINT_VEL_MAX] */
+static void test_huge_velocity_limit(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "huge_velocity.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "line 5: joint 'j1'",
+                 "<limit velocity> must be in (0, 100] rad/s (got 1e+300)");
+}
+
 static void test_zero_axis(void **state) {
     (void)state;
     load_t l;
@@ -286,6 +295,7 @@ int main(void) {
         cmocka_unit_test(test_revolute_without_limit),
         cmocka_unit_test(test_continuous_without_limit),
         cmocka_unit_test(test_zero_velocity_limit),
+        cmocka_unit_test(test_huge_velocity_limit),
         cmocka_unit_test(test_zero_axis),
         cmocka_unit_test(test_too_many_joints),
         cmocka_unit_test(test_unknown_tip),
