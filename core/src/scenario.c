@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "mca/err.h"
@@ -276,10 +277,11 @@ static int key_line(const char *path, const char *key, int nth) {
     if (!f) {
         return 0;
     }
-    char buf[1024];
+    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
+    size_t cap = 0;
     int line = 0, found = 0, seen = 0;
     const size_t kl = strlen(key);
-    while (fgets(buf, sizeof buf, f)) {
+    while (getline(&buf, &cap, f) != -1) {
         line++;
         const char *c = buf;
         while (*c == ' ' || *c == '-') {
@@ -292,6 +294,49 @@ static int key_line(const char *path, const char *key, int nth) {
             }
         }
     }
+    free(buf);
+    fclose(f);
+    return found;
+}
+
+/* Line of entry idx of the block sequence under the nth "key:" (one "- " item per line); the key's own line
+ * for a flow sequence ("key: [...]") or when the entry is not found. */
+static int entry_line(const char *path, const char *key, int nth, unsigned idx) {
+    const int kl = key_line(path, key, nth);
+    FILE *f = kl ? fopen(path, "r") : NULL;
+    if (!f) {
+        return kl;
+    }
+    char *buf = NULL;
+    size_t cap = 0;
+    int line = 0, found = kl, key_indent = 0;
+    unsigned seen = 0;
+    while (getline(&buf, &cap, f) != -1) {
+        line++;
+        int ind = 0;
+        while (buf[ind] == ' ') {
+            ind++;
+        }
+        if (line == kl) {
+            key_indent = ind;
+            const char *colon = strchr(buf, ':');
+            if (colon && strchr(colon, '[')) {
+                break; /* flow sequence on the key's line */
+            }
+            continue;
+        }
+        if (line < kl || buf[ind] == '#' || buf[ind] == '\n' || buf[ind] == 0) {
+            continue;
+        }
+        if (buf[ind] != '-' || ind < key_indent) {
+            break; /* past the sequence */
+        }
+        if (seen++ == idx) {
+            found = line;
+            break;
+        }
+    }
+    free(buf);
     fclose(f);
     return found;
 }
@@ -303,6 +348,89 @@ static int key_line(const char *path, const char *key, int nth) {
         set_err(err, errlen, "%s:%d: %s", path, key_line(path, key, nth), m_);                               \
         rc = MCA_ERANGE;                                                                                     \
         goto out;                                                                                            \
+    } while (0)
+
+/* ---------------------------------------------------------------- ranges (issue 16) */
+
+/* What a real cell can need; docs/scheme.md section 3 lists them. Times up to an hour (the longest task),
+ * distances and placements within 100 m of the world origin, gains and speeds far above the paper's. */
+static const mca_range_t scn_ranges[] = {
+    {"duration", 0.0, 3600.0, 1, 0, "s"},
+    {"dt", 1e-4, 0.1, 0, 0, "s"},
+    {"d1", 0.0, 1.0, 0, 0, "m"},
+    {"d2", 0.0, 2.0, 1, 0, "m"},
+    {"K", 0.0, 1000.0, 0, 0, "1/s"},
+    {"epsilon", 0.0, 1000.0, 1, 0, "1/s"},
+    {"v_normal", 0.0, 10.0, 1, 0, "m/s"},
+    {"v_floor", 0.0, 10.0, 0, 0, "m/s"},
+    {"sample_times", 0.0, 3600.0, 0, 0, "s"},
+    {"base_xyz", -100.0, 100.0, 0, 0, "m"},
+    {"base_rpy", -2.0 * M_PI, 2.0 * M_PI, 0, 0, "rad"},
+    {"t0", 0.0, 3600.0, 0, 0, "s"},
+    {"radius", 0.0, 10.0, 1, 0, "m"},
+    {"period", 0.0, 3600.0, 1, 0, "s"},
+    {"turns", 0.0, 1000.0, 1, 0, ""},
+    {"points", -100.0, 100.0, 0, 0, "m"},
+    {"durations", 0.0, 3600.0, 1, 0, "s"},
+};
+
+int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
+    if (!r) {
+        set_err(why, whylen, "no range");
+        return MCA_EINVAL;
+    }
+    if (isfinite(v) && (r->lo_open ? v > r->lo : v >= r->lo) && v <= r->hi) {
+        return MCA_OK;
+    }
+    const char *sp = r->unit[0] ? " " : "";
+    if (r->integer) {
+        set_err(why, whylen, "must be in %.0f..%.0f%s%s (got %.15g)", r->lo, r->hi, sp, r->unit, v);
+    } else {
+        set_err(why, whylen, "must be in %c%.6g, %.6g]%s%s (got %.15g)", r->lo_open ? '(' : '[', r->lo, r->hi,
+                sp, r->unit, v);
+    }
+    return MCA_ERANGE;
+}
+
+const mca_range_t *mca_scenario_range(const char *key) {
+    for (size_t i = 0; key && i < sizeof scn_ranges / sizeof scn_ranges[0]; i++) {
+        if (strcmp(scn_ranges[i].key, key) == 0) {
+            return &scn_ranges[i];
+        }
+    }
+    return NULL;
+}
+
+int mca_scenario_check_duration(double duration, double dt, char *why, size_t whylen) {
+    int rc = mca_range_check(mca_scenario_range("duration"), duration, why, whylen);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    if (!(dt > 0.0) || !(duration / dt <= (double)MCA_SCENARIO_MAX_TICKS)) {
+        set_err(why, whylen, "%.15g s at a tick of %g s is %.0f ticks, more than %d", duration, dt,
+                duration / dt, MCA_SCENARIO_MAX_TICKS);
+        return MCA_ERANGE;
+    }
+    return MCA_OK;
+}
+
+/* Range check of one value read from the file: "FILE:LINE: FIELD: must be in ..." on error (LINE: the nth
+ * occurrence of key). */
+static int check_at(const char *path, const char *key, int nth, const char *field, double v, char *err,
+                    size_t errlen) {
+    char why[160];
+    if (mca_range_check(mca_scenario_range(key), v, why, sizeof why) == MCA_OK) {
+        return MCA_OK;
+    }
+    set_err(err, errlen, "%s:%d: %s: %s", path, key_line(path, key, nth), field, why);
+    return MCA_ERANGE;
+}
+
+#define CHECK_AT(key, nth, field, v)                                                                         \
+    do {                                                                                                     \
+        if ((rc = check_at(path, key, nth, field, v, err, errlen)) != MCA_OK) {                              \
+            goto out;                                                                                        \
+        }                                                                                                    \
     } while (0)
 
 void mca_scenario_defaults(mca_scenario_t *scn) {
@@ -326,10 +454,6 @@ static int unit3(double out[3], const double *in) {
         out[i] = in[i] / n;
     }
     return 0;
-}
-
-static int positive(const double *v) {
-    return v && isfinite(*v) && *v > 0.0;
 }
 
 int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
@@ -359,6 +483,13 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         set_err(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
         return MCA_EPARSE;
     }
+    if (!raw) {
+        /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
+         * no data */
+        set_err(err, errlen, "%s: empty document (no YAML mapping: the file is empty or only comments)",
+                path);
+        return MCA_EPARSE;
+    }
 
     mca_scenario_t scn;
     int rc = MCA_OK;
@@ -366,47 +497,42 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     snprintf(scn.name, sizeof scn.name, "%s", raw->name);
     snprintf(scn.source, sizeof scn.source, "%s", path);
     scn.duration = raw->duration;
-    if (!(isfinite(scn.duration) && scn.duration > 0.0)) {
-        FAIL_AT("duration", 0, "duration: must be > 0 (got %g)", raw->duration);
-    }
     mca_scenario_params_t *p = &scn.params;
     if (raw->dt) {
-        if (!positive(raw->dt) || *raw->dt > 0.1) {
-            FAIL_AT("dt", 0, "dt: must be in (0, 0.1] s (got %g)", *raw->dt);
-        }
+        CHECK_AT("dt", 0, "dt", *raw->dt);
         p->dt = *raw->dt;
     }
+    {
+        char why[160];
+        if (mca_scenario_check_duration(scn.duration, p->dt, why, sizeof why) != MCA_OK) {
+            FAIL_AT("duration", 0, "duration: %s", why);
+        }
+    }
     if (raw->d1) {
+        CHECK_AT("d1", 0, "d1", *raw->d1);
         p->d1 = *raw->d1;
     }
     if (raw->d2) {
+        CHECK_AT("d2", 0, "d2", *raw->d2);
         p->d2 = *raw->d2;
     }
-    if (!(isfinite(p->d1) && isfinite(p->d2) && p->d1 >= 0.0 && p->d1 < p->d2)) {
+    if (!(p->d1 < p->d2)) {
         FAIL_AT("d2", 0, "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
     }
     if (raw->K) {
-        if (!(isfinite(*raw->K) && *raw->K >= 0.0)) {
-            FAIL_AT("K", 0, "K: must be >= 0 (got %g)", *raw->K);
-        }
+        CHECK_AT("K", 0, "K", *raw->K);
         p->K = *raw->K;
     }
     if (raw->epsilon) {
-        if (!positive(raw->epsilon)) {
-            FAIL_AT("epsilon", 0, "epsilon: must be > 0 (got %g)", *raw->epsilon);
-        }
+        CHECK_AT("epsilon", 0, "epsilon", *raw->epsilon);
         p->epsilon = *raw->epsilon;
     }
     if (raw->v_normal) {
-        if (!positive(raw->v_normal)) {
-            FAIL_AT("v_normal", 0, "v_normal: must be > 0 (got %g)", *raw->v_normal);
-        }
+        CHECK_AT("v_normal", 0, "v_normal", *raw->v_normal);
         p->v_normal = *raw->v_normal;
     }
     if (raw->v_floor) {
-        if (!(isfinite(*raw->v_floor) && *raw->v_floor >= 0.0)) {
-            FAIL_AT("v_floor", 0, "v_floor: must be >= 0 (got %g)", *raw->v_floor);
-        }
+        CHECK_AT("v_floor", 0, "v_floor", *raw->v_floor);
         p->v_floor = *raw->v_floor;
     }
     if (raw->form) {
@@ -415,14 +541,20 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     }
     scn.n_sample_times = (int)raw->sample_times_count;
     for (unsigned i = 0; i < raw->sample_times_count; i++) {
+        char field[32];
+        snprintf(field, sizeof field, "sample_times[%u]", i);
+        CHECK_AT("sample_times", 0, field, raw->sample_times[i]);
         scn.sample_times[i] = raw->sample_times[i];
     }
 
     scn.n_arms = (int)raw->arms_count;
+    /* how many earlier arms wrote each optional key: the nth occurrence in the file is this arm's */
+    int n_rpy = 0, n_t0 = 0, n_radius = 0, n_period = 0, n_turns = 0, n_points = 0, n_durations = 0;
     for (unsigned a = 0; a < raw->arms_count; a++) {
         const struct raw_arm *ra = &raw->arms[a];
         mca_scenario_arm_t *sa = &scn.arm[a];
         const int ai = (int)a;
+        char field[64];
         snprintf(sa->name, sizeof sa->name, "%s", ra->name);
         if (ra->urdf[0] == '/') {
             snprintf(sa->urdf, sizeof sa->urdf, "%s", ra->urdf);
@@ -434,9 +566,16 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         }
         snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link ? ra->tip_link : "");
         for (int i = 0; i < 3; i++) {
+            snprintf(field, sizeof field, "arms[%d].base_xyz[%d]", ai, i);
+            CHECK_AT("base_xyz", ai, field, ra->base_xyz[i]);
             sa->base_xyz[i] = ra->base_xyz[i];
+            if (ra->base_rpy) {
+                snprintf(field, sizeof field, "arms[%d].base_rpy[%d]", ai, i);
+                CHECK_AT("base_rpy", n_rpy, field, ra->base_rpy[i]);
+            }
             sa->base_rpy[i] = ra->base_rpy ? ra->base_rpy[i] : 0.0;
         }
+        n_rpy += ra->base_rpy != NULL;
         sa->n_q0 = (int)ra->q0_count;
         for (unsigned j = 0; j < ra->q0_count; j++) {
             sa->q0[j] = ra->q0[j];
@@ -446,8 +585,9 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         memset(pp, 0, sizeof *pp);
         pp->relative = rp->relative ? (*rp->relative ? 1 : 0) : 1;
         pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-        if (!(isfinite(pp->t0) && pp->t0 >= 0.0)) {
-            FAIL_AT("t0", 0, "arms[%d].path.t0: must be >= 0", ai);
+        if (rp->t0) {
+            snprintf(field, sizeof field, "arms[%d].path.t0", ai);
+            CHECK_AT("t0", n_t0, field, pp->t0);
         }
         switch (rp->kind) {
         case RAW_HOLD:
@@ -457,20 +597,25 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         case RAW_CIRCLE:
             pp->kind = MCA_PATH_CIRCLE;
             pp->relative = 1;
-            if (!positive(rp->radius)) {
+            if (!rp->radius) {
                 FAIL_AT("kind", ai, "arms[%d].path.radius: circle needs radius > 0", ai);
             }
-            if (!positive(rp->period)) {
+            if (!rp->period) {
                 FAIL_AT("kind", ai, "arms[%d].path.period: circle needs period > 0", ai);
             }
             if (!rp->u || !rp->v) {
                 FAIL_AT("kind", ai, "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
             }
+            snprintf(field, sizeof field, "arms[%d].path.radius", ai);
+            CHECK_AT("radius", n_radius, field, *rp->radius);
+            snprintf(field, sizeof field, "arms[%d].path.period", ai);
+            CHECK_AT("period", n_period, field, *rp->period);
             pp->radius = *rp->radius;
             pp->period = *rp->period;
             pp->turns = rp->turns ? *rp->turns : 1.0;
-            if (!(isfinite(pp->turns) && pp->turns > 0.0)) {
-                FAIL_AT("turns", 0, "arms[%d].path.turns: must be > 0", ai);
+            if (rp->turns) {
+                snprintf(field, sizeof field, "arms[%d].path.turns", ai);
+                CHECK_AT("turns", n_turns, field, pp->turns);
             }
             {
                 double u[3], v[3];
@@ -493,10 +638,11 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
                 FAIL_AT("kind", ai, "arms[%d].path.points: waypoints need points", ai);
             }
             if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
-                FAIL_AT("points", ai, "arms[%d].path.points: at most %d points", ai, MCA_PATH_MAX_POINTS - 1);
+                FAIL_AT("points", n_points, "arms[%d].path.points: at most %d points", ai,
+                        MCA_PATH_MAX_POINTS - 1);
             }
             if (!rp->durations || rp->durations_count != rp->points_count) {
-                FAIL_AT("points", ai,
+                FAIL_AT("points", n_points,
                         "arms[%d].path.durations: need one duration per point (%u points, %u durations)", ai,
                         rp->points_count, rp->durations ? rp->durations_count : 0u);
             }
@@ -504,17 +650,27 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             for (unsigned i = 0; i < rp->points_count; i++) {
                 for (int k = 0; k < 3; k++) {
                     pp->p[i + 1][k] = rp->points[i][k];
-                    if (!isfinite(pp->p[i + 1][k])) {
-                        FAIL_AT("points", ai, "arms[%d].path.points[%u]: not finite", ai, i);
+                    char why[160];
+                    if (mca_range_check(mca_scenario_range("points"), pp->p[i + 1][k], why, sizeof why) !=
+                        MCA_OK) {
+                        set_err(err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
+                                entry_line(path, "points", n_points, i), ai, i, k, why);
+                        rc = MCA_ERANGE;
+                        goto out;
                     }
                 }
-                if (!positive(&rp->durations[i])) {
-                    FAIL_AT("durations", ai, "arms[%d].path.durations[%u]: must be > 0", ai, i);
-                }
+                snprintf(field, sizeof field, "arms[%d].path.durations[%u]", ai, i);
+                CHECK_AT("durations", n_durations, field, rp->durations[i]);
                 pp->dur[i] = rp->durations[i];
             }
             break;
         }
+        n_t0 += rp->t0 != NULL;
+        n_radius += rp->radius != NULL;
+        n_period += rp->period != NULL;
+        n_turns += rp->turns != NULL;
+        n_points += rp->points != NULL;
+        n_durations += rp->durations != NULL;
     }
     *scn_out = scn;
 out:

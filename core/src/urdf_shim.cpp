@@ -147,6 +147,69 @@ const char *type_name(int type) {
     }
 }
 
+/* Element nesting deeper than this is refused before any XML parser sees the text: TinyXML (the pre-scan's
+ * and urdfdom's parser) descends recursively, one stack frame chain per element level, so a file nested
+ * 50 000 deep overflows the stack. A robot's URDF nests about 5 deep (robot/link/collision/geometry/...). */
+constexpr int kMaxDepth = 256;
+
+/* Cheap scan of the element structure: start tags deepen, end tags return, empty-element tags, comments,
+ * processing instructions, CDATA and DOCTYPE do not count; quoted attribute values may hold '>'. Reports
+ * the line of the first start tag deeper than kMaxDepth. Malformed text is left to TinyXML. */
+int depth_scan(Ctx &cx, const std::string &text) {
+    int depth = 0, line = 1;
+    const size_t n = text.size();
+    auto skip_to = [&](size_t i, const char *end) {
+        const size_t e = text.find(end, i);
+        const size_t stop = e == std::string::npos ? n : e + strlen(end);
+        for (size_t k = i; k < stop; k++) {
+            line += text[k] == '\n';
+        }
+        return stop;
+    };
+    for (size_t i = 0; i < n;) {
+        if (text[i] != '<') {
+            line += text[i] == '\n';
+            i++;
+            continue;
+        }
+        if (text.compare(i, 4, "<!--") == 0) {
+            i = skip_to(i, "-->");
+        } else if (text.compare(i, 9, "<![CDATA[") == 0) {
+            i = skip_to(i, "]]>");
+        } else if (text.compare(i, 2, "<?") == 0) {
+            i = skip_to(i, "?>");
+        } else if (text.compare(i, 2, "<!") == 0) {
+            i = skip_to(i, ">");
+        } else {
+            /* a tag: find its '>' outside quotes */
+            const int tag_line = line;
+            const bool end_tag = i + 1 < n && text[i + 1] == '/';
+            char quote = 0;
+            size_t k = i + 1;
+            for (; k < n; k++) {
+                const char c = text[k];
+                line += c == '\n';
+                if (quote) {
+                    quote = c == quote ? 0 : quote;
+                } else if (c == '"' || c == '\'') {
+                    quote = c;
+                } else if (c == '>') {
+                    break;
+                }
+            }
+            const bool empty_tag = k < n && k > i + 1 && text[k - 1] == '/';
+            if (end_tag) {
+                depth = depth > 0 ? depth - 1 : 0;
+            } else if (!empty_tag && ++depth > kMaxDepth) {
+                return cx.fail(MCA_EPARSE, "line %d: elements nested deeper than %d levels: not a URDF",
+                               tag_line, kMaxDepth);
+            }
+            i = k < n ? k + 1 : n;
+        }
+    }
+    return MCA_OK;
+}
+
 /* XML-level checks that urdfdom would only report without a line number. */
 int prescan(Ctx &cx, const std::string &text) {
     TiXmlDocument doc;
@@ -206,7 +269,11 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
         return cx.fail(MCA_EPARSE, "file is larger than %zu bytes: not a URDF", max_size);
     }
 
-    int rc = prescan(cx, text);
+    int rc = depth_scan(cx, text);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    rc = prescan(cx, text);
     if (rc != MCA_OK) {
         return rc;
     }
@@ -322,9 +389,9 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
                 return cx.fail(MCA_EPARSE, "%s: %s joint has no <limit> (its velocity limit is needed)",
                                ref.c_str(), type_name(j->type));
             }
-            if (!(j->limits->velocity > 0.0) || !std::isfinite(j->limits->velocity)) {
-                return cx.fail(MCA_EPARSE, "%s: <limit velocity> must be finite and > 0 (got %g)",
-                               ref.c_str(), j->limits->velocity);
+            if (!(j->limits->velocity > 0.0 && j->limits->velocity <= MCA_JOINT_VEL_MAX)) {
+                return cx.fail(MCA_EPARSE, "%s: <limit velocity> must be in (0, %g] rad/s (got %.15g)",
+                               ref.c_str(), MCA_JOINT_VEL_MAX, j->limits->velocity);
             }
             jm->vel_limit = j->limits->velocity;
             if (j->type == urdf::Joint::CONTINUOUS) {

@@ -297,10 +297,11 @@ static int find_key_from(const char *path, int from, const char *key) {
     if (!f) {
         return 0;
     }
-    char buf[1024];
+    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
+    size_t cap = 0;
     int line = 0, found = 0;
     const size_t kl = strlen(key);
-    while (fgets(buf, sizeof buf, f)) {
+    while (getline(&buf, &cap, f) != -1) {
         if (++line < from) {
             continue;
         }
@@ -313,6 +314,7 @@ static int find_key_from(const char *path, int from, const char *key) {
             break;
         }
     }
+    free(buf);
     fclose(f);
     return found;
 }
@@ -418,9 +420,10 @@ static int locate(const char *path, const char *sec, int idx, const char *key) {
     if (!f) {
         return 0;
     }
-    char buf[1024];
+    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
+    size_t cap = 0;
     int line = 0, found = 0, in_sec = 0, sec_line = 0, item = -1, item_indent = -1, item_line = 0;
-    while (fgets(buf, sizeof buf, f)) {
+    while (getline(&buf, &cap, f) != -1) {
         line++;
         const int ind = indent_of(buf);
         if (buf[ind] == '#' || buf[ind] == '\n' || buf[ind] == 0) {
@@ -467,6 +470,7 @@ static int locate(const char *path, const char *sec, int idx, const char *key) {
             break;
         }
     }
+    free(buf);
     fclose(f);
     if (found) {
         return found;
@@ -503,6 +507,46 @@ static void fail_at(char *err, size_t errlen, const char *file, int line, const 
         goto out;                                                                                            \
     } while (0)
 
+/* Range check of one loaded value (ranges: mca_range_t, issue 16); the field is printf-formatted:
+ * "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
+#define CHECK(w, key, range, v, ...)                                                                         \
+    do {                                                                                                     \
+        char f_[64], why_[160];                                                                              \
+        if (mca_range_check((range), (v), why_, sizeof why_) != MCA_OK) {                                    \
+            snprintf(f_, sizeof f_, __VA_ARGS__);                                                            \
+            FAIL(MCA_ERANGE, w, key, "%s: %s", f_, why_);                                                    \
+        }                                                                                                    \
+    } while (0)
+
+/* Ranges of the cell's own numbers (keys shared with scenarios use mca_scenario_range()); docs/daemon.md
+ * lists them. What a real cell can need: */
+static const mca_range_t r_pdnn_max_steps = {"pdnn_max_steps", 1, 20000, 0, 1,
+                                             "steps"}; /* 2000 ~ 1 ms here */
+static const mca_range_t r_pdnn_tol = {"pdnn_tol", 0.0, 1e-2, 1, 0, ""};
+static const mca_range_t r_eq_tol = {"eq_tol", 0.0, 0.1, 1, 0, "m"};
+static const mca_range_t r_fault_residual = {"fault_residual", 0.0, 1e-2, 1, 0, ""};
+static const mca_range_t r_deadlock_time = {"deadlock_time", 0.0, 60.0, 1, 0, "s"};
+static const mca_range_t r_back_off_time = {"back_off_time", 0.0, 60.0, 1, 0, "s"};
+/* 1e-12 made a stop last for ever; a real joint brakes at 0.5-50 rad/s^2 */
+static const mca_range_t r_dec_limit = {"dec_limit", 0.05, 100.0, 0, 0, "rad/s^2"};
+/* longest brake from a joint's velocity limit at dec_limit */
+#define CELL_MAX_STOP_S 60.0
+static const mca_range_t r_arm_priority = {"priority", 0.0, 1000.0, 1, 0, ""};
+static const mca_range_t r_lag_tau = {"lag_tau", 0.0, 1.0, 0, 0, "s"};
+static const mca_range_t r_latency_cycles = {"latency_cycles", 0, 64, 0, 1, "cycles"};
+static const mca_range_t r_noise_pos = {"noise_pos", 0.0, 0.1, 0, 0, "rad"};
+static const mca_range_t r_dds_domain = {"domain", 0, 230, 0, 1, ""};
+static const mca_range_t r_publish_divisor = {"publish_divisor", 1, 100000, 0, 1, "ticks"};
+static const mca_range_t r_rt_priority = {"priority", 0, 99, 0, 1, "(0 = SCHED_OTHER)"};
+/* overruns: real arms need 3-10; arms in virtual time (the sim backend, lockstep emulators on an emulated
+ * CPU) tolerate any stall, so up to the longest task's tick count (an hour of periods) */
+static const mca_range_t r_overrun_limit = {"overrun_limit", 1, MCA_SCENARIO_MAX_TICKS, 0, 1, "periods"};
+#define CELL_MAX_OVERRUN_S 3600.0
+/* lost feedback: the arm is blind while these pass; at most 1000 cycles and 1 s */
+static const mca_range_t r_lost_feedback_cycles = {"lost_feedback_cycles", 1, 1000, 0, 1, "cycles"};
+#define CELL_MAX_LOST_FEEDBACK_S 1.0
+static const mca_range_t r_stop_after = {"stop_after", 0.0, 86400.0, 0, 0, "s"};
+
 /* Resolve `rel` against the directory of `base_file` (made absolute, so paths do not depend on the
  * current directory later). */
 static void resolve(char *out, size_t outlen, const char *base_file, const char *rel) {
@@ -526,12 +570,18 @@ static int readable(const char *p) {
     return access(p, R_OK) == 0;
 }
 
-static int finite_pos(const double *v) {
-    return v && isfinite(*v) && *v > 0.0;
-}
-
 const char *mca_cell_backend_name(mca_cell_backend_t b) {
     return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : "sim";
+}
+
+/* "KEY: must be in ..." into why when v is outside the scenario range of key. */
+static int path_value(const char *key, double v, char *why, size_t whylen) {
+    char r[160];
+    if (mca_range_check(mca_scenario_range(key), v, r, sizeof r) != MCA_OK) {
+        snprintf(why, whylen, "%s: %s", key, r);
+        return -1;
+    }
+    return 0;
 }
 
 /* Inline path of a cell arm (hold or circle; richer paths belong in a scenario file). */
@@ -539,8 +589,7 @@ static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, siz
     memset(pp, 0, sizeof *pp);
     pp->relative = 1;
     pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-    if (!(isfinite(pp->t0) && pp->t0 >= 0.0)) {
-        snprintf(why, whylen, "t0: must be >= 0");
+    if (path_value("t0", pp->t0, why, whylen) != 0) {
         return -1;
     }
     if (rp->kind == RAW_HOLD) {
@@ -548,15 +597,16 @@ static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, siz
         return 0;
     }
     pp->kind = MCA_PATH_CIRCLE;
-    if (!finite_pos(rp->radius) || !finite_pos(rp->period) || !rp->u || !rp->v) {
+    if (!rp->radius || !rp->period || !rp->u || !rp->v) {
         snprintf(why, whylen, "circle: needs radius > 0, period > 0, u and v");
         return -1;
     }
     pp->radius = *rp->radius;
     pp->period = *rp->period;
     pp->turns = rp->turns ? *rp->turns : 1.0;
-    if (!(isfinite(pp->turns) && pp->turns > 0.0)) {
-        snprintf(why, whylen, "turns: must be > 0");
+    if (path_value("radius", pp->radius, why, whylen) != 0 ||
+        path_value("period", pp->period, why, whylen) != 0 ||
+        path_value("turns", pp->turns, why, whylen) != 0) {
         return -1;
     }
     const double nu = mca_v3_norm(rp->u);
@@ -610,6 +660,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         cell_parse_error(path, &ls, cerr, err, errlen);
         return MCA_EPARSE;
     }
+    if (!raw) {
+        /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
+         * no data */
+        set_err(err, errlen,
+                "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)",
+                path);
+        return MCA_EPARSE;
+    }
 
     mca_cell_t *cell = calloc(1, sizeof *cell);
     int rc = MCA_OK;
@@ -646,9 +704,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
     }
     if (raw->task.duration) {
-        if (!finite_pos(raw->task.duration)) {
-            FAIL(MCA_ERANGE, wtask, "duration", "task.duration: must be > 0 s (got %g)", *raw->task.duration);
-        }
+        CHECK(wtask, "duration", mca_scenario_range("duration"), *raw->task.duration, "task.duration");
         scn->duration = *raw->task.duration;
     }
 
@@ -658,9 +714,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
              raw->scheme);
     }
     if (raw->d1) {
+        CHECK(top, "d1", mca_scenario_range("d1"), *raw->d1, "d1");
         scn->params.d1 = *raw->d1;
     }
     if (raw->d2) {
+        CHECK(top, "d2", mca_scenario_range("d2"), *raw->d2, "d2");
         scn->params.d2 = *raw->d2;
     }
     if (!(isfinite(scn->params.d1) && isfinite(scn->params.d2) && scn->params.d1 >= 0.0 &&
@@ -676,41 +734,27 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         const struct raw_solver *s = raw->solver;
         const struct where ws = {path, "solver", -1};
         if (s->deadlock_time) {
-            if (!finite_pos(s->deadlock_time)) {
-                FAIL(MCA_ERANGE, ws, "deadlock_time", "solver.deadlock_time: must be > 0 s (got %g)",
-                     *s->deadlock_time);
-            }
+            CHECK(ws, "deadlock_time", &r_deadlock_time, *s->deadlock_time, "solver.deadlock_time");
             cell->deadlock_time = *s->deadlock_time;
         }
         if (s->back_off_time) {
-            if (!finite_pos(s->back_off_time)) {
-                FAIL(MCA_ERANGE, ws, "back_off_time", "solver.back_off_time: must be > 0 s (got %g)",
-                     *s->back_off_time);
-            }
+            CHECK(ws, "back_off_time", &r_back_off_time, *s->back_off_time, "solver.back_off_time");
             cell->back_off_time = *s->back_off_time;
         }
         if (s->K) {
-            if (!(isfinite(*s->K) && *s->K >= 0.0)) {
-                FAIL(MCA_ERANGE, ws, "K", "solver.K: must be >= 0 (got %g)", *s->K);
-            }
+            CHECK(ws, "K", mca_scenario_range("K"), *s->K, "solver.K");
             scn->params.K = *s->K;
         }
         if (s->epsilon) {
-            if (!finite_pos(s->epsilon)) {
-                FAIL(MCA_ERANGE, ws, "epsilon", "solver.epsilon: must be > 0 (got %g)", *s->epsilon);
-            }
+            CHECK(ws, "epsilon", mca_scenario_range("epsilon"), *s->epsilon, "solver.epsilon");
             scn->params.epsilon = *s->epsilon;
         }
         if (s->v_normal) {
-            if (!finite_pos(s->v_normal)) {
-                FAIL(MCA_ERANGE, ws, "v_normal", "solver.v_normal: must be > 0 (got %g)", *s->v_normal);
-            }
+            CHECK(ws, "v_normal", mca_scenario_range("v_normal"), *s->v_normal, "solver.v_normal");
             scn->params.v_normal = *s->v_normal;
         }
         if (s->v_floor) {
-            if (!(isfinite(*s->v_floor) && *s->v_floor >= 0.0)) {
-                FAIL(MCA_ERANGE, ws, "v_floor", "solver.v_floor: must be >= 0 (got %g)", *s->v_floor);
-            }
+            CHECK(ws, "v_floor", mca_scenario_range("v_floor"), *s->v_floor, "solver.v_floor");
             scn->params.v_floor = *s->v_floor;
         }
         if (s->form) {
@@ -718,29 +762,19 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             scn->params.form = *s->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
         }
         if (s->pdnn_max_steps) {
-            if (*s->pdnn_max_steps < 1) {
-                FAIL(MCA_ERANGE, ws, "pdnn_max_steps", "solver.pdnn_max_steps: must be >= 1 (got %d)",
-                     *s->pdnn_max_steps);
-            }
+            CHECK(ws, "pdnn_max_steps", &r_pdnn_max_steps, *s->pdnn_max_steps, "solver.pdnn_max_steps");
             cell->pdnn_max_steps = *s->pdnn_max_steps;
         }
         if (s->pdnn_tol) {
-            if (!finite_pos(s->pdnn_tol)) {
-                FAIL(MCA_ERANGE, ws, "pdnn_tol", "solver.pdnn_tol: must be > 0 (got %g)", *s->pdnn_tol);
-            }
+            CHECK(ws, "pdnn_tol", &r_pdnn_tol, *s->pdnn_tol, "solver.pdnn_tol");
             cell->pdnn_tol = *s->pdnn_tol;
         }
         if (s->eq_tol) {
-            if (!finite_pos(s->eq_tol)) {
-                FAIL(MCA_ERANGE, ws, "eq_tol", "solver.eq_tol: must be > 0 (got %g)", *s->eq_tol);
-            }
+            CHECK(ws, "eq_tol", &r_eq_tol, *s->eq_tol, "solver.eq_tol");
             cell->eq_tol = *s->eq_tol;
         }
         if (s->fault_residual) {
-            if (!finite_pos(s->fault_residual)) {
-                FAIL(MCA_ERANGE, ws, "fault_residual", "solver.fault_residual: must be > 0 (got %g)",
-                     *s->fault_residual);
-            }
+            CHECK(ws, "fault_residual", &r_fault_residual, *s->fault_residual, "solver.fault_residual");
             cell->fault_residual = *s->fault_residual;
         }
     }
@@ -819,6 +853,16 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
             ca->id_base = (uint32_t)*ra->id_base;
         }
+        /* two arms on one bus with one id block would each take the other's frames */
+        for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_SOCKETCAN; b++) {
+            const mca_cell_arm_t *cb = &cell->arm[b];
+            if (cb->backend == MCA_CELL_BACKEND_SOCKETCAN && strcmp(cb->interface, ca->interface) == 0 &&
+                cb->id_base == ca->id_base) {
+                FAIL(MCA_ERANGE, wa, "id_base",
+                     "arms[%d].id_base: 0x%x on %s is already arms[%u]'s (one id block per arm and bus)", ai,
+                     ca->id_base, ca->interface, b);
+            }
+        }
         /* model overrides */
         if (ra->urdf) {
             resolve(sa->urdf, sizeof sa->urdf, path, ra->urdf);
@@ -829,15 +873,17 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->tip_link) {
             snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
         }
+        /* the scenario's placement was checked when it loaded; the cell's overrides here, same ranges */
         for (int i = 0; i < 3; i++) {
             if (ra->base_xyz) {
+                CHECK(wa, "base_xyz", mca_scenario_range("base_xyz"), ra->base_xyz[i],
+                      "arms[%d].base_xyz[%d]", ai, i);
                 sa->base_xyz[i] = ra->base_xyz[i];
             }
             if (ra->base_rpy) {
+                CHECK(wa, "base_rpy", mca_scenario_range("base_rpy"), ra->base_rpy[i],
+                      "arms[%d].base_rpy[%d]", ai, i);
                 sa->base_rpy[i] = ra->base_rpy[i];
-            }
-            if (!isfinite(sa->base_xyz[i]) || !isfinite(sa->base_rpy[i])) {
-                FAIL(MCA_ERANGE, wa, "base_xyz", "arms[%d].base_xyz/base_rpy: not finite", ai);
             }
         }
         if (ra->q0) {
@@ -847,7 +893,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         if (ra->path) {
-            char why[128];
+            char why[256];
             if (inline_path(&sa->path, ra->path, why, sizeof why) != 0) {
                 FAIL(MCA_ERANGE, wa, "path", "arms[%d].path.%s", ai, why);
             }
@@ -873,38 +919,38 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         const double dec = ra->dec_limit ? *ra->dec_limit : 10.0;
-        if (!(isfinite(dec) && dec > 0.0)) {
-            FAIL(MCA_ERANGE, wa, "dec_limit", "arms[%d].dec_limit: must be > 0 rad/s^2 (got %g)", ai, dec);
+        CHECK(wa, "dec_limit", &r_dec_limit, dec, "arms[%d].dec_limit", ai);
+        for (int j = 0; j < chain.dof; j++) {
+            /* a stop has a bounded duration: from the joint's velocity limit to rest */
+            const double stop_s = chain.joint[j].vel_limit / dec;
+            if (!(stop_s <= CELL_MAX_STOP_S)) {
+                FAIL(MCA_ERANGE, wa, "dec_limit",
+                     "arms[%d].dec_limit: %g rad/s^2 brakes joint '%s' from its velocity limit %g rad/s in "
+                     "%.3g s, "
+                     "more than %g s",
+                     ai, dec, chain.joint[j].name, chain.joint[j].vel_limit, stop_s, CELL_MAX_STOP_S);
+            }
         }
         for (int j = 0; j < MCA_MAX_DOF; j++) {
             ca->dec_limit[j] = dec;
         }
         ca->priority = 0.0;
         if (ra->priority) {
-            if (!finite_pos(ra->priority)) {
-                FAIL(MCA_ERANGE, wa, "priority", "arms[%d].priority: must be > 0 (got %g)", ai,
-                     *ra->priority);
-            }
+            CHECK(wa, "priority", &r_arm_priority, *ra->priority, "arms[%d].priority", ai);
             ca->priority = *ra->priority;
         }
         if (ra->sim) {
             if (ra->sim->lag_tau) {
-                if (!(isfinite(*ra->sim->lag_tau) && *ra->sim->lag_tau >= 0.0)) {
-                    FAIL(MCA_ERANGE, wa, "lag_tau", "arms[%d].sim.lag_tau: must be >= 0", ai);
-                }
+                CHECK(wa, "lag_tau", &r_lag_tau, *ra->sim->lag_tau, "arms[%d].sim.lag_tau", ai);
                 ca->sim_lag_tau = *ra->sim->lag_tau;
             }
             if (ra->sim->latency_cycles) {
-                if (*ra->sim->latency_cycles < 0 || *ra->sim->latency_cycles > 64) {
-                    FAIL(MCA_ERANGE, wa, "latency_cycles", "arms[%d].sim.latency_cycles: must be in 0..64",
-                         ai);
-                }
+                CHECK(wa, "latency_cycles", &r_latency_cycles, *ra->sim->latency_cycles,
+                      "arms[%d].sim.latency_cycles", ai);
                 ca->sim_latency_cycles = *ra->sim->latency_cycles;
             }
             if (ra->sim->noise_pos) {
-                if (!(isfinite(*ra->sim->noise_pos) && *ra->sim->noise_pos >= 0.0)) {
-                    FAIL(MCA_ERANGE, wa, "noise_pos", "arms[%d].sim.noise_pos: must be >= 0", ai);
-                }
+                CHECK(wa, "noise_pos", &r_noise_pos, *ra->sim->noise_pos, "arms[%d].sim.noise_pos", ai);
                 ca->sim_noise_pos = *ra->sim->noise_pos;
             }
         }
@@ -922,9 +968,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             cell->dds.enabled = *d->enabled;
         }
         if (d->domain) {
-            if (*d->domain < 0 || *d->domain > 230) {
-                FAIL(MCA_ERANGE, wd, "domain", "dds.domain: must be in 0..230 (got %lld)", *d->domain);
-            }
+            CHECK(wd, "domain", &r_dds_domain, (double)*d->domain, "dds.domain");
             cell->dds.domain = (uint32_t)*d->domain;
         }
         if (d->config && d->config[0]) {
@@ -934,10 +978,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         if (d->publish_divisor) {
-            if (*d->publish_divisor < 1 || *d->publish_divisor > 100000) {
-                FAIL(MCA_ERANGE, wd, "publish_divisor",
-                     "dds.publish_divisor: must be in 1..100000 (got %lld)", *d->publish_divisor);
-            }
+            CHECK(wd, "publish_divisor", &r_publish_divisor, (double)*d->publish_divisor,
+                  "dds.publish_divisor");
             cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
         }
     }
@@ -955,17 +997,15 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         const struct raw_rt *r = raw->rt;
         const struct where wr = {path, "rt", -1};
         if (r->period_us) {
-            if (*r->period_us <= 0 || *r->period_us > 1000000) {
-                FAIL(MCA_ERANGE, wr, "period_us", "rt.period_us: must be in 1..1000000 us (got %lld)",
-                     *r->period_us);
-            }
+            /* the loop period is the controller's dt: the scenario's dt range, in us */
+            const mca_range_t *dt = mca_scenario_range("dt");
+            const mca_range_t r_period_us = {"period_us", llround(dt->lo * 1e6), llround(dt->hi * 1e6), 0, 1,
+                                             "us"};
+            CHECK(wr, "period_us", &r_period_us, (double)*r->period_us, "rt.period_us");
             rt->period_ns = *r->period_us * 1000;
         }
         if (r->priority) {
-            if (*r->priority < 0 || *r->priority > 99) {
-                FAIL(MCA_ERANGE, wr, "priority", "rt.priority: must be in 0..99 (0 = SCHED_OTHER; got %d)",
-                     *r->priority);
-            }
+            CHECK(wr, "priority", &r_rt_priority, *r->priority, "rt.priority");
             rt->priority = *r->priority;
         }
         if (r->cpu) {
@@ -976,17 +1016,24 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
             rt->cpu = *r->cpu;
         }
+        const double period_s = (double)rt->period_ns * 1e-9;
         if (r->overrun_limit) {
-            if (*r->overrun_limit < 1) {
-                FAIL(MCA_ERANGE, wr, "overrun_limit", "rt.overrun_limit: must be >= 1 (got %d)",
-                     *r->overrun_limit);
+            CHECK(wr, "overrun_limit", &r_overrun_limit, *r->overrun_limit, "rt.overrun_limit");
+            if (*r->overrun_limit * period_s > CELL_MAX_OVERRUN_S) {
+                FAIL(MCA_ERANGE, wr, "overrun_limit",
+                     "rt.overrun_limit: %d periods of %g s are %g s of overruns, more than %g s",
+                     *r->overrun_limit, period_s, *r->overrun_limit * period_s, CELL_MAX_OVERRUN_S);
             }
             rt->overrun_limit = *r->overrun_limit;
         }
         if (r->lost_feedback_cycles) {
-            if (*r->lost_feedback_cycles < 1) {
-                FAIL(MCA_ERANGE, wr, "lost_feedback_cycles", "rt.lost_feedback_cycles: must be >= 1 (got %d)",
-                     *r->lost_feedback_cycles);
+            CHECK(wr, "lost_feedback_cycles", &r_lost_feedback_cycles, *r->lost_feedback_cycles,
+                  "rt.lost_feedback_cycles");
+            if (*r->lost_feedback_cycles * period_s > CELL_MAX_LOST_FEEDBACK_S + 1e-12) {
+                FAIL(MCA_ERANGE, wr, "lost_feedback_cycles",
+                     "rt.lost_feedback_cycles: %d cycles of %g s are %g s without feedback, more than %g s",
+                     *r->lost_feedback_cycles, period_s, *r->lost_feedback_cycles * period_s,
+                     CELL_MAX_LOST_FEEDBACK_S);
             }
             rt->lost_feedback_cycles = *r->lost_feedback_cycles;
         }
@@ -999,11 +1046,16 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     /* the controller's prediction uses the loop period */
     scn->params.dt = (double)rt->period_ns * 1e-9;
+    {
+        /* the task's tick count at this period (the scenario checked it at its own dt) */
+        char why[160];
+        if (mca_scenario_check_duration(scn->duration, scn->params.dt, why, sizeof why) != MCA_OK) {
+            FAIL(MCA_ERANGE, wtask, raw->task.duration ? "duration" : "scenario", "task.duration: %s", why);
+        }
+    }
 
     if (raw->stop_after) {
-        if (!(isfinite(*raw->stop_after) && *raw->stop_after >= 0.0)) {
-            FAIL(MCA_ERANGE, top, "stop_after", "stop_after: must be >= 0 s (got %g)", *raw->stop_after);
-        }
+        CHECK(top, "stop_after", &r_stop_after, *raw->stop_after, "stop_after");
         cell->stop_after = *raw->stop_after;
     }
     if (raw->debug_stall_after_ticks) {

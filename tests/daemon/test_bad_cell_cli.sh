@@ -55,7 +55,7 @@ printf '%s' "$good" > "$tmp/good.yaml"
 
 # run_both NAME FILE LINE FIELD REASON: both modes, exit 2, the one message, nothing started
 run_both() {
-    local name=$1 file=$2 line=$3 field=$4 reason=$5 mode rc out
+    local name=$1 file=$2 line=$3 field=$4 reason=$5 mode rc out bad=0
     kinds=$((kinds + 1))
     for mode in check run; do
         if [ $mode = check ]; then
@@ -78,10 +78,10 @@ run_both() {
         if [ -n "$why" ]; then
             echo "FAIL $name (mcad ${mode/check/--check}): ${why#; }"
             cat "$tmp/$name.$mode.out" "$tmp/$name.$mode.err"
-            fail=1
+            fail=1 bad=1
         fi
     done
-    echo "ok   $name: $out"
+    [ $bad -eq 1 ] || echo "ok   $name: $out"
 }
 
 # expect NAME FROM TO NEEDLE FIELD REASON [LINE_OFFSET]: the good cell with FROM replaced by TO; the
@@ -99,6 +99,17 @@ expect() {
 NL=$'\n'
 URDF="$SRC/config/robots/pa10plus.urdf"
 run_both missing_file "$tmp/no-such-cell.yaml" 0 "" "cannot open cell file"
+# issue 16: an empty or comment-only cell, or a cell whose scenario file is so, was a NULL dereference
+: > "$tmp/empty.yaml"
+run_both empty_cell "$tmp/empty.yaml" 0 "(document)" "empty document"
+printf '# nothing but comments\n\n   # and blank lines\n' > "$tmp/comments.yaml"
+run_both comment_only_cell "$tmp/comments.yaml" 0 "(document)" "empty document"
+: > "$tmp/empty_scn.yaml"
+expect empty_scenario "  duration: 3.5$NL" "  scenario: empty_scn.yaml$NL" "scenario: empty_scn" "task.scenario" \
+    "$tmp/empty_scn.yaml: empty document"
+printf '# a scenario\n# still to be written\n' > "$tmp/comments_scn.yaml"
+expect comment_only_scenario "  duration: 3.5$NL" "  scenario: comments_scn.yaml$NL" "scenario: comments_scn" \
+    "task.scenario" "$tmp/comments_scn.yaml: empty document"
 expect yaml_syntax "[0.0, 0.6, 0.0]" "[0.0, 0.6, 0.0" "[0.0, 0.6, 0.0" "arms[1].base_xyz" "did not find expected"
 expect wrong_type "priority: 70" "priority: high" "priority: high" "rt.priority" "Invalid INT value: 'high'"
 expect wrong_type_in_arm "dec_limit: 4.0" "dec_limit: fast" "dec_limit: fast" "arms[0].dec_limit" "Invalid FLOAT value"
@@ -115,8 +126,8 @@ expect unknown_backend "backend: socketcan" "backend: ethercat" "ethercat" "arms
 expect dof_mismatch "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]" "q0: [0.0, 0.3, 0.0]" "q0: [0.0, 0.3, 0.0]" \
     "arms[0].q0" "3 values but"
 expect q0_outside_limits "q0: [0.1, 0.3," "q0: [9.0, 0.3," "q0: [9.0" "arms[1].q0[0] = 9" "outside joint"
-expect negative_period "period_us: 2000" "period_us: -1000" "period_us" "rt.period_us" "must be in 1..1000000 us (got -1000)"
-expect zero_period "period_us: 2000" "period_us: 0" "period_us" "rt.period_us" "must be in 1..1000000 us (got 0)"
+expect negative_period "period_us: 2000" "period_us: -1000" "period_us" "rt.period_us" "must be in 100..100000 us (got -1000)"
+expect zero_period "period_us: 2000" "period_us: 0" "period_us" "rt.period_us" "must be in 100..100000 us (got 0)"
 expect bad_priority "priority: 70" "priority: 150" "priority: 150" "rt.priority" "must be in 0..99"
 expect scenario_missing "  duration: 3.5$NL" "  scenario: gone/cross.yaml$NL" "scenario: gone" "task.scenario" \
     "gone/cross.yaml' not found"
@@ -125,7 +136,92 @@ expect socketcan_no_interface "    interface: vcan1$NL" "" "backend: socketcan" 
 expect dds_config_missing "  domain: 7$NL" "  domain: 7$NL  config: nowhere/cyclone.xml$NL" "config: nowhere" \
     "dds.config" "nowhere/cyclone.xml' not found"
 expect unknown_scheme "scheme: mvn" "scheme: magic" "scheme: magic" "scheme" "unknown scheme 'magic' (known: mca-ts, mca, mvn, apf)"
+# issue 16: a URDF nested 50 000 deep overflowed the stack in TinyXML's recursive parser
+{ printf '<?xml version="1.0"?>\n<robot name="deep">\n'; for ((i = 0; i < 50000; i++)); do printf '<a>'; done; } \
+    > "$tmp/deep.urdf"
+expect deep_urdf "$URDF${NL}    base_xyz: [0.0, -0.6" "$tmp/deep.urdf${NL}    base_xyz: [0.0, -0.6" "deep.urdf" \
+    "arms[0].urdf" "deep.urdf: line 3: elements nested deeper than 256 levels"
+# issue 16: lines over 1023 characters (fgets split them) shifted the reported line numbers
+long="# $(printf 'x%.0s' {1..3000})"
+expect long_line_before_range_error "rt:$NL  period_us: 2000" "$long${NL}rt:$NL  period_us: -1000" "period_us: -1000" \
+    "rt.period_us" "(got -1000)"
+expect long_line_before_parse_error "rt:$NL  period_us: 2000$NL  priority: 70" \
+    "$long${NL}rt:$NL  period_us: 2000$NL$long$NL  priority: high" "priority: high" "rt.priority" "Invalid INT value"
+expect long_line_before_unknown_key "stop_after: 1.5" "$long${NL}$long${NL}stop_afterwards: 1.5" "stop_afterwards" \
+    "stop_afterwards" "Unexpected key"
 expect duplicate_arm "  - name: right" "  - name: left" "backend: socketcan" "arms[1].name" "'left' used twice" -1
+
+# issue 16: every number has a range a real cell can need (docs/daemon.md); out of it, the field, the line
+# and the range are named and nothing starts
+expect lost_feedback_huge "lost_feedback_cycles: 6" "lost_feedback_cycles: 2147483647" "lost_feedback_cycles" \
+    "rt.lost_feedback_cycles" "must be in 1..1000 cycles (got 2147483647)"
+expect lost_feedback_too_long "lost_feedback_cycles: 6" "lost_feedback_cycles: 600" "lost_feedback_cycles" \
+    "rt.lost_feedback_cycles" "600 cycles of 0.002 s are 1.2 s without feedback, more than 1 s"
+expect lost_feedback_zero "lost_feedback_cycles: 6" "lost_feedback_cycles: 0" "lost_feedback_cycles" \
+    "rt.lost_feedback_cycles" "must be in 1..1000 cycles (got 0)"
+expect overrun_huge "overrun_limit: 3" "overrun_limit: 2147483647" "overrun_limit" "rt.overrun_limit" \
+    "must be in 1..3600000 periods (got 2147483647)"
+expect overrun_too_long "overrun_limit: 3" "overrun_limit: 2000000" "overrun_limit" "rt.overrun_limit" \
+    "2000000 periods of 0.002 s are 4000 s of overruns, more than 3600 s"
+expect period_too_short "period_us: 2000" "period_us: 10" "period_us" "rt.period_us" "must be in 100..100000 us (got 10)"
+expect solver_K_huge "K: 12" "K: 1e308" "K: 1e308" "solver.K" "must be in [0, 1000] 1/s (got 1e+308)"
+expect solver_v_normal_huge "  K: 12$NL" "  K: 12$NL  v_normal: 1e308$NL" "v_normal" "solver.v_normal" \
+    "must be in (0, 10] m/s (got 1e+308)"
+expect solver_epsilon_huge "  K: 12$NL" "  K: 12$NL  epsilon: 1e308$NL" "epsilon" "solver.epsilon" \
+    "must be in (0, 1000] 1/s (got 1e+308)"
+expect pdnn_max_steps_huge "pdnn_max_steps: 321" "pdnn_max_steps: 2147483647" "pdnn_max_steps" \
+    "solver.pdnn_max_steps" "must be in 1..20000 steps (got 2147483647)"
+expect pdnn_tol_huge "  K: 12$NL" "  K: 12$NL  pdnn_tol: 5$NL" "pdnn_tol" "solver.pdnn_tol" "must be in (0, 0.01] (got 5)"
+expect deadlock_time_huge "  K: 12$NL" "  K: 12$NL  deadlock_time: 1e9$NL" "deadlock_time" "solver.deadlock_time" \
+    "must be in (0, 60] s (got 1000000000)"
+expect base_xyz_huge "[0.0, -0.6, 0.1]" "[1e308, -0.6, 0.1]" "1e308" "arms[0].base_xyz[0]" \
+    "must be in [-100, 100] m (got 1e+308)"
+expect base_rpy_huge "[0.0, 0.0, 1.5]" "[0.0, 0.0, 150]" "[0.0, 0.0, 150]" "arms[0].base_rpy[2]" \
+    "must be in [-6.28319, 6.28319] rad (got 150)"
+expect dec_limit_tiny "dec_limit: 4.0" "dec_limit: 1e-12" "dec_limit" "arms[0].dec_limit" \
+    "must be in [0.05, 100] rad/s^2 (got 1e-12)"
+expect dec_limit_huge "dec_limit: 4.0" "dec_limit: 1e6" "dec_limit" "arms[0].dec_limit" \
+    "must be in [0.05, 100] rad/s^2 (got 1000000)"
+# a stop lasts at most 60 s: 0.05 rad/s^2 from a joint's velocity limit of 10 rad/s would take 200 s
+sed 's/velocity="[^"]*"/velocity="10"/' "$URDF" > "$tmp/fast.urdf"
+expect dec_limit_slow_stop "$URDF${NL}    base_xyz: [0.0, -0.6, 0.1]${NL}    base_rpy: [0.0, 0.0, 1.5]${NL}    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]${NL}    dec_limit: 4.0" \
+    "$tmp/fast.urdf${NL}    base_xyz: [0.0, -0.6, 0.1]${NL}    base_rpy: [0.0, 0.0, 1.5]${NL}    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]${NL}    dec_limit: 0.05" \
+    "dec_limit: 0.05" "arms[0].dec_limit" "0.05 rad/s^2 brakes joint 'S1' from its velocity limit 10 rad/s in 200 s, more than 60 s"
+expect arm_priority_huge "    dec_limit: 4.0$NL" "    dec_limit: 4.0$NL    priority: 1e308$NL" "priority: 1e308" \
+    "arms[0].priority" "must be in (0, 1000] (got 1e+308)"
+expect noise_huge "    dec_limit: 4.0$NL" "    dec_limit: 4.0$NL    sim: {noise_pos: 5}$NL" "noise_pos" \
+    "arms[0].sim.noise_pos" "must be in [0, 0.1] rad (got 5)"
+sed '0,/velocity="[^"]*"/s//velocity="1e300"/' "$URDF" > "$tmp/velocity.urdf"
+vline=$(grep -n -m 1 'velocity="1e300"' "$tmp/velocity.urdf" | cut -d: -f1)
+jline=$(head -n "$vline" "$tmp/velocity.urdf" | grep -n '<joint' | tail -n 1 | cut -d: -f1)
+expect urdf_velocity_huge "$URDF${NL}    base_xyz: [0.0, -0.6" "$tmp/velocity.urdf${NL}    base_xyz: [0.0, -0.6" "velocity.urdf" \
+    "arms[0].urdf" "velocity.urdf: line $jline: joint 'S1': <limit velocity> must be in (0, 100] rad/s (got 1e+300)"
+# two socketcan arms on one bus with one id block: the second is refused at its id_base
+expect same_can_ids "    backend: sim$NL    urdf: $URDF" "    backend: socketcan$NL    interface: vcan1$NL    id_base: 0x140$NL    urdf: $URDF" \
+    "q0: [0.1, 0.3" "arms[1].id_base" "0x140 on vcan1 is already arms[0]'s" -3
+expect d2_huge "d2: 0.15" "d2: 1e308" "d2: 1e308" "d2" "must be in (0, 2] m (got 1e+308)"
+expect duration_huge "duration: 3.5" "duration: 1e7" "duration: 1e7" "task.duration" "must be in (0, 3600] s (got 10000000)"
+expect stop_after_huge "stop_after: 1.5" "stop_after: 1e9" "stop_after: 1e9" "stop_after" \
+    "must be in [0, 86400] s (got 1000000000)"
+expect path_radius_huge "radius: 0.1" "radius: 1e308" "radius: 1e308" "arms[1].path.radius" \
+    "must be in (0, 10] m (got 1e+308)"
+# the tick count at the cell's period: 3000 s at 100 us are 30 million ticks
+good_saved=$good
+good=${good/period_us: 2000/period_us: 100}
+expect ticks_too_many "duration: 3.5" "duration: 3000" "duration: 3000" "task.duration" \
+    "3000 s at a tick of 0.0001 s is 30000000 ticks, more than 3600000"
+good=$good_saved
+# a scenario's own range error, through the cell
+sed -e 's/^duration: .*/duration: 1e7/' -e "s|\.\./robots/|$SRC/config/robots/|" "$SRC/config/scenarios/cross_circles.yaml" \
+    > "$tmp/long_scn.yaml"
+dline=$(grep -n '^duration:' "$tmp/long_scn.yaml" | cut -d: -f1)
+expect scenario_duration_huge "  duration: 3.5$NL" "  scenario: long_scn.yaml$NL" "scenario: long_scn" "task.scenario" \
+    "long_scn.yaml:$dline: duration: must be in (0, 3600] s (got 10000000)"
+# in range: two socketcan arms with one id block on different buses
+printf '%s' "${good/"    backend: sim$NL"/"    backend: socketcan$NL    interface: vcan0$NL    id_base: 0x140$NL"}" > "$tmp/two_buses.yaml"
+if ! "$MCAD" --check "$tmp/two_buses.yaml" > "$tmp/two_buses.out" 2>&1; then
+    echo "FAIL: two socketcan arms, one id block on two buses, rejected:"; cat "$tmp/two_buses.out"; fail=1
+fi
 
 # the good cell itself passes the check (so the failures above are the variants')
 if ! "$MCAD" --check "$tmp/good.yaml" > "$tmp/good.out" 2>&1; then

@@ -331,11 +331,14 @@ static void test_mca_ts_keys(void **state) {
     assert_true(cfg.ts.priority[0] == 3.0 && cfg.ts.priority[1] == 1.0);
     assert_true(cfg.ts.dec_limit[0] == 4.0 && cfg.ts.dec_limit[1] == 10.0);
     p = write_variant("ts5", "    dec_limit: 4.0\n", "    dec_limit: 4.0\n    priority: 0\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "priority: 0"), "arms[0].priority", "must be > 0", NULL);
+    expect_error(p, MCA_ERANGE, line_of(p, "priority: 0"), "arms[0].priority", "must be in (0, 1000] (got 0)",
+                 NULL);
     p = write_variant("ts6", "  pdnn_max_steps: 321\n", "  pdnn_max_steps: 321\n  deadlock_time: -1\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "deadlock_time: -1"), "solver.deadlock_time", "must be > 0", NULL);
+    expect_error(p, MCA_ERANGE, line_of(p, "deadlock_time: -1"), "solver.deadlock_time",
+                 "must be in (0, 60] s (got -1)", NULL);
     p = write_variant("ts7", "  pdnn_max_steps: 321\n", "  pdnn_max_steps: 321\n  back_off_time: 0\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "back_off_time: 0"), "solver.back_off_time", "must be > 0", NULL);
+    expect_error(p, MCA_ERANGE, line_of(p, "back_off_time: 0"), "solver.back_off_time",
+                 "must be in (0, 60] s (got 0)", NULL);
 }
 
 static void test_duplicate_arm(void **state) {

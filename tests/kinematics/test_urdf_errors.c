@@ -5,7 +5,9 @@
 #include "kin_test_util.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #ifndef KIN_DATA_DIR
 #error "KIN_DATA_DIR must be set by CMake"
@@ -86,6 +88,15 @@ static void test_zero_velocity_limit(void **state) {
     load_t l;
     load_data(&l, "no_velocity.urdf", "tool_tip");
     assert_error(&l, MCA_EPARSE, "joint 'j1'", "velocity");
+}
+
+/* issue 16: velocity="1e300" switched the velocity bounds off; limits are in (0, MCA_JOINT_VEL_MAX] */
+static void test_huge_velocity_limit(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "huge_velocity.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "line 5: joint 'j1'",
+                 "<limit velocity> must be in (0, 100] rad/s (got 1e+300)");
 }
 
 static void test_zero_axis(void **state) {
@@ -231,6 +242,51 @@ static void test_directory(void **state) {
     assert_error(&l, MCA_EIO, "cannot read", "directory");
 }
 
+/* Issue 16: a URDF nested 50 000 deep overflowed the stack in TinyXML's recursive parser. The depth is now
+ * bounded (256) by a scan before any parser runs: a clean EPARSE naming the line of the first element too
+ * deep. The file is written here (about 400 kB): <robot> on line 2, one <link> per line after it, so the
+ * element at depth 257 (link l256) is on line 258. */
+static void write_nested(const char *path, int levels, const char *extra) {
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "<?xml version=\"1.0\"?>\n<robot name=\"deep\">");
+    for (int i = 1; i < levels; i++) {
+        fprintf(f, "\n<link name=\"l%d\"%s>", i, extra);
+    }
+    for (int i = 1; i < levels; i++) {
+        fputs("</link>", f);
+    }
+    fputs("</robot>\n", f);
+    fclose(f);
+}
+
+static void test_nested_too_deep(void **state) {
+    (void)state;
+    char path[] = "/tmp/mca-deep-XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    write_nested(path, 50000, "");
+    load_t l;
+    snprintf(l.path, sizeof(l.path), "%s", path);
+    memset(&l.chain, 0xA5, sizeof(l.chain));
+    l.rc = mca_chain_load_urdf(&l.chain, path, NULL, l.err, sizeof(l.err));
+    print_message("50000 levels -> rc %d: %s\n", l.rc, l.err);
+    assert_error(&l, MCA_EPARSE, "line 258: elements nested deeper than 256 levels", NULL);
+    /* exactly 256 levels (attribute values with '>' and '/>' inside quotes, a comment with tags) pass the
+     * depth scan and fail later for what they are: links without joints, no chain */
+    write_nested(path, 256, " a=\"x > y\" b='/>' ");
+    FILE *f = fopen(path, "a");
+    assert_non_null(f);
+    fputs("<!-- <a><a><a> -->\n", f);
+    fclose(f);
+    l.rc = mca_chain_load_urdf(&l.chain, path, NULL, l.err, sizeof(l.err));
+    print_message("256 levels -> rc %d: %s\n", l.rc, l.err);
+    assert_int_equal(l.rc, MCA_EPARSE);
+    assert_null(strstr(l.err, "nested"));
+    unlink(path);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_missing_file),
@@ -239,6 +295,7 @@ int main(void) {
         cmocka_unit_test(test_revolute_without_limit),
         cmocka_unit_test(test_continuous_without_limit),
         cmocka_unit_test(test_zero_velocity_limit),
+        cmocka_unit_test(test_huge_velocity_limit),
         cmocka_unit_test(test_zero_axis),
         cmocka_unit_test(test_too_many_joints),
         cmocka_unit_test(test_unknown_tip),
@@ -252,6 +309,7 @@ int main(void) {
         cmocka_unit_test(test_bad_interval),
         cmocka_unit_test(test_no_revolute_joint),
         cmocka_unit_test(test_directory),
+        cmocka_unit_test(test_nested_too_deep),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

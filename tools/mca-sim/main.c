@@ -231,6 +231,14 @@ int main(int argc, char **argv) {
         fprintf(stderr, "mca-sim: %s\n", err);
         return 1;
     }
+    if (o.duration > 0.0) {
+        /* the file's duration was checked as it loaded; an override gets the same range and tick count */
+        char why[160];
+        if (mca_scenario_check_duration(o.duration, scn.params.dt, why, sizeof why) != MCA_OK) {
+            fprintf(stderr, "mca-sim: --duration: %s\n", why);
+            return 2;
+        }
+    }
     static mca_simrun_result_t res[4];
     for (int s = 0; s < n_list; s++) {
         char csvp[1024];

@@ -32,13 +32,17 @@ typedef struct mca_pose {
     double p[3];
 } mca_pose_t;
 
+/** Largest joint velocity limit a URDF may give [rad/s] (issue 16: velocity="1e300" switched the velocity
+ *  bounds off); real revolute joints move at well under 10 rad/s. */
+#define MCA_JOINT_VEL_MAX 100.0
+
 typedef struct mca_joint_model {
     char name[64];
     mca_pose_t origin; /**< previous joint frame (or root link) -> this joint frame at q = 0 */
     double axis[3];    /**< unit rotation axis in this joint's frame */
     double lower;      /**< position limit [rad]; -INFINITY when continuous */
     double upper;      /**< position limit [rad]; +INFINITY when continuous */
-    double vel_limit;  /**< |qdot| limit [rad/s] */
+    double vel_limit;  /**< |qdot| limit [rad/s], in (0, MCA_JOINT_VEL_MAX] */
     int continuous;    /**< 1 when the joint has no position limits */
 } mca_joint_model_t;
 

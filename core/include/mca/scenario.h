@@ -97,6 +97,46 @@ typedef struct mca_scenario {
     double sample_times[16];
 } mca_scenario_t;
 
+/**
+ * Allowed range of one number in a scenario or cell file (issue 16: values that switched supervision off, or
+ * overflowed the tick count, were accepted). The ranges are what a real cell can need; they are listed in
+ * docs/scheme.md section 3 (scenario keys) and docs/daemon.md (cell keys).
+ */
+typedef struct mca_range {
+    const char *key;  /**< field name as written in the file ("dt", "K", ...) */
+    double lo, hi;    /**< lo <= v <= hi (lo < v when lo_open) */
+    int lo_open;      /**< 1: lo itself is not allowed */
+    int integer;      /**< 1: printed as "LO..HI" */
+    const char *unit; /**< "s", "m", "1/s", ... ("" for none) */
+} mca_range_t;
+
+/** Most ticks of one task: an hour at 1 kHz (duration / dt, bounds what is allocated per tick). */
+#define MCA_SCENARIO_MAX_TICKS 3600000
+
+/**
+ * Check v against r (NaN and infinities are outside every range).
+ * @param[out] why  on MCA_ERANGE: "must be in [LO, HI] UNIT (got V)" (or "LO..HI" for integers)
+ * @retval MCA_OK, MCA_ERANGE, MCA_EINVAL (r NULL)
+ */
+int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen);
+
+/**
+ * The range of a number of a scenario file; cells use the same ranges for the same keys (their d1, d2, the
+ * solver's K, epsilon, v_normal, v_floor, task duration, arm placement and inline paths).
+ * Keys: duration, dt, d1, d2, K, epsilon, v_normal, v_floor, sample_times, base_xyz, base_rpy, t0, radius,
+ * period, turns, points, durations.
+ * @return the range, or NULL for a key without one
+ */
+const mca_range_t *mca_scenario_range(const char *key);
+
+/**
+ * Check a task duration against its range and the tick count it makes at tick period dt (at most
+ * MCA_SCENARIO_MAX_TICKS).
+ * @param[out] why  on MCA_ERANGE, the reason (without the field name)
+ * @retval MCA_OK, MCA_ERANGE
+ */
+int mca_scenario_check_duration(double duration, double dt, char *why, size_t whylen);
+
 /** Defaults: d1 0.05, d2 0.12, K 20, epsilon 5, dt 0.001, normal form, v_normal 0.5. */
 void mca_scenario_defaults(mca_scenario_t *scn);
 
@@ -104,7 +144,8 @@ void mca_scenario_defaults(mca_scenario_t *scn);
  * Parse a scenario YAML file (start-up only; allocates inside libcyaml and frees before returning).
  * @param[out] scn  filled on success (unchanged on error)
  * @param[out] err  message naming the file, the line when known, and the field at fault
- * @retval MCA_OK, MCA_ENOENT (file missing), MCA_EPARSE (bad YAML, unknown/missing field),
+ * @retval MCA_OK, MCA_ENOENT (file missing), MCA_EPARSE (bad YAML, unknown/missing field, empty or
+ *         comment-only file: "FILE: empty document ..."),
  *         MCA_ERANGE (value out of range: too many arms/points, d1 >= d2, non-positive duration, ...)
  */
 int mca_scenario_load(const char *path, mca_scenario_t *scn, char *err, size_t errlen);

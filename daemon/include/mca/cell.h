@@ -94,7 +94,8 @@ typedef struct mca_cell {
  * @param[out] err   "FILE:LINE: FIELD: reason"
  * @retval MCA_OK
  * @retval MCA_ENOENT  cell, scenario, URDF or DDS config file missing
- * @retval MCA_EPARSE  YAML syntax, wrong type, unknown key, missing required field
+ * @retval MCA_EPARSE  YAML syntax, wrong type, unknown key, missing required field, empty or comment-only
+ *                     file ("FILE:0: (document): empty document ...")
  * @retval MCA_ERANGE  a value out of range (d1 >= d2, period <= 0, priority, DOF mismatch, ...)
  * @retval MCA_EINVAL  NULL argument
  */
