@@ -288,7 +288,8 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                     bound = s * p->v_normal;
                 }
                 if (t_stop > 0.0) {
-                    bound = fmin(bound, fmax(0.0, c->d - d1m) / t_stop);
+                    bound = fmin(bound,
+                                 fmax(0.0, c->d - d1m) / (2.0 * t_stop)); /* invariant: docs/scheme.md §10 */
                 }
                 if (!(bound < p->big)) {
                     continue; /* beyond d2 with no stop bound: inactive */

@@ -769,7 +769,7 @@ static void test_timescale_deadlock(void **state) {
     assert_int_equal(last.paths_done, 0);
 }
 
-/* mca-ts rows against their closed form: priority shares, the stoppability bound (d - d1) / T beyond the
+/* mca-ts rows against their closed form: priority shares, the stoppability bound w (d - d1) / T beyond the
  * band too, one row per near link, and a pair repeated from the previous link left inactive. */
 static void test_near_rows(void **state) {
     (void)state;
@@ -808,9 +808,12 @@ static void test_near_rows(void **state) {
     assert_int_equal(qp.n_ineq, 2 * R * (ch.dof + 1));
     assert_int_equal(si.rows_per_link, R);
     assert_int_equal(si.row_off[1], R * (ch.dof + 1));
-    const double in_a = 2.0 * 0.75 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / t_stop);
-    const double far_a = 2.0 * 0.75 * (d_far - p.d1) / t_stop; /* beyond d2: the stop bound alone */
-    const double in_b = 2.0 * 0.25 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / t_stop);
+    /* 2 w_a S v_normal in the band; the stop bound w_a (d - d1) / T (docs/scheme.md, "Stoppability") */
+    const double in_a =
+        2.0 * 0.75 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / (2.0 * t_stop));
+    const double far_a = 0.75 * (d_far - p.d1) / t_stop; /* beyond d2: the stop bound alone */
+    const double in_b =
+        2.0 * 0.25 * fmin(mca_brake_s(d_in, p.d1, p.d2) * p.v_normal, (d_in - p.d1) / (2.0 * t_stop));
     assert_true(fabs(qp.beta[R * 4 + 0] - in_a) < 1e-15);
     assert_true(fabs(qp.beta[R * 4 + 1] - far_a) < 1e-15);
     assert_true(qp.beta[R * 4 + 2] == p.big); /* no third near link */

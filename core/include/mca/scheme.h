@@ -128,12 +128,13 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
  * The collision rows of mca-ts (normal form; on a QP assembled without collision rows; real-time safe).
  * Per arm a, per link l, one row per near pair near[a][l][k] (the link's MCA_NEAR_LINKS nearest links of
  * the other arms, so that a pair approaching while neither link has it as its closest is bounded too):
- *   n^T J_P qdot_a <= 2 w_a min{ S(d) v_normal (d < d2 only), (d - d1) / T_a },
+ *   n^T J_P qdot_a <= min{ 2 w_a S(d) v_normal (d < d2 only), w_a (d - d1) / T_a },
  *   w_a = priority_a / (priority_a + priority_b),  T_a = max_j qdot_max,j / dec_a,
- * so the pair's approach speeds sum to at most what both arms can brake away before d1 (docs/scheme.md,
- * "Stoppability"). dec NULL or dec[a] <= 0: no stop bound for arm a; priority NULL: equal shares. Rows
- * without a pair, or repeating a pair of the previous link (a shared joint), keep beta = big.
- * Sets qp->n_ineq and si's row layout, active_rows and brake.
+ * (d1 here is d1 + d1_margin) so the pair's approach speeds sum to at most what both arms can brake away
+ * within half the gap, and braking alone keeps each arm inside its row (docs/scheme.md, "Stoppability"). dec
+ * NULL or dec[a] <= 0: no stop bound for arm a; priority NULL: equal shares. Rows without a pair, or
+ * repeating a pair of the previous link (a shared joint), keep beta = big. Sets qp->n_ineq and si's row
+ * layout, active_rows and brake.
  * @retval MCA_OK, MCA_EINVAL, MCA_ERANGE (rows above the maximum)
  */
 int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
