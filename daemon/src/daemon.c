@@ -7,7 +7,9 @@
 #include <malloc.h>
 #include <math.h>
 #include <sched.h>
-#include <signal.h> /* raise (test hook) */
+#ifdef MCA_TEST_HOOKS
+#include <signal.h> /* raise (debug_kill_after_ticks) */
+#endif
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -18,6 +20,9 @@
 #include "mca/dds_bridge.h"
 #include "mca/err.h"
 #include "mca/sim_backend.h"
+#ifdef MCA_TEST_HOOKS
+#include "mca/daemon_test.h"
+#endif
 
 #define NS_PER_S 1000000000LL
 
@@ -36,7 +41,9 @@ struct mca_daemon {
     _Atomic int state;
     _Atomic uint64_t ticks;
     _Atomic int stop_request;
+#ifdef MCA_TEST_HOOKS
     _Atomic int stall_request;
+#endif
     _Atomic int finished;
     pthread_t thread;
     int thread_started;
@@ -155,6 +162,7 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
                     sc.vel_limit[j] = 1e300;
                 }
             }
+#ifdef MCA_TEST_HOOKS
             if (d->cell.debug_start_in_fault) {
                 /* test hook: the firmware latches a fault in its first cycle (INIT -> FAULT), as a fault
                  * left from an earlier run would be */
@@ -164,6 +172,7 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
                 sc.inject[0].at_cycle = 0;
                 sc.inject[0].joint = 0;
             }
+#endif
             rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
         }
     } else {
@@ -809,13 +818,16 @@ static void *rt_main(void *arg) {
     const int64_t period = d->cell.rt.period_ns;
     const double stop_after = d->opts.stop_after > 0 ? d->opts.stop_after : d->cell.stop_after;
     int64_t next = now_ns() + period;
+#ifdef MCA_TEST_HOOKS
     int stalled_logged = 0;
+#endif
     for (;;) {
         struct timespec ts = {(time_t)(next / NS_PER_S), (long)(next % NS_PER_S)};
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
         }
         const int64_t wake = now_ns();
         const uint64_t ticks = atomic_load_explicit(&d->ticks, memory_order_relaxed);
+#ifdef MCA_TEST_HOOKS
         if (d->cell.debug_kill_after_ticks && ticks >= d->cell.debug_kill_after_ticks) {
             /* test hook: die mid-task at an exact tick, as a crash would (vcan_e2e phase D: only the
              * arms' own watchdogs brake them); a kill from outside lands late when the host is slow */
@@ -835,6 +847,7 @@ static void *rt_main(void *arg) {
             next = wake + 10 * 1000000LL;
             continue;
         }
+#endif
         mca_hist_record(&d->jitter, wake - next);
         /* task time advances one period per tick: a missed deadline delays the task instead of skipping
          * path points (a sim or lockstep arm did not move meanwhile; real arms' drift is fed back) */
@@ -943,9 +956,11 @@ void mca_daemon_request_stop(mca_daemon_t *d) {
     atomic_store(&d->stop_request, 1);
 }
 
+#ifdef MCA_TEST_HOOKS
 void mca_daemon_request_stall(mca_daemon_t *d) {
     atomic_store(&d->stall_request, 1);
 }
+#endif
 
 int mca_daemon_finished(const mca_daemon_t *d) {
     return atomic_load(&((mca_daemon_t *)d)->finished);
@@ -1218,6 +1233,7 @@ mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
 }
 
+#ifdef MCA_TEST_HOOKS
 mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {
     if (!d || !arm || a < 0 || a >= d->n_arms) {
         return NULL;
@@ -1226,3 +1242,4 @@ mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {
     d->arm[a] = arm;
     return old;
 }
+#endif

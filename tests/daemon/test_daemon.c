@@ -20,6 +20,7 @@
 #include "mca/arm_can.h"
 #include "mca/cell.h"
 #include "mca/daemon.h"
+#include "mca/daemon_test.h" /* mca_daemon_swap_arm (the test build: mca_daemon_test) */
 #include "mca/err.h"
 #include "mca/rtlog.h"
 #include "mca/rtstats.h"

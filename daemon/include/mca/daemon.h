@@ -138,8 +138,6 @@ int mca_daemon_start(mca_daemon_t *d);
 
 /** Ask the loop to brake and stop (any thread, async-signal safe). */
 void mca_daemon_request_stop(mca_daemon_t *d);
-/** Test hook: make the loop stall (stop ticking) until a stop request (any thread). */
-void mca_daemon_request_stall(mca_daemon_t *d);
 /** 1 once the loop thread has ended. */
 int mca_daemon_finished(const mca_daemon_t *d);
 /** Ticks done so far (any thread; the supervisor's liveness check). */
@@ -185,10 +183,6 @@ void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, const char *text);
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);
 /** Arm handle (tests: sim backend fault injection). */
 mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a);
-/** Test hook (not while the loop runs): put @p arm in the place of arm a, e.g. a proxy around the
- *  handle returned (link fault injection). The daemon closes @p arm at mca_daemon_close(); the caller
- *  owns the old handle. @return the old handle, NULL (and nothing changed) if a or arm is bad. */
-mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm);
 
 #ifdef __cplusplus
 }
