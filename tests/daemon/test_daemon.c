@@ -776,7 +776,8 @@ static void test_plausible_bounds_and_after_fault(void **state) {
     for (int k = 0; k < 100; k++, t += 0.001) {
         assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
     }
-    const mca_joint_model_t *jm = &mca_daemon_controller(d)->cfg.chain[1].joint[1];
+    const mca_joint_model_t jm1 = mca_daemon_controller(d)->cfg.chain[1].joint[1]; /* copied: d is reopened */
+    const mca_joint_model_t *jm = &jm1;
     /* inside the margin: taken (the controller may then fault on its own bounds; the sample was used) */
     p.corrupt = MCA_FB_POSITION;
     p.joint = 1;
