@@ -679,6 +679,22 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     snprintf(cell->name, sizeof cell->name, "%s", raw->name);
     snprintf(cell->source, sizeof cell->source, "%s", path);
+#ifndef MCA_TEST_HOOKS
+    {
+        /* issue 16: production holds no test hooks. The keys stay in the schema so that the error names
+         * the line (not a generic unknown key), before anything else is checked. */
+        const char *hook = raw->debug_stall_after_ticks  ? "debug_stall_after_ticks"
+                           : raw->debug_kill_after_ticks ? "debug_kill_after_ticks"
+                           : raw->debug_start_in_fault   ? "debug_start_in_fault"
+                                                         : NULL;
+        if (hook) {
+            FAIL(MCA_ENOTSUP, top, hook,
+                 "%s: test hook: this mcad is the production build, which takes no debug_* keys (only the "
+                 "test build mcad-test does); remove the line",
+                 hook);
+        }
+    }
+#endif
 
     /* task: a scenario file, or inline (arms carry urdf/base/q0/path themselves) */
     mca_scenario_t *scn = &cell->scn;
@@ -1058,6 +1074,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         CHECK(top, "stop_after", &r_stop_after, *raw->stop_after, "stop_after");
         cell->stop_after = *raw->stop_after;
     }
+#ifdef MCA_TEST_HOOKS
     if (raw->debug_stall_after_ticks) {
         if (*raw->debug_stall_after_ticks < 0) {
             FAIL(MCA_ERANGE, top, "debug_stall_after_ticks", "debug_stall_after_ticks: must be >= 0");
@@ -1071,6 +1088,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         cell->debug_kill_after_ticks = (uint64_t)*raw->debug_kill_after_ticks;
     }
     cell->debug_start_in_fault = raw->debug_start_in_fault && *raw->debug_start_in_fault;
+#endif
     *out = *cell;
 out:
     free(cell);

@@ -7,7 +7,9 @@
 #include <malloc.h>
 #include <math.h>
 #include <sched.h>
-#include <signal.h> /* raise (test hook) */
+#ifdef MCA_TEST_HOOKS
+#include <signal.h> /* raise (debug_kill_after_ticks) */
+#endif
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -18,6 +20,9 @@
 #include "mca/dds_bridge.h"
 #include "mca/err.h"
 #include "mca/sim_backend.h"
+#ifdef MCA_TEST_HOOKS
+#include "mca/daemon_test.h"
+#endif
 
 #define NS_PER_S 1000000000LL
 
@@ -36,7 +41,9 @@ struct mca_daemon {
     _Atomic int state;
     _Atomic uint64_t ticks;
     _Atomic int stop_request;
+#ifdef MCA_TEST_HOOKS
     _Atomic int stall_request;
+#endif
     _Atomic int finished;
     pthread_t thread;
     int thread_started;
@@ -47,6 +54,12 @@ struct mca_daemon {
     int lost[MCA_MAX_ARMS];
     uint64_t bus_errors[MCA_MAX_ARMS];
     int not_servo[MCA_MAX_ARMS]; /* ticks RUNNING with the arm not servoing */
+    /* feedback plausibility (mca_feedback_fault_t), bounds set at open */
+    double fb_lo[MCA_MAX_ARMS][MCA_MAX_DOF], fb_hi[MCA_MAX_ARMS][MCA_MAX_DOF]; /* limits -+ margin */
+    double fb_vmax[MCA_MAX_ARMS][MCA_MAX_DOF];                                 /* factor x vel limit */
+    uint32_t fb_frame[MCA_MAX_ARMS];    /* frame id of the last good sample */
+    uint64_t implausible[MCA_MAX_ARMS]; /* samples dropped */
+    int fault_arm, feedback_fault;      /* latched with the fault */
     mca_arm_command_t cmd[MCA_MAX_ARMS];
     double q[MCA_MAX_ARMS][MCA_MAX_DOF];
     double qdot[MCA_MAX_ARMS][MCA_MAX_DOF];
@@ -122,6 +135,88 @@ static inline int dds_ab_publishes(const mca_daemon_t *d, uint64_t n) {
     return d->opts.dds_ab_block == 0 || (n / d->opts.dds_ab_block) % 2 == 1;
 }
 
+/* ---------------------------------------------------------------- feedback plausibility (rt) */
+
+static const char *const fb_fault_names[] = {
+    "none",        "joint-count",    "non-finite",    "frame-backwards",
+    "frame-ahead", "position-limit", "velocity-limit"};
+/* what each check means, for the fault text */
+static const char *const fb_fault_what[] = {
+    "",
+    "joint count differs from the cell",
+    "position or velocity NaN/Inf",
+    "frame id runs backwards",
+    "frame id ahead of every command sent",
+    "position outside the joint limits by more than the margin",
+    "velocity above 1.5 x the joint's limit",
+};
+
+const char *mca_feedback_fault_name(int kind) {
+    return kind >= 0 && kind <= MCA_FB_VELOCITY ? fb_fault_names[kind] : "?";
+}
+
+/* Bounds of arm a's plausible feedback from its model (start-up): the URDF limits -+ the margin (plus
+ * 6 sigma of a sim arm's measurement noise), MCA_FB_VELOCITY_FACTOR x the velocity limit. */
+static void feedback_bounds(mca_daemon_t *d, int a) {
+    const mca_cell_arm_t *ca = &d->cell.arm[a];
+    const double margin =
+        MCA_FB_POSITION_MARGIN + (ca->backend == MCA_CELL_BACKEND_SIM ? 6.0 * ca->sim_noise_pos : 0.0);
+    for (int j = 0; j < d->dof[a]; j++) {
+        const mca_joint_model_t *jm = &d->ccfg.chain[a].joint[j];
+        d->fb_lo[a][j] = jm->lower - margin; /* -inf for a continuous joint */
+        d->fb_hi[a][j] = jm->upper + margin;
+        d->fb_vmax[a][j] = MCA_FB_VELOCITY_FACTOR * jm->vel_limit;
+    }
+}
+
+/* The one plausibility check of a feedback sample of arm a (mca_feedback_fault_t, in that order); the
+ * frame id only when @p frames (not at start-up: the first sample may answer an earlier run's command).
+ * On a failure, *joint (-1: the whole sample), *value and *bound say what failed. */
+static int feedback_check(const mca_daemon_t *d, int a, const mca_arm_feedback_t *fb, int frames, int *joint,
+                          double *value, double *bound) {
+    *joint = -1;
+    if (fb->n != d->dof[a]) {
+        *value = fb->n;
+        *bound = d->dof[a];
+        return MCA_FB_JOINT_COUNT;
+    }
+    if (frames && (int32_t)(fb->frame_id - d->fb_frame[a]) < 0) {
+        *value = fb->frame_id;
+        *bound = d->fb_frame[a];
+        return MCA_FB_FRAME_BACKWARDS;
+    }
+    if (frames && (int32_t)(fb->frame_id - d->frame_id) > 0) {
+        *value = fb->frame_id;
+        *bound = d->frame_id;
+        return MCA_FB_FRAME_AHEAD;
+    }
+    for (int j = 0; j < fb->n; j++) {
+        if (!isfinite(fb->position[j]) || !isfinite(fb->velocity[j])) {
+            *joint = j;
+            *value = isfinite(fb->position[j]) ? fb->velocity[j] : fb->position[j];
+            *bound = 0.0;
+            return MCA_FB_NONFINITE;
+        }
+    }
+    for (int j = 0; j < fb->n; j++) {
+        if (fb->position[j] < d->fb_lo[a][j] || fb->position[j] > d->fb_hi[a][j]) {
+            *joint = j;
+            *value = fb->position[j];
+            *bound = fb->position[j] < d->fb_lo[a][j] ? d->fb_lo[a][j] : d->fb_hi[a][j];
+            return MCA_FB_POSITION;
+        }
+    }
+    for (int j = 0; j < fb->n; j++) {
+        if (fabs(fb->velocity[j]) > d->fb_vmax[a][j]) {
+            *joint = j;
+            *value = fb->velocity[j];
+            *bound = d->fb_vmax[a][j];
+            return MCA_FB_VELOCITY;
+        }
+    }
+    return MCA_FB_OK;
+}
+
 /* ---------------------------------------------------------------- start-up */
 
 static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
@@ -155,6 +250,7 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
                     sc.vel_limit[j] = 1e300;
                 }
             }
+#ifdef MCA_TEST_HOOKS
             if (d->cell.debug_start_in_fault) {
                 /* test hook: the firmware latches a fault in its first cycle (INIT -> FAULT), as a fault
                  * left from an earlier run would be */
@@ -164,6 +260,7 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
                 sc.inject[0].at_cycle = 0;
                 sc.inject[0].joint = 0;
             }
+#endif
             rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
         }
     } else {
@@ -212,11 +309,23 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
                 }
                 cleared++;
             } else if (fb.state == MCA_ARM_READY || fb.state == MCA_ARM_SERVOING) {
-                if (fb.n != d->dof[a]) {
+                /* the first tick's command starts from this sample: the same plausibility check */
+                int joint;
+                double value, bound;
+                const int kind = feedback_check(d, a, &fb, 0, &joint, &value, &bound);
+                if (kind == MCA_FB_JOINT_COUNT) {
                     snprintf(err, errlen, "arm '%s': answers with %d joints, the model has %d",
                              d->cell.scn.arm[a].name, fb.n, d->dof[a]);
                     return MCA_EINVAL;
                 }
+                if (kind != MCA_FB_OK) {
+                    snprintf(err, errlen,
+                             "arm '%s': implausible feedback at start (%s: %s): joint %d: %g (bound %g)",
+                             d->cell.scn.arm[a].name, fb_fault_names[kind], fb_fault_what[kind], joint, value,
+                             bound);
+                    return MCA_EINVAL;
+                }
+                d->fb_frame[a] = fb.frame_id;
                 d->fb[a] = fb;
                 d->have_fb[a] = 1;
                 for (int j = 0; j < fb.n; j++) {
@@ -289,7 +398,9 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         for (int j = 0; j < d->dof[a]; j++) {
             d->dec[a][j] = cell->arm[a].dec_limit[j] > 0.0 ? cell->arm[a].dec_limit[j] : 10.0;
         }
+        feedback_bounds(d, a);
     }
+    d->fault_arm = -1;
     d->brake_rest_t = -1.0;
     d->deadlock_arm = -1;
     for (int a = 0; a < d->n_arms && rc == MCA_OK; a++) {
@@ -358,11 +469,12 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
 
 /* ---------------------------------------------------------------- the tick (rt) */
 
-static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, double t) {
+static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, double t, int arm) {
     if (d->fault != MCA_DAEMON_FAULT_NONE) {
         return;
     }
     d->fault = fault;
+    d->fault_arm = arm;
     d->fault_code = code;
     d->fault_t = t;
     size_t i = 0;
@@ -402,14 +514,59 @@ static void arm_text(char *txt, size_t len, const char *name, const char *mid, c
     txt[k] = 0;
 }
 
-/* Read every arm's feedback; counts lost cycles and latches arm/link faults. */
+/* An implausible sample of arm a: dropped (the caller keeps the last good one), counted, the first of each
+ * arm logged with what failed; a fault of that arm while running or braking (every arm then brakes from the
+ * last good state). */
+static void feedback_implausible(mca_daemon_t *d, int a, int kind, int joint, double value, double bound,
+                                 double t) {
+    if (d->implausible[a]++ == 0) {
+        if (joint >= 0) {
+            LOGN(d, MCA_LOG_ERR, "arm %g joint %g: implausible feedback, dropped: %g (bound %g): %s", 4, a,
+                 joint, value, bound, fb_fault_what[kind]);
+        } else {
+            LOGN(d, MCA_LOG_ERR, "arm %g: implausible feedback, dropped: %g (bound %g): %s", 3, a, value,
+                 bound, 0, fb_fault_what[kind]);
+        }
+    }
+    const int state = atomic_load_explicit(&d->state, memory_order_relaxed);
+    if (state == MCA_DAEMON_RUNNING || state == MCA_DAEMON_BRAKING) {
+        char txt[160];
+        const char *parts[] = {
+            "arm ", d->cell.scn.arm[a].name, " sends implausible feedback (", fb_fault_names[kind],
+            "): ",  fb_fault_what[kind]};
+        size_t k = 0;
+        for (size_t i = 0; i < sizeof parts / sizeof parts[0]; i++) {
+            for (const char *c = parts[i]; *c && k + 1 < sizeof txt; c++) {
+                txt[k++] = *c;
+            }
+        }
+        txt[k] = 0;
+        if (d->fault == MCA_DAEMON_FAULT_NONE) {
+            d->feedback_fault = kind;
+        }
+        latch_fault(d, MCA_DAEMON_FAULT_FEEDBACK, MCA_EINVAL, txt, t, a);
+    }
+}
+
+/* Read every arm's feedback; checks each sample (feedback_check), counts lost cycles and latches arm/link
+ * faults. */
 static void read_feedback(mca_daemon_t *d, double t) {
     const int running = atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING;
     for (int a = 0; a < d->n_arms; a++) {
         mca_arm_feedback_t fb;
         const int rc = mca_arm_read(d->arm[a], &fb);
+        int joint = -1, kind = MCA_FB_OK;
+        double value = 0.0, bound = 0.0;
         if (rc == MCA_OK || rc == MCA_EFAULT) {
+            kind = feedback_check(d, a, &fb, 1, &joint, &value, &bound);
+        }
+        if (kind != MCA_FB_OK) {
+            /* not integrated: q, fb and the frame id stay the last good sample's. Not a lost cycle either:
+             * the arm answered, wrongly, and that is its own fault. */
+            feedback_implausible(d, a, kind, joint, value, bound, t);
+        } else if (rc == MCA_OK || rc == MCA_EFAULT) {
             d->fb[a] = fb;
+            d->fb_frame[a] = fb.frame_id;
             d->have_fb[a] = 1;
             d->lost[a] = 0;
             for (int j = 0; j < d->dof[a]; j++) {
@@ -420,7 +577,7 @@ static void read_feedback(mca_daemon_t *d, double t) {
                 arm_text(txt, sizeof txt, d->cell.scn.arm[a].name,
                          fb.state == MCA_ARM_FAULT ? " reports FAULT " : " brakes on its own: ",
                          mca_arm_fault_name(fb.fault_code));
-                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t);
+                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t, a);
             }
             /* an arm that keeps its brakes on while commanded (commands rejected) is a fault too */
             d->not_servo[a] =
@@ -431,7 +588,7 @@ static void read_feedback(mca_daemon_t *d, double t) {
                 char txt[96];
                 arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " does not servo: state ",
                          mca_arm_state_name(fb.state));
-                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t);
+                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t, a);
             }
         } else if (rc == MCA_EIO) {
             /* no new feedback and a link error (error frame, bus-off): a lost cycle, as EAGAIN (a burst
@@ -451,9 +608,9 @@ static void read_feedback(mca_daemon_t *d, double t) {
             if (mca_arm_stats(d->arm[a], &st) == MCA_OK && st.link_fault == MCA_ARM_FAULT_BUS) {
                 char txt[96];
                 arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " link is bus-off: lost feedback", "");
-                latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, txt, t);
+                latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, txt, t, a);
             } else {
-                latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t);
+                latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t, a);
             }
         }
     }
@@ -721,8 +878,8 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         }
         if (rc != MCA_OK) {
             d->ctrl_fault = d->info.fault;
-            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), d->info.fault_text,
-                        t);
+            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), d->info.fault_text, t,
+                        -1);
             state = MCA_DAEMON_BRAKING;
         } else {
             send_commands(d, 1);
@@ -809,13 +966,16 @@ static void *rt_main(void *arg) {
     const int64_t period = d->cell.rt.period_ns;
     const double stop_after = d->opts.stop_after > 0 ? d->opts.stop_after : d->cell.stop_after;
     int64_t next = now_ns() + period;
+#ifdef MCA_TEST_HOOKS
     int stalled_logged = 0;
+#endif
     for (;;) {
         struct timespec ts = {(time_t)(next / NS_PER_S), (long)(next % NS_PER_S)};
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
         }
         const int64_t wake = now_ns();
         const uint64_t ticks = atomic_load_explicit(&d->ticks, memory_order_relaxed);
+#ifdef MCA_TEST_HOOKS
         if (d->cell.debug_kill_after_ticks && ticks >= d->cell.debug_kill_after_ticks) {
             /* test hook: die mid-task at an exact tick, as a crash would (vcan_e2e phase D: only the
              * arms' own watchdogs brake them); a kill from outside lands late when the host is slow */
@@ -835,6 +995,7 @@ static void *rt_main(void *arg) {
             next = wake + 10 * 1000000LL;
             continue;
         }
+#endif
         mca_hist_record(&d->jitter, wake - next);
         /* task time advances one period per tick: a missed deadline delays the task instead of skipping
          * path points (a sim or lockstep arm did not move meanwhile; real arms' drift is fed back) */
@@ -859,7 +1020,7 @@ static void *rt_main(void *arg) {
             }
             if (d->consecutive_overruns >= d->cell.rt.overrun_limit &&
                 atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING) {
-                latch_fault(d, MCA_DAEMON_FAULT_OVERRUN, MCA_ETIMEDOUT, "consecutive overruns", t);
+                latch_fault(d, MCA_DAEMON_FAULT_OVERRUN, MCA_ETIMEDOUT, "consecutive overruns", t, -1);
             }
         } else {
             d->consecutive_overruns = 0;
@@ -943,9 +1104,11 @@ void mca_daemon_request_stop(mca_daemon_t *d) {
     atomic_store(&d->stop_request, 1);
 }
 
+#ifdef MCA_TEST_HOOKS
 void mca_daemon_request_stall(mca_daemon_t *d) {
     atomic_store(&d->stall_request, 1);
 }
+#endif
 
 int mca_daemon_finished(const mca_daemon_t *d) {
     return atomic_load(&((mca_daemon_t *)d)->finished);
@@ -1043,6 +1206,11 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->min_distance_t = d->min_d_t;
     s->fault = d->fault;
     s->ctrl_fault = d->ctrl_fault;
+    s->fault_arm = d->fault ? d->fault_arm : -1;
+    s->feedback_fault = d->fault == MCA_DAEMON_FAULT_FEEDBACK ? d->feedback_fault : MCA_FB_OK;
+    for (int a = 0; a < d->n_arms; a++) {
+        s->implausible_samples += d->implausible[a];
+    }
     for (size_t i = 0; i < sizeof s->fault_text - 1 && d->fault_text[i]; i++) {
         s->fault_text[i] = d->fault_text[i];
     }
@@ -1134,6 +1302,10 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
     } else {
         fprintf(f, "<6>mcad: summary: faults: none\n");
     }
+    if (s->implausible_samples) {
+        fprintf(f, "<4>mcad: summary: implausible feedback samples dropped %llu\n",
+                (unsigned long long)s->implausible_samples);
+    }
     if (s->log_dropped || s->csv_dropped) {
         fprintf(f, "<4>mcad: summary: dropped log records %llu, CSV rows %llu\n",
                 (unsigned long long)s->log_dropped, (unsigned long long)s->csv_dropped);
@@ -1218,6 +1390,7 @@ mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
 }
 
+#ifdef MCA_TEST_HOOKS
 mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {
     if (!d || !arm || a < 0 || a >= d->n_arms) {
         return NULL;
@@ -1226,3 +1399,4 @@ mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {
     d->arm[a] = arm;
     return old;
 }
+#endif

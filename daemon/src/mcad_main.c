@@ -1,7 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /* mcad: the controller daemon. Loads a cell, opens the arms and DDS, runs the 1 kHz loop in a real-time
  * thread and supervises it from the main thread (signals, systemd notification and watchdog, log and CSV
- * draining). See docs/daemon.md. */
+ * draining). See docs/daemon.md.
+ * Built twice: mcad (production: no test hooks; SIGUSR1 prints a status line and changes nothing) and
+ * mcad-test (MCA_TEST_HOOKS, tests only: SIGUSR1 stalls the loop, the cell's debug_* keys; exit 4 when
+ * it ended stalled). */
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
@@ -17,10 +20,16 @@
 #include "mca/cell.h"
 #include "mca/daemon.h"
 #include "mca/err.h"
+#ifdef MCA_TEST_HOOKS
+#include "mca/daemon_test.h"
+#define MCAD_NAME "mcad-test"
+#else
+#define MCAD_NAME "mcad"
+#endif
 
 static void usage(FILE *f) {
     fprintf(f,
-            "usage: mcad [options] CELL.yaml\n"
+            "usage: " MCAD_NAME " [options] CELL.yaml\n"
             "  --check            load and check the cell file, print what it configures, exit\n"
             "  --csv FILE         write one CSV row per tick (from a non-real-time thread)\n"
             "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
@@ -31,9 +40,17 @@ static void usage(FILE *f) {
             "  --dds-ab N         DDS cost benchmark: publish only in every other block of N ticks and\n"
             "                     print the whole tick's time with publishing off and on (one run)\n"
             "  -h, --help\n"
+#ifdef MCA_TEST_HOOKS
             "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
             "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
-            "4 ended while stalled.\n");
+            "4 ended while stalled.\n"
+            "This is the test build (test hooks: debug_* cell keys, SIGUSR1); never run it with real arms.\n"
+#else
+            "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 prints a status line (nothing else);\n"
+            "SIGHUP is ignored.\n"
+            "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault.\n"
+#endif
+    );
 }
 
 static double mono_s(void) {
@@ -207,7 +224,12 @@ int main(int argc, char **argv) {
     const double wd_interval = wd ? (double)wd_usec * 1e-6 / 4.0 : 0.0;
     double next_wd = mono_s(), next_status = mono_s() + 1.0;
     uint64_t last_ticks = mca_daemon_ticks(d);
-    int stopping = 0, stalled = 0;
+    int stopping = 0;
+#ifdef MCA_TEST_HOOKS
+    int stalled = 0;
+    fprintf(stderr,
+            "<4>mcad: test build (mcad-test): test hooks on (SIGUSR1 stalls the loop, debug_* keys)\n");
+#endif
     while (!mca_daemon_finished(d)) {
         const struct timespec to = {0, 5 * 1000000L};
         const int sig = sigtimedwait(&sigs, NULL, &to);
@@ -220,9 +242,23 @@ int main(int argc, char **argv) {
             }
             mca_daemon_request_stop(d);
         } else if (sig == SIGUSR1) {
+#ifdef MCA_TEST_HOOKS
             fprintf(stderr, "<4>mcad: SIGUSR1: stalling the loop (test hook)\n");
             mca_daemon_request_stall(d);
             stalled = 1;
+#else
+            /* issue 16: many setups send SIGUSR1 for log rotation. mcad logs to stderr (the journal) and
+             * has no log file to re-open, so SIGUSR1 only prints where the loop is; the loop never sees it
+             * (every signal is taken here, blocked in every other thread). */
+            mca_daemon_summary_t s;
+            mca_daemon_summary(d, &s);
+            fprintf(
+                stderr,
+                "<6>mcad: SIGUSR1: state %s, ticks %llu, overruns %llu (skipped periods %llu) (status only: "
+                "SIGUSR1 changes nothing)\n",
+                mca_daemon_state_name(s.state), (unsigned long long)s.ticks, (unsigned long long)s.overruns,
+                (unsigned long long)s.skipped_periods);
+#endif
         }
         mca_daemon_service(d);
         const double now = mono_s();
@@ -268,7 +304,12 @@ int main(int argc, char **argv) {
     if (s.fault) {
         return 3;
     }
-    if (stalled || s.state != MCA_DAEMON_STOPPED) {
+#ifdef MCA_TEST_HOOKS
+    if (stalled) {
+        return 4;
+    }
+#endif
+    if (s.state != MCA_DAEMON_STOPPED) {
         return 4;
     }
     return 0;

@@ -7,9 +7,10 @@
 #     LINE is the line of the bad text (found here independently, with grep) and which names the field,
 #   - start nothing: no other stderr line (no "cell ... arms", "ready", "running"), nothing on stdout.
 # The good cell is test_cell.c's (a sim arm and a socketcan arm, inline task); each variant replaces one
-# exact piece of it. usage: test_bad_cell_cli.sh MCAD SOURCE_DIR
+# exact piece of it. Issue 16: the debug_* keys (test hooks) are bad cells for the production mcad; the
+# test build MCAD_TEST (mcad-test) takes the same files. usage: test_bad_cell_cli.sh MCAD SOURCE_DIR [MCAD_TEST]
 set -u
-MCAD=$1 SRC=$2
+MCAD=$1 SRC=$2 MCAD_TEST=${3:-}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0 kinds=0
@@ -217,6 +218,21 @@ sed -e 's/^duration: .*/duration: 1e7/' -e "s|\.\./robots/|$SRC/config/robots/|"
 dline=$(grep -n '^duration:' "$tmp/long_scn.yaml" | cut -d: -f1)
 expect scenario_duration_huge "  duration: 3.5$NL" "  scenario: long_scn.yaml$NL" "scenario: long_scn" "task.scenario" \
     "long_scn.yaml:$dline: duration: must be in (0, 3600] s (got 10000000)"
+# issue 16: production holds no test hooks. Each debug_* key, whatever its value, is refused by mcad at its
+# line; the test build (mcad-test) checks the same file without complaint.
+for hook in "debug_kill_after_ticks: 1500" "debug_kill_after_ticks: 0" "debug_stall_after_ticks: 400" \
+    "debug_start_in_fault: true"; do
+    key=${hook%%:*}
+    expect "hook_${key}_${hook##* }" "stop_after: 1.5" "stop_after: 1.5$NL$hook   # a test hook" "$key:" "$key" \
+        "$key: test hook: this mcad is the production build, which takes no debug_* keys"
+    if [ -n "$MCAD_TEST" ]; then
+        if "$MCAD_TEST" --check "$tmp/hook_${key}_${hook##* }.yaml" > "$tmp/hook_test.out" 2>&1; then
+            echo "ok   mcad-test --check takes '$hook'"
+        else
+            echo "FAIL: mcad-test --check rejects '$hook':"; cat "$tmp/hook_test.out"; fail=1
+        fi
+    fi
+done
 # in range: two socketcan arms with one id block on different buses
 printf '%s' "${good/"    backend: sim$NL"/"    backend: socketcan$NL    interface: vcan0$NL    id_base: 0x140$NL"}" > "$tmp/two_buses.yaml"
 if ! "$MCAD" --check "$tmp/two_buses.yaml" > "$tmp/two_buses.out" 2>&1; then

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* Cell files: a good cell loads with the values written in it; each kind of bad cell fails with its own
- * message naming the file, the line (found independently in the generated text) and the field. */
+ * message naming the file, the line (found independently in the generated text) and the field.
+ * Built twice: test_cell against the production library (debug_* keys are refused, naming the line) and
+ * test_cell_hooks against the test build (MCA_TEST_HOOKS: the keys load). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -167,8 +169,11 @@ static void test_good_cell(void **state) {
     assert_int_equal(cell.rt.overrun_limit, 3);
     assert_int_equal(cell.rt.lost_feedback_cycles, 6);
     assert_true(cell.stop_after == 1.5);
+#ifdef MCA_TEST_HOOKS
     assert_true(cell.debug_stall_after_ticks == 0);
     assert_true(cell.debug_kill_after_ticks == 0);
+    assert_true(cell.debug_start_in_fault == 0);
+#endif
 }
 
 static void test_missing_file(void **state) {
@@ -254,7 +259,8 @@ static void test_q0_outside_limits(void **state) {
     expect_error(p, MCA_ERANGE, line_of(p, "q0: [9.0"), "arms[1].q0[0] = 9", "outside joint", NULL);
 }
 
-/* The crash hook: set, and refused when negative with the field named. */
+#ifdef MCA_TEST_HOOKS
+/* The crash hook (test build): set, and refused when negative with the field named. */
 static void test_debug_kill_hook(void **state) {
     (void)state;
     const char *p =
@@ -267,7 +273,30 @@ static void test_debug_kill_hook(void **state) {
     p = write_variant("kill_hook_neg", "stop_after: 1.5", "stop_after: 1.5\ndebug_kill_after_ticks: -1");
     expect_error(p, MCA_ERANGE, line_of(p, "debug_kill_after_ticks"), "debug_kill_after_ticks",
                  "must be >= 0", NULL);
+    p = write_variant("fault_hook", "stop_after: 1.5", "stop_after: 1.5\ndebug_start_in_fault: true");
+    if (mca_cell_load(p, &cell, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    assert_true(cell.debug_start_in_fault == 1 && cell.debug_kill_after_ticks == 0);
 }
+#else
+/* Issue 16: the production build has no test hooks; each debug_* key (whatever its value, 0 and false
+ * too) is refused with the file, its line and the key, before anything else is checked. */
+static void test_debug_kill_hook(void **state) {
+    (void)state;
+    static const char *const keys[] = {"debug_kill_after_ticks: 1500", "debug_kill_after_ticks: 0",
+                                       "debug_stall_after_ticks: 400", "debug_start_in_fault: false"};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+        char to[128], key[64];
+        snprintf(to, sizeof to, "stop_after: 1.5\n%s", keys[i]);
+        snprintf(key, sizeof key, "%.*s", (int)(strchr(keys[i], ':') - keys[i]), keys[i]);
+        const char *p = write_variant("hook_refused", "stop_after: 1.5", to);
+        const int line = line_of(p, key);
+        assert_true(line > 1);
+        expect_error(p, MCA_ENOTSUP, line, key, "test hook", "production build", NULL);
+    }
+}
+#endif
 
 static void test_negative_period(void **state) {
     (void)state;

@@ -3,7 +3,7 @@
 # debug_start_in_fault: the sim firmware latches a fault in its first cycle, as one left from an earlier
 # run) stops the start (exit 1, the arm and the fault named) unless --clear-faults is given; then the
 # clearing is logged and the task runs (here 0.3 s, exit 0).
-# usage: test_clear_faults_cli.sh MCAD SOURCE_DIR
+# usage: test_clear_faults_cli.sh MCAD_TEST SOURCE_DIR (the test build: the FAULT comes from a test hook)
 MCAD=$1
 SRC=$2
 T=$(mktemp -d /tmp/mca-clear-faults-XXXXXX)

@@ -20,6 +20,7 @@
 #include "mca/arm_can.h"
 #include "mca/cell.h"
 #include "mca/daemon.h"
+#include "mca/daemon_test.h" /* mca_daemon_swap_arm (the test build: mca_daemon_test) */
 #include "mca/err.h"
 #include "mca/rtlog.h"
 #include "mca/rtstats.h"
@@ -496,6 +497,330 @@ static void test_bus_error_keeps_feedback(void **state) {
     free(cell);
 }
 
+/* ---- issue 16: implausible feedback. A proxy between the daemon and a sim arm (the test hook
+ * mca_daemon_swap_arm) corrupts one sample in a chosen way, or drops it (EAGAIN) ---- */
+typedef struct fbproxy {
+    mca_arm_t *inner;
+    int corrupt;   /* the mca_feedback_fault_t to make of the next sample; 0: pass it through */
+    int joint;     /* the joint to corrupt */
+    double value;  /* the position / velocity to put there */
+    int drop_next; /* the next sample is lost (EAGAIN) */
+    uint32_t last_cmd_frame;
+    mca_arm_feedback_t last_good; /* the last sample passed through unchanged */
+} fbproxy_t;
+
+static int fbproxy_read(void *ctx, mca_arm_feedback_t *fb) {
+    fbproxy_t *p = ctx;
+    const int rc = mca_arm_read(p->inner, fb);
+    if (rc != MCA_OK && rc != MCA_EFAULT) {
+        return rc;
+    }
+    if (p->drop_next) {
+        p->drop_next = 0;
+        return MCA_EAGAIN;
+    }
+    switch (p->corrupt) {
+    case MCA_FB_OK:
+        p->last_good = *fb;
+        break;
+    case MCA_FB_JOINT_COUNT:
+        fb->n -= 1;
+        break;
+    case MCA_FB_NONFINITE:
+        /* value NaN: a position; +-Inf: a velocity */
+        if (isnan(p->value)) {
+            fb->position[p->joint] = p->value;
+        } else {
+            fb->velocity[p->joint] = p->value;
+        }
+        break;
+    case MCA_FB_FRAME_BACKWARDS:
+        fb->frame_id = p->last_good.frame_id - 3;
+        break;
+    case MCA_FB_FRAME_AHEAD:
+        fb->frame_id = p->last_cmd_frame + 1000; /* answers a command never sent */
+        break;
+    case MCA_FB_POSITION:
+        fb->position[p->joint] = p->value;
+        break;
+    case MCA_FB_VELOCITY:
+        fb->velocity[p->joint] = p->value;
+        break;
+    default:
+        break;
+    }
+    p->corrupt = MCA_FB_OK;
+    return rc;
+}
+
+static int fbproxy_write(void *ctx, const mca_arm_command_t *cmd) {
+    fbproxy_t *p = ctx;
+    p->last_cmd_frame = cmd->frame_id;
+    return mca_arm_write(p->inner, cmd);
+}
+
+static int fbproxy_stats(void *ctx, mca_arm_stats_t *st) {
+    return mca_arm_stats(((fbproxy_t *)ctx)->inner, st);
+}
+
+static void fbproxy_close(void *ctx) {
+    mca_arm_close(((fbproxy_t *)ctx)->inner);
+}
+
+static const mca_arm_ops_t fbproxy_ops = {.name = "fbproxy",
+                                          .read = fbproxy_read,
+                                          .write = fbproxy_write,
+                                          .stats = fbproxy_stats,
+                                          .close = fbproxy_close};
+
+static mca_daemon_t *open_with_fbproxy(const mca_cell_t *cell, int a, fbproxy_t *p, FILE *log) {
+    char err[1024] = "";
+    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = log};
+    mca_daemon_t *d = NULL;
+    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    memset(p, 0, sizeof *p);
+    mca_arm_t *proxy = NULL;
+    assert_int_equal(mca_arm_wrap(&proxy, &fbproxy_ops, p), MCA_OK);
+    p->inner = mca_daemon_swap_arm(d, a, proxy);
+    assert_non_null(p->inner);
+    return d;
+}
+
+/* both daemons sent bit-identical commands to every arm */
+static void assert_same_commands(mca_daemon_t *x, mca_daemon_t *y, int tick) {
+    for (int a = 0; a < 2; a++) {
+        const mca_arm_command_t *cx = mca_daemon_last_command(x, a), *cy = mca_daemon_last_command(y, a);
+        assert_int_equal(cx->n, cy->n);
+        for (int j = 0; j < cx->n; j++) {
+            if (cx->velocity[j] != cy->velocity[j] || cx->position_ref[j] != cy->position_ref[j] ||
+                cx->flags[j] != cy->flags[j]) {
+                fail_msg(
+                    "tick %d, arm %d joint %d: command %.17g (ref %.17g) differs from the reference %.17g "
+                    "(ref %.17g)",
+                    tick, a, j, cx->velocity[j], cx->position_ref[j], cy->velocity[j], cy->position_ref[j]);
+            }
+        }
+    }
+}
+
+/* One kind of implausible feedback on arm a, in the sample of tick K: the fault of that arm, named; no
+ * command derived from the sample. The proof: a reference daemon on the same cell, run in lockstep, loses
+ * that sample instead (EAGAIN) and is asked to stop at the same tick, so it brakes from the last good state;
+ * every command of both arms, from that tick until both are at rest, is bit-identical to the reference's. */
+typedef struct fb_case {
+    int kind, arm, joint;
+    double value; /* for NONFINITE: NaN (a position) or +-Inf (a velocity); POSITION/VELOCITY: set below from
+                     the model when 0, see bad_value */
+    double over;  /* POSITION: the distance beyond the limit (> 0 above upper, < 0 below lower); VELOCITY:
+                     the factor of the velocity limit */
+    const char *text;
+} fb_case_t;
+
+static void run_fb_case(const fb_case_t *fc) {
+    enum { K = 1000 };
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
+    FILE *log = tmpfile(), *log_ref = tmpfile();
+    assert_non_null(log);
+    assert_non_null(log_ref);
+    static fbproxy_t p, pr;
+    mca_daemon_t *d = open_with_fbproxy(cell, fc->arm, &p, log);
+    mca_daemon_t *r = open_with_fbproxy(cell, fc->arm, &pr, log_ref);
+    double t = 0.0;
+    for (int k = 0; k < K; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_daemon_step(r, t, 0), MCA_DAEMON_RUNNING);
+        assert_same_commands(d, r, k);
+    }
+    /* the left arm moves on its circle (a quarter of the way), the right one holds (small commands) */
+    const mca_joint_model_t *jm = &mca_daemon_controller(d)->cfg.chain[fc->arm].joint[fc->joint];
+    double value = fc->value;
+    if (fc->kind == MCA_FB_POSITION) {
+        value = fc->over > 0 ? jm->upper + fc->over : jm->lower + fc->over;
+    } else if (fc->kind == MCA_FB_VELOCITY) {
+        value = fc->over * jm->vel_limit;
+    }
+    const mca_arm_feedback_t good = p.last_good;
+    p.corrupt = fc->kind;
+    p.joint = fc->joint;
+    p.value = value;
+    pr.drop_next = 1;
+    mca_daemon_request_stop(r);
+    const int st = mca_daemon_step(d, t, 0);
+    assert_int_equal(mca_daemon_step(r, t, 0), MCA_DAEMON_BRAKING);
+    assert_int_equal(st, MCA_DAEMON_BRAKING);
+    /* the first braking command: from the last good sample, not the bad one */
+    assert_same_commands(d, r, K);
+    const mca_arm_command_t *c = mca_daemon_last_command(d, fc->arm);
+    for (int j = 0; j < c->n; j++) {
+        assert_true(c->position_ref[j] == good.position[j] + c->velocity[j] * 0.001);
+        assert_true(c->flags[j] == (MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE));
+    }
+    assert_true(mca_daemon_positions(d, fc->arm)[fc->joint] == good.position[fc->joint]);
+    /* the whole stop is the reference's: the arms brake from the last good state */
+    int n = 0, sd, sr;
+    do {
+        t += 0.001;
+        sd = mca_daemon_step(d, t, 0);
+        sr = mca_daemon_step(r, t, 0);
+        assert_same_commands(d, r, K + ++n);
+        assert_true(n < 10000);
+    } while (sd == MCA_DAEMON_BRAKING || sr == MCA_DAEMON_BRAKING);
+    assert_int_equal(sd, MCA_DAEMON_FAULT);
+    assert_int_equal(sr, MCA_DAEMON_STOPPED);
+
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    print_message("  %-15s arm %d: %s (value %g; braked %d ticks, as the reference)\n",
+                  mca_feedback_fault_name(fc->kind), fc->arm, s.fault_text, value, n);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_FEEDBACK);
+    assert_int_equal(s.feedback_fault, fc->kind);
+    assert_int_equal(s.fault_arm, fc->arm);
+    assert_true(s.implausible_samples == 1);
+    assert_true(fabs(s.fault_t - (double)K * 0.001) < 1e-9);
+    char want[160];
+    snprintf(want, sizeof want, "arm %s sends implausible feedback (%s)", fc->arm ? "right" : "left",
+             mca_feedback_fault_name(fc->kind));
+    if (strncmp(s.fault_text, want, strlen(want)) != 0) {
+        fail_msg("fault text '%s' does not start with '%s'", s.fault_text, want);
+    }
+    /* the log names the arm, the joint and the value */
+    mca_daemon_service(d);
+    fflush(log);
+    rewind(log);
+    char line[512], lwant[128];
+    if (fc->kind == MCA_FB_JOINT_COUNT || fc->kind == MCA_FB_FRAME_BACKWARDS ||
+        fc->kind == MCA_FB_FRAME_AHEAD) {
+        snprintf(lwant, sizeof lwant, "<3>mcad: arm %d: implausible feedback, dropped: ", fc->arm);
+    } else {
+        snprintf(lwant, sizeof lwant, "<3>mcad: arm %d joint %d: implausible feedback, dropped: ", fc->arm,
+                 fc->joint);
+    }
+    int found = 0;
+    while (fgets(line, sizeof line, log)) {
+        if (strstr(line, lwant) && strstr(line, fc->text)) {
+            found++;
+            print_message("  log: %s", line);
+        }
+    }
+    assert_int_equal(found, 1);
+    mca_daemon_summary(r, &s);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_NONE);
+    mca_daemon_close(d);
+    mca_daemon_close(r);
+    fclose(log);
+    fclose(log_ref);
+    free(cell);
+}
+
+static void test_implausible_joint_count(void **state) {
+    (void)state;
+    run_fb_case(&(fb_case_t){MCA_FB_JOINT_COUNT, 0, 0, 0.0, 0.0, "7 (bound 8): joint count differs"});
+}
+
+static void test_implausible_nan_position(void **state) {
+    (void)state;
+    run_fb_case(
+        &(fb_case_t){MCA_FB_NONFINITE, 0, 2, NAN, 0.0, "nan (bound 0): position or velocity NaN/Inf"});
+}
+
+static void test_implausible_inf_velocity(void **state) {
+    (void)state;
+    run_fb_case(&(fb_case_t){MCA_FB_NONFINITE, 1, 1, -INFINITY, 0.0, "-inf (bound 0): position or velocity"});
+}
+
+static void test_implausible_frame_backwards(void **state) {
+    (void)state;
+    run_fb_case(&(fb_case_t){MCA_FB_FRAME_BACKWARDS, 0, 0, 0.0, 0.0, "frame id runs backwards"});
+}
+
+static void test_implausible_frame_ahead(void **state) {
+    (void)state;
+    run_fb_case(&(fb_case_t){MCA_FB_FRAME_AHEAD, 1, 0, 0.0, 0.0, "frame id ahead of every command sent"});
+}
+
+static void test_implausible_position_high(void **state) {
+    (void)state;
+    /* 0.06 rad above the upper limit: just past the 0.05 rad margin */
+    run_fb_case(&(fb_case_t){MCA_FB_POSITION, 0, 3, 0.0, 0.06, "outside the joint limits by more than"});
+}
+
+static void test_implausible_position_low(void **state) {
+    (void)state;
+    run_fb_case(&(fb_case_t){MCA_FB_POSITION, 1, 0, 0.0, -2.0, "outside the joint limits by more than"});
+}
+
+static void test_implausible_velocity(void **state) {
+    (void)state;
+    /* 1.6 x the joint's velocity limit (the bound is 1.5 x) */
+    run_fb_case(&(fb_case_t){MCA_FB_VELOCITY, 0, 0, 0.0, 1.6, "velocity above 1.5 x the joint's limit"});
+    run_fb_case(&(fb_case_t){MCA_FB_VELOCITY, 1, 5, 0.0, -1.6, "velocity above 1.5 x the joint's limit"});
+}
+
+/* Plausible samples near the bounds are used: a position 0.04 rad beyond a limit (inside the margin) and a
+ * velocity of 1.4 x the limit are integrated (the daemon's q is that sample), no fault. After a fault the
+ * check still drops implausible samples (counted, the first fault stays the one named). */
+static void test_plausible_bounds_and_after_fault(void **state) {
+    (void)state;
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
+    static fbproxy_t p;
+    mca_daemon_t *d = open_with_fbproxy(cell, 1, &p, stderr);
+    double t = 0.0;
+    for (int k = 0; k < 100; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+    }
+    const mca_joint_model_t jm1 = mca_daemon_controller(d)->cfg.chain[1].joint[1]; /* copied: d is reopened */
+    const mca_joint_model_t *jm = &jm1;
+    /* inside the margin: taken (the controller may then fault on its own bounds; the sample was used) */
+    p.corrupt = MCA_FB_POSITION;
+    p.joint = 1;
+    p.value = jm->upper + 0.04;
+    mca_daemon_step(d, t += 0.001, 0);
+    assert_true(mca_daemon_positions(d, 1)[1] == jm->upper + 0.04);
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    assert_true(s.fault != MCA_DAEMON_FAULT_FEEDBACK && s.implausible_samples == 0);
+    mca_daemon_close(d);
+
+    d = open_with_fbproxy(cell, 1, &p, stderr);
+    for (int k = 0; k < 100; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+    }
+    p.corrupt = MCA_FB_VELOCITY;
+    p.joint = 1;
+    p.value = 1.4 * jm->vel_limit;
+    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
+    mca_daemon_summary(d, &s);
+    assert_true(s.fault == MCA_DAEMON_FAULT_NONE && s.implausible_samples == 0);
+    /* now a NaN: the fault; then, braking and in FAULT, more bad samples are dropped and counted */
+    p.corrupt = MCA_FB_NONFINITE;
+    p.value = NAN;
+    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_BRAKING);
+    p.corrupt = MCA_FB_POSITION;
+    p.value = 1e6;
+    mca_daemon_step(d, t += 0.001, 0);
+    int st;
+    while ((st = mca_daemon_step(d, t += 0.001, 0)) == MCA_DAEMON_BRAKING) {
+    }
+    assert_int_equal(st, MCA_DAEMON_FAULT);
+    p.corrupt = MCA_FB_FRAME_AHEAD;
+    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_FAULT);
+    assert_true(isfinite(mca_daemon_positions(d, 1)[1]) && mca_daemon_positions(d, 1)[1] < 1e3);
+    mca_daemon_summary(d, &s);
+    assert_int_equal(s.feedback_fault, MCA_FB_NONFINITE);
+    assert_int_equal(s.fault_arm, 1);
+    assert_true(s.implausible_samples == 3);
+    mca_daemon_close(d);
+    free(cell);
+}
+
 /* Braking after a stop request: the arms still move, so the distances are still measured
  * (mca_controller_observe): in the CSV the distance changes tick by tick while BRAKING, the end
  * effector moves, and once STOPPED (the ramp's last step fed back) the distance stays put. (Before,
@@ -662,6 +987,15 @@ int main(void) {
         cmocka_unit_test(test_arm_not_servoing_is_a_fault),
         cmocka_unit_test(test_distance_fault),
         cmocka_unit_test(test_bus_error_keeps_feedback),
+        cmocka_unit_test(test_implausible_joint_count),
+        cmocka_unit_test(test_implausible_nan_position),
+        cmocka_unit_test(test_implausible_inf_velocity),
+        cmocka_unit_test(test_implausible_frame_backwards),
+        cmocka_unit_test(test_implausible_frame_ahead),
+        cmocka_unit_test(test_implausible_position_high),
+        cmocka_unit_test(test_implausible_position_low),
+        cmocka_unit_test(test_implausible_velocity),
+        cmocka_unit_test(test_plausible_bounds_and_after_fault),
         cmocka_unit_test(test_distances_while_braking),
         cmocka_unit_test(test_histogram_vs_sorted),
         cmocka_unit_test(test_rtlog),

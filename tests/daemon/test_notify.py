@@ -10,7 +10,9 @@ keep-alives. Four runs of a short sim cell (two PA10+, hold task, DDS on the loo
      one check interval after the stall), while the process still runs; SIGTERM ends it (exit 4).
   3. same with SIGUSR1 as the stall trigger.
   4. as 1 with SIGINT (Ctrl-C) instead of SIGTERM: STOPPING=1, braking, stopped, exit 0.
-usage: test_notify.py MCAD SOURCE_DIR [--no-rt]
+Runs 1 and 4 use the production mcad; 2 and 3 need the test hooks, so they run the test build mcad-test
+(issue 16: production holds no test hooks; daemon_sigusr1 shows that SIGUSR1 does not stall mcad).
+usage: test_notify.py MCAD MCAD_TEST SOURCE_DIR [--no-rt]
 """
 import os
 import signal
@@ -20,8 +22,8 @@ import sys
 import tempfile
 import time
 
-MCAD, SRC = sys.argv[1], sys.argv[2]
-EXTRA = sys.argv[3:]
+MCAD, MCAD_TEST, SRC = sys.argv[1], sys.argv[2], sys.argv[3]
+EXTRA = sys.argv[4:]
 WATCHDOG_USEC = 1000000  # 1 s: pings every 250 ms while healthy
 INTERVAL = WATCHDOG_USEC * 1e-6 / 4
 
@@ -86,7 +88,9 @@ def run(tmp, name, extra_yaml, stall_by_signal, stop_sig=signal.SIGTERM):
     env = dict(os.environ, NOTIFY_SOCKET=sock_path, WATCHDOG_USEC=str(WATCHDOG_USEC))
     env.pop("WATCHDOG_PID", None)
     t0 = time.monotonic()
-    proc = subprocess.Popen([MCAD] + EXTRA + [cell], env=env, stderr=subprocess.PIPE, text=True)
+    # the stall runs need the test hooks (debug_stall_after_ticks, SIGUSR1 stalls): the test build
+    binary = MCAD_TEST if (extra_yaml or stall_by_signal) else MCAD
+    proc = subprocess.Popen([binary] + EXTRA + [cell], env=env, stderr=subprocess.PIPE, text=True)
     msgs = []  # (time since start, field)
 
     def pump(until):

@@ -38,6 +38,8 @@ B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
 OUT=$B/tests/daemon/vcan-e2e
 ARMSIM=$B/sim_backend/armsim_can/mca-armsim
 MCAD=$B/daemon/mcad
+# phase D's self-kill is a test hook (debug_kill_after_ticks): only the test build takes it (issue 16)
+MCAD_TEST=$B/daemon/mcad-test
 MON=$B/tools/mca-monitor/mca-monitor
 SRC_CELL=$S/config/cells/cup_stacking_vcan.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
@@ -512,9 +514,9 @@ if echo "$PHASES" | grep -q D; then
     t0=$(now)
     # the first segment's quintic (3 s to above the first cup): joint speeds > 0.15 rad/s from 0.5 to 2.5 s,
     # 0.59 at 1.5 s. mcad kills itself (SIGKILL: nothing brakes, nothing is flushed) at tick K_KILL, the
-    # cell's test hook debug_kill_after_ticks: a kill from this shell, timed by polling the CSV, landed at
-    # 2.1-3 s of task time when the host was busy (the arms at < 0.1 rad/s). The arm's speed at the kill is
-    # checked from the bus (>= 0.1 rad/s).
+    # cell's test hook debug_kill_after_ticks (so phase D runs the test build, mcad-test): a kill from this
+    # shell, timed by polling the CSV, landed at 2.1-3 s of task time when the host was busy (the arms at
+    # < 0.1 rad/s). The arm's speed at the kill is checked from the bus (>= 0.1 rad/s).
     K_KILL=1500
     CELL_D=$OUT/cup_stacking_vcan_e2e_D.yaml
     { cat "$CELL"; echo "debug_kill_after_ticks: $K_KILL   # vcan_e2e.sh phase D: mcad dies at tick $K_KILL"; } > "$CELL_D"
@@ -522,7 +524,7 @@ if echo "$PHASES" | grep -q D; then
     CD=$!
     sleep 0.3
     armsims D clocked
-    $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcadD.csv" "$CELL_D" 2> "$OUT/mcadD.log"
+    $PIN2 "$MCAD_TEST" --no-dds --csv "$TMPD/mcadD.csv" "$CELL_D" 2> "$OUT/mcadD.log"
     rc=$?
     t_seen=$(csv_t "$TMPD/mcadD.csv")
     # the watchdog, the ramp (<= 0.1 s at 5 rad/s^2 from <= 0.5 rad/s) and a few WATCHDOG heartbeats

@@ -80,12 +80,15 @@ typedef struct mca_cell {
         back_off_time; /**< mca-ts: the yielding arm runs its path backwards this long [s] (<= 0: default) */
     mca_cell_dds_t dds;
     mca_cell_rt_t rt;
-    double stop_after;                /**< [s] of running after which the daemon stops by itself; 0 = never */
-    uint64_t debug_stall_after_ticks; /**< test hook: the loop stalls after this many ticks; 0 = never */
-    int debug_start_in_fault;         /**< test hook: sim backend arms start with a latched firmware fault
-                                           (INJECTED), as if left from an earlier run (mcad --clear-faults) */
-    uint64_t debug_kill_after_ticks;  /**< test hook: the daemon dies (SIGKILL, nothing braked) after this
-                                           many ticks, as a crash would; 0 = never */
+    double stop_after; /**< [s] of running after which the daemon stops by itself; 0 = never */
+#ifdef MCA_TEST_HOOKS
+    /* the test build's cell keys (mca/daemon_test.h); the production build rejects debug_* keys */
+    uint64_t debug_stall_after_ticks; /**< the loop stalls after this many ticks; 0 = never */
+    int debug_start_in_fault;         /**< sim backend arms start with a latched firmware fault (INJECTED), as
+                                           if left from an earlier run (mcad --clear-faults) */
+    uint64_t debug_kill_after_ticks;  /**< the daemon dies (SIGKILL, nothing braked) after this many ticks, as
+                                           a crash would; 0 = never */
+#endif
 } mca_cell_t;
 
 /**
@@ -97,6 +100,8 @@ typedef struct mca_cell {
  * @retval MCA_EPARSE  YAML syntax, wrong type, unknown key, missing required field, empty or comment-only
  *                     file ("FILE:0: (document): empty document ...")
  * @retval MCA_ERANGE  a value out of range (d1 >= d2, period <= 0, priority, DOF mismatch, ...)
+ * @retval MCA_ENOTSUP a debug_* key (a test hook) in the production build ("FILE:LINE: debug_...: test
+ *                     hook, only the test build (mcad-test) takes it")
  * @retval MCA_EINVAL  NULL argument
  */
 int mca_cell_load(const char *path, mca_cell_t *cell, char *err, size_t errlen);

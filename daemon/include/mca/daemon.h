@@ -9,7 +9,9 @@
  *   RUNNING --(fault)--> BRAKING --(all commands at 0)--> FAULT
  * Faults: controller fault (NaN, infeasible/not converged QP, distance below d1, fake attractor),
  * rt.overrun_limit consecutive overruns, no new feedback from an arm for rt.lost_feedback_cycles,
- * an arm reporting FAULT/BRAKING on its own, a bus error burst. BRAKING runs mca_controller_brake each
+ * an arm reporting FAULT/BRAKING on its own, a bus error burst, implausible feedback from an arm (see
+ * mca_feedback_fault_t: checked as it is read, before anything uses it; the sample is dropped, never
+ * integrated into a command). BRAKING runs mca_controller_brake each
  * tick (velocities closest to zero inside last command +- dec_limit dt, the joint limits and the collision
  * rows; without a QP answer each arm's whole velocity vector is scaled down, keeping its direction); after
  * 1.5 max_j |v_j|/dec_j + 20 periods from its start only that scale-down is used, so a stop is bounded.
@@ -56,7 +58,38 @@ typedef enum mca_daemon_fault {
     MCA_DAEMON_FAULT_LOST_FEEDBACK = 3, /**< no new feedback for rt.lost_feedback_cycles */
     MCA_DAEMON_FAULT_ARM = 4,           /**< an arm reports FAULT or brakes on its own */
     MCA_DAEMON_FAULT_BUS = 5,           /**< bus error on an arm's link */
+    MCA_DAEMON_FAULT_FEEDBACK = 6, /**< implausible feedback from an arm (mca_feedback_fault_t says how) */
 } mca_daemon_fault_t;
+
+/**
+ * Plausibility of one feedback sample (issue 16: "feedback that is not plausible is a fault of that arm,
+ * never integrated into a command"). Every sample an arm's read returns (mca_arm_read: MCA_OK/MCA_EFAULT)
+ * is checked in this order before the daemon uses any of it; the first failed check names the fault.
+ * A failed sample is dropped (positions, velocities, state and frame id stay the last good sample's),
+ * the fault MCA_DAEMON_FAULT_FEEDBACK of that arm is latched (while running or braking) and every arm
+ * brakes from the last good state. At start-up (the handshake) a failed sample fails the start.
+ */
+typedef enum mca_feedback_fault {
+    MCA_FB_OK = 0,
+    MCA_FB_JOINT_COUNT = 1,     /**< fb.n differs from the arm's joint count in the cell */
+    MCA_FB_NONFINITE = 2,       /**< a position or velocity is NaN or +-Inf */
+    MCA_FB_FRAME_BACKWARDS = 3, /**< fb.frame_id older than the last good sample's (serial arithmetic) */
+    MCA_FB_FRAME_AHEAD = 4,     /**< fb.frame_id newer than the newest command sent: answers no command */
+    MCA_FB_POSITION = 5,        /**< a position outside the joint's limits by more than the margin */
+    MCA_FB_VELOCITY = 6,        /**< a |velocity| above MCA_FB_VELOCITY_FACTOR x the joint's limit */
+} mca_feedback_fault_t;
+
+/** Position margin beyond the URDF joint limits [rad] (plus 6 sigma of a sim arm's noise_pos): the
+ *  firmware clamps positions at the limits and the controller's bounds keep them inside, so a sample
+ *  beyond is a broken encoder, a wrong zero or model, or a corrupt frame (docs/daemon.md). */
+#define MCA_FB_POSITION_MARGIN 0.05
+/** Velocity factor over the URDF joint velocity limit: commands never exceed the limit, the firmware
+ *  saturates them at it; 1.5 leaves room for a real velocity loop's overshoot and noise. */
+#define MCA_FB_VELOCITY_FACTOR 1.5
+
+/** "joint-count", "non-finite", "frame-backwards", "frame-ahead", "position-limit", "velocity-limit";
+ *  "none" for MCA_FB_OK, "?" otherwise. */
+const char *mca_feedback_fault_name(int kind);
 
 const char *mca_daemon_state_name(int state);
 
@@ -102,8 +135,11 @@ typedef struct mca_daemon_summary {
     int64_t dds_ab_p50_ns[2], dds_ab_p99_ns[2];    /**< whole tick, publishing [0] off, [1] on */
     double dds_ab_mean_ns[2];                      /**< the same, mean (exact, not binned) */
     double min_distance, min_distance_t;
-    int fault;      /**< mca_daemon_fault_t */
-    int ctrl_fault; /**< mca_ctrl_fault_t when fault == CONTROLLER */
+    int fault;          /**< mca_daemon_fault_t */
+    int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */
+    int fault_arm;      /**< the arm the fault is about (ARM, LOST_FEEDBACK, BUS, FEEDBACK), else -1 */
+    int feedback_fault; /**< mca_feedback_fault_t when fault == FEEDBACK */
+    uint64_t implausible_samples; /**< feedback samples dropped as implausible (every arm, whole run) */
     char fault_text[160];
     double fault_t;
     uint64_t log_dropped, csv_dropped;
@@ -138,8 +174,6 @@ int mca_daemon_start(mca_daemon_t *d);
 
 /** Ask the loop to brake and stop (any thread, async-signal safe). */
 void mca_daemon_request_stop(mca_daemon_t *d);
-/** Test hook: make the loop stall (stop ticking) until a stop request (any thread). */
-void mca_daemon_request_stall(mca_daemon_t *d);
 /** 1 once the loop thread has ended. */
 int mca_daemon_finished(const mca_daemon_t *d);
 /** Ticks done so far (any thread; the supervisor's liveness check). */
@@ -185,10 +219,6 @@ void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, const char *text);
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);
 /** Arm handle (tests: sim backend fault injection). */
 mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a);
-/** Test hook (not while the loop runs): put @p arm in the place of arm a, e.g. a proxy around the
- *  handle returned (link fault injection). The daemon closes @p arm at mca_daemon_close(); the caller
- *  owns the old handle. @return the old handle, NULL (and nothing changed) if a or arm is bad. */
-mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Issue 16, "production holds no test hooks": SIGUSR1 (which many setups send for log rotation) must not
+touch the production mcad's loop. Before, it stalled the loop for good (a test hook).
+
+The production mcad runs the shipped sim cell config/cells/cross_circles_sim.yaml (--no-dds, --stop-after 3)
+and gets SIGUSR1 six times, 0.3 s apart, while it runs. Checks:
+  - each SIGUSR1 gives one status line ("<6>mcad: SIGUSR1: state running, ticks N, ...") and nothing else;
+  - between two signals the loop ticked at its period: ticks advanced by at least half the periods that
+    passed on the wall clock (a stalled loop advances by 0);
+  - the task ends by itself at stop_after (no SIGTERM needed): exit 0, "state stopped", no fault, no stall;
+  - the summary: ticks = 3000 + the braking ticks (3000..3600), skipped periods <= 10 % of the ticks, and
+    the run's wall time matches its ticks + skipped periods (within 1 s).
+usage: test_sigusr1.py MCAD SOURCE_DIR [--no-rt]
+"""
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+MCAD, SRC = sys.argv[1], sys.argv[2]
+EXTRA = sys.argv[3:]
+CELL = os.path.join(SRC, "config", "cells", "cross_circles_sim.yaml")
+STOP_AFTER = 3.0
+N_SIG, GAP = 6, 0.3
+PERIOD = 1e-3
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+lines = []  # (monotonic time, line)
+proc = subprocess.Popen([MCAD, "--no-dds", "--stop-after", str(STOP_AFTER)] + EXTRA + [CELL],
+                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def reader():
+    for ln in proc.stderr:
+        lines.append((time.monotonic(), ln.rstrip("\n")))
+
+
+th = threading.Thread(target=reader, daemon=True)
+th.start()
+
+deadline = time.monotonic() + 15
+while time.monotonic() < deadline and proc.poll() is None and not any("mcad: ready" in ln for _, ln in lines):
+    time.sleep(0.01)
+t_ready = next((t for t, ln in lines if "mcad: ready" in ln), None)
+check(t_ready is not None, "mcad ready")
+sent = []
+if t_ready is not None:
+    time.sleep(0.3)
+    for i in range(N_SIG):
+        if proc.poll() is not None:
+            break
+        sent.append(time.monotonic())
+        proc.send_signal(signal.SIGUSR1)
+        time.sleep(GAP)
+try:
+    rc = proc.wait(timeout=30)
+except subprocess.TimeoutExpired:
+    # the old mcad: stalled by the first SIGUSR1, it never reaches stop_after
+    proc.send_signal(signal.SIGTERM)
+    try:
+        rc = proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        rc = proc.wait()
+    check(False, f"mcad did not end by itself within 30 s (stalled?); after SIGTERM exit {rc}")
+t_end = time.monotonic()
+th.join(timeout=5)
+log = "\n".join(ln for _, ln in lines)
+
+check(len(sent) == N_SIG, f"{len(sent)} SIGUSR1 sent while mcad ran")
+status = [(t, ln) for t, ln in lines if "SIGUSR1:" in ln]
+pat = re.compile(r"<6>mcad: SIGUSR1: state running, ticks (\d+), overruns (\d+) \(skipped periods (\d+)\)")
+parsed = [(t, *map(int, m.groups())) for t, ln in status for m in [pat.search(ln)] if m]
+check(len(status) == len(sent) and len(parsed) == len(status),
+      f"one status line per SIGUSR1 ({len(status)} lines, {len(parsed)} 'state running' ones, {len(sent)} sent)")
+for (t0, k0, _, s0), (t1, k1, _, s1) in zip(parsed, parsed[1:]):
+    periods = (t1 - t0) / PERIOD
+    check(k1 - k0 >= 0.5 * periods,
+          f"the loop ticked between two SIGUSR1: {k1 - k0} ticks (+ {s1 - s0} skipped periods) "
+          f"in {t1 - t0:.3f} s ({periods:.0f} periods)")
+check(not re.search(r"stall", log, re.I), "nothing stalled (no 'stall' in the log)")
+check(rc == 0, f"exit status {rc} (want 0: stopped by itself at stop_after {STOP_AFTER} s)")
+check("summary: state stopped" in log, "summary: state stopped")
+check("summary: faults: none" in log, "summary: faults: none")
+m = re.search(r"summary: state \w+, ticks (\d+), overruns (\d+) \(skipped periods (\d+)\)", log)
+check(m is not None, "summary line with ticks and overruns")
+if m and t_ready is not None:
+    ticks, overruns, skipped = map(int, m.groups())
+    want = int(STOP_AFTER / PERIOD)
+    check(want <= ticks <= want + 600, f"ticks {ticks} (want {want} + the braking ticks, <= {want + 600})")
+    check(skipped <= 0.1 * ticks, f"overruns {overruns}, skipped periods {skipped} <= 10 % of the ticks")
+    wall = t_end - t_ready
+    loop = (ticks + skipped) * PERIOD
+    check(abs(wall - loop) < 1.0,
+          f"wall time ready -> exit {wall:.3f} s ~ (ticks + skipped periods) x period = {loop:.3f} s")
+if failures:
+    print(log)
+    print(f"{len(failures)} check(s) failed")
+    sys.exit(1)
+print("all checks passed")
