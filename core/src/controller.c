@@ -469,17 +469,11 @@ static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, i
             }
             continue;
         }
-        const double step = cfg->ts.dec_limit[a] * cfg->dt;
-        double f = 0.0;
+        double dec[MCA_MAX_DOF];
         for (int j = 0; j < dof; j++) {
-            const double v = fabs(ctrl->box_center[vo + j]);
-            if (v > 0.0 && step > 0.0) {
-                f = fmax(f, 1.0 - step / v);
-            }
+            dec[j] = cfg->ts.dec_limit[a];
         }
-        for (int j = 0; j < dof; j++) {
-            ctrl->phi[vo + j] = f * ctrl->box_center[vo + j];
-        }
+        mca_brake_scale_arm(&ctrl->box_center[vo], dec, cfg->dt, dof, &ctrl->phi[vo]);
     }
 }
 
@@ -554,12 +548,11 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
 
 /* mca-ts, after the solve: read each arm's rate, advance its clock, watch for a deadlock. */
 static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int ts_off[],
-                       const double rdot_d[][3]) {
+                       const double rdot_d[][3], const double target[], const double lo[],
+                       const double hi[]) {
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const mca_timescale_params_t *tp = &cfg->ts;
     const int na = cfg->n_arms;
-    double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS];
-    ts_plan(ctrl, info->task_t, target, lo, hi); /* idempotent: the same targets the QP was built with */
     const double re = 1.0 / sqrt(tp->w_slack);
     int unfinished = 0, progressing = 0, victim = -1;
     double slack = 0.0;
@@ -731,8 +724,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         }
         info->brake = si.brake;
         int ts_off[MCA_MAX_ARMS] = {0};
+        double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS]; /* mca-ts: the rates' plan */
         if (ts) {
-            double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS];
             ts_plan(ctrl, info->task_t, target, lo, hi);
             rc = mca_scheme_near_rows(&ctrl->qp, &si, na, chains, ctrl->kin,
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])ctrl->near,
@@ -783,7 +776,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
                 repair_capped(ctrl, &si, na);
             }
-            ts_advance(ctrl, info, ts_off, (const double(*)[3])rdot_d);
+            ts_advance(ctrl, info, ts_off, (const double(*)[3])rdot_d, target, lo, hi);
         } else if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
             /* an infeasible QP (tracking against avoidance) never converges: name it as the paper does */
             if (eq > cfg->eq_tol) {
@@ -865,22 +858,19 @@ fault:
 
 /* Braking fallback: every arm's whole velocity vector scaled by one factor, the largest that keeps each
  * joint's change within dec dt, so the arm keeps its direction of motion while it slows. */
-static void brake_scale(const mca_controller_t *ctrl, const double *const v_last[MCA_MAX_ARMS],
-                        const double *const dec[MCA_MAX_ARMS], double dt, double *const qdot[MCA_MAX_ARMS]) {
-    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
-        const int dof = ctrl->cfg.chain[a].dof;
-        /* joint j changes by (1 - f) |v_j| <= dec_j dt for every j: the fastest joint (in stop time) sets f
-         */
-        double f = 0.0;
-        for (int j = 0; j < dof; j++) {
-            const double v = fabs(v_last[a][j]);
-            if (v > 0.0) {
-                f = fmax(f, 1.0 - dec[a][j] * dt / v);
-            }
+void mca_brake_scale_arm(const double *v, const double *dec, double dt, int dof, double *out) {
+    double f = 0.0;
+    int finite = 1;
+    for (int j = 0; j < dof; j++) {
+        const double s = fabs(v[j]);
+        if (!isfinite(s)) {
+            finite = 0;
+        } else if (s > 0.0 && dec[j] > 0.0) {
+            f = fmax(f, 1.0 - dec[j] * dt / s); /* joint j changes by (1 - f) |v_j| <= dec_j dt */
         }
-        for (int j = 0; j < dof; j++) {
-            qdot[a][j] = isfinite(v_last[a][j]) ? f * v_last[a][j] : 0.0;
-        }
+    }
+    for (int j = 0; j < dof; j++) {
+        out[j] = finite ? f * v[j] : 0.0;
     }
 }
 
@@ -977,7 +967,9 @@ int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q
     info->brake_fallback = 0;
     if (rc != MCA_OK || brake_qp(ctrl, q, v_last, dec_limit, qdot, info) != MCA_OK) {
         /* no distances or no QP answer: keep each arm's direction, slow it as fast as allowed */
-        brake_scale(ctrl, v_last, dec_limit, ctrl->cfg.dt, qdot);
+        for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+            mca_brake_scale_arm(v_last[a], dec_limit[a], ctrl->cfg.dt, ctrl->cfg.chain[a].dof, qdot[a]);
+        }
         info->brake_fallback = 1;
         ctrl->brake_pdnn.h = 0;
     }

@@ -622,20 +622,9 @@ static int brake_scale_down(mca_daemon_t *d) {
     const double dt = (double)d->cell.rt.period_ns * 1e-9;
     int all_zero = 1;
     for (int a = 0; a < d->n_arms; a++) {
-        /* joint j changes by (1 - s) |v_j| <= dec_j dt for every j: the joint slowest to stop sets s */
-        double s = 0.0;
-        int finite = 1;
+        mca_brake_scale_arm(d->vcmd[a], d->dec[a], dt, d->dof[a], d->qdot[a]);
         for (int j = 0; j < d->dof[a]; j++) {
-            const double v = fabs(d->vcmd[a][j]);
-            if (!isfinite(v)) {
-                finite = 0;
-            } else if (v > 0.0) {
-                s = fmax(s, 1.0 - d->dec[a][j] * dt / v);
-            }
-        }
-        for (int j = 0; j < d->dof[a]; j++) {
-            const double v = finite ? s * d->vcmd[a][j] : 0.0;
-            d->qdot[a][j] = fabs(v) <= 1e-9 ? 0.0 : v;
+            d->qdot[a][j] = fabs(d->qdot[a][j]) <= 1e-9 ? 0.0 : d->qdot[a][j];
             all_zero &= d->qdot[a][j] == 0.0;
         }
     }

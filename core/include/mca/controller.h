@@ -252,6 +252,14 @@ int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q
                          mca_tick_info_t *info);
 
 /**
+ * The keep-direction stop of one arm (RT safe): out = f v with one factor f in [0, 1) for the whole vector,
+ * the largest such that no joint changes by more than dec[j] dt, so the joint slowest to stop sets it and
+ * the arm reaches rest within ceil(max_j |v_j| / (dec_j dt)) calls. A joint with dec[j] <= 0 (no limit) may
+ * stop at once. Any non-finite v[j]: every joint 0 (no direction to keep). out may alias v.
+ */
+void mca_brake_scale_arm(const double *v, const double *dec, double dt, int dof, double *out);
+
+/**
  * Measured joint velocities for the next tick (mca-ts; RT safe). The next command then stays within
  * dec_limit dt of what each joint really does, not of the last command, so an arm that could not follow a
  * command is not assumed to have. Used by one tick, then forgotten (without it: the last command).
