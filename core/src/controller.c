@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "mca/err.h"
+#include "mca/segdist.h"
 #include "mca/vec3.h"
 
 static const char *const fault_names[] = {
@@ -229,32 +230,53 @@ void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *te
     raise_fault(ctrl, code, "%s", text ? text : "");
 }
 
-/* Insert a pair into a link's list of its MCA_NEAR_LINKS nearest (sorted by d). */
-static void near_insert(mca_link_critical_t list[MCA_NEAR_LINKS], int other_arm, const mca_link_pair_t *lp,
-                        int flip) {
-    int k = MCA_NEAR_LINKS;
-    while (k > 0 && (!list[k - 1].valid || lp->d < list[k - 1].d)) {
+/* Insert a witness pair (P on this link, E on link other_link of other_arm, surface distance d) into a
+ * link's list of its MCA_NEAR_PAIRS nearest, sorted by d. A pair found twice (a shared joint point of two
+ * links of the other arm, the closest points found again at a segment end) is listed once; pairs that are
+ * nearly the same give nearly parallel rows, which mca_scheme_near_rows merges. */
+static void near_insert(mca_link_critical_t list[MCA_NEAR_PAIRS], int other_arm, int other_link, double d,
+                        const double p[3], const double e[3]) {
+    if (list[MCA_NEAR_PAIRS - 1].valid && !(d < list[MCA_NEAR_PAIRS - 1].d)) {
+        return; /* most candidates: not among the nearest */
+    }
+    for (int i = 0; i < MCA_NEAR_PAIRS && list[i].valid; i++) {
+        if (fabs(list[i].d - d) < 1e-9 && mca_v3_dist(list[i].p, p) < 1e-9 &&
+            mca_v3_dist(list[i].e, e) < 1e-9) {
+            return;
+        }
+    }
+    int k = MCA_NEAR_PAIRS;
+    while (k > 0 && (!list[k - 1].valid || d < list[k - 1].d)) {
         k--;
     }
-    if (k >= MCA_NEAR_LINKS) {
+    if (k >= MCA_NEAR_PAIRS) {
         return;
     }
-    memmove(&list[k + 1], &list[k], (size_t)(MCA_NEAR_LINKS - 1 - k) * sizeof list[0]);
+    memmove(&list[k + 1], &list[k], (size_t)(MCA_NEAR_PAIRS - 1 - k) * sizeof list[0]);
     mca_link_critical_t *c = &list[k];
     c->valid = 1;
     c->other_arm = other_arm;
-    c->other_link = flip ? lp->link : lp->other_link;
-    c->d = lp->d;
-    mca_v3_set(c->p, flip ? lp->e : lp->p);
-    mca_v3_set(c->e, flip ? lp->p : lp->e);
+    c->other_link = other_link;
+    c->d = d;
+    mca_v3_set(c->p, p);
+    mca_v3_set(c->e, e);
 }
 
-/* Per link of every arm: its MCA_NEAR_LINKS nearest links of the other arms (mca-ts rows, braking). */
+/* The distance a new witness pair of this d would need to enter the list (INFINITY while it has room). */
+static double near_worst(const mca_link_critical_t list[MCA_NEAR_PAIRS]) {
+    return list[MCA_NEAR_PAIRS - 1].valid ? list[MCA_NEAR_PAIRS - 1].d : INFINITY;
+}
+
+/* Per link of every arm: its MCA_NEAR_PAIRS nearest witness pairs against the other arms' links (mca-ts rows,
+ * braking). Two segments' distance is the least of their closest points and their four ends' distances to
+ * the other segment; each of these moves smoothly, but which one is least can jump (nearly parallel links:
+ * the closest points jump from one end to the other). A row on each keeps every one above d1, so the
+ * minimum too; a row on the closest points alone lets the far end approach unbounded until it takes over. */
 static void near_links(mca_controller_t *ctrl) {
     const int na = ctrl->cfg.n_arms;
     for (int a = 0; a < na; a++) {
         for (int l = 0; l < MCA_MAX_LINKS; l++) {
-            for (int k = 0; k < MCA_NEAR_LINKS; k++) {
+            for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
                 ctrl->near[a][l][k].valid = 0;
             }
         }
@@ -264,8 +286,34 @@ static void near_links(mca_controller_t *ctrl) {
             const mca_arm_distances_t *ad = &ctrl->dist[a][b];
             for (int i = 0; i < ad->n_links_a; i++) {
                 for (int j = 0; j < ad->n_links_b; j++) {
-                    near_insert(ctrl->near[a][i], b, &ad->pair[i][j], 0);
-                    near_insert(ctrl->near[b][j], a, &ad->pair[i][j], 1);
+                    const mca_link_pair_t *lp = &ad->pair[i][j];
+                    near_insert(ctrl->near[a][i], b, j, lp->d, lp->p, lp->e);
+                    near_insert(ctrl->near[b][j], a, i, lp->d, lp->e, lp->p);
+                }
+            }
+            /* the ends: never nearer than their pair's closest points, so only pairs that could enter a list
+             */
+            const mca_kin_t *ka = &ctrl->kin[a], *kb = &ctrl->kin[b];
+            const double *ra = ctrl->cfg.chain[a].link_radius, *rb = ctrl->cfg.chain[b].link_radius;
+            for (int i = 0; i < ad->n_links_a; i++) {
+                for (int j = 0; j < ad->n_links_b; j++) {
+                    const double d0 = ad->pair[i][j].d;
+                    if (!(d0 < near_worst(ctrl->near[a][i]) || d0 < near_worst(ctrl->near[b][j]))) {
+                        continue;
+                    }
+                    const double *sa[2] = {ka->point[i], ka->point[i + 1]};
+                    const double *sb[2] = {kb->point[j], kb->point[j + 1]};
+                    for (int end = 0; end < 2; end++) {
+                        double h[3];
+                        const double da =
+                            mca_point_segment_paper(sa[end], sb[0], sb[1], h, NULL) - ra[i] - rb[j];
+                        near_insert(ctrl->near[a][i], b, j, da, sa[end], h);
+                        near_insert(ctrl->near[b][j], a, i, da, h, sa[end]);
+                        const double db =
+                            mca_point_segment_paper(sb[end], sa[0], sa[1], h, NULL) - ra[i] - rb[j];
+                        near_insert(ctrl->near[a][i], b, j, db, h, sb[end]);
+                        near_insert(ctrl->near[b][j], a, i, db, sb[end], h);
+                    }
                 }
             }
         }
@@ -728,7 +776,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (ts) {
             ts_plan(ctrl, info->task_t, target, lo, hi);
             rc = mca_scheme_near_rows(&ctrl->qp, &si, na, chains, ctrl->kin,
-                                      (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])ctrl->near,
+                                      (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
                                       &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
@@ -903,7 +951,7 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     /* every scheme brakes with the near rows; the stop bound and priorities are mca-ts's */
     const int ts = cfg->scheme == MCA_SCHEME_MCA_TS;
     rc = mca_scheme_near_rows(qp, &si, na, chains, ctrl->kin,
-                              (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])ctrl->near, &sp,
+                              (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near, &sp,
                               ts ? cfg->ts.dec_limit : NULL, ts ? cfg->ts.priority : NULL);
     if (rc != MCA_OK) {
         return rc;

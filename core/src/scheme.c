@@ -218,12 +218,12 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
 
 /* Same critical pair (P and E) as any row of the previous link: a duplicate row adds nothing and makes the
  * QP degenerate. */
-static int repeats_previous(const mca_link_critical_t near[][MCA_NEAR_LINKS], int l,
+static int repeats_previous(const mca_link_critical_t near[][MCA_NEAR_PAIRS], int l,
                             const mca_link_critical_t *c) {
     if (l == 0) {
         return 0;
     }
-    for (int k = 0; k < MCA_NEAR_LINKS; k++) {
+    for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
         const mca_link_critical_t *o = &near[l - 1][k];
         if (o->valid && mca_v3_dist(o->p, c->p) < 1e-12 && mca_v3_dist(o->e, c->e) < 1e-12) {
             return 1;
@@ -232,9 +232,50 @@ static int repeats_previous(const mca_link_critical_t near[][MCA_NEAR_LINKS], in
     return 0;
 }
 
+/* Two rows of one arm whose unit normals differ by less than this are one row: parallel to 1e-7 they made
+ * the active set degenerate, and the PDNN met its residual 1e-9 some 1e-5 away from the optimum (OSQP gave
+ * up on them). Keeping the tighter of the two misses the other by at most this times the arm's speed. */
+#define MCA_ROW_PARALLEL 1e-3
+
+/* Row r of arm a (columns vo..vo+dof-1) against the rows kept before it: when one of them is parallel to
+ * it, the tighter bound of the two stays in the kept row and 1 is returned (row r is to be dropped). */
+static int merge_parallel(mca_qp_t *qp, int vo, int dof, int r, const int *kept, double *kept_norm,
+                          int n_kept) {
+    double nr = 0.0;
+    for (int j = 0; j < dof; j++) {
+        nr += qp->U[r][vo + j] * qp->U[r][vo + j];
+    }
+    nr = sqrt(nr);
+    kept_norm[n_kept] = nr;
+    if (!(nr > 0.0)) {
+        return 0;
+    }
+    for (int k = 0; k < n_kept; k++) {
+        const int o = kept[k];
+        const double no = kept_norm[k];
+        double dot = 0.0;
+        for (int j = 0; j < dof; j++) {
+            dot += qp->U[r][vo + j] * qp->U[o][vo + j];
+        }
+        /* |u/|u| - v/|v||^2 = 2 - 2 cos */
+        if (!(2.0 - 2.0 * dot / (nr * no) < MCA_ROW_PARALLEL * MCA_ROW_PARALLEL)) {
+            continue;
+        }
+        if (qp->beta[r] / nr < qp->beta[o] / no) {
+            for (int j = 0; j < dof; j++) {
+                qp->U[o][vo + j] = qp->U[r][vo + j];
+            }
+            qp->beta[o] = qp->beta[r];
+            kept_norm[k] = nr;
+        }
+        return 1;
+    }
+    return 0;
+}
+
 int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                          const mca_kin_t kin[],
-                         const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_LINKS],
+                         const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_PAIRS],
                          const mca_scheme_params_t *p, const double *dec, const double *priority) {
     if (!qp || !si || !chain || !kin || !near || !p || n_arms < 1 || n_arms > MCA_MAX_ARMS) {
         return MCA_EINVAL;
@@ -242,7 +283,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     int n_ineq = 0;
     for (int a = 0; a < n_arms; a++) {
         si->row_off[a] = n_ineq;
-        n_ineq += MCA_NEAR_LINKS * (chain[a]->dof + 1);
+        n_ineq += MCA_NEAR_PAIRS * (chain[a]->dof + 1);
     }
     if (n_ineq > MCA_QP_MAX_INEQ) {
         return MCA_ERANGE;
@@ -253,7 +294,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
         qp->beta[i] = p->big;
     }
     qp->n_ineq = n_ineq;
-    si->rows_per_link = MCA_NEAR_LINKS;
+    si->rows_per_link = MCA_NEAR_PAIRS;
     si->active_rows = 0;
     si->brake = 1.0;
     for (int a = n_arms; a < MCA_MAX_ARMS; a++) {
@@ -262,6 +303,8 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     const double d1m = fmin(p->d1 + p->d1_margin, 0.5 * (p->d1 + p->d2)); /* the rows aim above d1 */
     for (int a = 0; a < n_arms; a++) {
         const int dof = chain[a]->dof, vo = si->var_off[a];
+        int kept[MCA_NEAR_PAIRS * MCA_MAX_LINKS], n_kept = 0; /* arm a's active rows so far */
+        double kept_norm[MCA_NEAR_PAIRS * MCA_MAX_LINKS];
         double t_stop = 0.0; /* longest stop of arm a from its fastest joint speed */
         if (dec && dec[a] > 0.0) {
             for (int j = 0; j < dof; j++) {
@@ -269,9 +312,9 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
             }
         }
         for (int l = 0; l <= dof; l++) {
-            for (int k = 0; k < MCA_NEAR_LINKS; k++) {
+            for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
                 const mca_link_critical_t *c = &near[a][l][k];
-                const int r = si->row_off[a] + MCA_NEAR_LINKS * l + k;
+                const int r = si->row_off[a] + MCA_NEAR_PAIRS * l + k;
                 if (!c->valid || repeats_previous(near[a], l, c)) {
                     continue;
                 }
@@ -313,6 +356,12 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                     continue;
                 }
                 qp->beta[r] = share * bound;
+                if (merge_parallel(qp, vo, dof, r, kept, kept_norm, n_kept)) {
+                    memset(qp->U[r], 0, row_bytes);
+                    qp->beta[r] = p->big;
+                    continue;
+                }
+                kept[n_kept++] = r;
                 si->active_rows++;
             }
         }

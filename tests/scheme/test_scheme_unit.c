@@ -769,6 +769,152 @@ static void test_timescale_deadlock(void **state) {
     assert_int_equal(last.paths_done, 0);
 }
 
+/* Independent point-to-segment distance: the foot of o on [a, b] by the clamped projection. */
+static double point_seg(const double o[3], const double a[3], const double b[3], double h[3]) {
+    double ab[3], ao[3], t = 0.0, l2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = b[k] - a[k];
+        ao[k] = o[k] - a[k];
+        l2 += ab[k] * ab[k];
+        t += ab[k] * ao[k];
+    }
+    t = l2 > 0.0 ? fmin(1.0, fmax(0.0, t / l2)) : 0.0;
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        h[k] = a[k] + t * ab[k];
+        d2 += (o[k] - h[k]) * (o[k] - h[k]);
+    }
+    return sqrt(d2);
+}
+
+typedef struct witness_seen {
+    int ticks, ends_listed, entries;
+} witness_seen_t;
+
+/* A link's list (row input of mca-ts and braking) has its MCA_NEAR_PAIRS nearest witness pairs: every end
+ * of two links against the other link, nearer than the list's last entry, is listed (or one at the same
+ * point and direction, nearer); every entry lies on both links, at its distance. */
+static void check_witnesses(const mca_controller_t *c, const mca_tick_info_t *info, void *user) {
+    (void)info;
+    witness_seen_t *seen = user;
+    if (c->ticks % 25) {
+        return;
+    }
+    seen->ticks++;
+    const mca_kin_t *k0 = &c->kin[0], *k1 = &c->kin[1];
+    const double *r0 = c->cfg.chain[0].link_radius, *r1 = c->cfg.chain[1].link_radius;
+    for (int side = 0; side < 2; side++) {
+        const mca_kin_t *km = side ? k1 : k0, *ko = side ? k0 : k1;
+        const double *rm = side ? r1 : r0, *ro = side ? r0 : r1;
+        for (int i = 0; i <= km->dof; i++) {
+            const mca_link_critical_t *list = c->near[side][i];
+            for (int e = 0; e < MCA_NEAR_PAIRS && list[e].valid; e++) {
+                const mca_link_critical_t *w = &list[e];
+                double h[3];
+                seen->entries++;
+                assert_true(point_seg(w->p, km->point[i], km->point[i + 1], h) < 1e-9);
+                assert_true(point_seg(w->e, ko->point[w->other_link], ko->point[w->other_link + 1], h) <
+                            1e-9);
+                assert_true(fabs(mca_v3_dist(w->p, w->e) - rm[i] - ro[w->other_link] - w->d) < 1e-9);
+                assert_true(e == 0 || list[e - 1].d <= w->d);
+            }
+            const int full = list[MCA_NEAR_PAIRS - 1].valid;
+            for (int j = 0; j <= ko->dof; j++) {
+                for (int end = 0; end < 4; end++) {
+                    /* ends 0, 1: this link's ends against link j; 2, 3: link j's ends against this link */
+                    double p[3], o[3];
+                    const double *src = end < 2 ? km->point[i + end] : ko->point[j + end - 2];
+                    const double d = (end < 2 ? point_seg(src, ko->point[j], ko->point[j + 1], o)
+                                              : point_seg(src, km->point[i], km->point[i + 1], o)) -
+                                     rm[i] - ro[j];
+                    mca_v3_set(p, end < 2 ? src : o);
+                    if (end >= 2) {
+                        mca_v3_set(o, src);
+                    }
+                    if (full && !(d < list[MCA_NEAR_PAIRS - 1].d - 1e-9)) {
+                        continue;
+                    }
+                    double n[3];
+                    mca_v3_sub(n, o, p);
+                    const double nn = mca_v3_norm(n);
+                    int found = 0;
+                    for (int e = 0; e < MCA_NEAR_PAIRS && list[e].valid && !found; e++) {
+                        double m[3];
+                        mca_v3_sub(m, list[e].e, list[e].p);
+                        const double mn = mca_v3_norm(m);
+                        double dn = 0.0;
+                        for (int x = 0; x < 3; x++) {
+                            const double y = n[x] / nn - m[x] / mn;
+                            dn += y * y;
+                        }
+                        found =
+                            list[e].d <= d + 1e-9 && mca_v3_dist(list[e].p, p) < 1e-4 + 1e-9 && dn < 1.01e-8;
+                    }
+                    assert_true(found);
+                    seen->ends_listed++;
+                }
+            }
+        }
+    }
+}
+
+static void test_near_witnesses(void **state) {
+    (void)state;
+    witness_seen_t seen = {0, 0, 0};
+    mca_tick_info_t last;
+    run_ts(SCN("cup_stacking.yaml"), 8.0, check_witnesses, &seen, &last);
+    print_message("cup_stacking mca-ts: %d ticks checked, %d list entries, %d segment ends listed\n",
+                  seen.ticks, seen.entries, seen.ends_listed);
+    assert_true(seen.ticks > 300);
+    assert_true(seen.ends_listed > 1000);
+}
+
+/* Two parallel rows of one arm (the same point and direction, two distances) are one row, the tighter. */
+static void test_near_rows_parallel(void **state) {
+    (void)state;
+    static mca_chain_t ch;
+    char err[256];
+    assert_int_equal(mca_chain_load_urdf(&ch, PA10, NULL, err, sizeof err), MCA_OK);
+    const mca_chain_t *chains[2] = {&ch, &ch};
+    mca_kin_t kin[2];
+    const double q[MCA_MAX_DOF] = {0.1, 0.4, 0.0, 0.8, 0.0, 0.3, 0.0, 0.0};
+    assert_int_equal(mca_fk(&ch, q, &kin[0]), MCA_OK);
+    kin[1] = kin[0];
+    static mca_qp_t qp;
+    mca_scheme_params_t p;
+    mca_scheme_default_params(&p);
+    mca_scheme_info_t si = {0};
+    si.var_off[1] = ch.dof;
+    assert_int_equal(mca_qp_reset(&qp, 2 * ch.dof, 6, 0), MCA_OK);
+    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_PAIRS];
+    memset(near, 0, sizeof near);
+    /* link 4: the same P and direction at 0.08 m and 0.09 m (listed apart), and a third pair across */
+    near[0][4][0] = (mca_link_critical_t){1, 1, 3, 0.08, {0.3, 0.0, 0.9}, {0.3, 0.1, 0.9}};
+    near[0][4][1] = (mca_link_critical_t){1, 1, 4, 0.09, {0.3, 0.0, 0.9}, {0.3, 0.2, 0.9}};
+    near[0][4][2] = (mca_link_critical_t){1, 1, 5, 0.10, {0.3, 0.0, 0.9}, {0.4, 0.0, 0.9}};
+    const double dec[2] = {2.0, 2.0};
+    assert_int_equal(mca_scheme_near_rows(&qp, &si, 2, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                          &p, dec, NULL),
+                     MCA_OK);
+    const int R = MCA_NEAR_PAIRS;
+    assert_int_equal(si.active_rows, 2);
+    assert_true(qp.beta[R * 4 + 0] < p.big);
+    assert_true(qp.beta[R * 4 + 1] == p.big); /* parallel to row 0, looser: merged */
+    assert_true(qp.beta[R * 4 + 2] < p.big);
+    /* the other order: the tighter one comes second and takes the first one's place */
+    const double b_tight = qp.beta[R * 4 + 0];
+    near[0][4][0].d = 0.09;
+    near[0][4][1].d = 0.08;
+    assert_int_equal(mca_scheme_near_rows(&qp, &si, 2, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                          &p, dec, NULL),
+                     MCA_OK);
+    assert_int_equal(si.active_rows, 2);
+    assert_true(qp.beta[R * 4 + 0] == b_tight);
+    assert_true(qp.beta[R * 4 + 1] == p.big);
+}
+
 /* mca-ts rows against their closed form: priority shares, the stoppability bound w (d - d1) / T beyond the
  * band too, one row per near link, and a pair repeated from the previous link left inactive. */
 static void test_near_rows(void **state) {
@@ -787,7 +933,7 @@ static void test_near_rows(void **state) {
     mca_scheme_info_t si = {0};
     si.var_off[1] = ch.dof;
     assert_int_equal(mca_qp_reset(&qp, 2 * ch.dof, 6, 0), MCA_OK);
-    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_LINKS];
+    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_PAIRS];
     memset(near, 0, sizeof near);
     const double d_in = 0.08, d_far = 0.5;
     /* arm 0, link 4: two near links of arm 1 (one inside the band, one far); link 5 repeats link 4's first */
@@ -801,10 +947,10 @@ static void test_near_rows(void **state) {
         t_stop = fmax(t_stop, ch.joint[j].vel_limit / 2.0);
     }
     assert_int_equal(mca_scheme_near_rows(&qp, &si, 2, chains, kin,
-                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])near,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
                                           &p, dec, prio),
                      MCA_OK);
-    const int R = MCA_NEAR_LINKS;
+    const int R = MCA_NEAR_PAIRS;
     assert_int_equal(qp.n_ineq, 2 * R * (ch.dof + 1));
     assert_int_equal(si.rows_per_link, R);
     assert_int_equal(si.row_off[1], R * (ch.dof + 1));
@@ -829,7 +975,7 @@ static void test_near_rows(void **state) {
     }
     /* without dec and priorities: the paper's band only */
     assert_int_equal(mca_scheme_near_rows(&qp, &si, 2, chains, kin,
-                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_LINKS])near,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
                                           &p, NULL, NULL),
                      MCA_OK);
     assert_true(fabs(qp.beta[R * 4] - mca_brake_s(d_in, p.d1, p.d2) * p.v_normal) < 1e-15);
@@ -912,6 +1058,8 @@ int main(void) {
         cmocka_unit_test(test_timescale_stand_still_feasible),
         cmocka_unit_test(test_timescale_deadlock),
         cmocka_unit_test(test_near_rows),
+        cmocka_unit_test(test_near_witnesses),
+        cmocka_unit_test(test_near_rows_parallel),
         cmocka_unit_test(test_controller_brake),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

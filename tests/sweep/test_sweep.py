@@ -8,6 +8,10 @@ usage: test_sweep.py pa10|pa10-simarm MCA_SIM MCA_SWEEP_PY WORK_DIR
          and with a stop request). pa10-simarm: the sim backend's rate-limited firmware model: the stop runs
          have none below d1, the task runs at most KNOWN_SIMARM_UNSAFE (1) (a known gap of issue 11, see
          docs/scheme.md "What is not yet shown"; the bound makes a regression fail);
+       test_sweep.py regress MCA_SIM MCA_SWEEP_PY WORK_DIR
+         tasks of the full sweep (seed 1) that once went below d1 under mca-ts: MVN goes below d1 on each,
+         mca-ts keeps d1 (task and with a stop request). jaco-mico:411: the tool links nearly parallel, the
+         closest points jumped from one end to the other (a row on the closest points only, 2 mm below d1);
        test_sweep.py three MCA_SIM THREE_ARMS_YAML WORK_DIR
          the three-arm task: MVN goes below d1; mca-ts keeps every pair (CSV d_<a>_<b>) >= d1 at every tick,
          braking included, and completes.
@@ -73,6 +77,32 @@ def sweep(sim, tool, work, ideal):
         print("note: this mca-sim has no --stop-at: no stop runs checked")
 
 
+REGRESSIONS = ["jaco-mico:411"]
+
+
+def regress(sim, tool, work):
+    os.makedirs(work, exist_ok=True)
+    out = os.path.join(work, "regress.json")
+    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--n", "500", "--seed", "1", "--only",
+           ",".join(REGRESSIONS), "--schemes", "mvn,mca-ts", "--jobs", "2", "--work", os.path.join(work, "tasks"),
+           "--json", out]
+    print(" ".join(cmd))
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=400)
+    print(p.stdout)
+    if p.returncode != 0:
+        print(p.stderr)
+        sys.exit("mca_sweep.py failed (exit %d)" % p.returncode)
+    d = json.load(open(out))
+    check(len(d["tasks"]) == len(REGRESSIONS), "%d tasks run" % len(d["tasks"]))
+    for t in d["tasks"]:
+        runs = t["runs"]
+        check(runs["mvn"]["task"]["cls"] == "unsafe", "%s: MVN goes below d1 (%s)" % (t["id"],
+                                                                                   runs["mvn"]["task"]["cls"]))
+        for r in ("task", "stop"):
+            cls = runs["mca-ts"][r]["cls"]
+            check(cls != "unsafe", "%s: mca-ts %s run keeps d1 (%s)" % (t["id"], r, cls))
+
+
 def three(sim, scn, work):
     os.makedirs(work, exist_ok=True)
     summ = os.path.join(work, "three.json")
@@ -110,6 +140,8 @@ def main():
         return 77
     if mode in ("pa10", "pa10-simarm"):
         sweep(sim, sys.argv[3], sys.argv[4], mode == "pa10")
+    elif mode == "regress":
+        regress(sim, sys.argv[3], sys.argv[4])
     elif mode == "three":
         three(sim, sys.argv[3], sys.argv[4])
     else:

@@ -175,7 +175,7 @@ typedef struct mca_controller {
     mca_arm_distances_t dist[MCA_MAX_ARMS][MCA_MAX_ARMS]; /**< [a][b], a < b */
     mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
     mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS]
-                            [MCA_NEAR_LINKS]; /**< nearest links (mca-ts, braking) */
+                            [MCA_NEAR_PAIRS]; /**< nearest links (mca-ts, braking) */
     mca_scheme_state_t sstate;
     mca_qp_t qp;
     mca_pdnn_t pdnn;

@@ -20,11 +20,14 @@
 /** Extra QP variables per arm under path-time scaling (mca-ts): the path rate and a 3-vector tracking slack.
  */
 #define MCA_TS_VARS (1 + MCA_TASK_DIM)
+/** Collision rows per link under mca-ts and in braking: one per each of the link's nearest witness pairs
+ *  against the other arms (mca_scheme_near_rows). */
+#define MCA_NEAR_PAIRS 6
 /** QP sizes: phi = all joint velocities (and the mca-ts variables), one 3-row equality per arm, and per
- *  link of every arm one critical point of up to 3 rows (componentwise form) against the other arms. */
+ *  link of every arm up to MCA_NEAR_PAIRS rows (mca-ts; the paper's componentwise form needs 3). */
 #define MCA_QP_MAX_VARS (MCA_MAX_ARMS * (MCA_MAX_DOF + MCA_TS_VARS))
 #define MCA_QP_MAX_EQ (MCA_MAX_ARMS * MCA_TASK_DIM)
-#define MCA_QP_MAX_INEQ (MCA_MAX_ARMS * MCA_MAX_LINKS * 3)
+#define MCA_QP_MAX_INEQ (MCA_MAX_ARMS * MCA_MAX_LINKS * MCA_NEAR_PAIRS)
 /** Primal-dual vector length h = vars + eq + ineq. */
 #define MCA_QP_MAX_H (MCA_QP_MAX_VARS + MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ)
 

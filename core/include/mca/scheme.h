@@ -121,13 +121,11 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
                         const double *phi_prev, mca_scheme_state_t *st, mca_qp_t *qp,
                         mca_scheme_info_t *info);
 
-/** Collision rows per link under mca-ts: one per each of the link's nearest links of the other arms. */
-#define MCA_NEAR_LINKS 3
-
 /**
  * The collision rows of mca-ts (normal form; on a QP assembled without collision rows; real-time safe).
- * Per arm a, per link l, one row per near pair near[a][l][k] (the link's MCA_NEAR_LINKS nearest links of
- * the other arms, so that a pair approaching while neither link has it as its closest is bounded too):
+ * Per arm a, per link l, one row per near pair near[a][l][k]: the link's MCA_NEAR_PAIRS nearest witness pairs
+ * against the other arms' links (each link pair's closest points and the closest points of its four segment
+ * ends, so that a pair approaching while it is not the closest one is bounded too; see the controller):
  *   n^T J_P qdot_a <= min{ 2 w_a S(d) v_normal (d < d2 only), w_a (d - d1) / T_a },
  *   w_a = priority_a / (priority_a + priority_b),  T_a = max_j qdot_max,j / dec_a,
  * (d1 here is d1 + d1_margin) so the pair's approach speeds sum to at most what both arms can brake away
@@ -139,7 +137,7 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
  */
 int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                          const mca_kin_t kin[],
-                         const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_LINKS],
+                         const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_PAIRS],
                          const mca_scheme_params_t *p, const double *dec, const double *priority);
 
 /** Path-time scaling weights (see mca_scheme_add_timescale). */
