@@ -465,6 +465,12 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         dc.config_path = cell->dds.config[0] ? cell->dds.config : NULL;
         dc.fault_text = dds_fault_text; /* the fault's text is made by the publisher thread */
         dc.fault_text_arg = d;
+        if (!opts->virtual_time) {
+            /* the publisher wakes on the loop's grid, just after a publishing tick has pushed: the push then
+             * makes no system call (only a late tick finds the publisher parked and wakes it) */
+            dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;
+            dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
+        }
         rc = mca_dds_bridge_create(&d->dds, &dc);
         if (rc != MCA_OK) {
             set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),

@@ -9,7 +9,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <errno.h>
 #include <linux/futex.h> /* FUTEX_WAIT_PRIVATE, FUTEX_WAKE_PRIVATE */
+#include <sys/prctl.h>   /* PR_SET_TIMERSLACK */
 #include <sys/syscall.h> /* SYS_futex */
 #include <time.h>
 #include <unistd.h> /* syscall */
@@ -36,7 +38,7 @@ struct mca_dds_bridge {
      * a push that finds `parked` set clears it, bumps `wake_seq` and wakes the futex. */
     _Atomic uint32_t wake_seq;
     _Atomic int parked;
-    _Atomic uint64_t parks; /* written by the publisher thread only */
+    _Atomic uint64_t parks, grid_sleeps; /* written by the publisher thread only */
     /* Written by the publisher thread only. */
     _Atomic uint64_t published, samples, write_errors, invalid, max_pending;
     _Atomic int64_t max_publish_ns;
@@ -184,27 +186,7 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
         bump(&b->invalid);
         return;
     }
-    for (uint32_t i = 0; i < s->n_arms; ++i) {
-        mca_dds_arm_snapshot_t *a = &s->arm[i];
-        const mca_dds_JointState js = {
-            .arm_id = (uint8_t)i,
-            .tick = s->tick,
-            .stamp_ns = s->stamp_ns,
-            .position = seq_of(a->position, a->n_dof),
-            .velocity = seq_of(a->velocity, a->n_dof),
-            .effort = seq_of(a->effort, a->n_dof),
-        };
-        write_one(b, W_STATE, &js);
-        mca_dds_JointCommand jc = {
-            .arm_id = (uint8_t)i,
-            .tick = s->tick,
-            .stamp_ns = s->stamp_ns,
-            .velocity_setpoint = seq_of(a->velocity_setpoint, a->n_dof),
-            .position_reference = seq_of(a->position_reference, a->n_dof),
-        };
-        memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
-        write_one(b, W_COMMAND, &jc);
-    }
+    /* Distances first: the safety picture is what subscribers wait for (tick -> monitor latency) */
     for (uint32_t k = 0; k < s->n_pairs; ++k) {
         mca_dds_pair_snapshot_t *p = &s->pair[k];
         mca_dds_Distances d = {
@@ -225,6 +207,27 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
         memcpy(d.p, p->p, sizeof d.p);
         memcpy(d.e, p->e, sizeof d.e);
         write_one(b, W_DIST, &d);
+    }
+    for (uint32_t i = 0; i < s->n_arms; ++i) {
+        mca_dds_arm_snapshot_t *a = &s->arm[i];
+        const mca_dds_JointState js = {
+            .arm_id = (uint8_t)i,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .position = seq_of(a->position, a->n_dof),
+            .velocity = seq_of(a->velocity, a->n_dof),
+            .effort = seq_of(a->effort, a->n_dof),
+        };
+        write_one(b, W_STATE, &js);
+        mca_dds_JointCommand jc = {
+            .arm_id = (uint8_t)i,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .velocity_setpoint = seq_of(a->velocity_setpoint, a->n_dof),
+            .position_reference = seq_of(a->position_reference, a->n_dof),
+        };
+        memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
+        write_one(b, W_COMMAND, &jc);
     }
     const int changed = !b->have_status || s->status.state != b->last_status.state ||
                         s->status.fault_code != b->last_status.fault_code;
@@ -265,8 +268,35 @@ static void wake(mca_dds_bridge_t *b) {
     futex(&b->wake_seq, FUTEX_WAKE_PRIVATE, 1);
 }
 
+/* wake_period_ns: sleep until the next publishing tick of the caller's grid has pushed (the last
+ * snapshot's stamp + period + offset), unless that is already past or the ring is not empty. */
+static void sleep_on_grid(mca_dds_bridge_t *b, int64_t stamp_ns) {
+    mca_ring_stats_t rs;
+    mca_ring_stats(&b->ring, &rs);
+    if (rs.pending > 0 || atomic_load_explicit(&b->stop, memory_order_acquire)) {
+        return;
+    }
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    const int64_t t_now = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
+    const int64_t step = (int64_t)(b->cfg.wake_period_ns + b->cfg.wake_offset_ns);
+    int64_t target = stamp_ns + step;
+    if (target <= t_now) {
+        return; /* late already: look now, park if nothing is there */
+    }
+    if (target > t_now + step) {
+        target = t_now + step; /* a stamp not on this clock: never sleep longer than one period */
+    }
+    bump(&b->grid_sleeps);
+    const struct timespec ts = {(time_t)(target / 1000000000LL), (long)(target % 1000000000LL)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+}
+
 static void *publisher_main(void *arg) {
     mca_dds_bridge_t *b = arg;
+    /* wake at the grid point itself, not up to 50 us later (the default slack of a normal thread) */
+    prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
     for (;;) {
         /* Read stop BEFORE trying the ring: once stop is seen, one more empty pop means drained. */
         const int stop = atomic_load_explicit(&b->stop, memory_order_acquire);
@@ -283,6 +313,9 @@ static void *publisher_main(void *arg) {
             const int64_t dt = (t1.tv_sec - t0.tv_sec) * 1000000000LL + (t1.tv_nsec - t0.tv_nsec);
             if (dt > atomic_load_explicit(&b->max_publish_ns, memory_order_relaxed)) {
                 atomic_store_explicit(&b->max_publish_ns, dt, memory_order_relaxed);
+            }
+            if (b->cfg.wake_period_ns > 0) {
+                sleep_on_grid(b, b->work.stamp_ns);
             }
             continue;
         }
@@ -309,7 +342,8 @@ static void delete_entities(mca_dds_bridge_t *b) {
 
 int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
     if (out == NULL || cfg == NULL || cfg->status_divisor == 0 || !is_pow2(cfg->ring_capacity) ||
-        cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN) {
+        cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN ||
+        cfg->wake_period_ns > 10000000000ULL || cfg->wake_offset_ns > 10000000000ULL) {
         return MCA_EINVAL;
     }
     const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
@@ -428,6 +462,7 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     out->max_publish_ns = atomic_load_explicit(&bridge->max_publish_ns, memory_order_relaxed);
     out->wakes = atomic_load_explicit(&bridge->wakes, memory_order_relaxed);
     out->parks = atomic_load_explicit(&bridge->parks, memory_order_relaxed);
+    out->grid_sleeps = atomic_load_explicit(&bridge->grid_sleeps, memory_order_relaxed);
     return MCA_OK;
 }
 

@@ -8,7 +8,8 @@ CSV writer on, so every ring the loop feeds is in use. strace attaches to the lo
 ("mcad-loop", found in /proc) right after start-up and records each of its system calls until it exits.
 
 Allowed while the loop runs: clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, ...) (the period),
-futex(..., FUTEX_WAKE_PRIVATE, 1) (waking the parked DDS publisher, at most once per published tick) and
+futex(..., FUTEX_WAKE_PRIVATE, 1) (waking the DDS publisher when a late tick found it parked instead of asleep
+on the loop's grid; at most once per published tick) and
 one restart_syscall (the sleep strace's attach interrupted). Allowed only after the last clock_nanosleep
 (the thread ending: glibc's thread exit): rt_sigprocmask, madvise, exit. Anything else fails the test.
 
@@ -140,8 +141,6 @@ def main():
     n_wake = counts.get("futex", 0)
     if n_wake > n_sleep // 10 + 2:
         bad.append(f"{n_wake} futex wakes for {n_sleep} ticks: more than one per published tick (divisor 10)")
-    if n_wake == 0:
-        bad.append("no futex wake: the DDS publisher was never woken (is DDS on?)")
     for b in bad[:20]:
         print("FAIL: " + b)
     if bad:

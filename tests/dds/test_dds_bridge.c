@@ -385,6 +385,56 @@ static void test_publisher_parks_and_wakes(void **state) {
     dds_delete(r.pp);
 }
 
+/* With wake_period_ns the publisher sleeps on the caller's grid (stamp + period + offset) after each
+ * snapshot: on-time pushes find it asleep there and make no system call (no FUTEX_WAKE). */
+static void test_publisher_wakes_on_grid(void **state) {
+    (void)state;
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.ring_capacity = 64;
+    cfg.partition = g_partition;
+    cfg.wake_period_ns = 10000000; /* a push every 10 ms */
+    cfg.wake_offset_ns = 3000000;  /* the publisher looks 3 ms after each */
+    mca_dds_bridge_t *b = NULL;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    readers_t r;
+    open_readers(&r);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 10000), MCA_OK);
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    enum { N = 30 };
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    const int64_t start = (int64_t)t0.tv_sec * 1000000000LL + t0.tv_nsec + 10000000;
+    for (int k = 0; k < N; ++k) {
+        const int64_t at = start + (int64_t)k * 10000000;
+        const struct timespec ts = {(time_t)(at / 1000000000LL), (long)(at % 1000000000LL)};
+        while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
+        }
+        mca_dds_synth_fill(&snap, (uint64_t)k, at, &mn, &ms);
+        snap.stamp_ns = at; /* the tick's grid time, as mcad's wake stamp */
+        mca_dds_bridge_push(b, &snap);
+    }
+    mca_dds_stats_t st;
+    for (int i = 0; i < 5000; ++i) {
+        assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
+        if (st.published == N) {
+            break;
+        }
+        const struct timespec ms1 = {0, 1000000};
+        nanosleep(&ms1, NULL);
+    }
+    print_message("grid: %llu sleeps on the grid, %llu futex wakes of %d pushes\n",
+                  (unsigned long long)st.grid_sleeps, (unsigned long long)st.wakes, N);
+    assert_int_equal(st.published, N);
+    assert_true(st.grid_sleeps >= N / 2);
+    assert_true(st.wakes <= N / 2); /* only a push more than 3 ms late finds the publisher parked */
+    mca_dds_bridge_destroy(b, &st);
+    dds_delete(r.pp);
+}
+
 static void test_overrun_drops_oldest_and_counts(void **state) {
     (void)state;
     /* Ring of 4: 100 snapshots pushed back to back (~1 us each) while one publish takes tens of us: most are
@@ -516,6 +566,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(test_create_rejects_bad_xml),
         cmocka_unit_test(test_every_snapshot_arrives_intact),
         cmocka_unit_test(test_publisher_parks_and_wakes),
+        cmocka_unit_test(test_publisher_wakes_on_grid),
         cmocka_unit_test(test_overrun_drops_oldest_and_counts),
         cmocka_unit_test(test_partition_isolates),
         cmocka_unit_test(test_invalid_snapshot_rejected),

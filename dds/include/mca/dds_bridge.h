@@ -4,10 +4,13 @@
  * wait. On a tick that publishes (the CALLER decides which: the bridge queues every snapshot it is
  * given), the loop fills a plain C snapshot and calls mca_dds_bridge_push() (wait-free copy into a
  * lock-free drop-oldest ring, see mca/ring.h); a normal-priority publisher thread owned by the bridge
- * drains the ring and writes the DDS samples. The publisher never polls: with the ring empty it parks
- * on a futex, and a push wakes it only if it is parked (one FUTEX_WAKE, a non-blocking system call, at
- * most once per push). If the thread falls behind, the oldest snapshots are dropped and counted, never
- * the loop delayed.
+ * drains the ring and writes the DDS samples. The publisher never polls. With wake_period_ns set it
+ * wakes on the caller's own grid (absolute clock_nanosleep until the last snapshot's stamp_ns +
+ * wake_period_ns + wake_offset_ns, i.e. just after the next publishing tick has pushed) and the push
+ * costs the loop no system call; whenever it finds the ring empty (a late or skipped tick, or without
+ * wake_period_ns) it parks on a futex, and a push wakes it only if it is parked (one FUTEX_WAKE, a
+ * non-blocking system call, at most once per push). If the thread falls behind, the oldest snapshots are
+ * dropped and counted, never the loop delayed.
  *
  * Topics (types in dds/mca_dds.idl, QoS in docs/dds.md), one sample per published snapshot:
  *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id = index in arm[])
@@ -116,6 +119,14 @@ typedef struct mca_dds_config {
      *  the rt path. NULL: the snapshot's text as pushed. */
     void (*fault_text)(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len);
     void *fault_text_arg;
+    /** The caller's publishing period on CLOCK_MONOTONIC [ns] (publish divisor x loop period; the
+     *  snapshots' stamp_ns must be CLOCK_MONOTONIC wake times of the ticks): after each snapshot the
+     *  publisher sleeps until its stamp + wake_period_ns + wake_offset_ns instead of parking, so the push
+     *  of an on-time tick makes no system call. 0 (default): parked, woken by the pushes. */
+    uint64_t wake_period_ns;
+    /** How long after a publishing tick's wake-up its push is expected [ns] (a bit over the tick's
+     *  compute time): a push later than that finds the publisher parked and wakes it. */
+    uint64_t wake_offset_ns;
 } mca_dds_config_t;
 
 /** Bridge counters. */
@@ -132,6 +143,7 @@ typedef struct mca_dds_stats {
     int64_t max_publish_ns; /**< longest time spent writing one snapshot's samples */
     uint64_t wakes;         /**< pushes that woke the parked publisher (FUTEX_WAKE calls of the rt side) */
     uint64_t parks;         /**< times the publisher parked (slept on the futex with the ring empty) */
+    uint64_t grid_sleeps;   /**< wake_period_ns: sleeps until the next publishing tick (no futex) */
 } mca_dds_stats_t;
 
 typedef struct mca_dds_bridge mca_dds_bridge_t;
