@@ -80,7 +80,13 @@ struct mca_daemon {
     int fault; /* mca_daemon_fault_t; latched */
     int ctrl_fault;
     int fault_code; /* negative MCA_E* for DDS */
-    char fault_text[160];
+    /* The fault is latched as a code and numbers (no text on the rt path); fault_describe() makes the text
+     * in the non-rt threads (log drainer, summary, DDS publisher), which read these once the record or
+     * snapshot that carries the fault reached them (written once, before, by the loop). */
+    int fault_detail;   /* ARM: ARM_FAULT_*; FEEDBACK: mca_feedback_fault_t; CONTROLLER: mca_ctrl_fault_t */
+    int fault_arm_code; /* ARM: the arm's fault code (reports FAULT, brakes) or state (does not servo) */
+    int fault_count;    /* OVERRUN: periods missed in a row; LOST_FEEDBACK/BUS: cycles without feedback */
+    char ctrl_fault_text[160]; /* CONTROLLER: the controller's own text (core makes it), copied once */
     double fault_t;
     int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
     int consecutive_overruns;
@@ -93,6 +99,7 @@ struct mca_daemon {
     mca_dds_snapshot_t snap;
     int64_t pct_cache[6];
     int sched_fifo, mem_locked, dma_fd;
+    int non_rt_pinned; /* rt.cpu: the non-rt threads were moved off the loop's CPU */
 
     /* CSV: rt -> writer */
     mca_ring_t csv_ring;
@@ -108,6 +115,8 @@ struct mca_daemon {
 };
 
 static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
+static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len);
+static void dds_fault_text(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len);
 
 static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
 
@@ -128,6 +137,10 @@ static void set_err(char *err, size_t errlen, const char *fmt, const char *a, co
 }
 
 #define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
+/* codes of mca_rtlog_code() records (formatted by log_format, non-rt) */
+enum { LOGC_FAULT = 1 };
+/* fault_detail of MCA_DAEMON_FAULT_ARM */
+enum { ARM_FAULT_REPORTS = 1, ARM_FAULT_BRAKES = 2, ARM_FAULT_NOT_SERVO = 3 };
 #define LOGN(d, lvl, fmt, n, a0, a1, a2, a3, txt) mca_rtlog(&(d)->log, lvl, fmt, n, a0, a1, a2, a3, txt)
 
 /* --dds-ab: tick @p n publishes only in the odd blocks; without it every tick publishes */
@@ -350,6 +363,37 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
     return MCA_ETIMEDOUT;
 }
 
+/* rt.cpu set: the calling (main, supervising) thread, and so every thread created from it later (DDS,
+ * Cyclone's own, the loop before it pins itself), leaves the loop's CPU. Start-up. */
+static void pin_non_rt(mca_daemon_t *d) {
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) != 0) {
+        return;
+    }
+    CPU_CLR(d->cell.rt.cpu, &set);
+    if (CPU_COUNT(&set) == 0) {
+        fprintf(d->opts.log,
+                "<4>mcad: rt.cpu %d is the only CPU this process may use: the other threads share it\n",
+                d->cell.rt.cpu);
+        return;
+    }
+    if (sched_setaffinity(0, sizeof set, &set) != 0) {
+        fprintf(d->opts.log, "<4>mcad: cannot move the non-real-time threads off CPU %d: %s\n",
+                d->cell.rt.cpu, strerror(errno));
+        return;
+    }
+    char list[128];
+    size_t k = 0;
+    for (int c = 0; c < CPU_SETSIZE && k + 8 < sizeof list; c++) {
+        if (CPU_ISSET(c, &set)) {
+            k += (size_t)snprintf(list + k, sizeof list - k, "%s%d", k ? "," : "", c);
+        }
+    }
+    fprintf(d->opts.log, "<6>mcad: loop on CPU %d; supervisor, log/CSV drainer and DDS threads on CPUs %s\n",
+            d->cell.rt.cpu, list);
+    d->non_rt_pinned = 1;
+}
+
 int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen) {
     if (!out || !cell || !opts) {
@@ -369,6 +413,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     d->dma_fd = -1;
     atomic_store(&d->state, MCA_DAEMON_INIT);
     mca_rtlog_init(&d->log, "mcad");
+    mca_rtlog_set_formatter(&d->log, log_format, d);
     mca_ring_init(&d->sum_ring, d->sum_storage, sizeof d->sum_storage, sizeof(mca_daemon_summary_t), 4);
     mca_hist_reset(&d->jitter);
     mca_hist_reset(&d->compute);
@@ -409,12 +454,23 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     for (int a = 0; a < d->n_arms && rc == MCA_OK; a++) {
         rc = handshake(d, a, err, errlen);
     }
+    if (rc == MCA_OK && cell->rt.cpu >= 0 && !opts->virtual_time) {
+        /* before DDS starts its threads: they, the CSV/log drainer and the supervisor inherit this mask */
+        pin_non_rt(d);
+    }
     if (rc == MCA_OK && cell->dds.enabled && !opts->no_dds) {
         mca_dds_config_t dc;
         mca_dds_config_default(&dc);
         dc.domain_id = cell->dds.domain;
         dc.config_path = cell->dds.config[0] ? cell->dds.config : NULL;
-        dc.rate_divisor = cell->dds.publish_divisor;
+        dc.fault_text = dds_fault_text; /* the fault's text is made by the publisher thread */
+        dc.fault_text_arg = d;
+        if (!opts->virtual_time) {
+            /* the publisher wakes on the loop's grid, just after a publishing tick has pushed: the push then
+             * makes no system call (only a late tick finds the publisher parked and wakes it) */
+            dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;
+            dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
+        }
         rc = mca_dds_bridge_create(&d->dds, &dc);
         if (rc != MCA_OK) {
             set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
@@ -469,7 +525,11 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
 
 /* ---------------------------------------------------------------- the tick (rt) */
 
-static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, double t, int arm) {
+/* Latch a fault (the first one wins) as a code and numbers: @p detail, @p arm_code and @p count as the
+ * fault kind needs them (see struct mca_daemon), @p ctrl_text the controller's own text (CONTROLLER only).
+ * No text is made here: the log record carries the code, fault_describe() makes the text off the rt path. */
+static void latch_fault(mca_daemon_t *d, int fault, int code, double t, int arm, int detail, int arm_code,
+                        int count, const char *ctrl_text) {
     if (d->fault != MCA_DAEMON_FAULT_NONE) {
         return;
     }
@@ -477,14 +537,17 @@ static void latch_fault(mca_daemon_t *d, int fault, int code, const char *text, 
     d->fault_arm = arm;
     d->fault_code = code;
     d->fault_t = t;
+    d->fault_detail = detail;
+    d->fault_arm_code = arm_code;
+    d->fault_count = count;
     size_t i = 0;
-    for (; text && text[i] && i + 1 < sizeof d->fault_text; i++) {
-        d->fault_text[i] = text[i];
+    for (; ctrl_text && ctrl_text[i] && i + 1 < sizeof d->ctrl_fault_text; i++) {
+        d->ctrl_fault_text[i] = ctrl_text[i];
     }
-    d->fault_text[i] = 0;
+    d->ctrl_fault_text[i] = 0;
     d->stop_pending = 0;
     atomic_store(&d->state, MCA_DAEMON_BRAKING);
-    LOGN(d, MCA_LOG_ERR, "fault at t = %.3f s: braking both arms: %s", 1, t, 0, 0, 0, d->fault_text);
+    mca_rtlog_code(&d->log, MCA_LOG_ERR, LOGC_FAULT, 1, t, 0, 0, 0, NULL);
 }
 
 static int ctrl_fault_code(int f) {
@@ -502,16 +565,65 @@ static int ctrl_fault_code(int f) {
     }
 }
 
-/* "arm NAME<mid><tail>" without formatting (rt path). */
-static void arm_text(char *txt, size_t len, const char *name, const char *mid, const char *tail) {
-    const char *parts[4] = {"arm ", name, mid, tail};
-    size_t k = 0;
-    for (int i = 0; i < 4; i++) {
-        for (const char *c = parts[i]; *c && k + 1 < len; c++) {
-            txt[k++] = *c;
+/* The text of a latched fault (non-rt: summary, log drainer, DDS publisher). */
+static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail, int arm_code, int count,
+                           const char *ctrl_text, char *buf, size_t len) {
+    const char *name = arm >= 0 && arm < d->n_arms ? d->cell.scn.arm[arm].name : "?";
+    switch (fault) {
+    case MCA_DAEMON_FAULT_CONTROLLER:
+        snprintf(buf, len, "%s", ctrl_text);
+        break;
+    case MCA_DAEMON_FAULT_OVERRUN:
+        snprintf(buf, len, "consecutive overruns: %d periods missed in a row (rt.overrun_limit %d)", count,
+                 d->cell.rt.overrun_limit);
+        break;
+    case MCA_DAEMON_FAULT_LOST_FEEDBACK:
+        snprintf(buf, len, "lost feedback: arm %s, no new feedback for %d cycles", name, count);
+        break;
+    case MCA_DAEMON_FAULT_BUS:
+        snprintf(buf, len, "arm %s link is bus-off: lost feedback (%d cycles)", name, count);
+        break;
+    case MCA_DAEMON_FAULT_ARM:
+        if (detail == ARM_FAULT_NOT_SERVO) {
+            snprintf(buf, len, "arm %s does not servo: state %s", name, mca_arm_state_name(arm_code));
+        } else {
+            snprintf(buf, len, "arm %s %s%s", name,
+                     detail == ARM_FAULT_REPORTS ? "reports FAULT " : "brakes on its own: ",
+                     mca_arm_fault_name(arm_code));
         }
+        break;
+    case MCA_DAEMON_FAULT_FEEDBACK:
+        snprintf(buf, len, "arm %s sends implausible feedback (%s): %s", name,
+                 mca_feedback_fault_name(detail),
+                 detail > 0 && detail <= MCA_FB_VELOCITY ? fb_fault_what[detail] : "?");
+        break;
+    default:
+        snprintf(buf, len, "%s", fault ? "?" : "");
+        break;
     }
-    txt[k] = 0;
+}
+
+static void fault_text_of(const mca_daemon_t *d, char *buf, size_t len) {
+    fault_describe(d, d->fault, d->fault_arm, d->fault_detail, d->fault_arm_code, d->fault_count,
+                   d->ctrl_fault_text, buf, len);
+}
+
+/* mca_rtlog_code() records (the drainer, non-rt) */
+static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len) {
+    const mca_daemon_t *d = arg;
+    if (rec->code == LOGC_FAULT) {
+        char txt[192];
+        fault_text_of(d, txt, sizeof txt);
+        snprintf(buf, len, "fault at t = %.3f s: braking both arms: %s", rec->arg[0], txt);
+    } else {
+        snprintf(buf, len, "code %d", rec->code);
+    }
+}
+
+/* DDS ControllerStatus text (the publisher thread, non-rt) */
+static void dds_fault_text(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len) {
+    (void)st;
+    fault_text_of(arg, text, len);
 }
 
 /* An implausible sample of arm a: dropped (the caller keeps the last good one), counted, the first of each
@@ -530,21 +642,10 @@ static void feedback_implausible(mca_daemon_t *d, int a, int kind, int joint, do
     }
     const int state = atomic_load_explicit(&d->state, memory_order_relaxed);
     if (state == MCA_DAEMON_RUNNING || state == MCA_DAEMON_BRAKING) {
-        char txt[160];
-        const char *parts[] = {
-            "arm ", d->cell.scn.arm[a].name, " sends implausible feedback (", fb_fault_names[kind],
-            "): ",  fb_fault_what[kind]};
-        size_t k = 0;
-        for (size_t i = 0; i < sizeof parts / sizeof parts[0]; i++) {
-            for (const char *c = parts[i]; *c && k + 1 < sizeof txt; c++) {
-                txt[k++] = *c;
-            }
-        }
-        txt[k] = 0;
         if (d->fault == MCA_DAEMON_FAULT_NONE) {
             d->feedback_fault = kind;
         }
-        latch_fault(d, MCA_DAEMON_FAULT_FEEDBACK, MCA_EINVAL, txt, t, a);
+        latch_fault(d, MCA_DAEMON_FAULT_FEEDBACK, MCA_EINVAL, t, a, kind, 0, 0, NULL);
     }
 }
 
@@ -573,11 +674,9 @@ static void read_feedback(mca_daemon_t *d, double t) {
                 d->q[a][j] = fb.position[j];
             }
             if (running && (fb.state == MCA_ARM_FAULT || fb.state == MCA_ARM_BRAKING)) {
-                char txt[96];
-                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name,
-                         fb.state == MCA_ARM_FAULT ? " reports FAULT " : " brakes on its own: ",
-                         mca_arm_fault_name(fb.fault_code));
-                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t, a);
+                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, t, a,
+                            fb.state == MCA_ARM_FAULT ? ARM_FAULT_REPORTS : ARM_FAULT_BRAKES, fb.fault_code,
+                            0, NULL);
             }
             /* an arm that keeps its brakes on while commanded (commands rejected) is a fault too */
             d->not_servo[a] =
@@ -585,10 +684,8 @@ static void read_feedback(mca_daemon_t *d, double t) {
             const int not_servo_limit =
                 2 * d->cell.rt.lost_feedback_cycles > 100 ? 2 * d->cell.rt.lost_feedback_cycles : 100;
             if (d->not_servo[a] >= not_servo_limit) {
-                char txt[96];
-                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " does not servo: state ",
-                         mca_arm_state_name(fb.state));
-                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, txt, t, a);
+                latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, t, a, ARM_FAULT_NOT_SERVO, fb.state,
+                            d->not_servo[a], NULL);
             }
         } else if (rc == MCA_EIO) {
             /* no new feedback and a link error (error frame, bus-off): a lost cycle, as EAGAIN (a burst
@@ -606,11 +703,9 @@ static void read_feedback(mca_daemon_t *d, double t) {
             /* name the cause when the link knows it: a bus-off controller hears nothing */
             mca_arm_stats_t st;
             if (mca_arm_stats(d->arm[a], &st) == MCA_OK && st.link_fault == MCA_ARM_FAULT_BUS) {
-                char txt[96];
-                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " link is bus-off: lost feedback", "");
-                latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, txt, t, a);
+                latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, t, a, 0, 0, d->lost[a], NULL);
             } else {
-                latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t, a);
+                latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, t, a, 0, 0, d->lost[a], NULL);
             }
         }
     }
@@ -768,11 +863,7 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     mca_dds_status_snapshot_t *st = &s->status;
     st->state = (mca_dds_state_t)state;
     st->fault_code = d->fault ? d->fault_code : 0;
-    size_t i = 0;
-    for (; i < MCA_DDS_FAULT_TEXT_MAX && d->fault_text[i]; i++) {
-        st->fault_text[i] = d->fault_text[i];
-    }
-    st->fault_text[i] = 0;
+    st->fault_text[0] = 0; /* the publisher thread writes it (dds_fault_text): no text on the rt path */
     st->ticks = s->tick;
     st->overruns = d->overruns;
     st->skipped_periods = d->skipped;
@@ -867,8 +958,8 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         }
         if (rc != MCA_OK) {
             d->ctrl_fault = d->info.fault;
-            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), d->info.fault_text, t,
-                        -1);
+            latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), t, -1, d->info.fault,
+                        0, 0, d->info.fault_text);
             state = MCA_DAEMON_BRAKING;
         } else {
             send_commands(d, 1);
@@ -922,7 +1013,8 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         d->pct_cache[5] = d->sum_rt.jitter_p999_ns;
         mca_ring_push(&d->sum_ring, &d->sum_rt);
     }
-    if (d->dds && dds_ab_publishes(d, n)) {
+    if (d->dds && n % d->cell.dds.publish_divisor == 0 && dds_ab_publishes(d, n)) {
+        /* only a tick that publishes fills the snapshot (the bridge queues every push) */
         fill_snapshot(d, stamp_ns, state);
         mca_dds_bridge_push(d->dds, &d->snap);
     }
@@ -1009,7 +1101,8 @@ static void *rt_main(void *arg) {
             }
             if (d->consecutive_overruns >= d->cell.rt.overrun_limit &&
                 atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING) {
-                latch_fault(d, MCA_DAEMON_FAULT_OVERRUN, MCA_ETIMEDOUT, "consecutive overruns", t, -1);
+                latch_fault(d, MCA_DAEMON_FAULT_OVERRUN, MCA_ETIMEDOUT, t, -1, 0, 0, d->consecutive_overruns,
+                            NULL);
             }
         } else {
             d->consecutive_overruns = 0;
@@ -1200,8 +1293,12 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     for (int a = 0; a < d->n_arms; a++) {
         s->implausible_samples += d->implausible[a];
     }
-    for (size_t i = 0; i < sizeof s->fault_text - 1 && d->fault_text[i]; i++) {
-        s->fault_text[i] = d->fault_text[i];
+    /* the record, not the text (this runs in the loop once a second): mca_daemon_summary() makes the text */
+    s->fault_detail = d->fault_detail;
+    s->fault_arm_code = d->fault_arm_code;
+    s->fault_count = d->fault_count;
+    for (size_t i = 0; i < sizeof s->fault_text - 1 && d->ctrl_fault_text[i]; i++) {
+        s->fault_text[i] = d->ctrl_fault_text[i];
     }
     s->fault_t = d->fault_t;
     s->log_dropped = mca_rtlog_dropped(&d->log);
@@ -1231,9 +1328,15 @@ void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
         *s = d->sum_main;
         s->state = mca_daemon_state(d);
         s->ticks = mca_daemon_ticks(d);
-        return;
+    } else {
+        compute_summary(d, s);
     }
-    compute_summary(d, s);
+    if (s->fault) {
+        char ctrl[sizeof s->fault_text];
+        memcpy(ctrl, s->fault_text, sizeof ctrl);
+        fault_describe(d, s->fault, s->fault_arm, s->fault_detail, s->fault_arm_code, s->fault_count, ctrl,
+                       s->fault_text, sizeof s->fault_text);
+    }
 }
 
 void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
@@ -1327,16 +1430,7 @@ void mca_daemon_close(mca_daemon_t *d) {
         st->skipped_periods = s.skipped_periods;
         d->snap.tick = s.ticks;
         st->ticks = s.ticks;
-        /* the bridge queues every rate_divisor-th push: offer the final snapshot until it is queued */
-        mca_dds_stats_t bs;
-        uint64_t pushes = 1;
-        if (mca_dds_bridge_stats(d->dds, &bs) == MCA_OK && d->cell.dds.publish_divisor > 1) {
-            const uint64_t div = d->cell.dds.publish_divisor;
-            pushes = (div - bs.offered % div) % div + 1;
-        }
-        for (uint64_t i = 0; i < pushes; i++) {
-            mca_dds_bridge_push(d->dds, &d->snap);
-        }
+        mca_dds_bridge_push(d->dds, &d->snap); /* the bridge queues every push: the final one goes out */
         mca_dds_bridge_destroy(d->dds, NULL);
         d->dds = NULL;
     }

@@ -12,13 +12,21 @@ int mca_rtlog_init(mca_rtlog_t *log, const char *tag) {
         return MCA_EINVAL;
     }
     log->tag = tag ? tag : "mca";
+    log->formatter = NULL;
+    log->formatter_arg = NULL;
     return mca_ring_init(&log->ring, log->storage, sizeof log->storage, sizeof(mca_rtlog_rec_t),
                          MCA_RTLOG_CAPACITY);
 }
 
-void mca_rtlog(mca_rtlog_t *log, int level, const char *fmt, int nargs, double a0, double a1, double a2,
-               double a3, const char *text) {
+void mca_rtlog_set_formatter(mca_rtlog_t *log, mca_rtlog_formatter_t fn, void *arg) {
+    log->formatter = fn;
+    log->formatter_arg = arg;
+}
+
+static void rtlog_put(mca_rtlog_t *log, int level, const char *fmt, int code, int nargs, double a0, double a1,
+                      double a2, double a3, const char *text) {
     mca_rtlog_rec_t r;
+    r.code = code;
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts); /* vDSO: no system call */
     r.level = level;
@@ -39,10 +47,31 @@ void mca_rtlog(mca_rtlog_t *log, int level, const char *fmt, int nargs, double a
     mca_ring_push(&log->ring, &r);
 }
 
+void mca_rtlog(mca_rtlog_t *log, int level, const char *fmt, int nargs, double a0, double a1, double a2,
+               double a3, const char *text) {
+    rtlog_put(log, level, fmt, 0, nargs, a0, a1, a2, a3, text);
+}
+
+void mca_rtlog_code(mca_rtlog_t *log, int level, int code, int nargs, double a0, double a1, double a2,
+                    double a3, const char *text) {
+    rtlog_put(log, level, NULL, code, nargs, a0, a1, a2, a3, text);
+}
+
 char *mca_rtlog_format(const mca_rtlog_t *log, const mca_rtlog_rec_t *r, char *buf, size_t len) {
     char msg[384];
     const double *a = r->arg;
     const char *t = r->text;
+    if (r->fmt == NULL) {
+        /* a code record: the owner's formatter (non-rt) */
+        msg[0] = 0;
+        if (log->formatter) {
+            log->formatter(log->formatter_arg, r, msg, sizeof msg);
+        } else {
+            snprintf(msg, sizeof msg, "code %d: %g %g %g %g %s", r->code, a[0], a[1], a[2], a[3], t);
+        }
+        snprintf(buf, len, "<%d>%s: %s", r->level, log->tag, msg);
+        return buf;
+    }
     /* the text goes right after the numbers (see the format rules) */
     switch (r->nargs) {
     case 0:

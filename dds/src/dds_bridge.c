@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher thread -> Cyclone DDS writers. */
+/* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher thread -> Cyclone DDS writers. The publisher
+ * parks on a futex when the ring is empty; a push wakes it only when it is parked. */
 #include "mca/dds_bridge.h"
 
 #include <math.h>
@@ -8,7 +9,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <errno.h>
+#include <linux/futex.h> /* FUTEX_WAIT_PRIVATE, FUTEX_WAKE_PRIVATE */
+#include <sys/prctl.h>   /* PR_SET_TIMERSLACK */
+#include <sys/syscall.h> /* SYS_futex */
 #include <time.h>
+#include <unistd.h> /* syscall */
 
 #include "mca/dds_qos.h"
 #include "mca/err.h"
@@ -27,6 +33,12 @@ struct mca_dds_bridge {
     char partition[MCA_DDS_PARTITION_MAX + 1];
 
     _Atomic uint64_t offered; /* written by the rt thread only */
+    _Atomic uint64_t wakes;   /* written by the rt thread only */
+    /* Park/wake (futex): the publisher sets `parked` before it re-checks the ring and sleeps on `wake_seq`;
+     * a push that finds `parked` set clears it, bumps `wake_seq` and wakes the futex. */
+    _Atomic uint32_t wake_seq;
+    _Atomic int parked;
+    _Atomic uint64_t parks, grid_sleeps; /* written by the publisher thread only */
     /* Written by the publisher thread only. */
     _Atomic uint64_t published, samples, write_errors, invalid, max_pending;
     _Atomic int64_t max_publish_ns;
@@ -58,10 +70,8 @@ void mca_dds_config_default(mca_dds_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->domain_id = 0;
     cfg->config_path = NULL;
-    cfg->rate_divisor = 1;
     cfg->ring_capacity = 1024; /* 1 s of publisher stall at 1 kHz, 3 MB */
     cfg->status_divisor = 100;
-    cfg->poll_period_us = 200;
     cfg->controller_id = 0;
     cfg->frame_id = "world";
 }
@@ -147,6 +157,11 @@ static void write_status(mca_dds_bridge_t *b) {
     m.fault_code = st->fault_code;
     memcpy(m.fault_text, st->fault_text, sizeof m.fault_text - 1);
     m.fault_text[sizeof m.fault_text - 1] = '\0';
+    if (m.fault_code != 0 && m.fault_text[0] == '\0' && b->cfg.fault_text != NULL) {
+        /* the owner's rt side latched a code and numbers: the text is made here, off the rt path */
+        b->cfg.fault_text(b->cfg.fault_text_arg, st, m.fault_text, sizeof m.fault_text);
+        m.fault_text[sizeof m.fault_text - 1] = '\0';
+    }
     m.ticks = st->ticks;
     m.overruns = st->overruns;
     m.skipped_periods = st->skipped_periods;
@@ -171,27 +186,7 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
         bump(&b->invalid);
         return;
     }
-    for (uint32_t i = 0; i < s->n_arms; ++i) {
-        mca_dds_arm_snapshot_t *a = &s->arm[i];
-        const mca_dds_JointState js = {
-            .arm_id = (uint8_t)i,
-            .tick = s->tick,
-            .stamp_ns = s->stamp_ns,
-            .position = seq_of(a->position, a->n_dof),
-            .velocity = seq_of(a->velocity, a->n_dof),
-            .effort = seq_of(a->effort, a->n_dof),
-        };
-        write_one(b, W_STATE, &js);
-        mca_dds_JointCommand jc = {
-            .arm_id = (uint8_t)i,
-            .tick = s->tick,
-            .stamp_ns = s->stamp_ns,
-            .velocity_setpoint = seq_of(a->velocity_setpoint, a->n_dof),
-            .position_reference = seq_of(a->position_reference, a->n_dof),
-        };
-        memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
-        write_one(b, W_COMMAND, &jc);
-    }
+    /* Distances first: the safety picture is what subscribers wait for (tick -> monitor latency) */
     for (uint32_t k = 0; k < s->n_pairs; ++k) {
         mca_dds_pair_snapshot_t *p = &s->pair[k];
         mca_dds_Distances d = {
@@ -213,6 +208,27 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
         memcpy(d.e, p->e, sizeof d.e);
         write_one(b, W_DIST, &d);
     }
+    for (uint32_t i = 0; i < s->n_arms; ++i) {
+        mca_dds_arm_snapshot_t *a = &s->arm[i];
+        const mca_dds_JointState js = {
+            .arm_id = (uint8_t)i,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .position = seq_of(a->position, a->n_dof),
+            .velocity = seq_of(a->velocity, a->n_dof),
+            .effort = seq_of(a->effort, a->n_dof),
+        };
+        write_one(b, W_STATE, &js);
+        mca_dds_JointCommand jc = {
+            .arm_id = (uint8_t)i,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .velocity_setpoint = seq_of(a->velocity_setpoint, a->n_dof),
+            .position_reference = seq_of(a->position_reference, a->n_dof),
+        };
+        memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
+        write_one(b, W_COMMAND, &jc);
+    }
     const int changed = !b->have_status || s->status.state != b->last_status.state ||
                         s->status.fault_code != b->last_status.fault_code;
     b->last_status = s->status;
@@ -226,10 +242,61 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
     bump(&b->published);
 }
 
+static long futex(_Atomic uint32_t *addr, int op, uint32_t val) {
+    return syscall(SYS_futex, (uint32_t *)addr, op, val, NULL, NULL, 0);
+}
+
+/* Publisher side of the park/wake protocol: sleep until a push (or destroy) bumps wake_seq. Sets `parked`
+ * and re-checks the ring after a full fence; the pusher stores into the ring, fences and then reads
+ * `parked`: one of the two sees the other (no lost wake-up). A bump between the re-check and the sleep
+ * makes FUTEX_WAIT return at once (the value differs from `seen`). */
+static void park(mca_dds_bridge_t *b) {
+    const uint32_t seen = atomic_load_explicit(&b->wake_seq, memory_order_acquire);
+    atomic_store_explicit(&b->parked, 1, memory_order_relaxed);
+    atomic_thread_fence(memory_order_seq_cst);
+    mca_ring_stats_t rs;
+    mca_ring_stats(&b->ring, &rs);
+    if (rs.pending == 0 && !atomic_load_explicit(&b->stop, memory_order_acquire)) {
+        bump(&b->parks);
+        futex(&b->wake_seq, FUTEX_WAIT_PRIVATE, seen); /* EAGAIN / EINTR: look again */
+    }
+    atomic_store_explicit(&b->parked, 0, memory_order_relaxed);
+}
+
+static void wake(mca_dds_bridge_t *b) {
+    atomic_fetch_add_explicit(&b->wake_seq, 1u, memory_order_release);
+    futex(&b->wake_seq, FUTEX_WAKE_PRIVATE, 1);
+}
+
+/* wake_period_ns: sleep until the next publishing tick of the caller's grid has pushed (the last
+ * snapshot's stamp + period + offset), unless that is already past or the ring is not empty. */
+static void sleep_on_grid(mca_dds_bridge_t *b, int64_t stamp_ns) {
+    mca_ring_stats_t rs;
+    mca_ring_stats(&b->ring, &rs);
+    if (rs.pending > 0 || atomic_load_explicit(&b->stop, memory_order_acquire)) {
+        return;
+    }
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    const int64_t t_now = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
+    const int64_t step = (int64_t)(b->cfg.wake_period_ns + b->cfg.wake_offset_ns);
+    int64_t target = stamp_ns + step;
+    if (target <= t_now) {
+        return; /* late already: look now, park if nothing is there */
+    }
+    if (target > t_now + step) {
+        target = t_now + step; /* a stamp not on this clock: never sleep longer than one period */
+    }
+    bump(&b->grid_sleeps);
+    const struct timespec ts = {(time_t)(target / 1000000000LL), (long)(target % 1000000000LL)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+}
+
 static void *publisher_main(void *arg) {
     mca_dds_bridge_t *b = arg;
-    const struct timespec nap = {(time_t)(b->cfg.poll_period_us / 1000000u),
-                                 (long)(b->cfg.poll_period_us % 1000000u) * 1000L};
+    /* wake at the grid point itself, not up to 50 us later (the default slack of a normal thread) */
+    prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
     for (;;) {
         /* Read stop BEFORE trying the ring: once stop is seen, one more empty pop means drained. */
         const int stop = atomic_load_explicit(&b->stop, memory_order_acquire);
@@ -247,12 +314,15 @@ static void *publisher_main(void *arg) {
             if (dt > atomic_load_explicit(&b->max_publish_ns, memory_order_relaxed)) {
                 atomic_store_explicit(&b->max_publish_ns, dt, memory_order_relaxed);
             }
+            if (b->cfg.wake_period_ns > 0) {
+                sleep_on_grid(b, b->work.stamp_ns);
+            }
             continue;
         }
         if (stop) {
             break;
         }
-        nanosleep(&nap, NULL);
+        park(b);
     }
     return NULL;
 }
@@ -271,9 +341,9 @@ static void delete_entities(mca_dds_bridge_t *b) {
 }
 
 int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
-    if (out == NULL || cfg == NULL || cfg->rate_divisor == 0 || cfg->status_divisor == 0 ||
-        !is_pow2(cfg->ring_capacity) || cfg->ring_capacity > MCA_RING_MAX_CAPACITY ||
-        cfg->domain_id > MCA_DDS_MAX_DOMAIN || cfg->poll_period_us == 0 || cfg->poll_period_us > 1000000) {
+    if (out == NULL || cfg == NULL || cfg->status_divisor == 0 || !is_pow2(cfg->ring_capacity) ||
+        cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN ||
+        cfg->wake_period_ns > 10000000000ULL || cfg->wake_offset_ns > 10000000000ULL) {
         return MCA_EINVAL;
     }
     const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
@@ -363,10 +433,14 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
 }
 
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
-    const uint64_t n = atomic_load_explicit(&bridge->offered, memory_order_relaxed);
-    atomic_store_explicit(&bridge->offered, n + 1u, memory_order_relaxed);
-    if (bridge->cfg.rate_divisor == 1 || n % bridge->cfg.rate_divisor == 0) {
-        mca_ring_push(&bridge->ring, snap);
+    bump(&bridge->offered);
+    mca_ring_push(&bridge->ring, snap);
+    /* pairs with the fence in park(): the publisher sees the record or we see it parked */
+    atomic_thread_fence(memory_order_seq_cst);
+    if (atomic_load_explicit(&bridge->parked, memory_order_relaxed) &&
+        atomic_exchange_explicit(&bridge->parked, 0, memory_order_relaxed)) {
+        bump(&bridge->wakes);
+        wake(bridge); /* one non-blocking system call */
     }
 }
 
@@ -386,6 +460,9 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     out->invalid = atomic_load_explicit(&bridge->invalid, memory_order_relaxed);
     out->max_pending = atomic_load_explicit(&bridge->max_pending, memory_order_relaxed);
     out->max_publish_ns = atomic_load_explicit(&bridge->max_publish_ns, memory_order_relaxed);
+    out->wakes = atomic_load_explicit(&bridge->wakes, memory_order_relaxed);
+    out->parks = atomic_load_explicit(&bridge->parks, memory_order_relaxed);
+    out->grid_sleeps = atomic_load_explicit(&bridge->grid_sleeps, memory_order_relaxed);
     return MCA_OK;
 }
 
@@ -435,7 +512,8 @@ void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_sta
         return;
     }
     if (bridge->thread_started) {
-        atomic_store_explicit(&bridge->stop, 1, memory_order_release);
+        atomic_store_explicit(&bridge->stop, 1, memory_order_seq_cst);
+        wake(bridge); /* a parked publisher sees stop, drains what is left and ends */
         pthread_join(bridge->thread, NULL);
     }
     if (bridge->have_status) {

@@ -28,10 +28,9 @@ static void usage(FILE *f) {
                "  --config FILE      Cyclone DDS XML (default: CYCLONEDDS_URI or built-in)\n"
                "  --ticks N          ticks to run (default 10000; 0 = until Ctrl-C)\n"
                "  --hz F             loop rate (default 1000)\n"
-               "  --divisor N        publish every Nth tick (default 1)\n"
+               "  --divisor N        publish every Nth tick (default 1; the other ticks fill nothing)\n"
                "  --ring N           ring capacity, power of two (default 1024)\n"
                "  --partition NAME   publish in DDS partition NAME (default: the default partition)\n"
-               "  --poll-us N        publisher thread's sleep when the ring is empty (default 200)\n"
                "  --wait-readers N   before the first tick wait for N matched readers\n"
                "  --wait-topic NAME  ... on this topic only (default: on every topic)\n"
                "  --wait-timeout MS  give up waiting after MS ms (default 10000), exit 1\n"
@@ -61,6 +60,7 @@ int main(int argc, char **argv) {
     mca_dds_config_t cfg;
     mca_dds_config_default(&cfg);
     unsigned long long ticks = 10000, wait_readers = 0, wait_timeout = 10000, linger = 0, v = 0;
+    unsigned long long divisor = 1;
     double hz = 1000.0;
     const char *wait_topic = NULL;
     static const struct option opts[] = {
@@ -74,7 +74,6 @@ int main(int argc, char **argv) {
         {"wait-timeout", required_argument, NULL, 't'},
         {"linger", required_argument, NULL, 'l'},
         {"wait-topic", required_argument, NULL, 'T'},
-        {"poll-us", required_argument, NULL, 'p'},
         {"partition", required_argument, NULL, 'P'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
@@ -110,7 +109,7 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "mca-dds-synth: --divisor must be >= 1\n");
                 return 2;
             }
-            cfg.rate_divisor = (uint32_t)v;
+            divisor = v;
             break;
         case 'r':
             if (parse_u64(optarg, "--ring", 1u << 20, &v) != 0 || v < 2 || (v & (v - 1)) != 0) {
@@ -131,13 +130,6 @@ int main(int argc, char **argv) {
             break;
         case 'P':
             cfg.partition = optarg;
-            break;
-        case 'p':
-            if (parse_u64(optarg, "--poll-us", 1000000, &v) != 0 || v == 0) {
-                fprintf(stderr, "mca-dds-synth: --poll-us must be in 1..1000000\n");
-                return 2;
-            }
-            cfg.poll_period_us = (uint32_t)v;
             break;
         case 'T':
             wait_topic = optarg;
@@ -200,8 +192,10 @@ int main(int argc, char **argv) {
         }
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL) == EINTR && !g_stop) {
         }
-        mca_dds_synth_fill(&snap, k, now_ns(), &min_so_far, &min_stamp);
-        mca_dds_bridge_push(bridge, &snap);
+        if (k % divisor == 0) { /* decimation here: a tick that does not publish fills nothing */
+            mca_dds_synth_fill(&snap, k, now_ns(), &min_so_far, &min_stamp);
+            mca_dds_bridge_push(bridge, &snap);
+        }
     }
     if (linger > 0 && !g_stop) {
         const struct timespec ts = {(time_t)(linger / 1000), (long)(linger % 1000) * 1000000L};
@@ -210,10 +204,10 @@ int main(int argc, char **argv) {
     mca_dds_stats_t st;
     mca_dds_bridge_destroy(bridge, &st); /* flushes first */
     printf("mca-dds-synth: ticks %llu offered %llu queued %llu published %llu dropped %llu "
-           "samples %llu write_errors %llu max_pending %llu max_publish_us %lld\n",
+           "samples %llu write_errors %llu max_pending %llu max_publish_us %lld wakes %llu parks %llu\n",
            (unsigned long long)k, (unsigned long long)st.offered, (unsigned long long)st.queued,
            (unsigned long long)st.published, (unsigned long long)st.dropped, (unsigned long long)st.samples,
            (unsigned long long)st.write_errors, (unsigned long long)st.max_pending,
-           (long long)(st.max_publish_ns / 1000));
+           (long long)(st.max_publish_ns / 1000), (unsigned long long)st.wakes, (unsigned long long)st.parks);
     return st.write_errors == 0 ? 0 : 1;
 }

@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /* DDS bridge, in one process: argument and config errors, every pushed snapshot arrives intact on a
- * DDS reader, rate divisor, ring overrun accounting (published + dropped == queued, also in the final
- * ControllerStatus), rejected snapshots. argv[1] = Cyclone XML, argv[2] = domain id. The bridge under
- * test uses CYCLONEDDS_URI (set by ctest) so that the readers here can share its domain. */
+ * DDS reader, the publisher parks (no polling) and every push is queued and wakes it, ring overrun accounting
+ * (published + dropped == queued, also in the final ControllerStatus), rejected snapshots. argv[1] = Cyclone
+ * XML, argv[2] = domain id. The bridge under test uses CYCLONEDDS_URI (set by ctest) so that the readers here
+ * can share its domain. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -13,7 +14,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
+
+#include <dirent.h> /* opendir: /proc/self/task */
 
 #include "mca/dds_bridge.h"
 #include "mca/dds_qos.h"
@@ -33,9 +37,9 @@ static void test_create_rejects_bad_arguments(void **state) {
     cfg.domain_id = g_domain;
     assert_int_equal(mca_dds_bridge_create(NULL, &cfg), MCA_EINVAL);
     assert_int_equal(mca_dds_bridge_create(&b, NULL), MCA_EINVAL);
-    cfg.rate_divisor = 0;
+    cfg.status_divisor = 0;
     assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
-    cfg.rate_divisor = 1;
+    cfg.status_divisor = 100;
     cfg.ring_capacity = 100;
     assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
     cfg.ring_capacity = 16;
@@ -118,13 +122,11 @@ static void open_readers(readers_t *r) {
     open_readers_in(r, g_partition);
 }
 
-static mca_dds_bridge_t *make_bridge(uint32_t divisor, uint32_t capacity, uint32_t poll_us) {
+static mca_dds_bridge_t *make_bridge(uint32_t capacity) {
     mca_dds_config_t cfg;
     mca_dds_config_default(&cfg);
     cfg.domain_id = g_domain;
-    cfg.rate_divisor = divisor;
     cfg.ring_capacity = capacity;
-    cfg.poll_period_us = poll_us;
     cfg.frame_id = "base_link";
     cfg.partition = g_partition;
     mca_dds_bridge_t *b = NULL;
@@ -240,7 +242,7 @@ static void push_range(mca_dds_bridge_t *b, uint64_t n) {
 
 static void test_every_snapshot_arrives_intact(void **state) {
     (void)state;
-    mca_dds_bridge_t *b = make_bridge(1, 256, 200);
+    mca_dds_bridge_t *b = make_bridge(256);
     readers_t r;
     open_readers(&r);
     assert_int_equal(mca_dds_bridge_wait_readers(b, NULL, 1, 10000), MCA_OK);
@@ -293,30 +295,151 @@ static void test_every_snapshot_arrives_intact(void **state) {
     dds_delete(r.pp);
 }
 
-static void test_rate_divisor(void **state) {
+/* Context switches (voluntary + involuntary) of this process's thread named @p name; -1 if none. */
+static long thread_switches(const char *name) {
+    char path[300], line[128];
+    DIR *dir = opendir("/proc/self/task");
+    long n = -1;
+    for (struct dirent *e; dir != NULL && n < 0 && (e = readdir(dir)) != NULL;) {
+        snprintf(path, sizeof path, "/proc/self/task/%s/comm", e->d_name);
+        FILE *f = fopen(path, "r");
+        if (f == NULL) {
+            continue;
+        }
+        const int same = fgets(line, sizeof line, f) != NULL && strncmp(line, name, strlen(name)) == 0;
+        fclose(f);
+        if (!same) {
+            continue;
+        }
+        snprintf(path, sizeof path, "/proc/self/task/%s/status", e->d_name);
+        f = fopen(path, "r");
+        long v;
+        n = 0;
+        while (f != NULL && fgets(line, sizeof line, f) != NULL) {
+            if (sscanf(line, "voluntary_ctxt_switches: %ld", &v) == 1 ||
+                sscanf(line, "nonvoluntary_ctxt_switches: %ld", &v) == 1) {
+                n += v;
+            }
+        }
+        if (f != NULL) {
+            fclose(f);
+        }
+    }
+    if (dir != NULL) {
+        closedir(dir);
+    }
+    return n;
+}
+
+/* Issue 13: the publisher does not poll. With the ring empty it parks (the old one woke every 200 us:
+ * ~5000 switches a second); every push is queued (decimation is the caller's) and a push wakes a parked
+ * publisher, at most one wake per push. */
+static void test_publisher_parks_and_wakes(void **state) {
     (void)state;
-    mca_dds_bridge_t *b = make_bridge(5, 64, 200);
+    mca_dds_bridge_t *b = make_bridge(64);
     readers_t r;
     open_readers(&r);
     assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 10000), MCA_OK);
-    push_range(b, 50);
-    mca_dds_stats_t st;
-    mca_dds_bridge_destroy(b, &st);
-    assert_int_equal(st.offered, 50);
-    assert_int_equal(st.queued, 10);
-    assert_int_equal(st.published, 10);
-    uint64_t ticks[16];
-    assert_int_equal(take_distances(r.rd_dist, ticks, 16), 10);
-    for (int i = 0; i < 10; ++i) {
-        assert_int_equal(ticks[i], (uint64_t)(5 * i)); /* ticks 0, 5, 10, ... */
+    const long sw0 = thread_switches("mca-dds-pub");
+    assert_true(sw0 >= 0);
+    const struct timespec idle = {1, 0};
+    nanosleep(&idle, NULL);
+    const long sw1 = thread_switches("mca-dds-pub");
+    print_message("publisher thread: %ld context switches in 1 s idle\n", sw1 - sw0);
+    assert_true(sw1 - sw0 <= 2);
+
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    enum { N = 20 };
+    for (uint64_t k = 0; k < N; ++k) {
+        mca_dds_synth_fill(&snap, 10 * k, (int64_t)(1000 + 10 * k), &mn, &ms);
+        mca_dds_bridge_push(b, &snap);
+        /* woken, not polled: the snapshot goes out at once (10 s: only a starved machine is that slow) */
+        mca_dds_stats_t st;
+        for (int i = 0; i < 10000; ++i) {
+            assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
+            if (st.published == k + 1) {
+                break;
+            }
+            const struct timespec ms1 = {0, 1000000};
+            nanosleep(&ms1, NULL);
+        }
+        assert_int_equal(st.published, k + 1);
     }
+    mca_dds_stats_t st;
+    assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
+    print_message("wakes %llu parks %llu of %d pushes\n", (unsigned long long)st.wakes,
+                  (unsigned long long)st.parks, N);
+    assert_true(st.wakes >= 1 && st.wakes <= N);
+    assert_true(st.parks >= st.wakes);
+    mca_dds_bridge_destroy(b, &st);
+    assert_int_equal(st.offered, N);
+    assert_int_equal(st.queued, N); /* every push is queued: the caller decimates */
+    assert_int_equal(st.published, N);
+    uint64_t ticks[N + 4];
+    assert_int_equal(take_distances(r.rd_dist, ticks, N + 4), N);
+    for (int i = 0; i < N; ++i) {
+        assert_int_equal(ticks[i], (uint64_t)(10 * i));
+    }
+    dds_delete(r.pp);
+}
+
+/* With wake_period_ns the publisher sleeps on the caller's grid (stamp + period + offset) after each
+ * snapshot: on-time pushes find it asleep there and make no system call (no FUTEX_WAKE). */
+static void test_publisher_wakes_on_grid(void **state) {
+    (void)state;
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.ring_capacity = 64;
+    cfg.partition = g_partition;
+    cfg.wake_period_ns = 10000000; /* a push every 10 ms */
+    cfg.wake_offset_ns = 3000000;  /* the publisher looks 3 ms after each */
+    mca_dds_bridge_t *b = NULL;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    readers_t r;
+    open_readers(&r);
+    assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 10000), MCA_OK);
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    enum { N = 30 };
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    const int64_t start = (int64_t)t0.tv_sec * 1000000000LL + t0.tv_nsec + 10000000;
+    for (int k = 0; k < N; ++k) {
+        const int64_t at = start + (int64_t)k * 10000000;
+        const struct timespec ts = {(time_t)(at / 1000000000LL), (long)(at % 1000000000LL)};
+        while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
+        }
+        mca_dds_synth_fill(&snap, (uint64_t)k, at, &mn, &ms);
+        snap.stamp_ns = at; /* the tick's grid time, as mcad's wake stamp */
+        mca_dds_bridge_push(b, &snap);
+    }
+    mca_dds_stats_t st;
+    for (int i = 0; i < 5000; ++i) {
+        assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
+        if (st.published == N) {
+            break;
+        }
+        const struct timespec ms1 = {0, 1000000};
+        nanosleep(&ms1, NULL);
+    }
+    print_message("grid: %llu sleeps on the grid, %llu futex wakes of %d pushes\n",
+                  (unsigned long long)st.grid_sleeps, (unsigned long long)st.wakes, N);
+    assert_int_equal(st.published, N);
+    assert_true(st.grid_sleeps >= N / 2);
+    assert_true(st.wakes <= N / 2); /* only a push more than 3 ms late finds the publisher parked */
+    mca_dds_bridge_destroy(b, &st);
     dds_delete(r.pp);
 }
 
 static void test_overrun_drops_oldest_and_counts(void **state) {
     (void)state;
-    /* Ring of 4 drained every 300 ms: 100 snapshots pushed at once must mostly be dropped. */
-    mca_dds_bridge_t *b = make_bridge(1, 4, 300000);
+    /* Ring of 4: 100 snapshots pushed back to back (~1 us each) while one publish takes tens of us: most are
+     * dropped. */
+    mca_dds_bridge_t *b = make_bridge(4);
     readers_t r;
     open_readers(&r);
     assert_int_equal(mca_dds_bridge_wait_readers(b, NULL, 1, 10000), MCA_OK);
@@ -324,7 +447,7 @@ static void test_overrun_drops_oldest_and_counts(void **state) {
     mca_dds_stats_t st;
     assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
     assert_int_equal(st.queued, 100);
-    assert_true(st.dropped >= 80); /* the drain thread sleeps 300 ms: at most a few were popped */
+    assert_true(st.dropped >= 50); /* the publisher drains one per publish, far slower than a push */
     mca_dds_bridge_destroy(b, &st);
     assert_int_equal(st.queued, 100);
     assert_int_equal(st.published + st.dropped + st.invalid, st.queued);
@@ -347,7 +470,7 @@ static void test_overrun_drops_oldest_and_counts(void **state) {
 
 static void test_partition_isolates(void **state) {
     (void)state;
-    mca_dds_bridge_t *b = make_bridge(1, 16, 200);
+    mca_dds_bridge_t *b = make_bridge(16);
     readers_t other, same;
     open_readers_in(&other, "mca-test-some-other-partition");
     /* A reader in another partition of the same domain never matches and gets nothing. */
@@ -365,7 +488,7 @@ static void test_partition_isolates(void **state) {
 
 static void test_invalid_snapshot_rejected(void **state) {
     (void)state;
-    mca_dds_bridge_t *b = make_bridge(1, 16, 200);
+    mca_dds_bridge_t *b = make_bridge(16);
     static mca_dds_snapshot_t snap;
     double mn = INFINITY;
     int64_t ms = 0;
@@ -439,10 +562,15 @@ int main(int argc, char **argv) {
     g_domain = (uint32_t)strtoul(argv[2], NULL, 10);
     snprintf(g_partition, sizeof g_partition, "mca-test-bridge-%ld", (long)getpid());
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_create_rejects_bad_arguments),    cmocka_unit_test(test_create_rejects_bad_xml),
-        cmocka_unit_test(test_every_snapshot_arrives_intact),   cmocka_unit_test(test_rate_divisor),
-        cmocka_unit_test(test_overrun_drops_oldest_and_counts), cmocka_unit_test(test_partition_isolates),
-        cmocka_unit_test(test_invalid_snapshot_rejected),       cmocka_unit_test(test_brake_factor_eq13),
+        cmocka_unit_test(test_create_rejects_bad_arguments),
+        cmocka_unit_test(test_create_rejects_bad_xml),
+        cmocka_unit_test(test_every_snapshot_arrives_intact),
+        cmocka_unit_test(test_publisher_parks_and_wakes),
+        cmocka_unit_test(test_publisher_wakes_on_grid),
+        cmocka_unit_test(test_overrun_drops_oldest_and_counts),
+        cmocka_unit_test(test_partition_isolates),
+        cmocka_unit_test(test_invalid_snapshot_rejected),
+        cmocka_unit_test(test_brake_factor_eq13),
         cmocka_unit_test(test_pair_fill_from_armdist),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

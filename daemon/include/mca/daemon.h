@@ -123,6 +123,11 @@ typedef struct mca_daemon_csv_rec {
 
 #define MCA_DAEMON_CSV_CAPACITY 4096
 
+/** The DDS publisher wakes this long after a publishing tick's wake-up (mca_dds_config_t.wake_offset_ns):
+ *  above the whole tick's usual compute time here (p50 ~25 us, p99 ~50 us), so that most pushes find the
+ *  publisher asleep on the grid (no system call) and the sample still leaves soon after the tick. */
+#define MCA_DAEMON_DDS_WAKE_OFFSET_NS 60000
+
 /** Final/online figures. */
 typedef struct mca_daemon_summary {
     int state;
@@ -140,7 +145,12 @@ typedef struct mca_daemon_summary {
     int fault_arm;      /**< the arm the fault is about (ARM, LOST_FEEDBACK, BUS, FEEDBACK), else -1 */
     int feedback_fault; /**< mca_feedback_fault_t when fault == FEEDBACK */
     uint64_t implausible_samples; /**< feedback samples dropped as implausible (every arm, whole run) */
-    char fault_text[160];
+    /* The fault as the loop latched it: a code and numbers (no text is made on the rt path). */
+    int fault_detail;   /**< ARM: 1 reports FAULT, 2 brakes on its own, 3 does not servo; FEEDBACK: the
+                             mca_feedback_fault_t; CONTROLLER: the mca_ctrl_fault_t */
+    int fault_arm_code; /**< ARM: the arm's fault code (1, 2) or state (3) */
+    int fault_count;    /**< OVERRUN: periods missed in a row; LOST_FEEDBACK, BUS: cycles without feedback */
+    char fault_text[160]; /**< made by mca_daemon_summary() (non-rt) from the fields above */
     double fault_t;
     uint64_t log_dropped, csv_dropped;
     /* braking (SIGTERM or a fault; through mca_controller_brake) */

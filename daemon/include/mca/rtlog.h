@@ -10,11 +10,16 @@
  * all double conversions (%g, %.3f, %e ...) taking the numbers in order, plus at most one %s, which
  * must come AFTER all the numbers and takes the text.
  *
+ * A record can also carry a code and numbers without any format (mca_rtlog_code()): the drainer turns it
+ * into text with the owner's formatter (mca_rtlog_set_formatter()), off the rt path; the daemon logs its
+ * faults this way.
+ *
  * If the drainer falls behind, the oldest records are overwritten and counted (mca_rtlog_dropped()).
  */
 #ifndef MCA_RTLOG_H
 #define MCA_RTLOG_H
 
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -33,16 +38,23 @@ enum { MCA_LOG_ERR = 3, MCA_LOG_WARNING = 4, MCA_LOG_NOTICE = 5, MCA_LOG_INFO = 
 typedef struct mca_rtlog_rec {
     int level;
     int nargs;
+    int code;         /**< mca_rtlog_code(): the owner's code (fmt is NULL then) */
     int64_t stamp_ns; /**< CLOCK_MONOTONIC */
     const char *fmt;
     double arg[4];
     char text[MCA_RTLOG_TEXT];
 } mca_rtlog_rec_t;
 
+/** Formatter of mca_rtlog_code() records (non-rt, called by the drainer): writes the message (without the
+ *  "<N>tag: " prefix) into buf. */
+typedef void (*mca_rtlog_formatter_t)(void *arg, const struct mca_rtlog_rec *rec, char *buf, size_t len);
+
 typedef struct mca_rtlog {
     mca_ring_t ring;
     _Alignas(8) unsigned char storage[MCA_RING_STORAGE_SIZE(sizeof(mca_rtlog_rec_t), MCA_RTLOG_CAPACITY)];
     const char *tag; /**< prefix of every line ("mcad") */
+    mca_rtlog_formatter_t formatter;
+    void *formatter_arg;
 } mca_rtlog_t;
 
 /** Context: init. @retval MCA_OK, MCA_EINVAL */
@@ -51,6 +63,14 @@ int mca_rtlog_init(mca_rtlog_t *log, const char *tag);
 /** Queue one record (rt; one producer thread). text may be NULL. Unused args are ignored. */
 void mca_rtlog(mca_rtlog_t *log, int level, const char *fmt, int nargs, double a0, double a1, double a2,
                double a3, const char *text);
+
+/** Queue one record with a code and numbers, no format (rt; one producer thread): the drainer formats it
+ *  with the formatter set by mca_rtlog_set_formatter(). text may be NULL. */
+void mca_rtlog_code(mca_rtlog_t *log, int level, int code, int nargs, double a0, double a1, double a2,
+                    double a3, const char *text);
+
+/** Set the formatter of code records. Context: init (before the first record is drained). */
+void mca_rtlog_set_formatter(mca_rtlog_t *log, mca_rtlog_formatter_t fn, void *arg);
 
 /** Write every queued record to f (non-rt; one consumer thread). @return records written. */
 int mca_rtlog_drain(mca_rtlog_t *log, FILE *f);

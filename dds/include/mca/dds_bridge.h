@@ -1,10 +1,16 @@
 /* SPDX-License-Identifier: MIT */
 /** @file mca/dds_bridge.h
  * DDS bridge: publishes the controller's state on Cyclone DDS without ever making the 1 kHz loop
- * wait. The loop fills a plain C snapshot per tick and calls mca_dds_bridge_push() (wait-free copy
- * into a lock-free drop-oldest ring, see mca/ring.h); a normal-priority publisher thread owned by
- * the bridge drains the ring and writes the DDS samples. If the thread falls behind, the oldest
- * snapshots are dropped and counted, never the loop delayed.
+ * wait. On a tick that publishes (the CALLER decides which: the bridge queues every snapshot it is
+ * given), the loop fills a plain C snapshot and calls mca_dds_bridge_push() (wait-free copy into a
+ * lock-free drop-oldest ring, see mca/ring.h); a normal-priority publisher thread owned by the bridge
+ * drains the ring and writes the DDS samples. The publisher never polls. With wake_period_ns set it
+ * wakes on the caller's own grid (absolute clock_nanosleep until the last snapshot's stamp_ns +
+ * wake_period_ns + wake_offset_ns, i.e. just after the next publishing tick has pushed) and the push
+ * costs the loop no system call; whenever it finds the ring empty (a late or skipped tick, or without
+ * wake_period_ns) it parks on a futex, and a push wakes it only if it is parked (one FUTEX_WAKE, a
+ * non-blocking system call, at most once per push). If the thread falls behind, the oldest snapshots are
+ * dropped and counted, never the loop delayed.
  *
  * Topics (types in dds/mca_dds.idl, QoS in docs/dds.md), one sample per published snapshot:
  *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id = index in arm[])
@@ -14,11 +20,12 @@
  *                        on any change of state or fault code, and once more at destroy.
  *
  * Calling context of each function: init (start-up/shut-down, may allocate and block), rt (the 1 kHz
- * loop: no allocation, no lock, no system call), non-rt (any normal thread).
+ * loop: no allocation, no lock, no system call but the wake-up above), non-rt (any normal thread).
  */
 #ifndef MCA_DDS_BRIDGE_H
 #define MCA_DDS_BRIDGE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "mca/armdist.h" /* mca_arm_distances_t */
@@ -100,20 +107,32 @@ typedef struct mca_dds_snapshot {
 typedef struct mca_dds_config {
     uint32_t domain_id;      /**< DDS domain (0..230) */
     const char *config_path; /**< Cyclone XML file, or NULL for CYCLONEDDS_URI / built-in defaults */
-    uint32_t rate_divisor;   /**< publish every Nth pushed snapshot; 1 = every tick (default) */
     uint32_t ring_capacity;  /**< snapshots in the ring, power of two (default 1024) */
     uint32_t status_divisor; /**< status every Nth published snapshot (default 100) + on change */
-    uint32_t poll_period_us; /**< publisher thread's sleep when the ring is empty (default 200) */
     uint8_t controller_id;   /**< key of ControllerStatus (default 0) */
     const char *frame_id;    /**< JointCommand.frame_id (default "world"); copied at create */
     const char *partition;   /**< DDS partition of the writers, NULL = default partition; copied.
                                   Separates controllers (or test runs) sharing a domain. */
+    /** Optional, called by the publisher thread (non-rt) before it writes a ControllerStatus whose
+     *  fault_code is not 0 and whose fault_text is empty: the owner writes the text (len bytes with
+     *  the NUL) from what its rt side latched as a code and numbers, so that no text is formatted on
+     *  the rt path. NULL: the snapshot's text as pushed. */
+    void (*fault_text)(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len);
+    void *fault_text_arg;
+    /** The caller's publishing period on CLOCK_MONOTONIC [ns] (publish divisor x loop period; the
+     *  snapshots' stamp_ns must be CLOCK_MONOTONIC wake times of the ticks): after each snapshot the
+     *  publisher sleeps until its stamp + wake_period_ns + wake_offset_ns instead of parking, so the push
+     *  of an on-time tick makes no system call. 0 (default): parked, woken by the pushes. */
+    uint64_t wake_period_ns;
+    /** How long after a publishing tick's wake-up its push is expected [ns] (a bit over the tick's
+     *  compute time): a push later than that finds the publisher parked and wakes it. */
+    uint64_t wake_offset_ns;
 } mca_dds_config_t;
 
 /** Bridge counters. */
 typedef struct mca_dds_stats {
     uint64_t offered;       /**< mca_dds_bridge_push() calls */
-    uint64_t queued;        /**< snapshots put into the ring (offered / rate_divisor) */
+    uint64_t queued;        /**< snapshots put into the ring (= offered: the caller decimates) */
     uint64_t published;     /**< snapshots written to DDS */
     uint64_t dropped;       /**< snapshots lost to ring overrun */
     uint64_t pending;       /**< snapshots in the ring now */
@@ -122,6 +141,9 @@ typedef struct mca_dds_stats {
     uint64_t invalid;       /**< snapshots rejected (n_arms, n_dof, ... out of range) */
     uint64_t max_pending;   /**< most snapshots seen waiting in the ring (high-water mark) */
     int64_t max_publish_ns; /**< longest time spent writing one snapshot's samples */
+    uint64_t wakes;         /**< pushes that woke the parked publisher (FUTEX_WAKE calls of the rt side) */
+    uint64_t parks;         /**< times the publisher parked (slept on the futex with the ring empty) */
+    uint64_t grid_sleeps;   /**< wake_period_ns: sleeps until the next publishing tick (no futex) */
 } mca_dds_stats_t;
 
 typedef struct mca_dds_bridge mca_dds_bridge_t;
@@ -144,8 +166,9 @@ void mca_dds_config_default(mca_dds_config_t *cfg);
 int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);
 
 /**
- * Hand one snapshot to the publisher. Copies it into the ring (every rate_divisor-th call) and
- * returns; never waits, never fails. Context: rt, from ONE thread only (the loop).
+ * Hand one snapshot to the publisher: copies it into the ring (every call: decimation is the caller's,
+ * so that a tick that does not publish fills nothing) and, if the publisher is parked, wakes it with
+ * one FUTEX_WAKE (non-blocking); never waits, never fails. Context: rt, from ONE thread only (the loop).
  */
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
 

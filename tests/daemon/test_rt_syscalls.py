@@ -1,0 +1,156 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Issue 13: every system call of mcad's real-time thread, against the allow-list of docs/daemon.md.
+
+Runs mcad (sim backend) on the negative task for 10 s: running ticks, the controller's fault (PDNN not
+converged at 3.078 s), braking, then FAULT until the stop; DDS on (100 Hz, no subscriber needed) and the
+CSV writer on, so every ring the loop feeds is in use. strace attaches to the loop thread alone
+("mcad-loop", found in /proc) right after start-up and records each of its system calls until it exits.
+
+Allowed while the loop runs: clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, ...) (the period),
+futex(..., FUTEX_WAKE_PRIVATE, 1) (waking the DDS publisher when a late tick found it parked instead of asleep
+on the loop's grid; at most once per published tick) and
+one restart_syscall (the sleep strace's attach interrupted). Allowed only after the last clock_nanosleep
+(the thread ending: glibc's thread exit): rt_sigprocmask, madvise, exit. Anything else fails the test.
+
+With two or more CPUs the cell sets rt.cpu: 1, and the test also checks the threads' CPU affinity: the loop
+on CPU 1 alone, every other thread (supervisor/drainer, DDS publisher, Cyclone's) off CPU 1.
+
+usage: test_rt_syscalls.py MCAD SOURCE_DIR DOMAIN [--no-rt]
+exit 0 pass, 1 fail, 77 skipped (no strace)."""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+STEADY = {"clock_nanosleep", "futex", "restart_syscall"}
+THREAD_EXIT = {"rt_sigprocmask", "madvise", "exit"}
+SECONDS = 10
+
+
+def fail(msg):
+    print("FAIL: " + msg)
+    sys.exit(1)
+
+
+def threads(pid):
+    out = {}
+    for tid in os.listdir(f"/proc/{pid}/task"):
+        try:
+            name = open(f"/proc/{pid}/task/{tid}/comm").read().strip()
+            cpus = re.search(r"Cpus_allowed_list:\s*(\S+)", open(f"/proc/{pid}/task/{tid}/status").read()).group(1)
+        except (OSError, AttributeError):
+            continue
+        out[int(tid)] = (name, cpus)
+    return out
+
+
+def cpu_list(s):
+    cpus = set()
+    for part in s.split(","):
+        a, _, b = part.partition("-")
+        cpus.update(range(int(a), int(b or a) + 1))
+    return cpus
+
+
+def main():
+    mcad, src, domain = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
+    extra = sys.argv[4:]
+    strace = shutil.which("strace")
+    if not strace:
+        print("SKIP: strace not installed")
+        return 77
+    pin = (os.cpu_count() or 1) >= 2
+    tmp = tempfile.mkdtemp(prefix="mca-rt-syscalls-")
+    cell = os.path.join(tmp, "cell.yaml")
+    text = open(os.path.join(src, "config/cells/negative_sim.yaml")).read()
+    text = text.replace("../", os.path.join(src, "config") + "/")
+    text = re.sub(r"domain: *\d+", f"domain: {domain}", text)
+    if pin:
+        text = re.sub(r"cpu: *-?\d+", "cpu: 1", text)
+    open(cell, "w").write(text)
+    trace = os.path.join(tmp, "loop.strace")
+    err = open(os.path.join(tmp, "mcad.err"), "w+")
+    p = subprocess.Popen([mcad, "--csv", os.path.join(tmp, "run.csv"), "--stop-after", str(SECONDS)] + extra + [cell],
+                         stderr=err, stdout=subprocess.DEVNULL)
+    loop = None
+    t0 = time.time()
+    while loop is None and time.time() - t0 < 30 and p.poll() is None:
+        loop = next((tid for tid, (name, _) in threads(p.pid).items() if name == "mcad-loop"), None)
+        time.sleep(0.01)
+    if loop is None:
+        p.kill()
+        err.seek(0)
+        fail("no mcad-loop thread appeared: " + err.read()[-2000:])
+    st = subprocess.Popen([strace, "-qq", "-p", str(loop), "-o", trace])
+    time.sleep(1.0)
+    affinity = threads(p.pid)
+    rc = p.wait(timeout=120)
+    st.wait(timeout=30)
+    err.seek(0)
+    log = err.read()
+    print("\n".join(l for l in log.splitlines() if "summary" in l or "<3>" in l or "<4>" in l))
+    bad = []
+    if rc != 3 or "PDNN residual" not in log:
+        bad.append(f"mcad: exit {rc}, expected 3 with the PDNN fault of the negative task")
+
+    if pin:
+        for tid, (name, cpus) in sorted(affinity.items()):
+            c = cpu_list(cpus)
+            ok = c == {1} if name == "mcad-loop" else 1 not in c
+            print(f"thread {tid} {name:16s} CPUs {cpus}{'' if ok else '   <- wrong'}")
+            if not ok:
+                bad.append(f"thread {name} on CPUs {cpus} (rt.cpu 1: the loop alone on 1, every other thread off it)")
+
+    calls = []
+    for line in open(trace):
+        m = re.match(r"(\w+)\((.*)", line)
+        if m:
+            calls.append((m.group(1), line.strip()))
+        elif line.strip() and not line.startswith("+++"):
+            bad.append(f"unexpected trace line: {line.strip()}")
+    counts = {}
+    for name, _ in calls:
+        counts[name] = counts.get(name, 0) + 1
+    print("loop thread system calls:", ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+    sleeps = [i for i, (n, _) in enumerate(calls) if n == "clock_nanosleep"]
+    last_sleep = sleeps[-1] if sleeps else -1
+    restarts = 0
+    for i, (name, line) in enumerate(calls):
+        if name == "clock_nanosleep":
+            if "CLOCK_MONOTONIC, TIMER_ABSTIME" not in line:
+                bad.append(f"clock_nanosleep not absolute on CLOCK_MONOTONIC: {line}")
+        elif name == "futex":
+            if "FUTEX_WAKE_PRIVATE, 1)" not in line:
+                bad.append(f"futex other than one FUTEX_WAKE_PRIVATE: {line}")
+        elif name == "restart_syscall":
+            restarts += 1
+            if restarts > 1 or "clock_nanosleep" not in line:
+                bad.append(f"restart_syscall other than the one sleep strace interrupted: {line}")
+        elif name in THREAD_EXIT:
+            if i < last_sleep:
+                bad.append(f"{name} while the loop runs (allowed only as the thread ends): {line}")
+        else:
+            bad.append(f"not on the allow-list (docs/daemon.md): {line}")
+    n_sleep = len(sleeps)
+    if n_sleep < (SECONDS - 2) * 1000:
+        bad.append(f"only {n_sleep} clock_nanosleep calls traced (expected about {SECONDS * 1000 - 1000})")
+    n_wake = counts.get("futex", 0)
+    if n_wake > n_sleep // 10 + 2:
+        bad.append(f"{n_wake} futex wakes for {n_sleep} ticks: more than one per published tick (divisor 10)")
+    for b in bad[:20]:
+        print("FAIL: " + b)
+    if bad:
+        print(f"trace kept in {trace}")
+        return 1
+    shutil.rmtree(tmp, ignore_errors=True)
+    print(f"OK: {n_sleep} clock_nanosleep, {n_wake} futex wakes (one per published tick at most), nothing else "
+          "while the loop ran")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
