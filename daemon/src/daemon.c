@@ -264,7 +264,14 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
             rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
         }
     } else {
-        rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], NULL, berr, sizeof berr);
+        /* the link refuses feedback outside the same bounds the daemon checks (issue 16: at the decoder) */
+        mca_can_options_t co;
+        mca_can_options_default(&co);
+        for (int j = 0; j < d->dof[a]; j++) {
+            co.pos_lo[j] = d->fb_lo[a][j];
+            co.pos_hi[j] = d->fb_hi[a][j];
+        }
+        rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], &co, berr, sizeof berr);
     }
     if (rc != MCA_OK) {
         if (err && errlen) {
@@ -285,10 +292,19 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
     mca_arm_command_t c;
     memset(&c, 0, sizeof c);
     c.n = d->dof[a];
+    const int can = d->cell.arm[a].backend == MCA_CELL_BACKEND_SOCKETCAN;
     while (now_ns() < deadline) {
         mca_arm_feedback_t fb;
         const int rc = mca_arm_read(d->arm[a], &fb);
-        if (rc == MCA_OK || rc == MCA_EFAULT) {
+        mca_can_state_msg_t hb;
+        const int have_hb = can && mca_can_backend_state(d->arm[a], &hb) == MCA_OK;
+        if (have_hb && hb.n != d->dof[a]) {
+            /* the arm's own joint count (heartbeat), not the decoder's: the link refuses its feedback */
+            snprintf(err, errlen, "arm '%s': its heartbeat names %d joints, the model has %d",
+                     d->cell.scn.arm[a].name, hb.n, d->dof[a]);
+            return MCA_EINVAL;
+        }
+        if ((rc == MCA_OK || rc == MCA_EFAULT) && (!can || have_hb)) {
             if (fb.state == MCA_ARM_FAULT && !d->opts.clear_faults) {
                 if (err && errlen) {
                     snprintf(
@@ -605,10 +621,17 @@ static void read_feedback(mca_daemon_t *d, double t) {
             LOGN(d, MCA_LOG_ERR, "arm %g: no feedback for %g cycles", 2, a, d->lost[a], 0, 0, NULL);
             /* name the cause when the link knows it: a bus-off controller hears nothing */
             mca_arm_stats_t st;
-            if (mca_arm_stats(d->arm[a], &st) == MCA_OK && st.link_fault == MCA_ARM_FAULT_BUS) {
+            const int have_st = mca_arm_stats(d->arm[a], &st) == MCA_OK;
+            if (have_st && st.link_fault == MCA_ARM_FAULT_BUS) {
                 char txt[96];
                 arm_text(txt, sizeof txt, d->cell.scn.arm[a].name, " link is bus-off: lost feedback", "");
                 latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, txt, t, a);
+            } else if (have_st && st.link_fault != MCA_ARM_FAULT_NONE) {
+                /* the link refused what came (implausible feedback, another joint count): name it */
+                char txt[96];
+                arm_text(txt, sizeof txt, d->cell.scn.arm[a].name,
+                         " link refuses its feedback: ", mca_arm_fault_name(st.link_fault));
+                latch_fault(d, MCA_DAEMON_FAULT_FEEDBACK, MCA_EINVAL, txt, t, a);
             } else {
                 latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, "lost feedback", t, a);
             }
