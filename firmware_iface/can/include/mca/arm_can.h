@@ -67,7 +67,8 @@ typedef struct mca_can_options {
     double pos_hi[MCA_MAX_DOF]; /**< ... above (default +MCA_CAN_FB_POS_ABS_MAX) */
 } mca_can_options_t;
 
-/** Defaults (see the fields). */
+/** Defaults (see the fields). Start every mca_can_options_t from these: a zeroed struct has position
+ *  bounds 0..0, and the link would refuse every feedback (as POSITION). */
 void mca_can_options_default(mca_can_options_t *opt);
 
 /**
