@@ -62,6 +62,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     mca_arm_feedback_t last;
     memset(&last, 0, sizeof last);
     int have_last = 0;
+    uint64_t last_received = 0;
     mca_can_frame_t f;
     unsigned arg = 0;
     int op;
@@ -92,13 +93,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                 const int64_t dt = fb.stamp_ns - last.stamp_ns > MCA_CAN_FB_JUMP_MIN_DT_NS
                                        ? fb.stamp_ns - last.stamp_ns
                                        : MCA_CAN_FB_JUMP_MIN_DT_NS;
-                const double bound = MCA_CAN_FB_JUMP_RATE * (double)dt * 1e-9 + MCA_CAN_FB_JUMP_MARGIN;
+                /* the link bounds each applied frame against the one before (the time floor and the
+                 * margin per frame): k frames applied since the last take may add up to k of them */
+                const double k = (double)(l.st.feedback_received - last_received);
+                const double bound = MCA_CAN_FB_JUMP_RATE * (double)dt * 1e-9 +
+                                     k * (MCA_CAN_FB_JUMP_MARGIN + MCA_CAN_FB_JUMP_RATE * 1e-3);
                 for (int j = 0; j < n; j++) {
                     CHECK(fabs(fb.position[j] - last.position[j]) <= bound);
                 }
                 CHECK((int32_t)(fb.frame_id - last.frame_id) >= 0);
             }
             last = fb;
+            last_received = l.st.feedback_received;
             have_last = 1;
         }
         /* the controller sends its next command (frame ids may skip, as after a full tx queue) */
