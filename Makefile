@@ -3,6 +3,9 @@
 
 BUILD     ?= build
 ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 300
+FUZZ_TARGETS ?=
 JOBS      ?= $(shell nproc)
 PY        ?= python3
 VENV      := $(CURDIR)/.venv
@@ -11,7 +14,7 @@ DEB_PKGS  := $(shell grep -v '^\#' tools/deps/debian-packages.txt)
 STAMP_DEB := .deps-debian.stamp
 STAMP_PY  := $(VENV)/.deps-python.stamp
 
-.PHONY: all deps build test asan-test demo bench sweep format format-check clean
+.PHONY: all deps build test asan-test fuzz demo bench sweep format format-check clean
 
 all: build
 
@@ -49,6 +52,13 @@ asan-test: deps
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -LE nosan $(CTEST_ARGS)
 
+# libFuzzer (clang) + ASan + UBSan: every decoder and parser (fuzz/), FUZZ_SECONDS each (default 300),
+# one after the other; FUZZ_TARGETS="can_link cell" picks some. Figures: docs/fuzz.md.
+fuzz: deps
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMCA_FUZZ=ON
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_all
+	bash fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+
 demo: build
 	bash tools/demo.sh $(BUILD)
 
@@ -59,7 +69,7 @@ bench: build
 sweep: build
 	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
 
-SOURCES_CMD = find core firmware_iface dds sim_backend daemon tools bench tests \
+SOURCES_CMD = find core firmware_iface dds sim_backend daemon tools bench tests fuzz \
 	  \( -name '*.c' -o -name '*.h' -o -name '*.cpp' \) -print0
 
 format:
@@ -70,4 +80,4 @@ format-check: $(STAMP_DEB)
 	$(SOURCES_CMD) | xargs -0 -r clang-format --dry-run -Werror
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

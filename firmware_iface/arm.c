@@ -119,6 +119,10 @@ const char *mca_arm_fault_name(unsigned fault_code) {
         return "INJECTED";
     case MCA_ARM_FAULT_BUS:
         return "BUS";
+    case MCA_ARM_FAULT_FEEDBACK:
+        return "FEEDBACK";
+    case MCA_ARM_FAULT_JOINT_COUNT:
+        return "JOINT_COUNT";
     default:
         return "UNKNOWN";
     }

@@ -225,11 +225,29 @@ int prescan(Ctx &cx, const std::string &text) {
     if (!robot) {
         return cx.fail(MCA_EPARSE, "no <robot> element at the top level");
     }
+    /* child link -> (parent link, joint); urdfdom builds a link that is its own parent, or a loop of
+     * links, into shared_ptr cycles that it never frees (found by fuzz/fuzz_urdf, issue 16): refused here */
+    std::map<std::string, std::pair<std::string, std::string>> parent_of;
     for (const TiXmlElement *j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
         const char *name = j->Attribute("name");
         const char *type = j->Attribute("type");
         if (!name) {
             return cx.fail(MCA_EPARSE, "line %d: <joint> without a name", j->Row());
+        }
+        const TiXmlElement *pe = j->FirstChildElement("parent");
+        const TiXmlElement *ce = j->FirstChildElement("child");
+        const char *parent = pe ? pe->Attribute("link") : nullptr;
+        const char *child = ce ? ce->Attribute("link") : nullptr;
+        if (parent && child) {
+            if (!strcmp(parent, child)) {
+                return cx.fail(MCA_EPARSE, "line %d: joint '%s': link '%s' is its own parent", j->Row(), name,
+                               child);
+            }
+            if (parent_of.count(child)) {
+                return cx.fail(MCA_EPARSE, "line %d: joint '%s': link '%s' already has a parent (joint '%s')",
+                               j->Row(), name, child, parent_of[child].second.c_str());
+            }
+            parent_of[child] = std::make_pair(std::string(parent), std::string(name));
         }
         cx.joint_line[name] = j->Row();
         if (!type) {
@@ -238,6 +256,19 @@ int prescan(Ctx &cx, const std::string &text) {
         /* urdfdom rejects these without saying where; a side branch with them is rejected too */
         if ((!strcmp(type, "revolute") || !strcmp(type, "prismatic")) && !j->FirstChildElement("limit")) {
             return cx.fail(MCA_EPARSE, "line %d: joint '%s': %s joint has no <limit>", j->Row(), name, type);
+        }
+    }
+    /* every link has at most one parent now: a walk up that takes more steps than there are joints is
+     * going round a loop */
+    for (const auto &e : parent_of) {
+        std::string at = e.first;
+        size_t steps = 0;
+        for (auto it = parent_of.find(at); it != parent_of.end(); it = parent_of.find(at)) {
+            at = it->second.first;
+            if (++steps > parent_of.size()) {
+                return cx.fail(MCA_EPARSE, "joint '%s': its links form a loop (a URDF is a tree)",
+                               e.second.second.c_str());
+            }
         }
     }
     return MCA_OK;

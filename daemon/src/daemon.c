@@ -139,6 +139,10 @@ static void set_err(char *err, size_t errlen, const char *fmt, const char *a, co
 #define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
 /* codes of mca_rtlog_code() records (formatted by log_format, non-rt) */
 enum { LOGC_FAULT = 1 };
+/* fault_detail of MCA_DAEMON_FAULT_FEEDBACK when the arm's link refused the feedback (arm_code: its
+ * link_fault), not the daemon's own check (mca_feedback_fault_t) */
+#define FB_DETAIL_LINK (-1)
+
 /* fault_detail of MCA_DAEMON_FAULT_ARM */
 enum { ARM_FAULT_REPORTS = 1, ARM_FAULT_BRAKES = 2, ARM_FAULT_NOT_SERVO = 3 };
 #define LOGN(d, lvl, fmt, n, a0, a1, a2, a3, txt) mca_rtlog(&(d)->log, lvl, fmt, n, a0, a1, a2, a3, txt)
@@ -277,7 +281,14 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
             rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
         }
     } else {
-        rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], NULL, berr, sizeof berr);
+        /* the link refuses feedback outside the same bounds the daemon checks (issue 16: at the decoder) */
+        mca_can_options_t co;
+        mca_can_options_default(&co);
+        for (int j = 0; j < d->dof[a]; j++) {
+            co.pos_lo[j] = d->fb_lo[a][j];
+            co.pos_hi[j] = d->fb_hi[a][j];
+        }
+        rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], &co, berr, sizeof berr);
     }
     if (rc != MCA_OK) {
         if (err && errlen) {
@@ -298,10 +309,19 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
     mca_arm_command_t c;
     memset(&c, 0, sizeof c);
     c.n = d->dof[a];
+    const int can = d->cell.arm[a].backend == MCA_CELL_BACKEND_SOCKETCAN;
     while (now_ns() < deadline) {
         mca_arm_feedback_t fb;
         const int rc = mca_arm_read(d->arm[a], &fb);
-        if (rc == MCA_OK || rc == MCA_EFAULT) {
+        mca_can_state_msg_t hb;
+        const int have_hb = can && mca_can_backend_state(d->arm[a], &hb) == MCA_OK;
+        if (have_hb && hb.n != d->dof[a]) {
+            /* the arm's own joint count (heartbeat), not the decoder's: the link refuses its feedback */
+            snprintf(err, errlen, "arm '%s': its heartbeat names %d joints, the model has %d",
+                     d->cell.scn.arm[a].name, hb.n, d->dof[a]);
+            return MCA_EINVAL;
+        }
+        if ((rc == MCA_OK || rc == MCA_EFAULT) && (!can || have_hb)) {
             if (fb.state == MCA_ARM_FAULT && !d->opts.clear_faults) {
                 if (err && errlen) {
                     snprintf(
@@ -593,6 +613,10 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
         }
         break;
     case MCA_DAEMON_FAULT_FEEDBACK:
+        if (detail == FB_DETAIL_LINK) {
+            snprintf(buf, len, "arm %s link refuses its feedback: %s", name, mca_arm_fault_name(arm_code));
+            break;
+        }
         snprintf(buf, len, "arm %s sends implausible feedback (%s): %s", name,
                  mca_feedback_fault_name(detail),
                  detail > 0 && detail <= MCA_FB_VELOCITY ? fb_fault_what[detail] : "?");
@@ -702,8 +726,13 @@ static void read_feedback(mca_daemon_t *d, double t) {
             LOGN(d, MCA_LOG_ERR, "arm %g: no feedback for %g cycles", 2, a, d->lost[a], 0, 0, NULL);
             /* name the cause when the link knows it: a bus-off controller hears nothing */
             mca_arm_stats_t st;
-            if (mca_arm_stats(d->arm[a], &st) == MCA_OK && st.link_fault == MCA_ARM_FAULT_BUS) {
+            const int have_st = mca_arm_stats(d->arm[a], &st) == MCA_OK;
+            if (have_st && st.link_fault == MCA_ARM_FAULT_BUS) {
                 latch_fault(d, MCA_DAEMON_FAULT_BUS, MCA_EIO, t, a, 0, 0, d->lost[a], NULL);
+            } else if (have_st && st.link_fault != MCA_ARM_FAULT_NONE) {
+                /* the link refused what came (implausible feedback, another joint count): name it */
+                latch_fault(d, MCA_DAEMON_FAULT_FEEDBACK, MCA_EINVAL, t, a, FB_DETAIL_LINK, st.link_fault,
+                            d->lost[a], NULL);
             } else {
                 latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, t, a, 0, 0, d->lost[a], NULL);
             }

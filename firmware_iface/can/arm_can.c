@@ -2,6 +2,7 @@
 /* SocketCAN backend of mca/arm.h (see mca/arm_can.h). */
 #include "mca/arm_can.h"
 
+#include <math.h>   /* fabs */
 #include <stdio.h>  /* snprintf */
 #include <stdlib.h> /* calloc, free */
 #include <string.h> /* memset, memcpy */
@@ -21,7 +22,34 @@ int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n) {
     mca_can_seq_reset(&l->seq_fb);
     mca_can_seq_reset(&l->seq_state);
     mca_can_seq_reset(&l->seq_fault);
+    return mca_can_link_set_bounds(l, NULL, NULL);
+}
+
+int mca_can_link_set_bounds(mca_can_link_t *l, const double *lo, const double *hi) {
+    if (!l) {
+        return MCA_EINVAL;
+    }
+    double nlo[MCA_MAX_DOF], nhi[MCA_MAX_DOF];
+    for (int j = 0; j < MCA_MAX_DOF; j++) {
+        nlo[j] = lo && j < l->n ? lo[j] : -MCA_CAN_FB_POS_ABS_MAX;
+        nhi[j] = hi && j < l->n ? hi[j] : MCA_CAN_FB_POS_ABS_MAX;
+        if (isnan(nlo[j]) || isnan(nhi[j]) || nlo[j] > nhi[j]) {
+            return MCA_EINVAL;
+        }
+        nlo[j] = nlo[j] < -MCA_CAN_FB_POS_ABS_MAX ? -MCA_CAN_FB_POS_ABS_MAX : nlo[j];
+        nhi[j] = nhi[j] > MCA_CAN_FB_POS_ABS_MAX ? MCA_CAN_FB_POS_ABS_MAX : nhi[j];
+    }
+    memcpy(l->pos_lo, nlo, sizeof nlo);
+    memcpy(l->pos_hi, nhi, sizeof nhi);
     return MCA_OK;
+}
+
+/* The link fault names the worst of what holds now (mca/arm.h: stats.link_fault). */
+static void update_link_fault(mca_can_link_t *l) {
+    l->st.link_fault = l->st.bus_off    ? MCA_ARM_FAULT_BUS
+                       : l->bad_joints  ? MCA_ARM_FAULT_JOINT_COUNT
+                       : l->implausible ? MCA_ARM_FAULT_FEEDBACK
+                                        : MCA_ARM_FAULT_NONE;
 }
 
 /* bus_off and the link fault code that names it move together. */
@@ -30,7 +58,61 @@ static void set_bus_off(mca_can_link_t *l, int on) {
         l->st.bus_off_events++;
     }
     l->st.bus_off = on;
-    l->st.link_fault = on ? MCA_ARM_FAULT_BUS : MCA_ARM_FAULT_NONE;
+    update_link_fault(l);
+}
+
+const char *mca_can_fb_check_name(unsigned kind) {
+    switch (kind) {
+    case MCA_CAN_FB_OK:
+        return "OK";
+    case MCA_CAN_FB_SATURATED:
+        return "SATURATED";
+    case MCA_CAN_FB_JUMP:
+        return "JUMP";
+    case MCA_CAN_FB_FRAME_AHEAD:
+        return "FRAME_AHEAD";
+    case MCA_CAN_FB_FRAME_BACKWARDS:
+        return "FRAME_BACKWARDS";
+    case MCA_CAN_FB_POSITION:
+        return "POSITION";
+    default:
+        return "UNKNOWN";
+    }
+}
+
+/* Plausibility of a decoded feedback (frame id already unwrapped) against what the link knows: the
+ * field's range, the last applied feedback and the last command sent. @return enum mca_can_fb_check */
+static int feedback_check(const mca_can_link_t *l, const mca_arm_feedback_t *fb) {
+    const double q_hi = (double)INT32_MAX * MCA_CAN_FB_POS_SCALE;
+    const double q_lo = (double)INT32_MIN * MCA_CAN_FB_POS_SCALE;
+    for (int j = 0; j < fb->n; j++) {
+        if (fb->position[j] >= q_hi || fb->position[j] <= q_lo) {
+            return MCA_CAN_FB_SATURATED;
+        }
+    }
+    for (int j = 0; j < fb->n; j++) {
+        if (fb->position[j] < l->pos_lo[j] || fb->position[j] > l->pos_hi[j]) {
+            return MCA_CAN_FB_POSITION;
+        }
+    }
+    if (l->st.commands_sent > 0 && (int32_t)(fb->frame_id - l->last_frame_id) > 0) {
+        return MCA_CAN_FB_FRAME_AHEAD;
+    }
+    if (!l->have_fb) {
+        return MCA_CAN_FB_OK;
+    }
+    if ((int32_t)(fb->frame_id - l->fb.frame_id) < 0) {
+        return MCA_CAN_FB_FRAME_BACKWARDS;
+    }
+    int64_t dt = fb->stamp_ns - l->fb.stamp_ns;
+    dt = dt > MCA_CAN_FB_JUMP_MIN_DT_NS ? dt : MCA_CAN_FB_JUMP_MIN_DT_NS;
+    const double bound = MCA_CAN_FB_JUMP_RATE * (double)dt * 1e-9 + MCA_CAN_FB_JUMP_MARGIN;
+    for (int j = 0; j < fb->n; j++) {
+        if (fabs(fb->position[j] - l->fb.position[j]) > bound) {
+            return MCA_CAN_FB_JUMP;
+        }
+    }
+    return MCA_CAN_FB_OK;
 }
 
 static int ignored(uint64_t *counter) {
@@ -45,11 +127,10 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
     if (f->can_id & CAN_ERR_FLAG) {
         l->st.bus_errors++;
         l->err_pending = 1;
+        /* Bus-off ends only when feedback gets through again: a CAN_ERR_RESTARTED frame (alone, or in the
+         * same frame as BUSOFF) says the controller restarted, not that the bus works (issue 16). */
         if (f->can_id & CAN_ERR_BUSOFF) {
             set_bus_off(l, 1);
-        }
-        if (f->can_id & CAN_ERR_RESTARTED) {
-            set_bus_off(l, 0);
         }
         return MCA_OK;
     }
@@ -70,6 +151,16 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         fb.frame_id = mca_can_unwrap16(l->last_frame_id, (uint16_t)fb.frame_id);
         memcpy(fb.fault_flags, l->fault_flags, sizeof(fb.fault_flags));
         fb.stamp_ns = f->stamp_ns;
+        const int kind = feedback_check(l, &fb);
+        if (kind != MCA_CAN_FB_OK) {
+            /* refused and named; the counter was consumed, so a forged frame costs the genuine stream
+             * one frame (its repeat), never more */
+            l->st.implausible_kind = (uint16_t)kind;
+            l->implausible = 1;
+            l->err_pending = 1;
+            update_link_fault(l);
+            return ignored(&l->st.rx_implausible);
+        }
         if (f->kstamp) {
             l->st.rx_stamp_kernel++;
         } else {
@@ -77,6 +168,8 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         }
         l->fb = fb;
         l->fb_new = 1;
+        l->have_fb = 1;
+        l->implausible = 0;
         l->st.feedback_received++;
         set_bus_off(l, 0); /* feedback got through: the bus works again */
         return MCA_OK;
@@ -91,6 +184,13 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         }
         l->state = m;
         l->have_state = 1;
+        l->st.hb_joints = m.n;
+        /* the arm's own joint count against the configured one (issue 16: the decoder's fb.n is ours) */
+        l->bad_joints = m.n != l->n;
+        if (l->bad_joints) {
+            l->st.rx_bad_joints++;
+        }
+        update_link_fault(l);
         return MCA_OK;
     }
     case MCA_CAN_OFF_FAULT: {
@@ -132,6 +232,11 @@ int mca_can_link_take(mca_can_link_t *l, mca_arm_feedback_t *fb) {
     }
     /* New feedback wins over a link error seen in the same read (mca/arm.h, read contract): the error
      * stays pending until a take without new feedback reports it. */
+    if (l->bad_joints) {
+        l->fb_new = 0; /* laid out for another arm: never handed on */
+        l->err_pending = 0;
+        return MCA_EIO;
+    }
     if (l->fb_new) {
         *fb = l->fb;
         l->fb_new = 0;
@@ -149,6 +254,10 @@ void mca_can_options_default(mca_can_options_t *opt) {
         opt->brs = 1;
         opt->err_mask = CAN_ERR_MASK;
         opt->rx_burst = 64;
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            opt->pos_lo[j] = -MCA_CAN_FB_POS_ABS_MAX;
+            opt->pos_hi[j] = MCA_CAN_FB_POS_ABS_MAX;
+        }
     }
 }
 
@@ -230,9 +339,13 @@ int mca_can_backend_open(mca_arm_t **arm, const char *iface, uint32_t id_base, i
         b->opt.rx_burst = 1;
     }
     int rc = mca_can_link_init(&b->link, id_base, n_joints);
+    if (rc == MCA_OK) {
+        rc = mca_can_link_set_bounds(&b->link, b->opt.pos_lo, b->opt.pos_hi);
+    }
     if (rc != MCA_OK) {
         if (err && errlen) {
-            snprintf(err, errlen, "can: bad id base 0x%x or joint count %d", (unsigned)id_base, n_joints);
+            snprintf(err, errlen, "can: bad id base 0x%x, joint count %d or position bounds",
+                     (unsigned)id_base, n_joints);
         }
         free(b);
         return rc;

@@ -236,15 +236,19 @@ int mca_can_seq_accept(mca_can_seq_t *s, uint8_t counter) {
     if (!s) {
         return 0;
     }
-    if (!s->synced || counter == (uint8_t)(s->last + 1u) ||
-        (s->have_cand && counter == (uint8_t)(s->cand + 1u))) {
+    if (!s->synced || counter == (uint8_t)(s->last + 1u)) {
         s->synced = 1;
         s->last = counter;
-        s->have_cand = 0;
+        s->run = 0;
         return 1;
     }
-    s->have_cand = 1;
+    s->run = s->run > 0 && counter == (uint8_t)(s->cand + 1u) ? s->run + 1 : 1;
     s->cand = counter;
+    if (s->run >= MCA_CAN_SEQ_RESYNC_RUN) {
+        s->last = counter;
+        s->run = 0;
+        return 1;
+    }
     return 0;
 }
 

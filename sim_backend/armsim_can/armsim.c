@@ -26,6 +26,7 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 
+#include "mca/armsim_rx.h"
 #include "mca/can_proto.h"
 #include "mca/can_sock.h"
 #include "mca/chain.h"
@@ -40,8 +41,7 @@ static void on_signal(int sig) {
 }
 
 typedef struct armsim_counters {
-    uint64_t frames_rx, cmd_accepted, cmd_superseded, rx_bad_length, rx_bad_counter, rx_unknown_id;
-    uint64_t bus_errors, tx_feedback, tx_state, tx_fault, tx_dropped, overruns;
+    uint64_t tx_feedback, tx_state, tx_fault, tx_dropped, overruns;
 } armsim_counters_t;
 
 /* One sent state or fault frame (--log). */
@@ -57,11 +57,7 @@ typedef struct armsim {
     int fd;
     uint32_t base;
     mca_sim_arm_t arm;
-    mca_can_seq_t seq;
-    uint32_t frame_ref; /* last unwrapped command frame id */
-    int have_ref;
-    mca_arm_command_t cmd;
-    int have_cmd;
+    mca_armsim_rx_t rx; /* receive rules (mca/armsim_rx.h): the cycle's command */
     uint8_t ctr_fb, ctr_state, ctr_fault;
     uint16_t sent_code;
     uint16_t sent_flags[MCA_MAX_DOF];
@@ -181,40 +177,14 @@ static int parse_double(const char *opt, const char *s, double lo, double *out) 
     return 0;
 }
 
-/* Drain the socket: keep the newest valid command; count and drop everything else. */
+/* Drain the socket, at most MCA_ARMSIM_RX_BURST frames (a flood waits, the firmware cycle runs): keep the
+ * newest valid command; count and drop everything else (mca/armsim_rx.h). */
+static int sock_recv(void *ctx, mca_can_frame_t *f) {
+    return mca_can_sock_recv(*(const int *)ctx, f);
+}
+
 static void drain(armsim_t *s) {
-    mca_can_frame_t f;
-    while (mca_can_sock_recv(s->fd, &f) == MCA_OK) {
-        s->c.frames_rx++;
-        if (f.can_id & CAN_ERR_FLAG) {
-            s->c.bus_errors++;
-            continue;
-        }
-        uint32_t id = f.can_id & CAN_SFF_MASK;
-        if ((f.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) || id != s->base + MCA_CAN_OFF_COMMAND) {
-            s->c.rx_unknown_id++; /* our own feedback ids from another node, or undefined ids */
-            continue;
-        }
-        mca_arm_command_t cmd;
-        uint8_t ctr;
-        if (!f.fd || mca_can_decode_command(f.data, f.len, &cmd, &ctr) != MCA_OK) {
-            s->c.rx_bad_length++;
-            continue;
-        }
-        if (!mca_can_seq_accept(&s->seq, ctr)) {
-            s->c.rx_bad_counter++;
-            continue;
-        }
-        cmd.frame_id = s->have_ref ? mca_can_unwrap16(s->frame_ref, (uint16_t)cmd.frame_id) : cmd.frame_id;
-        s->frame_ref = cmd.frame_id;
-        s->have_ref = 1;
-        if (s->have_cmd) {
-            s->c.cmd_superseded++;
-        }
-        s->cmd = cmd;
-        s->have_cmd = 1;
-        s->c.cmd_accepted++;
-    }
+    mca_armsim_rx_drain(&s->rx, sock_recv, &s->fd);
 }
 
 /* @return 1 sent, 0 dropped */
@@ -231,8 +201,8 @@ static int send_frame(armsim_t *s, uint32_t off, const uint8_t *buf, size_t len,
 /* One firmware cycle and its frames. */
 static void cycle(armsim_t *s, double dt) {
     mca_arm_feedback_t fb;
-    int rc = mca_sim_arm_cycle(&s->arm, s->have_cmd ? &s->cmd : NULL, dt, &fb);
-    s->have_cmd = 0;
+    mca_arm_command_t cmd;
+    int rc = mca_sim_arm_cycle(&s->arm, mca_armsim_rx_take(&s->rx, &cmd), dt, &fb);
     if (rc == MCA_OK) {
         uint8_t buf[MCA_CAN_LEN_FEEDBACK];
         if (mca_can_encode_feedback(&fb, s->ctr_fb, buf) == MCA_OK) {
@@ -253,7 +223,8 @@ static void cycle(armsim_t *s, double dt) {
             .n = (uint8_t)n,
             .fault_code = a->fault_code,
             .missed = (uint16_t)(a->missed > 65535 ? 65535 : a->missed),
-            .rx_errors = (uint8_t)(s->c.rx_bad_length + s->c.rx_bad_counter + s->c.rx_unknown_id),
+            .rx_errors = (uint8_t)(s->rx.c.rx_bad_length + s->rx.c.rx_bad_counter + s->rx.c.rx_unknown_id +
+                                   s->rx.c.rx_bad_frame_id),
         };
         uint8_t buf[MCA_CAN_LEN_STATE];
         const uint8_t ctr = s->ctr_state;
@@ -299,11 +270,13 @@ static void print_counters(FILE *f, const armsim_t *s) {
             " rx_bad_length=%" PRIu64 " rx_bad_counter=%" PRIu64 " rx_unknown_id=%" PRIu64
             " bus_errors=%" PRIu64 " tx_feedback=%" PRIu64 " tx_state=%" PRIu64 " tx_fault=%" PRIu64
             " tx_dropped=%" PRIu64 " overruns=%" PRIu64 " fw_cmd_accepted=%" PRIu64 " fw_cmd_stale=%" PRIu64
-            " watchdog_trips=%" PRIu64 " state=%s fault_code=%u log_lost=%" PRIu64 "\n",
-            fw->cycles, s->c.frames_rx, s->c.cmd_accepted, s->c.cmd_superseded, s->c.rx_bad_length,
-            s->c.rx_bad_counter, s->c.rx_unknown_id, s->c.bus_errors, s->c.tx_feedback, s->c.tx_state,
-            s->c.tx_fault, s->c.tx_dropped, s->c.overruns, fw->cmd_accepted, fw->cmd_stale,
-            fw->watchdog_trips, mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code, s->log_lost);
+            " watchdog_trips=%" PRIu64 " state=%s fault_code=%u log_lost=%" PRIu64 " rx_bad_frame_id=%" PRIu64
+            " rx_burst_full=%" PRIu64 "\n",
+            fw->cycles, s->rx.c.frames_rx, s->rx.c.cmd_accepted, s->rx.c.cmd_superseded,
+            s->rx.c.rx_bad_length, s->rx.c.rx_bad_counter, s->rx.c.rx_unknown_id, s->rx.c.bus_errors,
+            s->c.tx_feedback, s->c.tx_state, s->c.tx_fault, s->c.tx_dropped, s->c.overruns, fw->cmd_accepted,
+            fw->cmd_stale, fw->watchdog_trips, mca_arm_state_name(s->arm.state), (unsigned)s->arm.fault_code,
+            s->log_lost, s->rx.c.rx_bad_frame_id, s->rx.c.rx_burst_full);
 }
 
 int main(int argc, char **argv) {
@@ -497,7 +470,7 @@ int main(int argc, char **argv) {
             return 1;
         }
     }
-    mca_can_seq_reset(&s.seq);
+    mca_armsim_rx_init(&s.rx, s.base);
     int rc = mca_can_sock_open(&s.fd, iface, s.base, CAN_ERR_MASK, err, sizeof(err));
     if (rc != MCA_OK) {
         fprintf(stderr, "mca-armsim: %s\n", err);
@@ -522,7 +495,7 @@ int main(int argc, char **argv) {
             struct pollfd pfd = {.fd = s.fd, .events = POLLIN};
             poll(&pfd, 1, 100);
             drain(&s);
-            if (s.have_cmd) {
+            if (s.rx.have_cmd) {
                 cycle(&s, dt);
             }
             clock_gettime(CLOCK_MONOTONIC, &now);

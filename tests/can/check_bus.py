@@ -61,7 +61,7 @@ def decode_all(db, frames):
 
 def seq_sim(frames, ident, length, fd=True):
     """Independent re-implementation of the receive rule: returns (accepted, bad_length, bad_counter)."""
-    synced, last, cand = False, 0, None
+    synced, last, cand, run = False, 0, 0, 0
     acc = badlen = badctr = 0
     for t, i, f, data, dec in frames:
         if i != ident:
@@ -70,11 +70,17 @@ def seq_sim(frames, ident, length, fd=True):
             badlen += 1
             continue
         c = data[0]
-        if not synced or c == (last + 1) % 256 or (cand is not None and c == (cand + 1) % 256):
-            synced, last, cand = True, c, None
+        if not synced or c == (last + 1) % 256:
+            synced, last, run = True, c, 0
+            acc += 1
+            continue
+        # a run of 3 consecutive other counters resyncs (MCA_CAN_SEQ_RESYNC_RUN)
+        run = run + 1 if run > 0 and c == (cand + 1) % 256 else 1
+        cand = c
+        if run >= 3:
+            last, run = c, 0
             acc += 1
         else:
-            cand = c
             badctr += 1
     return acc, badlen, badctr
 

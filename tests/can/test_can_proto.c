@@ -224,14 +224,36 @@ static void test_seq(void **state) {
     /* repeat (stale) is rejected, the stream goes on */
     assert_int_equal(mca_can_seq_accept(&s, 10), 0);
     assert_int_equal(mca_can_seq_accept(&s, 11), 1);
-    /* a real loss (12 lost): 13 rejected, 14 continues it and resyncs */
+    /* a real loss (12 lost): 13 and 14 rejected, 15 completes the run of MCA_CAN_SEQ_RESYNC_RUN and resyncs
+     */
     assert_int_equal(mca_can_seq_accept(&s, 13), 0);
-    assert_int_equal(mca_can_seq_accept(&s, 14), 1);
+    assert_int_equal(mca_can_seq_accept(&s, 14), 0);
     assert_int_equal(mca_can_seq_accept(&s, 15), 1);
+    assert_int_equal(mca_can_seq_accept(&s, 16), 1);
     /* old frame replayed twice in a row (non-consecutive) never gets in */
     assert_int_equal(mca_can_seq_accept(&s, 3), 0);
     assert_int_equal(mca_can_seq_accept(&s, 3), 0);
-    assert_int_equal(mca_can_seq_accept(&s, 16), 1);
+    assert_int_equal(mca_can_seq_accept(&s, 17), 1);
+}
+
+/* Issue 16: a forged pair of consecutive counters (c, c+1) neither gets in nor resyncs the stream; the
+ * genuine next frame is accepted and drops the candidate run. */
+static void test_seq_forged_pair(void **state) {
+    (void)state;
+    mca_can_seq_t s;
+    mca_can_seq_reset(&s);
+    assert_int_equal(mca_can_seq_accept(&s, 10), 1);
+    assert_int_equal(mca_can_seq_accept(&s, 11), 1);
+    assert_int_equal(mca_can_seq_accept(&s, 200), 0); /* forged */
+    assert_int_equal(mca_can_seq_accept(&s, 201), 0); /* forged, continues it: no resync (was accepted) */
+    assert_int_equal(mca_can_seq_accept(&s, 12), 1);  /* genuine */
+    assert_int_equal(mca_can_seq_accept(&s, 202), 0); /* the forged run was dropped by the genuine frame */
+    assert_int_equal(mca_can_seq_accept(&s, 13), 1);
+    assert_int_equal(s.last, 13);
+    /* wrap: 255 -> 0 -> 1 as a run */
+    assert_int_equal(mca_can_seq_accept(&s, 255), 0);
+    assert_int_equal(mca_can_seq_accept(&s, 0), 0);
+    assert_int_equal(mca_can_seq_accept(&s, 1), 1);
 }
 
 static void test_unwrap16(void **state) {
@@ -321,11 +343,12 @@ static void test_link(void **state) {
     assert_int_equal(st.feedback_received, 1);
     assert_int_equal(st.rx_stamp_kernel + st.rx_stamp_user, 1); /* ignored frames are not counted */
 
-    /* the genuine next frame is still accepted after the stray counter */
-    f = fb_frame(0x100, 1, 0x10005, 0.5, 6);
+    /* the genuine next frame is still accepted after the stray counter (positions move by at most
+     * MCA_CAN_FB_JUMP_RATE between frames: the stamps here are 1 ns apart, taken as 1 ms) */
+    f = fb_frame(0x100, 1, 0x10005, 0.255, 6);
     assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
-    assert_true(fabs(fb.position[0] - 0.5) < 1e-12);
+    assert_true(fabs(fb.position[0] - 0.255) < 1e-12);
 
     /* fault frame flags reach the next feedback */
     mca_can_fault_msg_t fm;
@@ -338,7 +361,7 @@ static void test_link(void **state) {
     ff.len = 20;
     mca_can_encode_fault(&fm, 0, ff.data);
     assert_int_equal(mca_can_link_rx(&l, &ff), MCA_OK);
-    f = fb_frame(0x100, 2, 0x10005, 0.5, 6);
+    f = fb_frame(0x100, 2, 0x10005, 0.255, 6);
     assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
     assert_int_equal(fb.fault_flags[3], MCA_ACT_FLT_LIMIT_LOW);
@@ -363,26 +386,208 @@ static void test_link(void **state) {
     assert_int_equal(l.st.bus_off_events, 1);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
-    f = fb_frame(0x100, 3, 0x10005, 0.75, 6);
+    f = fb_frame(0x100, 3, 0x10005, 0.26, 6);
     assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
     assert_int_equal(l.st.bus_off, 0);
     assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
     fb.position[0] = 0;
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK); /* error already reported */
-    assert_true(fabs(fb.position[0] - 0.75) < 1e-12);
+    assert_true(fabs(fb.position[0] - 0.26) < 1e-12);
     assert_int_equal(l.st.bus_errors, 3);
-    /* a restarted controller (CAN_ERR_RESTARTED) ends bus-off too; a second bus-off is a second event */
+    /* a restarted controller (CAN_ERR_RESTARTED) does not end bus-off (issue 16): only feedback does; a
+     * second bus-off is a second event */
     ef.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
     assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
     ef.can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED;
     assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
-    assert_int_equal(l.st.bus_off, 0);
+    assert_int_equal(l.st.bus_off, 1);
     assert_int_equal(l.st.bus_off_events, 2);
-    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
-    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO); /* the error frames are still reported once */
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_BUS);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO); /* while bus-off */
+    f = fb_frame(0x100, 4, 0x10005, 0.26, 6);
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(l.st.bus_off, 0);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_EAGAIN);
     assert_int_equal(l.st.rx_stamp_kernel, 1);
-    assert_int_equal(l.st.rx_stamp_user, 3);
+    assert_int_equal(l.st.rx_stamp_user, 4);
+}
+
+/* A link of 6 joints that has sent one command (frame id 100) and applied one feedback (q = 0.1 rad,
+ * counter 0, stamp 1 s). */
+static void link_ready(mca_can_link_t *l) {
+    assert_int_equal(mca_can_link_init(l, 0x100, 6), MCA_OK);
+    mca_arm_command_t c;
+    memset(&c, 0, sizeof(c));
+    c.n = 6;
+    c.frame_id = 100;
+    mca_can_link_sent(l, &c);
+    mca_can_frame_t f = fb_frame(0x100, 0, 100, 0.1, 6);
+    f.stamp_ns = 1000000000;
+    assert_int_equal(mca_can_link_rx(l, &f), MCA_OK);
+    mca_arm_feedback_t fb;
+    assert_int_equal(mca_can_link_take(l, &fb), MCA_OK);
+}
+
+/* Issue 16: feedback of 2147 rad (the saturated field, or inside it but beyond the bounds), and a jump
+ * from 2147 to -1 rad in one frame, is never applied: refused at the link, counted, named. */
+static void test_link_feedback_implausible(void **state) {
+    (void)state;
+    mca_can_link_t l;
+    mca_arm_feedback_t fb;
+    link_ready(&l);
+    /* saturated: +2147.483647 rad (INT32_MAX) */
+    mca_can_frame_t f = fb_frame(0x100, 1, 100, 1e9, 6);
+    f.stamp_ns = 1001000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.rx_implausible, 1);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_SATURATED);
+    assert_string_equal(mca_can_fb_check_name(l.st.implausible_kind), "SATURATED");
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_FEEDBACK);
+    assert_string_equal(mca_arm_fault_name(l.st.link_fault), "FEEDBACK");
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO); /* reported once as a link error */
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EAGAIN);
+    /* 2147.0 rad: inside the field, outside the bounds (default +-MCA_CAN_FB_POS_ABS_MAX) */
+    f = fb_frame(0x100, 2, 100, 2147.0, 6);
+    f.stamp_ns = 1002000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_POSITION);
+    /* a jump 0.1 -> -1 rad within 1 ms (bound 6.55 rad/s x 1 ms + 0.01 rad) */
+    f = fb_frame(0x100, 3, 100, -1.0, 6);
+    f.stamp_ns = 1003000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_JUMP);
+    assert_int_equal(l.st.rx_implausible, 3);
+    assert_int_equal(l.st.feedback_received, 1);
+    /* with the bounds of a real arm, 2147 and the jump from there to -1 (had 2147 been in) are refused */
+    double lo[6] = {-3.2, -3.2, -3.2, -3.2, -3.2, -3.2}, hi[6] = {3.2, 3.2, 3.2, 3.2, 3.2, 3.2};
+    assert_int_equal(mca_can_link_set_bounds(&l, lo, hi), MCA_OK);
+    f = fb_frame(0x100, 4, 100, 2147.0, 6);
+    f.stamp_ns = 1004000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_POSITION);
+    /* the same -1 rad after 0.5 s is a plausible move (6.55 rad/s x 0.5 s): applied, fault cleared */
+    f = fb_frame(0x100, 5, 100, -1.0, 6);
+    f.stamp_ns = 1500000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
+    assert_true(fabs(fb.position[0] + 1.0) < 1e-12);
+    /* bad bounds */
+    lo[2] = 4.0;
+    assert_int_equal(mca_can_link_set_bounds(&l, lo, hi), MCA_EINVAL);
+}
+
+/* Issue 16: the feedback's frame id is compared with the last command sent (ahead: refused) and with the
+ * last applied feedback (backwards: refused). */
+static void test_link_feedback_frame_id(void **state) {
+    (void)state;
+    mca_can_link_t l;
+    mca_arm_feedback_t fb;
+    link_ready(&l);
+    mca_can_frame_t f = fb_frame(0x100, 1, 101, 0.1, 6); /* answers frame 101, only 100 was sent */
+    f.stamp_ns = 1001000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_FRAME_AHEAD);
+    f = fb_frame(0x100, 2, 99, 0.1, 6); /* behind the applied feedback's 100 */
+    f.stamp_ns = 1002000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_FRAME_BACKWARDS);
+    assert_string_equal(mca_can_fb_check_name(l.st.implausible_kind), "FRAME_BACKWARDS");
+    f = fb_frame(0x100, 3, 100, 0.1, 6); /* the same command again (the arm missed the next): fine */
+    f.stamp_ns = 1003000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
+    assert_int_equal(fb.frame_id, 100u);
+    assert_int_equal(l.st.rx_implausible, 2);
+}
+
+static mca_can_frame_t state_frame(uint8_t ctr, uint8_t n) {
+    mca_can_state_msg_t m = {.state = MCA_ARM_SERVOING, .n = n};
+    mca_can_frame_t f;
+    memset(&f, 0, sizeof(f));
+    f.can_id = 0x102;
+    f.fd = 1;
+    f.len = MCA_CAN_LEN_STATE;
+    mca_can_encode_state(&m, ctr, f.data);
+    return f;
+}
+
+/* Issue 16: the heartbeat's joint count is checked against the configured arm: another count is a named
+ * link fault and no feedback gets through while it lasts. */
+static void test_link_heartbeat_joints(void **state) {
+    (void)state;
+    mca_can_link_t l;
+    mca_arm_feedback_t fb;
+    link_ready(&l);
+    mca_can_frame_t h = state_frame(0, 7);
+    assert_int_equal(mca_can_link_rx(&l, &h), MCA_OK);
+    assert_int_equal(l.st.rx_bad_joints, 1);
+    assert_int_equal(l.st.hb_joints, 7);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_JOINT_COUNT);
+    assert_string_equal(mca_arm_fault_name(l.st.link_fault), "JOINT_COUNT");
+    mca_can_frame_t f = fb_frame(0x100, 1, 100, 0.1, 6);
+    f.stamp_ns = 1001000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO); /* feedback of a 7-joint arm: not handed on */
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
+    h = state_frame(1, 6); /* the arm's heartbeat agrees again */
+    assert_int_equal(mca_can_link_rx(&l, &h), MCA_OK);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_NONE);
+    f = fb_frame(0x100, 2, 100, 0.1, 6);
+    f.stamp_ns = 1002000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
+}
+
+/* Issue 16: an error frame that says BUSOFF and RESTARTED at once takes the link down (BUS) until feedback
+ * gets through. */
+static void test_link_busoff_restarted(void **state) {
+    (void)state;
+    mca_can_link_t l;
+    mca_arm_feedback_t fb;
+    link_ready(&l);
+    mca_can_frame_t ef;
+    memset(&ef, 0, sizeof(ef));
+    ef.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF | CAN_ERR_RESTARTED;
+    ef.len = 8;
+    assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
+    assert_int_equal(l.st.bus_off, 1);
+    assert_int_equal(l.st.bus_off_events, 1);
+    assert_int_equal(l.st.link_fault, MCA_ARM_FAULT_BUS);
+    for (int i = 0; i < 3; i++) {
+        assert_int_equal(mca_can_link_take(&l, &fb), MCA_EIO);
+    }
+    mca_can_frame_t f = fb_frame(0x100, 1, 100, 0.1, 6);
+    f.stamp_ns = 1001000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    assert_int_equal(l.st.bus_off, 0);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
+}
+
+/* Issue 16: a forged pair of feedback frames with consecutive counters does not resync the stream: none
+ * of the forged frames is applied and the genuine stream goes on. */
+static void test_link_forged_counter_pair(void **state) {
+    (void)state;
+    mca_can_link_t l;
+    mca_arm_feedback_t fb;
+    link_ready(&l);
+    mca_can_frame_t f = fb_frame(0x100, 77, 100, 0.11, 6);
+    f.stamp_ns = 1001000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    f = fb_frame(0x100, 78, 100, 0.11, 6);
+    f.stamp_ns = 1001000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(mca_can_link_take(&l, &fb), MCA_EAGAIN);
+    for (uint8_t c = 1; c < 5; c++) {
+        f = fb_frame(0x100, c, 100, 0.1, 6);
+        f.stamp_ns = 1001000000 + c * 1000000;
+        assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+        assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK);
+        assert_true(fabs(fb.position[0] - 0.1) < 1e-12);
+    }
+    assert_int_equal(l.st.rx_bad_counter, 2);
 }
 
 static void test_backend_open_errors(void **state) {
@@ -409,7 +614,13 @@ int main(void) {
         cmocka_unit_test(test_state_fault_frames),
         cmocka_unit_test(test_seq),
         cmocka_unit_test(test_unwrap16),
+        cmocka_unit_test(test_seq_forged_pair),
         cmocka_unit_test(test_link),
+        cmocka_unit_test(test_link_feedback_implausible),
+        cmocka_unit_test(test_link_feedback_frame_id),
+        cmocka_unit_test(test_link_heartbeat_joints),
+        cmocka_unit_test(test_link_busoff_restarted),
+        cmocka_unit_test(test_link_forged_counter_pair),
         cmocka_unit_test(test_backend_open_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -130,6 +130,22 @@ static void test_unknown_parent_link(void **state) {
     assert_error(&l, MCA_EPARSE, "ghost_link", NULL);
 }
 
+/* Issue 16, found by fuzz/fuzz_urdf (fuzz/regress/urdf/leak-*): a link that is its own parent, and a loop
+ * of links, made urdfdom leak its shared_ptr cycles; refused before urdfdom, named. */
+static void test_self_parent(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "self_parent.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "joint 'joint_3'", "its own parent");
+}
+
+static void test_link_loop(void **state) {
+    (void)state;
+    load_t l;
+    load_data(&l, "link_loop.urdf", "tool_tip");
+    assert_error(&l, MCA_EPARSE, "link 'link_1' already has a parent", NULL);
+}
+
 static void test_branch_without_tip(void **state) {
     (void)state;
     load_t l;
@@ -290,6 +306,8 @@ static void test_nested_too_deep(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_self_parent),
+        cmocka_unit_test(test_link_loop),
         cmocka_unit_test(test_malformed_xml),
         cmocka_unit_test(test_prismatic),
         cmocka_unit_test(test_revolute_without_limit),

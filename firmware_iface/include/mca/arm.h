@@ -58,6 +58,8 @@ enum mca_arm_fault {
     MCA_ARM_FAULT_VELOCITY = 3,    /**< commanded velocity above the limit */
     MCA_ARM_FAULT_INJECTED = 4,    /**< test fault injection */
     MCA_ARM_FAULT_BUS = 5,         /**< bus error / bus-off */
+    MCA_ARM_FAULT_FEEDBACK = 6,    /**< the link refused implausible feedback (link_fault only, issue 16) */
+    MCA_ARM_FAULT_JOINT_COUNT = 7, /**< the arm's heartbeat names another joint count (link_fault only) */
 };
 
 /** Per-actuator fault flag bits (feedback.fault_flags[j]); latched until MCA_ACT_CLEAR_FAULT. */
@@ -99,11 +101,18 @@ typedef struct mca_arm_stats {
     uint64_t bus_errors;     /**< error frames seen */
     int bus_off;             /**< 1 while the controller is bus-off */
     /* CAN backend (the sim backend leaves these 0): */
-    uint64_t bus_off_events;  /**< times bus_off went 0 -> 1 */
-    uint16_t link_fault;      /**< the link's own fault (enum mca_arm_fault, for mca_arm_fault_name()):
-                                   MCA_ARM_FAULT_BUS while bus_off, else NONE; the arm's is fb.fault_code */
-    uint64_t rx_stamp_kernel; /**< feedback frames applied with the kernel's receive time stamp */
-    uint64_t rx_stamp_user;   /**< feedback frames applied with the user-space read time (no kernel stamp) */
+    uint64_t bus_off_events;   /**< times bus_off went 0 -> 1 */
+    uint16_t link_fault;       /**< the link's own fault (enum mca_arm_fault, for mca_arm_fault_name()):
+                                    MCA_ARM_FAULT_BUS while bus_off, else JOINT_COUNT while the arm's
+                                    heartbeat names another joint count, else FEEDBACK from a refused
+                                    implausible feedback frame until the next applied one, else NONE; the
+                                    arm's own fault is fb.fault_code */
+    uint64_t rx_stamp_kernel;  /**< feedback frames applied with the kernel's receive time stamp */
+    uint64_t rx_stamp_user;    /**< feedback frames applied with the user-space read time (no kernel stamp) */
+    uint64_t rx_implausible;   /**< feedback frames refused as implausible (CAN: mca_can_fb_check_name()) */
+    uint16_t implausible_kind; /**< kind of the newest refused one (CAN: enum mca_can_fb_check) */
+    uint64_t rx_bad_joints;    /**< heartbeats whose joint count differs from the configured arm */
+    uint8_t hb_joints;         /**< joint count of the newest heartbeat (0: none yet) */
 } mca_arm_stats_t;
 
 typedef struct mca_arm mca_arm_t; /**< opaque handle */

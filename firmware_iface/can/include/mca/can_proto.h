@@ -106,17 +106,24 @@ int mca_can_encode_fault(const mca_can_fault_msg_t *m, uint8_t counter, uint8_t 
 /** @retval MCA_OK, MCA_EINVAL (NULL, len != 20, state out of range) */
 int mca_can_decode_fault(const uint8_t *data, size_t len, mca_can_fault_msg_t *m, uint8_t *counter);
 
+/** Consecutive counters a new stream needs before it replaces the current one (mca_can_seq_accept()). */
+#define MCA_CAN_SEQ_RESYNC_RUN 3
+
 /**
  * Rolling-counter check of one receive stream. A frame is accepted when its counter is the last
- * accepted + 1. Any other counter (stale, repeated or skipped) is rejected and remembered as a
- * candidate; the next frame that continues the candidate (candidate + 1) is accepted and resyncs the
- * stream. So a stray frame costs nothing, a real loss costs one more frame. The first frame syncs.
+ * accepted + 1. Any other counter (stale, repeated or skipped) is rejected and starts (or continues) a
+ * candidate run; a run of MCA_CAN_SEQ_RESYNC_RUN consecutive counters (c, c+1, c+2) resyncs the stream at
+ * its last frame, which is accepted. A frame that continues the current stream always wins and drops the
+ * run. So a stray frame costs nothing, a forged pair of counters (c, c+1) never gets in nor resyncs the
+ * stream (issue 16), a real loss costs MCA_CAN_SEQ_RESYNC_RUN - 1 more frames. The first frame syncs.
+ * (Counters are no authentication: a node that sends three consecutive counters before the next genuine
+ * frame takes the stream over, until the genuine stream's own run takes it back.)
  */
 typedef struct mca_can_seq {
     int synced;
     uint8_t last;
-    int have_cand;
-    uint8_t cand;
+    int run;      /**< frames in the candidate run (0: none) */
+    uint8_t cand; /**< counter of the candidate run's last frame */
 } mca_can_seq_t;
 
 /** Reset a stream (the next frame syncs it). */

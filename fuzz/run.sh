@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# make fuzz: run every libFuzzer target of BUILD (a -DMCA_FUZZ=ON build) for SECONDS each, one after the
+# other (one core each: -workers 1), starting from the seed corpus and the regression inputs in the tree.
+# New corpus entries go to BUILD/fuzz-work/TARGET (the tree's corpus is read, never written); a crash,
+# leak or timeout leaves its input in BUILD/fuzz-artifacts/TARGET/ and fails the run.
+# Prints one line per target: executions, exec/s, coverage, corpus size, result.
+# usage: fuzz/run.sh BUILD SECONDS [TARGET...]
+set -uo pipefail
+build=$1
+secs=$2
+shift 2
+src=$(cd "$(dirname "$0")" && pwd)
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(can_link armsim_rx cell scenario urdf inject)
+fail=0
+summary=()
+for t in "${targets[@]}"; do
+  exe="$build/fuzz/fuzz_$t"
+  work="$build/fuzz-work/$t"
+  art="$build/fuzz-artifacts/$t"
+  mkdir -p "$work" "$art"
+  dirs=("$work" "$src/corpus/$t")
+  [ -d "$src/regress/$t" ] && dirs+=("$src/regress/$t")
+  log="$build/fuzz-work/$t.log"
+  echo "fuzz: $t for ${secs} s (log $log)"
+  ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    "$exe" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+    -artifact_prefix="$art/" "${dirs[@]}" >"$log" 2>&1
+  rc=$?
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  corp=$(ls "$work" | wc -l)
+  if [ $rc -eq 0 ]; then res=ok; else res="FAIL (rc $rc; see $log, $art)"; fail=1; fi
+  summary+=("$(printf '%-10s %12s execs %8s exec/s  cov %6s  new corpus %5s  %s' "$t" "${execs:-?}" \
+    "${rate:-?}" "${cov:-?}" "$corp" "$res")")
+  [ $rc -eq 0 ] || tail -40 "$log"
+done
+echo "fuzz summary (${secs} s per target):"
+printf '%s\n' "${summary[@]}"
+exit $fail
