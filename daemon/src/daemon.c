@@ -31,6 +31,8 @@ struct mca_daemon {
     mca_daemon_opts_t opts;
     mca_controller_config_t ccfg;
     mca_controller_t ctrl;
+    mca_controller_t warm_ctrl; /* scratch copy the loop warms its code on before the first command */
+    mca_tick_info_t warm_info;
     int n_arms;
     int dof[MCA_MAX_ARMS];
     mca_arm_t *arm[MCA_MAX_ARMS];
@@ -91,6 +93,12 @@ struct mca_daemon {
     int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
     int consecutive_overruns;
     uint64_t overruns, skipped;
+    uint64_t stalls;      /* ticks whose commands came > MCA_DAEMON_STALL_PERIODS periods after the last */
+    int64_t stall_max_ns; /* the longest such gap */
+    int64_t sent_ns;      /* when the last tick's commands went out (0: none yet) */
+    int64_t cmd_gap_ns;   /* this tick's commands after the last tick's (CSV cmd_gap_us) */
+    int64_t wake_late_ns; /* this tick woke this late (the loop sets it; 0 in virtual time) */
+    double t_tick;        /* this tick's task time */
     mca_hist_t jitter, compute, ctrl_time;
     mca_hist_t compute_ab[2]; /* --dds-ab: whole tick with publishing [0] off, [1] on */
     double min_d, min_d_t;
@@ -530,7 +538,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             for (int a = 0; a < d->n_arms; a++) {
                 fprintf(d->csv, ",tau%d,sigma%d", a, a);
             }
-            fprintf(d->csv, ",deadlock,deadlock_arm,deadlocks,brake_fallback");
+            fprintf(d->csv, ",deadlock,deadlock_arm,deadlocks,brake_fallback,cmd_gap_us");
             fprintf(d->csv, "\n");
         }
     }
@@ -844,6 +852,22 @@ static void send_commands(mca_daemon_t *d, int servo) {
             LOGN(d, MCA_LOG_WARNING, "arm %g: command not sent (%g)", 2, a, rc, 0, 0, NULL);
         }
     }
+    /* the arms' watchdogs count the time between commands: a loop stall is a gap of more than a few periods
+     * (an arm's watchdog tripping after it is the loop's stall, not the arm's fault). Logged one by one up
+     * to MCA_DAEMON_STALLS_LOGGED, all counted, each tick's gap in the CSV. */
+    const int64_t sent = now_ns();
+    d->cmd_gap_ns = d->sent_ns ? sent - d->sent_ns : 0;
+    d->sent_ns = sent;
+    if (!d->opts.virtual_time && d->cmd_gap_ns > MCA_DAEMON_STALL_PERIODS * d->cell.rt.period_ns) {
+        d->stalls++;
+        d->stall_max_ns = d->cmd_gap_ns > d->stall_max_ns ? d->cmd_gap_ns : d->stall_max_ns;
+        if (d->stalls <= MCA_DAEMON_STALLS_LOGGED) {
+            LOGN(
+                d, MCA_LOG_WARNING,
+                "loop stall at t = %.3f s: %.1f ms between two ticks' commands (this tick woke %.1f ms late)",
+                3, d->t_tick, (double)d->cmd_gap_ns * 1e-6, (double)d->wake_late_ns * 1e-6, 0, NULL);
+        }
+    }
 }
 
 static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
@@ -923,6 +947,7 @@ static void push_csv(mca_daemon_t *d, double t, int state) {
         }
     }
     r->info = d->info;
+    r->cmd_gap_ns = d->cmd_gap_ns;
     mca_ring_push(&d->csv_ring, r);
 }
 
@@ -948,6 +973,7 @@ static void deadlock_watch(mca_daemon_t *d, double t) {
 }
 
 int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
+    d->t_tick = t;
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
     if (state == MCA_DAEMON_READY) {
         state = MCA_DAEMON_RUNNING;
@@ -1061,6 +1087,50 @@ static void prefault_stack(void) {
     }
 }
 
+/* Run the loop's code once before the first command enables the servos. A process's first controller
+ * ticks run cold (lazy binding, first touch, and under QEMU/TCG the translation of every new code path:
+ * vcan_e2e saw tick 0 take 21 ms and ticks 1-2 1.5-3 ms against 0.5 ms after), long enough for an arm's
+ * 3-cycle watchdog to trip right after the first tick enabled it. Ticks a scratch copy of the controller
+ * from the start position, then brakes it: the arms see nothing (they stay READY, servo off, until the
+ * first real tick), the controller's own state is untouched. */
+static void warm_up(mca_daemon_t *d) {
+    const double dt = (double)d->cell.rt.period_ns * 1e-9;
+    double qdot[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
+    const double *qp[MCA_MAX_ARMS], *vl[MCA_MAX_ARMS], *dl[MCA_MAX_ARMS], *vm[MCA_MAX_ARMS] = {NULL};
+    double *qd[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qp[a] = d->q[a];
+        qd[a] = qdot[a];
+        vl[a] = qdot[a];
+        dl[a] = d->dec[a];
+    }
+    for (int a = 0; a < d->n_arms; a++) {
+        vm[a] = d->have_fb[a] ? d->fb[a].velocity : NULL;
+    }
+    const int64_t t0 = now_ns();
+    d->warm_ctrl = d->ctrl;
+    int64_t last = 0;
+    int k;
+    for (k = 0; k < MCA_DAEMON_WARM_TICKS; k++) {
+        const int64_t s = now_ns();
+        mca_controller_set_velocity(&d->warm_ctrl, vm);
+        mca_controller_tick(&d->warm_ctrl, (double)k * dt, qp, qd, &d->warm_info);
+        last = now_ns() - s;
+    }
+    double v0[MCA_MAX_ARMS][MCA_MAX_DOF];
+    memcpy(v0, qdot, sizeof v0);
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        vl[a] = v0[a];
+    }
+    for (int b = 0; b < 3; b++) {
+        mca_controller_brake(&d->warm_ctrl, (double)(k + b) * dt, qp, vl, dl, qd, &d->warm_info);
+    }
+    mca_controller_observe(&d->warm_ctrl, (double)k * dt, qp, &d->warm_info);
+    LOGN(d, MCA_LOG_INFO,
+         "warm-up: %g controller ticks and 3 braking ticks in %.1f ms (the last tick %.0f us)", 3, (double)k,
+         (double)(now_ns() - t0) * 1e-6, (double)last * 1e-3, 0, NULL);
+}
+
 static void *rt_main(void *arg) {
     mca_daemon_t *d = arg;
     pthread_setname_np(pthread_self(), "mcad-loop"); /* visible in ps -L, top -H */
@@ -1072,6 +1142,9 @@ static void *rt_main(void *arg) {
         if (pthread_setaffinity_np(pthread_self(), sizeof set, &set) != 0) {
             LOGN(d, MCA_LOG_WARNING, "cannot pin the loop to CPU %g", 1, d->cell.rt.cpu, 0, 0, 0, NULL);
         }
+    }
+    if (!d->opts.virtual_time) {
+        warm_up(d);
     }
     const int64_t period = d->cell.rt.period_ns;
     const double stop_after = d->opts.stop_after > 0 ? d->opts.stop_after : d->cell.stop_after;
@@ -1113,6 +1186,7 @@ static void *rt_main(void *arg) {
         if (stop_after > 0 && t >= stop_after) {
             atomic_store(&d->stop_request, 1);
         }
+        d->wake_late_ns = wake - next;
         const int state = mca_daemon_step(d, t, wake);
         const int64_t end = now_ns();
         mca_hist_record(&d->compute, end - wake);
@@ -1261,17 +1335,23 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
     for (int a = 0; a < d->n_arms; a++) {
         fprintf(f, ",%.6f,%.6g", in->tau[a], in->sigma[a]);
     }
-    fprintf(f, ",%d,%d,%d,%d", in->deadlock, in->deadlock_arm, in->deadlocks, in->brake_fallback);
+    fprintf(f, ",%d,%d,%d,%d,%.1f", in->deadlock, in->deadlock_arm, in->deadlocks, in->brake_fallback,
+            (double)r->cmd_gap_ns * 1e-3);
     fputc('\n', f);
 }
 
 int mca_daemon_service(mca_daemon_t *d) {
     int n = mca_rtlog_drain(&d->log, d->opts.log);
     if (d->csv) {
+        int rows = 0;
         while (mca_ring_pop(&d->csv_ring, &d->csv_out) == MCA_OK) {
             csv_write(d, &d->csv_out);
-            n++;
+            rows++;
         }
+        if (rows) {
+            fflush(d->csv); /* a killed mcad leaves its CSV up to the last drain */
+        }
+        n += rows;
     }
     return n;
 }
@@ -1296,6 +1376,8 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->ticks = mca_daemon_ticks(d);
     s->overruns = d->overruns;
     s->skipped_periods = d->skipped;
+    s->stalls = d->stalls;
+    s->stall_max_ns = d->stall_max_ns;
     s->jitter_p50_ns = mca_hist_percentile(&d->jitter, 0.5);
     s->jitter_p99_ns = mca_hist_percentile(&d->jitter, 0.99);
     s->jitter_p999_ns = mca_hist_percentile(&d->jitter, 0.999);
@@ -1375,6 +1457,10 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
             mca_daemon_state_name(s->state), (unsigned long long)s->ticks, (unsigned long long)s->overruns,
             (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no",
             s->mem_locked ? "yes" : "no");
+    fprintf(f,
+            "<6>mcad: summary: loop stalls (> %d periods between two ticks' commands) %llu, the longest %.1f "
+            "ms\n",
+            MCA_DAEMON_STALL_PERIODS, (unsigned long long)s->stalls, (double)s->stall_max_ns / 1e6);
     fprintf(f, "<6>mcad: summary: wake-up jitter p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
             (double)s->jitter_p50_ns / 1e3, (double)s->jitter_p99_ns / 1e3, (double)s->jitter_p999_ns / 1e3,
             (double)s->jitter_max_ns / 1e3);

@@ -62,8 +62,11 @@ sim_dq() {
         { cat "$OUT/sim$1.txt" >&2; echo "E2E FAIL: phase $1: mca-sim" >&2; return 1; }
     awk -F, -f "$S/tests/daemon/vcan_e2e_dq.awk" "$OUT/sim$1.csv" "$OUT/mcad$1.csv"
 }
+# the guest's exit status 77: every phase run passed but D, which the guest's starved loop left unjudged
+SKIP_RC=77
 host_checks() {
-    hf=$1
+    hf=$1 skipD=0
+    [ "$hf" -eq $SKIP_RC ] && hf=0 skipD=1
     if echo "$PHASES" | grep -q A && [ -s "$OUT/mcadA.csv" ]; then
         # A: the joint trajectory over SocketCAN (mcad's q columns, the feedback it used at each tick) against
         # the in-process sim backend in virtual time (mca-sim: same controller, same tick order: tick k uses
@@ -83,7 +86,9 @@ host_checks() {
         awk -v a="$4" -v b="$7" -v m="$DQ_MAX" -v n="$2" 'BEGIN { exit !(n >= 49990 && a + 0 <= m && b + 0 <= m) }' ||
             { echo "E2E FAIL: phase A: joint trajectory differs from the sim backend's by more than $DQ_MAX rad"; hf=1; }
     fi
-    if echo "$PHASES" | grep -q D && [ -s "$OUT/d.candump" ]; then
+    if [ $skipD -eq 1 ]; then
+        echo "E2E phase D: not judged (the guest starved mcad's loop on every attempt): no bus checks"
+    elif echo "$PHASES" | grep -q D && [ -s "$OUT/d.candump" ]; then
         th=$(now)
         "$PY" "$S/tests/daemon/check_watchdog.py" "$S/config/can/mca.dbc" "$OUT/d.candump" 3 "$DEC_H" "$D_PERIOD_US" "$OUT" \
             > "$OUT/check_watchdog.txt" 2>&1
@@ -139,6 +144,7 @@ host_checks() {
             echo "E2E FAIL: phase $1: no mcad CSV"; hf=1
         fi
     done
+    [ $hf -eq 0 ] && [ $skipD -eq 1 ] && hf=$SKIP_RC
     return $hf
 }
 now() { date +%s; }
@@ -507,7 +513,7 @@ fi
 # TCG guest so much that mcad managed one tick per ~5 firmware cycles and the watchdog tripped at
 # t = 0.06-0.08 s (both placements tried). With a 4 ms firmware cycle (D_PERIOD_US; dt 4 ms, the watchdog
 # 12 ms, the deceleration step dec_limit * 4 ms) mcad's ~3-4 commands per cycle are taken newest first
-# and the arm follows the task. An early trip shows in mcad's log ("reports FAULT"): a failure.
+# and the arm follows the task. An early trip shows in mcad's log ("reports FAULT"): see below.
 # candump records every frame of both id blocks from before the start; the host checks the capture
 # (check_watchdog.py: tests/can/check_bus.py's watchdog case per bus) against the emulators' --log.
 if echo "$PHASES" | grep -q D; then
@@ -520,7 +526,16 @@ if echo "$PHASES" | grep -q D; then
     K_KILL=1500
     CELL_D=$OUT/cup_stacking_vcan_e2e_D.yaml
     { cat "$CELL"; echo "debug_kill_after_ticks: $K_KILL   # vcan_e2e.sh phase D: mcad dies at tick $K_KILL"; } > "$CELL_D"
-    for attempt in 1 2; do
+    # A trip before the kill needs 3 firmware cycles (>= 2 D_PERIOD_US apart) without a command. mcad's CSV
+    # has each tick's time since the last tick's commands (cmd_gap_us; the CSV is flushed at every drain, so
+    # a SIGKILL leaves it nearly whole). A trip with a gap of >= 2 firmware cycles in the 50 ms of task time
+    # before mcad saw it is the guest starving the loop (SCHED_FIFO alone on its CPU: only a vCPU the host
+    # did not run, or ran slowly, holds it that long), and the arm's watchdog did right: the phase runs
+    # again, at most 3 times; when the guest starved the loop every time, phase D is not judged (SKIP, and
+    # the test shows as skipped). A trip without such a gap is a failure.
+    D_GAP_MS=$(awk -v p="$D_PERIOD_US" 'BEGIN { print 2 * p / 1000 }')
+    skipD=0
+    for attempt in 1 2 3; do
         $PIN2 candump -r 33554432 -L vcan0,100:7F0 vcan1,100:7F0 > "$TMPD/d.candump" 2>/dev/null &
         CD=$!
         sleep 0.3
@@ -537,15 +552,26 @@ if echo "$PHASES" | grep -q D; then
         [ $rc -eq 137 ] || { echo "E2E FAIL: phase D: mcad exit status $rc, want 137 (SIGKILL)"; fD=1; }
         early=0
         ! grep -q "fault at\|brakes on its own\|reports FAULT" "$OUT/mcadD.log" || early=1
-        if [ $early -eq 1 ] && [ $attempt -eq 1 ]; then
-            # The emulators' 12 ms watchdog against a TCG guest on a loaded 2-CPU host: a stall of the guest
-            # (seen 1-15 ms on this VM, more under load) can starve mcad for 3 firmware cycles. Say so, and run
-            # the phase once more: a product that misses its deadline trips again and fails.
-            echo "E2E phase D: attempt 1: a fault before the kill ($(grep -m1 'fault at' "$OUT/mcadD.log" | sed 's/^<[0-9]>//')); the guest may have been starved (TCG, host load $(cut -d' ' -f1 /proc/loadavg) in the guest): running phase D once more"
-            continue
+        if [ $early -eq 1 ]; then
+            t_f=$(sed -n 's/.*fault at t = \([0-9.]*\) s.*/\1/p' "$OUT/mcadD.log" | head -n 1)
+            # the longest gap between two ticks' commands in the 50 ms of task time before mcad saw the fault
+            stall=$(awk -F, -v tf="${t_f:-0}" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+                $1 + 0 <= tf + 0.0005 && $1 + 0 >= tf - 0.05 && $c["cmd_gap_us"] > g { g = $c["cmd_gap_us"] + 0; at = $1 }
+                END { if (g > 0) printf "%s %.1f\n", at, g / 1000 }' "$TMPD/mcadD.csv")
+            set -- $stall
+            if [ -n "$stall" ] && awk -v g="$2" -v m="$D_GAP_MS" 'BEGIN { exit !(g >= m) }'; then
+                echo "E2E phase D: attempt $attempt: the guest starved mcad's loop: $2 ms without a command before t = $1 s (the firmware's watchdog is 3 cycles of $((D_PERIOD_US / 1000)) ms), and the arm's watchdog braked it as it should (mcad: fault at t = $t_f s; $(grep -c 'loop stall at' "$OUT/mcadD.log") loop stalls logged; host load $(cut -d' ' -f1 /proc/loadavg) in the guest)"
+                if [ $attempt -lt 3 ]; then
+                    echo "E2E phase D: running phase D once more"
+                    continue
+                fi
+                echo "E2E SKIP: phase D: the guest starved mcad's loop on all 3 attempts: not judged (the host is too busy for a 12 ms watchdog under TCG)"
+                skipD=1
+                break
+            fi
+            echo "E2E FAIL: phase D: a fault before the kill without a gap of $D_GAP_MS ms or more between mcad's commands in the 50 ms before it (the longest: ${2:-?} ms at t = ${1:-?} s): $(grep -m1 'fault at' "$OUT/mcadD.log" | sed 's/^<[0-9]>//')"
+            fD=1
         fi
-        [ $early -eq 0 ] ||
-            { echo "E2E FAIL: phase D: a fault before the kill on both attempts (watchdog trip while mcad ran: not a single stall)"; fD=1; }
         for i in 0 1; do
             st=$(sed -n 's/.* watchdog_trips=\([0-9]*\) state=\([A-Z]*\) fault_code=\([0-9]*\).*/\2 fault \3 watchdog trips \1/p' "$TMPD/armsim$i""D.txt" 2>/dev/null)
             echo "E2E phase D: vcan$i: $(grep -c " vcan$i 10[0-3]##" "$TMPD/d.candump") frames captured; emulator: ${st:-?}"
@@ -553,7 +579,7 @@ if echo "$PHASES" | grep -q D; then
         done
         break
     done
-    echo "E2E phase D: mcad SIGKILLed itself at tick $K_KILL (its CSV, not flushed, reached t = ${t_seen:-?} s); $(($(now) - t0)) s"
+    echo "E2E phase D: mcad SIGKILLed itself at tick $K_KILL (its CSV, as far as the last drain, reached t = ${t_seen:-?} s); $(($(now) - t0)) s"
     [ $fD -eq 0 ] || fail=1
 fi
 # ---- phases E and F: a shipped two-PA10+ cell (8 joints in every command and feedback frame) run whole
@@ -640,5 +666,6 @@ if echo "$PHASES" | grep -q G; then
         echo "E2E ok: phase G: Hui over vcan0/vcan1 (8 joints): the whole task above d1, stopped, no fault, both arms at rest" ||
         fail=1
 fi
+[ $fail -eq 0 ] && [ "${skipD:-0}" -eq 1 ] && fail=$SKIP_RC
 echo "E2E phases $PHASES: $(($(now) - t_all)) s in the guest, exit status $fail"
 exit $fail

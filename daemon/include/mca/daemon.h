@@ -119,6 +119,7 @@ typedef struct mca_daemon_csv_rec {
     double q[MCA_MAX_ARMS][MCA_MAX_DOF];
     double qdot_cmd[MCA_MAX_ARMS][MCA_MAX_DOF];
     mca_tick_info_t info;
+    int64_t cmd_gap_ns; /**< this tick's commands after the last tick's (0 for the first) */
 } mca_daemon_csv_rec_t;
 
 #define MCA_DAEMON_CSV_CAPACITY 4096
@@ -128,10 +129,20 @@ typedef struct mca_daemon_csv_rec {
  *  publisher asleep on the grid (no system call) and the sample still leaves soon after the tick. */
 #define MCA_DAEMON_DDS_WAKE_OFFSET_NS 60000
 
+/** Controller ticks the loop runs on a scratch copy before its first command (the code runs cold once). */
+#define MCA_DAEMON_WARM_TICKS 20
+
+/** A loop stall: more than this many periods between two ticks' commands (logged, counted in the summary). */
+#define MCA_DAEMON_STALL_PERIODS 5
+/** Loop stalls logged one by one (all are counted). */
+#define MCA_DAEMON_STALLS_LOGGED 20
+
 /** Final/online figures. */
 typedef struct mca_daemon_summary {
     int state;
     uint64_t ticks, overruns, skipped_periods;
+    uint64_t stalls;      /**< loop stalls: > MCA_DAEMON_STALL_PERIODS periods between two ticks' commands */
+    int64_t stall_max_ns; /**< the longest gap between two ticks' commands of those */
     int64_t jitter_p50_ns, jitter_p99_ns, jitter_p999_ns, jitter_max_ns;
     int64_t compute_p50_ns, compute_p99_ns, compute_max_ns;
     int64_t ctrl_p50_ns, ctrl_p99_ns, ctrl_max_ns; /**< mca_controller_tick alone */
