@@ -267,13 +267,83 @@ static double near_worst(const mca_link_critical_t list[MCA_NEAR_PAIRS]) {
     return list[MCA_NEAR_PAIRS - 1].valid ? list[MCA_NEAR_PAIRS - 1].d : INFINITY;
 }
 
-/* Per link of every arm: its MCA_NEAR_PAIRS nearest witness pairs against the other arms' links (mca-ts rows,
- * braking). Two segments' distance is the least of their closest points and their four ends' distances to
- * the other segment; each of these moves smoothly, but which one is least can jump (nearly parallel links:
- * the closest points jump from one end to the other). A row on each keeps every one above d1, so the
- * minimum too; a row on the closest points alone lets the far end approach unbounded until it takes over. */
-static void near_links(mca_controller_t *ctrl) {
+/* Which witness pairs can bind this QP (near_links): per arm and link, the fastest any point of the link can
+ * move with the joint speeds inside the QP's box. A pair whose row bound (mca_scheme_row_bound, times the
+ * priority share) is above that speed cannot bind: mca_scheme_prune_rows would drop its row, so it is not
+ * listed (no Jacobian, no row). The bound grows with d: per arm, link and other arm a distance beyond which
+ * no pair binds, from the bound's two parts (the stop bound, and S(d) v_normal inside d2), 1 nm wider than
+ * the inverse gives so that rounding never drops a row that binds. */
+typedef struct near_reach {
+    double cut_stop[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_ARMS]; /* binds if d <= this (stop bound) */
+    double cut_s[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_ARMS];    /* or if d < d2 and d <= this (S part) */
+    double d2;
+} near_reach_t;
+
+#define NEAR_CUT_MARGIN 1e-9
+
+/* |J_p qdot| <= sum_j |qdot_j| |p - o_j| (unit axes, revolute joints), and on a segment |p - o_j| is
+ * largest at one of its ends. */
+static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const mca_qp_t *qp,
+                            const mca_scheme_info_t *si, const double *dec, const double *priority) {
+    const mca_scheme_params_t *sp = &ctrl->cfg.sp;
     const int na = ctrl->cfg.n_arms;
+    const double d1m = fmin(sp->d1 + sp->d1_margin, 0.5 * (sp->d1 + sp->d2)); /* as mca_scheme_row_bound */
+    r->d2 = sp->d2;
+    for (int a = 0; a < na; a++) {
+        const mca_kin_t *k = &ctrl->kin[a];
+        const int dof = ctrl->cfg.chain[a].dof, vo = si->var_off[a];
+        const double t_stop = mca_scheme_stop_time(&ctrl->cfg.chain[a], dec ? dec[a] : 0.0);
+        for (int l = 0; l <= dof; l++) {
+            double v = 0.0; /* the link's fastest point */
+            for (int j = 0; j < l; j++) {
+                const double qmax = fmax(fabs(qp->lb[vo + j]), fabs(qp->ub[vo + j]));
+                v += qmax * fmax(mca_v3_dist(k->point[l], k->point[j + 1]),
+                                 mca_v3_dist(k->point[l + 1], k->point[j + 1]));
+            }
+            for (int b = 0; b < na; b++) {
+                const double share = mca_scheme_row_share(priority, a, b);
+                double cs = -INFINITY, css = INFINITY;
+                if (!isfinite(v) || !(share > 0.0) || !(sp->v_normal > 0.0)) {
+                    cs = INFINITY; /* nothing known: every pair may bind */
+                } else {
+                    if (t_stop > 0.0) { /* share (d - d1m) / (2 t_stop) <= v */
+                        cs = d1m + 2.0 * t_stop * v / share + NEAR_CUT_MARGIN;
+                    }
+                    const double x = v / (share * sp->v_normal); /* S(d) <= x */
+                    css = x >= 1.0 ? INFINITY
+                                   : d1m + (sp->d2 - d1m) * (2.0 / M_PI) * asin(sqrt(fmax(0.0, x))) +
+                                         NEAR_CUT_MARGIN;
+                }
+                r->cut_stop[a][l][b] = cs;
+                r->cut_s[a][l][b] = css;
+            }
+        }
+    }
+}
+
+/* Can the row of arm a's link l against arm b at distance d bind? (NaN d: yes.) */
+static int near_can_bind(const near_reach_t *r, int a, int l, int b, double d) {
+    return !(d > r->cut_stop[a][l][b]) || (!(d >= r->d2) && !(d > r->cut_s[a][l][b]));
+}
+
+static void near_add(mca_link_critical_t list[MCA_NEAR_PAIRS], const near_reach_t *r, int a, int l, int b,
+                     int other_link, double d, const double p[3], const double e[3]) {
+    if (near_can_bind(r, a, l, b, d)) {
+        near_insert(list, b, other_link, d, p, e);
+    }
+}
+
+/* Per link of every arm: its MCA_NEAR_PAIRS nearest witness pairs against the other arms' links that can bind
+ * the QP in hand (its box: see near_reach_t), for mca-ts's rows and the braking rows. Two segments' distance
+ * is the least of their closest points and their four ends' distances to the other segment; each of these
+ * moves smoothly, but which one is least can jump (nearly parallel links: the closest points jump from one
+ * end to the other). A row on each keeps every one above d1, so the minimum too; a row on the closest
+ * points alone lets the far end approach unbounded until it takes over. */
+static void near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_scheme_info_t *si,
+                       const double *dec, const double *priority) {
+    const int na = ctrl->cfg.n_arms;
+    near_reach_t r;
+    near_reach_init(&r, ctrl, qp, si, dec, priority);
     for (int a = 0; a < na; a++) {
         for (int l = 0; l < MCA_MAX_LINKS; l++) {
             for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
@@ -287,8 +357,8 @@ static void near_links(mca_controller_t *ctrl) {
             for (int i = 0; i < ad->n_links_a; i++) {
                 for (int j = 0; j < ad->n_links_b; j++) {
                     const mca_link_pair_t *lp = &ad->pair[i][j];
-                    near_insert(ctrl->near[a][i], b, j, lp->d, lp->p, lp->e);
-                    near_insert(ctrl->near[b][j], a, i, lp->d, lp->e, lp->p);
+                    near_add(ctrl->near[a][i], &r, a, i, b, j, lp->d, lp->p, lp->e);
+                    near_add(ctrl->near[b][j], &r, b, j, a, i, lp->d, lp->e, lp->p);
                 }
             }
             /* the ends: never nearer than their pair's closest points, so only pairs that could enter a list
@@ -298,7 +368,9 @@ static void near_links(mca_controller_t *ctrl) {
             for (int i = 0; i < ad->n_links_a; i++) {
                 for (int j = 0; j < ad->n_links_b; j++) {
                     const double d0 = ad->pair[i][j].d;
-                    if (!(d0 < near_worst(ctrl->near[a][i]) || d0 < near_worst(ctrl->near[b][j]))) {
+                    const int in_a = d0 < near_worst(ctrl->near[a][i]) && near_can_bind(&r, a, i, b, d0);
+                    const int in_b = d0 < near_worst(ctrl->near[b][j]) && near_can_bind(&r, b, j, a, d0);
+                    if (!in_a && !in_b) {
                         continue;
                     }
                     const double *sa[2] = {ka->point[i], ka->point[i + 1]};
@@ -307,12 +379,12 @@ static void near_links(mca_controller_t *ctrl) {
                         double h[3];
                         const double da =
                             mca_point_segment_paper(sa[end], sb[0], sb[1], h, NULL) - ra[i] - rb[j];
-                        near_insert(ctrl->near[a][i], b, j, da, sa[end], h);
-                        near_insert(ctrl->near[b][j], a, i, da, h, sa[end]);
+                        near_add(ctrl->near[a][i], &r, a, i, b, j, da, sa[end], h);
+                        near_add(ctrl->near[b][j], &r, b, j, a, i, da, h, sa[end]);
                         const double db =
                             mca_point_segment_paper(sb[end], sa[0], sa[1], h, NULL) - ra[i] - rb[j];
-                        near_insert(ctrl->near[a][i], b, j, db, h, sb[end]);
-                        near_insert(ctrl->near[b][j], a, i, db, sb[end], h);
+                        near_add(ctrl->near[a][i], &r, a, i, b, j, db, h, sb[end]);
+                        near_add(ctrl->near[b][j], &r, b, j, a, i, db, sb[end], h);
                     }
                 }
             }
@@ -372,7 +444,6 @@ static int distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
             info->link_distance[a][l] = ctrl->crit[a][l].d;
         }
     }
-    near_links(ctrl);
     return MCA_OK;
 }
 
@@ -775,6 +846,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         double target[MCA_MAX_ARMS], lo[MCA_MAX_ARMS], hi[MCA_MAX_ARMS]; /* mca-ts: the rates' plan */
         if (ts) {
             ts_plan(ctrl, info->task_t, target, lo, hi);
+            accel_box(ctrl, &si, na); /* first: the lists keep the pairs this box can bring to a bound */
+            near_links(ctrl, &ctrl->qp, &si, cfg->ts.dec_limit, cfg->ts.priority);
             rc = mca_scheme_near_rows(&ctrl->qp, &si, na, chains, ctrl->kin,
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
                                       &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
@@ -783,7 +856,6 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                 goto fault;
             }
             info->brake = si.brake;
-            accel_box(ctrl, &si, na);
             const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack};
             rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
                                           ts_off, ctrl->ts_scale);
@@ -791,6 +863,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
                 goto fault;
             }
+            mca_scheme_prune_rows(&ctrl->qp, cfg->sp.big, &si); /* rows the box cannot reach */
         }
         info->active_rows = si.active_rows;
         mca_pdnn_result_t pr = {0};
@@ -948,14 +1021,6 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
         return rc;
     }
     qp->n_eq = 0;
-    /* every scheme brakes with the near rows; the stop bound and priorities are mca-ts's */
-    const int ts = cfg->scheme == MCA_SCHEME_MCA_TS;
-    rc = mca_scheme_near_rows(qp, &si, na, chains, ctrl->kin,
-                              (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near, &sp,
-                              ts ? cfg->ts.dec_limit : NULL, ts ? cfg->ts.priority : NULL);
-    if (rc != MCA_OK) {
-        return rc;
-    }
     for (int a = 0; a < na; a++) {
         for (int j = 0; j < cfg->chain[a].dof; j++) {
             const int k = si.var_off[a] + j;
@@ -970,6 +1035,18 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
             }
         }
     }
+    /* every scheme brakes with the near rows (the pairs this box can bring to a bound); the stop bound and
+     * priorities are mca-ts's */
+    const int ts = cfg->scheme == MCA_SCHEME_MCA_TS;
+    const double *row_dec = ts ? cfg->ts.dec_limit : NULL, *row_priority = ts ? cfg->ts.priority : NULL;
+    near_links(ctrl, qp, &si, row_dec, row_priority);
+    rc = mca_scheme_near_rows(qp, &si, na, chains, ctrl->kin,
+                              (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near, &sp,
+                              row_dec, row_priority);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    mca_scheme_prune_rows(qp, sp.big, &si); /* rows the deceleration box cannot reach */
     mca_pdnn_result_t pr = {0};
     double phi[MCA_QP_MAX_VARS];
     rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &cfg->pdnn, phi, &pr);

@@ -43,8 +43,16 @@ static int all_finite(const double *v, int len) {
     return 1;
 }
 
-/* Finite, and whether all zero (an inactive row), in one pass. */
+/* Finite, and whether all zero (an inactive row). Most rows of a QP with many witness pairs are inactive
+ * (memset to +0.0): memcmp against a zero row finds them at memory speed; any other row is checked element
+ * by element (there -0.0 also counts as zero). */
+static const double zero_row[MCA_QP_MAX_VARS];
+
 static int scan_row(const double *v, int len, unsigned char *zero) {
+    if (memcmp(v, zero_row, sizeof(double) * (size_t)len) == 0) {
+        *zero = 1;
+        return 1;
+    }
     int nz = 0;
     for (int i = 0; i < len; i++) {
         if (!isfinite(v[i])) {

@@ -273,6 +273,33 @@ static int merge_parallel(mca_qp_t *qp, int vo, int dof, int r, const int *kept,
     return 0;
 }
 
+double mca_scheme_stop_time(const mca_chain_t *chain, double dec) {
+    double t_stop = 0.0;
+    if (dec > 0.0) {
+        for (int j = 0; j < chain->dof; j++) {
+            t_stop = fmax(t_stop, chain->joint[j].vel_limit / dec);
+        }
+    }
+    return t_stop;
+}
+
+double mca_scheme_row_bound(const mca_scheme_params_t *p, double d, double t_stop) {
+    const double d1m = fmin(p->d1 + p->d1_margin, 0.5 * (p->d1 + p->d2)); /* the rows aim above d1 */
+    double bound = p->big;
+    if (d < p->d2) {
+        bound = mca_brake_s(d, d1m, p->d2) * p->v_normal;
+    }
+    if (t_stop > 0.0) {
+        bound = fmin(bound, fmax(0.0, d - d1m) / (2.0 * t_stop)); /* invariant: docs/scheme.md §10 */
+    }
+    return bound;
+}
+
+double mca_scheme_row_share(const double *priority, int a, int b) {
+    const double pa = priority ? priority[a] : 1.0, pb = priority ? priority[b] : 1.0;
+    return pa + pb > 0.0 ? 2.0 * pa / (pa + pb) : 1.0;
+}
+
 int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                          const mca_kin_t kin[],
                          const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_PAIRS],
@@ -305,12 +332,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
         const int dof = chain[a]->dof, vo = si->var_off[a];
         int kept[MCA_NEAR_PAIRS * MCA_MAX_LINKS], n_kept = 0; /* arm a's active rows so far */
         double kept_norm[MCA_NEAR_PAIRS * MCA_MAX_LINKS];
-        double t_stop = 0.0; /* longest stop of arm a from its fastest joint speed */
-        if (dec && dec[a] > 0.0) {
-            for (int j = 0; j < dof; j++) {
-                t_stop = fmax(t_stop, chain[a]->joint[j].vel_limit / dec[a]);
-            }
-        }
+        const double t_stop = mca_scheme_stop_time(chain[a], dec ? dec[a] : 0.0);
         for (int l = 0; l <= dof; l++) {
             for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
                 const mca_link_critical_t *c = &near[a][l][k];
@@ -324,21 +346,14 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                 if (!(nrm > 1e-12)) {
                     continue; /* axes touch: no direction; the distance fault handles it */
                 }
-                double bound = p->big;
                 if (c->d < p->d2) {
-                    const double s = mca_brake_s(c->d, d1m, p->d2);
-                    si->brake = fmin(si->brake, s);
-                    bound = s * p->v_normal;
+                    si->brake = fmin(si->brake, mca_brake_s(c->d, d1m, p->d2));
                 }
-                if (t_stop > 0.0) {
-                    bound = fmin(bound,
-                                 fmax(0.0, c->d - d1m) / (2.0 * t_stop)); /* invariant: docs/scheme.md §10 */
-                }
+                const double bound = mca_scheme_row_bound(p, c->d, t_stop);
                 if (!(bound < p->big)) {
                     continue; /* beyond d2 with no stop bound: inactive */
                 }
-                const double pa = priority ? priority[a] : 1.0, pb = priority ? priority[c->other_arm] : 1.0;
-                const double share = pa + pb > 0.0 ? 2.0 * pa / (pa + pb) : 1.0;
+                const double share = mca_scheme_row_share(priority, a, c->other_arm);
                 double Jp[3][MCA_MAX_DOF];
                 const int rc = mca_jacobian_point(&kin[a], l, c->p, Jp);
                 if (rc != MCA_OK) {
@@ -367,6 +382,33 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
         }
     }
     return MCA_OK;
+}
+
+int mca_scheme_prune_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si) {
+    int dropped = 0;
+    for (int i = 0; i < qp->n_ineq; i++) {
+        if (!(qp->beta[i] < big)) {
+            continue;
+        }
+        double reach = 0.0; /* the largest U_i phi over the box (+inf where a bound is infinite) */
+        for (int j = 0; j < qp->n; j++) {
+            const double u = qp->U[i][j];
+            if (u > 0.0) {
+                reach += u * qp->ub[j];
+            } else if (u < 0.0) {
+                reach += u * qp->lb[j];
+            }
+        }
+        if (reach < qp->beta[i]) {
+            memset(qp->U[i], 0, sizeof(double) * (size_t)qp->n);
+            qp->beta[i] = big;
+            dropped++;
+        }
+    }
+    if (si) {
+        si->active_rows -= dropped;
+    }
+    return dropped;
 }
 
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,

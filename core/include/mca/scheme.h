@@ -140,6 +140,30 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                          const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_PAIRS],
                          const mca_scheme_params_t *p, const double *dec, const double *priority);
 
+/** T_a of the stop bound: the longest stop of an arm from its fastest joint speed, max_j qdot_max,j / dec
+ *  (0 when dec <= 0: no stop bound). */
+double mca_scheme_stop_time(const mca_chain_t *chain, double dec);
+
+/**
+ * The bound on a witness pair's approach speed that mca_scheme_near_rows gives its row at distance d,
+ * before the priority share: S(d) v_normal inside d2 (S from d1 + margin), and with a stop time t_stop > 0
+ * at most (d - d1 - margin) / (2 t_stop). p->big when neither applies (an inactive row). Non-decreasing in d.
+ */
+double mca_scheme_row_bound(const mca_scheme_params_t *p, double d, double t_stop);
+
+/** The priority share of arm a's row against arm b (2 w_a; 1 with priority NULL). */
+double mca_scheme_row_share(const double *priority, int a, int b);
+
+/**
+ * Drop the inequality rows that no point of the box lb <= phi <= ub can bring to their bound (the largest
+ * U_i phi over the box is below beta_i): redundant rows, so the QP's answer is the same, and the PDNN
+ * iterates fewer rows. mca-ts's box is the acceleration box (last command +- dec_limit dt), so most
+ * witness-pair rows are dropped here while their pairs are not closing in. A dropped row becomes inactive
+ * (zero, beta = big) and leaves si->active_rows. RT safe.
+ * @return the number of rows dropped
+ */
+int mca_scheme_prune_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si);
+
 /** Path-time scaling weights (see mca_scheme_add_timescale). */
 typedef struct mca_timescale_weights {
     double w_sigma; /**< weight of (sigma - sigma_target)^2 */
