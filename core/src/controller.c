@@ -177,6 +177,7 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->deadlock_arm = -1;
     ctrl->deadlocks = 0;
     ctrl->brake_pdnn.h = 0;
+    ctrl->n_row_key = ctrl->n_brake_row_key = 0;
 }
 
 void mca_controller_clear_fault(mca_controller_t *ctrl) {
@@ -545,7 +546,8 @@ static double rows_lambda(const mca_qp_t *qp, const mca_scheme_info_t *si, int a
                           const double *dir, double big) {
     const int vo = si->var_off[a];
     double lambda = 1.0;
-    for (int i = si->row_off[a]; i < si->row_off[a] + si->rows_per_link * (dof + 1); i++) {
+    const int end = a + 1 < MCA_MAX_ARMS ? si->row_off[a + 1] : qp->n_ineq;
+    for (int i = si->row_off[a]; i < end; i++) {
         if (!(qp->beta[i] < big)) {
             continue;
         }
@@ -594,6 +596,30 @@ static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, i
         }
         mca_brake_scale_arm(&ctrl->box_center[vo], dec, cfg->dt, dof, &ctrl->phi[vo]);
     }
+}
+
+/* mca-ts and braking: only the active rows go to the PDNN (mca_scheme_compact_rows); each keeps its
+ * slot of the full layout (arm, link, list entry) in @p key, and its dual from the last solve where that
+ * slot was active then too. */
+static void compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, mca_pdnn_t *pdnn, int *key,
+                         int *n_key) {
+    int src[MCA_QP_MAX_INEQ], pos[MCA_QP_MAX_INEQ], old_of_new[MCA_QP_MAX_INEQ];
+    const int n_slots = qp->n_ineq;
+    for (int k = 0; k < n_slots; k++) {
+        pos[k] = -1;
+    }
+    for (int i = 0; i < *n_key; i++) {
+        if (key[i] >= 0 && key[i] < n_slots) {
+            pos[key[i]] = i;
+        }
+    }
+    const int n = mca_scheme_compact_rows(qp, big, si, src);
+    for (int i = 0; i < n; i++) {
+        old_of_new[i] = pos[src[i]];
+        key[i] = src[i];
+    }
+    *n_key = n;
+    mca_pdnn_remap_ineq(pdnn, n, old_of_new);
 }
 
 /* mca-ts: commands the arm can follow. Each joint's command stays within dec_limit dt of the last one, the
@@ -864,6 +890,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                 goto fault;
             }
             mca_scheme_prune_rows(&ctrl->qp, cfg->sp.big, &si); /* rows the box cannot reach */
+            compact_rows(&ctrl->qp, cfg->sp.big, &si, &ctrl->pdnn, ctrl->row_key, &ctrl->n_row_key);
         }
         info->active_rows = si.active_rows;
         mca_pdnn_result_t pr = {0};
@@ -1047,6 +1074,7 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
         return rc;
     }
     mca_scheme_prune_rows(qp, sp.big, &si); /* rows the deceleration box cannot reach */
+    compact_rows(qp, sp.big, &si, &ctrl->brake_pdnn, ctrl->brake_row_key, &ctrl->n_brake_row_key);
     mca_pdnn_result_t pr = {0};
     double phi[MCA_QP_MAX_VARS];
     rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &cfg->pdnn, phi, &pr);

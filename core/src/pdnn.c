@@ -34,6 +34,21 @@ void mca_pdnn_init(mca_pdnn_t *s) {
     }
 }
 
+void mca_pdnn_remap_ineq(mca_pdnn_t *s, int n_ineq, const int *old_of_new) {
+    if (!s || s->h <= 0 || n_ineq < 0 || n_ineq > MCA_QP_MAX_INEQ || !old_of_new) {
+        return;
+    }
+    const int base = s->n + s->n_eq;
+    double *t = s->ws_t;
+    for (int i = 0; i < n_ineq; i++) {
+        const int k = old_of_new[i];
+        t[i] = k >= 0 && k < s->n_ineq ? s->y[base + k] : 0.0;
+    }
+    memcpy(&s->y[base], t, sizeof(double) * (size_t)n_ineq);
+    s->n_ineq = n_ineq;
+    s->h = base + n_ineq;
+}
+
 static int all_finite(const double *v, int len) {
     for (int i = 0; i < len; i++) {
         if (!isfinite(v[i])) {

@@ -411,6 +411,34 @@ int mca_scheme_prune_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si) {
     return dropped;
 }
 
+int mca_scheme_compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, int *src) {
+    int off[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        off[a] = si->row_off[a];
+        si->row_off[a] = -1;
+    }
+    const size_t row_bytes = sizeof(double) * (size_t)qp->n;
+    int n = 0, a = 0;
+    for (int i = 0; i < qp->n_ineq; i++) {
+        while (a < MCA_MAX_ARMS && i >= off[a]) {
+            si->row_off[a++] = n; /* arm a's rows start here (empty arms: at the next kept row) */
+        }
+        if (!(qp->beta[i] < big)) {
+            continue;
+        }
+        if (n != i) {
+            memcpy(qp->U[n], qp->U[i], row_bytes);
+            qp->beta[n] = qp->beta[i];
+        }
+        src[n++] = i;
+    }
+    for (; a < MCA_MAX_ARMS; a++) {
+        si->row_off[a] = n;
+    }
+    qp->n_ineq = n;
+    return n;
+}
+
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
                              const double *sigma_lo, const double *sigma_hi, const mca_timescale_weights_t *w,
                              int ts_off[], double sigma_scale[]) {

@@ -200,6 +200,9 @@ typedef struct mca_controller {
     /* braking QP (kept apart from the tick's so a fault does not disturb the last tick's dump) */
     mca_qp_t brake_qp;
     mca_pdnn_t brake_pdnn;
+    /* mca-ts and braking: the compacted rows' slots in the full row layout (warm starts follow them) */
+    int row_key[MCA_QP_MAX_INEQ], n_row_key;
+    int brake_row_key[MCA_QP_MAX_INEQ], n_brake_row_key;
 } mca_controller_t;
 
 /** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */

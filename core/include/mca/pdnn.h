@@ -105,6 +105,10 @@ typedef struct mca_pdnn {
  *  dual-arm QP on the build machine, docs/pdnn.md). */
 void mca_pdnn_default_params(mca_pdnn_params_t *params);
 
+/** Keep the warm start across a change of the inequality rows: the next QP's row i was row old_of_new[i] of
+ *  the last solve (-1: a new row, dual 0); the primal part and the equality duals stay. RT safe. */
+void mca_pdnn_remap_ineq(mca_pdnn_t *s, int n_ineq, const int *old_of_new);
+
 /** Cold state (y = 0). Call once before the first solve (the state is large: keep it static or in a
  *  struct allocated at start-up, not on a small stack). */
 void mca_pdnn_init(mca_pdnn_t *s);

@@ -164,6 +164,15 @@ double mca_scheme_row_share(const double *priority, int a, int b);
  */
 int mca_scheme_prune_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si);
 
+/**
+ * Move the active inequality rows (beta < big) to the front, in order, and drop the rest: n_ineq becomes
+ * their count, src[i] the row that row i was, and si->row_off each arm's first row in the new order (arm
+ * a's rows stay [row_off[a], row_off[a + 1]), the last arm's up to n_ineq). The QP is the same; the PDNN
+ * then never sees the many inactive witness-pair rows (mca_pdnn_remap_ineq keeps its warm start). RT safe.
+ * @return the new n_ineq
+ */
+int mca_scheme_compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, int *src);
+
 /** Path-time scaling weights (see mca_scheme_add_timescale). */
 typedef struct mca_timescale_weights {
     double w_sigma; /**< weight of (sigma - sigma_target)^2 */
