@@ -20,6 +20,7 @@ static const char *const fault_names[] = {
     [MCA_CTRL_FAULT_DISTANCE] = "distance-below-d1",
     [MCA_CTRL_FAULT_FAKE_ATTRACTOR] = "fake-attractor",
     [MCA_CTRL_FAULT_INPUT] = "bad-input",
+    [MCA_CTRL_FAULT_TIME_BUDGET] = "pdnn-time-budget",
 };
 
 const char *mca_ctrl_fault_name(int fault) {
@@ -894,12 +895,21 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         }
         info->active_rows = si.active_rows;
         mca_pdnn_result_t pr = {0};
-        rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &cfg->pdnn, ctrl->phi, &pr);
+        mca_pdnn_params_t prm = cfg->pdnn;
+        prm.deadline_ns = cfg->pdnn_budget_ns > 0 ? t_enter + cfg->pdnn_budget_ns : 0;
+        rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &prm, ctrl->phi, &pr);
         info->pdnn_steps = pr.steps;
         info->pdnn_residual = pr.residual;
         info->pdnn_converged = pr.converged;
         if (rc == MCA_EINVAL) {
             raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "PDNN rejected the QP (non-finite data)");
+            goto fault;
+        }
+        if (rc == MCA_ETIMEDOUT) {
+            /* out of time before its step cap: a named fault, never an overrun of the loop */
+            raise_fault(ctrl, MCA_CTRL_FAULT_TIME_BUDGET,
+                        "PDNN time budget %.3g us used up after %d steps (residual %.2e)",
+                        (double)cfg->pdnn_budget_ns * 1e-3, pr.steps, pr.residual);
             goto fault;
         }
         const mca_qp_t *qp = &ctrl->qp;
@@ -1027,7 +1037,7 @@ void mca_brake_scale_arm(const double *v, const double *dec, double dt, int dof,
  * under mca-ts). No equality: the task is over. @retval MCA_OK with qdot written, or an error (no answer). */
 static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
                     const double *const v_last[MCA_MAX_ARMS], const double *const dec[MCA_MAX_ARMS],
-                    double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info) {
+                    double *const qdot[MCA_MAX_ARMS], mca_tick_info_t *info, int64_t t_enter) {
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const int na = cfg->n_arms;
     const double dt = cfg->dt;
@@ -1077,7 +1087,9 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     compact_rows(qp, sp.big, &si, &ctrl->brake_pdnn, ctrl->brake_row_key, &ctrl->n_brake_row_key);
     mca_pdnn_result_t pr = {0};
     double phi[MCA_QP_MAX_VARS];
-    rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &cfg->pdnn, phi, &pr);
+    mca_pdnn_params_t prm = cfg->pdnn; /* out of time: no answer, so the keep-direction fallback */
+    prm.deadline_ns = cfg->pdnn_budget_ns > 0 ? t_enter + cfg->pdnn_budget_ns : 0;
+    rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &prm, phi, &pr);
     info->pdnn_steps = pr.steps;
     info->pdnn_residual = pr.residual;
     info->pdnn_converged = pr.converged;
@@ -1118,7 +1130,7 @@ int mca_controller_brake(mca_controller_t *ctrl, double t, const double *const q
     }
     const int rc = mca_controller_observe(ctrl, t, q, info);
     info->brake_fallback = 0;
-    if (rc != MCA_OK || brake_qp(ctrl, q, v_last, dec_limit, qdot, info) != MCA_OK) {
+    if (rc != MCA_OK || brake_qp(ctrl, q, v_last, dec_limit, qdot, info, t_enter) != MCA_OK) {
         /* no distances or no QP answer: keep each arm's direction, slow it as fast as allowed */
         for (int a = 0; a < ctrl->cfg.n_arms; a++) {
             mca_brake_scale_arm(v_last[a], dec_limit[a], ctrl->cfg.dt, ctrl->cfg.chain[a].dof, qdot[a]);

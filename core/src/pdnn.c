@@ -483,7 +483,7 @@ static void gather(mca_pdnn_t *s, int n, int to_blocks) {
 
 /* Block b of the split problem as the Eigen side takes it: its slices of ws_B, ws_Bq, Omega and the row
  * factors (filled by split()). */
-static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b) {
+static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b, int64_t deadline_ns) {
     const int *bl = s->ws_blk[b];
     const mca_pdnn__problem_t p = {bl[1],
                                    bl[3],
@@ -492,13 +492,14 @@ static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b) {
                                    &s->ws_Blo[bl[0] + bl[2]],
                                    &s->ws_Bhi[bl[0] + bl[2]],
                                    &s->ws_Bf[bl[2]],
-                                   &s->ws_Bfi[bl[2]]};
+                                   &s->ws_Bfi[bl[2]],
+                                   deadline_ns};
     return p;
 }
 
 typedef struct pdnn_run {
     double r_true, kappa;
-    int steps, total, diverged;
+    int steps, total, diverged, timed_out;
 } pdnn_run_t;
 
 /* Integrate every block from ws_By until the QP as given meets tol (checked on the mapped-back y, the
@@ -513,8 +514,8 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
     for (int pass = 0; pass < 8; pass++) {
         for (int b = 0; b < s->ws_nblk; b++) {
             const int *bl = s->ws_blk[b];
-            const mca_pdnn__problem_t p = block_problem(s, b);
-            mca_pdnn_result_t it;
+            const mca_pdnn__problem_t p = block_problem(s, b, prm->deadline_ns);
+            mca_pdnn_result_t it = {0};
             mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b],
                               !prm->no_rescue, &it);
             bsteps[b] += it.steps;
@@ -527,6 +528,7 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
                 run->diverged = 1;
                 run->r_true = it.residual;
             }
+            run->timed_out |= it.timed_out;
         }
         gather(s, n, 0);
         if (run->diverged) {
@@ -534,8 +536,9 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
         }
         duals_from_iter(s, qp, pre, s->ws_y, s->ws_t);
         run->r_true = true_residual(qp, s, prm->big, s->ws_t);
-        if (run->r_true <= prm->tol || run->steps >= cap || (pass >= 3 && run->r_true > 0.5 * r_prev)) {
-            return; /* done, out of steps, or no progress (a contradiction the blocks cannot see) */
+        if (run->r_true <= prm->tol || run->steps >= cap || run->timed_out ||
+            (pass >= 3 && run->r_true > 0.5 * r_prev)) {
+            return; /* done, out of steps or time, or no progress (a contradiction the blocks cannot see) */
         }
         r_prev = run->r_true;
         tol_it *= fmax(1e-3, 0.5 * prm->tol / run->r_true);
@@ -600,7 +603,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
     for (int b = 0; b < s->ws_nblk; b++) {
         kfix[b] = prm.kappa;
         if (prm.kappa > 0.0 || prm.step_rule == MCA_PDNN_STEP_BOUND) {
-            const mca_pdnn__problem_t p = block_problem(s, b);
+            const mca_pdnn__problem_t p = block_problem(s, b, 0);
             /* ||I+M||_2^2 = (5 + 2 s^2 + sqrt(9 + 4 s^2)) / 2 with s = ||N||_2 (docs/pdnn.md), increasing in
              * s */
             const double s2 = mca_pdnn__norm_sq_bound(&p);
@@ -620,7 +623,8 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
     const int cap1 = rescue ? (prm.max_steps + 1) / 2 : prm.max_steps;
     run_passes(s, qp, pre, &prm, kfix, cap1, &run);
     res.kappa = run.kappa;
-    if (rescue && !run.diverged && !(run.r_true <= prm.tol) && prm.max_steps - run.steps > 0) {
+    if (rescue && !run.diverged && !run.timed_out && !(run.r_true <= prm.tol) &&
+        prm.max_steps - run.steps > 0) {
         pdnn_run_t run2 = {0};
         memcpy(s->ws_y2, s->ws_y, sizeof(double) * (size_t)h);
         memcpy(s->ws_t2, s->ws_t, sizeof(double) * (size_t)h);
@@ -633,6 +637,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
             memcpy(s->ws_t, s->ws_t2, sizeof(double) * (size_t)h);
             run.steps += run2.steps;
             run.total += run2.total;
+            run.timed_out |= run2.timed_out;
         } else {
             run2.steps += run.steps;
             run2.total += run.total;
@@ -647,6 +652,7 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
     res.steps = steps;
     res.residual = r_true;
     res.converged = r_true <= prm.tol;
+    res.timed_out = run.timed_out && !res.converged;
     res.warm = warm;
     res.precond = pre;
 
@@ -665,5 +671,5 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
     if (result != NULL) {
         *result = res;
     }
-    return res.converged ? MCA_OK : MCA_ENOTCONV;
+    return res.converged ? MCA_OK : res.timed_out ? MCA_ETIMEDOUT : MCA_ENOTCONV;
 }

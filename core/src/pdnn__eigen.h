@@ -19,6 +19,7 @@ typedef struct mca_pdnn__problem {
     /** m, or NULL: how a row reads in the QP as given: multiplier f w, row value b / f (b = (N x + q)_i);
      *  finv = 1 / f. */
     const double *f, *finv;
+    int64_t deadline_ns; /**< CLOCK_MONOTONIC instant to stop at (checked every 16 steps); 0: none */
 } mca_pdnn__problem_t;
 
 /** Upper bound on ||N||_2^2: Gershgorin row bound of N^T N. No allocation. */

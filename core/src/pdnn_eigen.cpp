@@ -11,6 +11,7 @@
 #endif
 #include <Eigen/Dense>
 #include <cmath>
+#include <ctime>
 
 #include "pdnn__eigen.h"
 
@@ -70,6 +71,14 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         }
         if (r <= tol || steps >= max_steps) {
             break;
+        }
+        if (p->deadline_ns != 0 && steps > 0 && (steps & 15) == 0) {
+            struct timespec ts;
+            clock_gettime(CLOCK_MONOTONIC, &ts);
+            if ((int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec >= p->deadline_ns) {
+                res->timed_out = 1;
+                break;
+            }
         }
         // The projection-contraction argument makes the distance to the solution fall, not the residual:
         // keep the best point seen, to hand back if the cap comes first.

@@ -82,6 +82,7 @@ struct raw_rt {
     int *priority;
     int *cpu;
     int *overrun_limit;
+    long long *pdnn_budget_us;
     int *lost_feedback_cycles;
     bool *lock_memory;
     bool *dma_latency;
@@ -190,6 +191,7 @@ static const cyaml_schema_field_t rt_fields[] = {
     CYAML_FIELD_INT_PTR("priority", OPT, struct raw_rt, priority),
     CYAML_FIELD_INT_PTR("cpu", OPT, struct raw_rt, cpu),
     CYAML_FIELD_INT_PTR("overrun_limit", OPT, struct raw_rt, overrun_limit),
+    CYAML_FIELD_INT_PTR("pdnn_budget_us", OPT, struct raw_rt, pdnn_budget_us),
     CYAML_FIELD_INT_PTR("lost_feedback_cycles", OPT, struct raw_rt, lost_feedback_cycles),
     CYAML_FIELD_BOOL_PTR("lock_memory", OPT, struct raw_rt, lock_memory),
     CYAML_FIELD_BOOL_PTR("dma_latency", OPT, struct raw_rt, dma_latency),
@@ -542,6 +544,8 @@ static const mca_range_t r_rt_priority = {"priority", 0, 99, 0, 1, "(0 = SCHED_O
  * CPU) tolerate any stall, so up to the longest task's tick count (an hour of periods) */
 static const mca_range_t r_overrun_limit = {"overrun_limit", 1, MCA_SCENARIO_MAX_TICKS, 0, 1, "periods"};
 #define CELL_MAX_OVERRUN_S 3600.0
+/* the PDNN's time per tick: from 10 us up to 1 s (an emulated CPU; a real loop wants half its period) */
+static const mca_range_t r_pdnn_budget_us = {"pdnn_budget_us", 10, 1000000, 0, 1, "us"};
 /* lost feedback: the arm is blind while these pass; at most 1000 cycles and 1 s */
 static const mca_range_t r_lost_feedback_cycles = {"lost_feedback_cycles", 1, 1000, 0, 1, "cycles"};
 #define CELL_MAX_LOST_FEEDBACK_S 1.0
@@ -1041,6 +1045,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                      *r->overrun_limit, period_s, *r->overrun_limit * period_s, CELL_MAX_OVERRUN_S);
             }
             rt->overrun_limit = *r->overrun_limit;
+        }
+        if (r->pdnn_budget_us) {
+            CHECK(wr, "pdnn_budget_us", &r_pdnn_budget_us, (double)*r->pdnn_budget_us, "rt.pdnn_budget_us");
+            rt->pdnn_budget_ns = *r->pdnn_budget_us * 1000;
         }
         if (r->lost_feedback_cycles) {
             CHECK(wr, "lost_feedback_cycles", &r_lost_feedback_cycles, *r->lost_feedback_cycles,

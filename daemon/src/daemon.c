@@ -585,6 +585,8 @@ static int ctrl_fault_code(int f) {
         return MCA_EINVAL;
     case MCA_CTRL_FAULT_NOT_CONVERGED:
         return MCA_ENOTCONV;
+    case MCA_CTRL_FAULT_TIME_BUDGET:
+        return MCA_ETIMEDOUT;
     case MCA_CTRL_FAULT_INFEASIBLE:
     case MCA_CTRL_FAULT_FAKE_ATTRACTOR:
         return MCA_EINFEASIBLE;
@@ -1222,6 +1224,12 @@ static void *rt_main(void *arg) {
 
 int mca_daemon_start(mca_daemon_t *d) {
     FILE *log = d->opts.log;
+    /* The loop's own clock: the PDNN's share of the period (rt.pdnn_budget_us, default half). Running out is
+     * a named fault, not an overrun. A caller that steps the daemon itself (mca-sim in virtual time, the
+     * tests) has no period to keep, and its runs stay deterministic. */
+    d->ccfg.pdnn_budget_ns =
+        d->cell.rt.pdnn_budget_ns > 0 ? d->cell.rt.pdnn_budget_ns : d->cell.rt.period_ns / 2;
+    d->ctrl.cfg.pdnn_budget_ns = d->ccfg.pdnn_budget_ns;
     if (!d->opts.no_rt && d->cell.rt.lock_memory) {
         /* keep freed memory in the process, never use mmap for malloc: no page faults after start-up */
         mallopt(M_TRIM_THRESHOLD, -1);

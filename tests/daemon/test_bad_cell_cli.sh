@@ -164,6 +164,10 @@ expect overrun_huge "overrun_limit: 3" "overrun_limit: 2147483647" "overrun_limi
     "must be in 1..3600000 periods (got 2147483647)"
 expect overrun_too_long "overrun_limit: 3" "overrun_limit: 2000000" "overrun_limit" "rt.overrun_limit" \
     "2000000 periods of 0.002 s are 4000 s of overruns, more than 3600 s"
+expect pdnn_budget_zero "overrun_limit: 3" "overrun_limit: 3${NL}  pdnn_budget_us: 0" "pdnn_budget_us" \
+    "rt.pdnn_budget_us" "must be in 10..1000000 us (got 0)"
+expect pdnn_budget_huge "overrun_limit: 3" "overrun_limit: 3${NL}  pdnn_budget_us: 5000000" "pdnn_budget_us" \
+    "rt.pdnn_budget_us" "must be in 10..1000000 us (got 5000000)"
 expect period_too_short "period_us: 2000" "period_us: 10" "period_us" "rt.period_us" "must be in 100..100000 us (got 10)"
 expect solver_K_huge "K: 12" "K: 1e308" "K: 1e308" "solver.K" "must be in [0, 1000] 1/s (got 1e+308)"
 expect solver_v_normal_huge "  K: 12$NL" "  K: 12$NL  v_normal: 1e308$NL" "v_normal" "solver.v_normal" \

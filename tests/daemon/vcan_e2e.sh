@@ -5,7 +5,7 @@
 # (lockstep: one firmware cycle per command, so the emulated guest CPU changes no trajectory), with DDS on
 # and mca-monitor subscribed. Natively when this kernel has vcan and we are root, else in one QEMU guest
 # boot (tools/vcan-guest, TCG). The cell is the shipped config/cells/cup_stacking_vcan.yaml with only
-# rt.overrun_limit widened (the emulated CPU misses every deadline; task time advances per tick) and the
+# rt.overrun_limit and rt.pdnn_budget_us widened (the emulated CPU misses every deadline; task time advances per tick) and the
 # loop pinned to the emulators' CPU (rt.cpu); the diff is printed.
 #   A: the whole 50 s task: exit 0, stopped, no fault, one CSV row per tick, every distance above d1,
 #      tracking error < 1 mm, both tool tips at their last waypoints; mca-monitor got the Distances samples
@@ -222,7 +222,7 @@ $PIN true 2>/dev/null || PIN="" PIN2=""
 # largest a cell may give (3600000 periods, an hour at 1 kHz; the guest gives itself 1800 s in all).
 CELL=$OUT/cup_stacking_vcan_e2e.yaml
 sed -e "s|\.\./|$S/config/|g" \
-    -e 's/^\(  overrun_limit:\).*/\1 3600000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
+    -e 's/^\(  overrun_limit:\).*/\1 3600000   # vcan_e2e.sh: emulated guest CPU (TCG)/' -e '/^  overrun_limit:/a\  pdnn_budget_us: 1000000   # vcan_e2e.sh: emulated guest CPU (TCG): the PDNN may take 1 s' \
     -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$SRC_CELL" > "$CELL"
 diff "$SRC_CELL" "$CELL" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
 D1=$(sed -n 's/^d1: *\([0-9.]*\).*/\1/p' "$SCN")
@@ -598,7 +598,7 @@ pa10_phase() {
     tag=$1 want=$4
     cell=$OUT/$(basename "$2" .yaml)_e2e.yaml
     sed -e "s|\.\./|$S/config/|g" \
-        -e 's/^\(  overrun_limit:\).*/\1 3600000   # vcan_e2e.sh: emulated guest CPU (TCG)/' \
+        -e 's/^\(  overrun_limit:\).*/\1 3600000   # vcan_e2e.sh: emulated guest CPU (TCG)/' -e '/^  overrun_limit:/a\  pdnn_budget_us: 1000000   # vcan_e2e.sh: emulated guest CPU (TCG): the PDNN may take 1 s' \
         -e "s/^\(  cpu:\).*/\1 $LOOP_CPU   # vcan_e2e.sh: the loop on the emulators' CPU/" "$2" > "$cell"
     diff "$2" "$cell" | grep '^[<>]' | sed 's/^</-  /; s/^>/+  /'
     fp=0

@@ -896,6 +896,93 @@ static void test_near_witnesses(void **state) {
     assert_true(seen.ends_unbindable > 1000);
 }
 
+/* The PDNN's time budget (issue 13): a tick whose solve runs out of it is the named fault pdnn-time-budget
+ * (zero command, latched), never a tick that runs on; a braking tick that runs out of it has no answer and
+ * takes the keep-direction fallback. A budget of 1 ns runs out at the first clock check (after 16 steps):
+ * on the negative task under mca-ts the fault comes exactly at the first tick whose solve needs more. */
+static void test_pdnn_time_budget(void **state) {
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    char err[512];
+    assert_int_equal(mca_scenario_load(SCN("negative.yaml"), &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
+                     MCA_OK);
+    for (int a = 0; a < cfg.n_arms; a++) {
+        cfg.ts.dec_limit[a] = 5.0;
+    }
+    mca_controller_t *c = malloc(sizeof *c), *b = malloc(sizeof *b);
+    assert_non_null(c);
+    assert_non_null(b);
+    double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
+    double vl[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, dec[MCA_MAX_ARMS][MCA_MAX_DOF];
+    const double *qs[MCA_MAX_ARMS], *vls[MCA_MAX_ARMS], *decs[MCA_MAX_ARMS];
+    double *qds[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qs[a] = q[a];
+        qds[a] = qd[a];
+        vls[a] = vl[a];
+        decs[a] = dec[a];
+        memcpy(q[a], s.arm[a].q0, sizeof q[a]);
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            dec[a][j] = 5.0;
+        }
+    }
+    mca_tick_info_t info;
+    /* no budget: the first tick whose solve takes more than 16 steps; the controller kept as it was before */
+    assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
+    int k_long = -1;
+    for (int k = 0; k < 8000 && k_long < 0; k++) {
+        *b = *c;
+        assert_int_equal(mca_controller_tick(c, k * cfg.dt, qs, qds, &info), MCA_OK);
+        if (info.pdnn_steps > 16) {
+            k_long = k;
+            break;
+        }
+        for (int a = 0; a < cfg.n_arms; a++) {
+            for (int j = 0; j < cfg.chain[a].dof; j++) {
+                vl[a][j] = qd[a][j];
+                q[a][j] += qd[a][j] * cfg.dt;
+            }
+        }
+    }
+    assert_true(k_long > 0);
+    /* that tick again with 1 ns: the named fault, zero command */
+    b->cfg.pdnn_budget_ns = 1;
+    mca_controller_t *r = malloc(sizeof *r);
+    assert_non_null(r);
+    *r = *b; /* for the braking below */
+    assert_int_equal(mca_controller_tick(b, k_long * cfg.dt, qs, qds, &info), MCA_EFAULT);
+    print_message("1 ns budget: tick %d (%s): %s\n", k_long, mca_ctrl_fault_name(info.fault),
+                  info.fault_text);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_TIME_BUDGET);
+    assert_string_equal(mca_ctrl_fault_name(info.fault), "pdnn-time-budget");
+    assert_non_null(strstr(info.fault_text, "time budget"));
+    assert_true(info.pdnn_steps <= 16);
+    for (int a = 0; a < cfg.n_arms; a++) {
+        for (int j = 0; j < cfg.chain[a].dof; j++) {
+            assert_true(qd[a][j] == 0.0);
+        }
+    }
+    /* braking from there with 1 ns: every tick either converged within 16 steps or took the fallback */
+    int fallback = 0;
+    for (int k = 0; k < 50; k++) {
+        const int rc = mca_controller_brake(r, (k_long + k) * cfg.dt, qs, vls, decs, qds, &info);
+        assert_true(rc >= 0);
+        assert_true(info.brake_fallback || info.pdnn_steps <= 16);
+        fallback += info.brake_fallback;
+        for (int a = 0; a < cfg.n_arms; a++) {
+            for (int j = 0; j < cfg.chain[a].dof; j++) {
+                vl[a][j] = qd[a][j];
+            }
+        }
+    }
+    print_message("1 ns budget: %d of 50 braking ticks took the fallback\n", fallback);
+    free(r);
+    free(b);
+    free(c);
+}
+
 /* Two parallel rows of one arm (the same point and direction, two distances) are one row, the tighter. */
 static void test_near_rows_parallel(void **state) {
     (void)state;
@@ -1086,6 +1173,7 @@ int main(void) {
         cmocka_unit_test(test_timescale_deadlock),
         cmocka_unit_test(test_near_rows),
         cmocka_unit_test(test_near_witnesses),
+        cmocka_unit_test(test_pdnn_time_budget),
         cmocka_unit_test(test_near_rows_parallel),
         cmocka_unit_test(test_controller_brake),
     };

@@ -102,7 +102,7 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
 }
 
 int mca_simrun_fault_from_name(const char *name) {
-    for (int f = 1; f <= MCA_CTRL_FAULT_INPUT; f++) {
+    for (int f = 1; f <= MCA_CTRL_FAULT_TIME_BUDGET; f++) {
         if (strcmp(name, mca_ctrl_fault_name(f)) == 0) {
             return f;
         }

@@ -93,6 +93,7 @@ typedef enum mca_ctrl_fault {
     MCA_CTRL_FAULT_DISTANCE = 4,       /**< distance below d1, or predicted below d1 next tick */
     MCA_CTRL_FAULT_FAKE_ATTRACTOR = 5, /**< equality residual above eq_tol: tracking contradicts avoidance */
     MCA_CTRL_FAULT_INPUT = 6,          /**< bad call (NULL pointers, solver error) */
+    MCA_CTRL_FAULT_TIME_BUDGET = 7,    /**< the PDNN ran out of its time budget (pdnn_budget_ns) */
 } mca_ctrl_fault_t;
 
 /** Short constant name of a fault code ("fake-attractor", ...). */
@@ -112,6 +113,9 @@ typedef struct mca_controller_config {
     double eq_tol;                 /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
     int fault_distance;            /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
     mca_timescale_params_t ts;     /**< mca-ts only */
+    int64_t pdnn_budget_ns; /**< wall time the PDNN may use from the start of a tick (0: none); running out is
+                                 the fault MCA_CTRL_FAULT_TIME_BUDGET, a braking tick's the keep-direction
+                                 fallback. mcad: rt.pdnn_budget_us (half the period); mca-sim: none */
 } mca_controller_config_t;
 
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */

@@ -11,6 +11,8 @@
 #ifndef MCA_PDNN_H
 #define MCA_PDNN_H
 
+#include <stdint.h>
+
 #include "mca/qp.h"
 
 #ifdef __cplusplus
@@ -56,6 +58,8 @@ typedef struct mca_pdnn_params {
     int no_rescue; /**< 1: the network alone: return the last iterate, no cold restart. 0: when capped, return
                         the least-residual iterate seen, and a warm start that misses tol within half the
                         steps is followed by a cold restart for the other half (the better answer is kept) */
+    int64_t deadline_ns; /**< CLOCK_MONOTONIC instant at which the solve stops as if capped (checked every 16
+                              steps; timed_out says so); 0: none. The 1 kHz loop's time budget. */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
@@ -72,6 +76,7 @@ typedef struct mca_pdnn_result {
     int steps_total;    /**< Euler steps summed over the blocks (the work done) */
     int restarted;      /**< 1: the warm start missed tol in half the steps and a cold restart had the rest
                              (the result is the better of the two) */
+    int timed_out;      /**< 1: stopped at params.deadline_ns before tol (mca_pdnn_solve: MCA_ETIMEDOUT) */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
