@@ -272,16 +272,16 @@ static double near_worst(const mca_link_critical_t list[MCA_NEAR_PAIRS]) {
 /* Which witness pairs can bind this QP (near_links): per arm and link, the fastest any point of the link can
  * move with the joint speeds inside the QP's box. A pair whose row bound (mca_scheme_row_bound, times the
  * priority share) is above that speed cannot bind: mca_scheme_prune_rows would drop its row, so it is not
- * listed (no Jacobian, no row). The bound grows with d: per arm, link and other arm a distance beyond which
- * no pair binds, from the bound's two parts (the stop bound, and S(d) v_normal inside d2), 1 nm wider than
- * the inverse gives so that rounding never drops a row that binds. */
+ * listed (no Jacobian, no row). The bound grows with d; its stop part is linear, so per arm, link and other
+ * arm a distance below which every pair may bind is known at once; beyond it only pairs inside d2 (the S
+ * part) are checked one by one. */
 typedef struct near_reach {
-    double cut_stop[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_ARMS]; /* binds if d <= this (stop bound) */
-    double cut_s[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_ARMS];    /* or if d < d2 and d <= this (S part) */
-    double d2;
+    double speed[MCA_MAX_ARMS][MCA_MAX_LINKS];                  /* |J_p qdot| <= this, p on the link */
+    double cut_stop[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_ARMS]; /* the stop part binds if d <= this */
+    double share[MCA_MAX_ARMS][MCA_MAX_ARMS];
+    double t_stop[MCA_MAX_ARMS];
+    const mca_scheme_params_t *sp;
 } near_reach_t;
-
-#define NEAR_CUT_MARGIN 1e-9
 
 /* |J_p qdot| <= sum_j |qdot_j| |p - o_j| (unit axes, revolute joints), and on a segment |p - o_j| is
  * largest at one of its ends. */
@@ -290,11 +290,14 @@ static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const
     const mca_scheme_params_t *sp = &ctrl->cfg.sp;
     const int na = ctrl->cfg.n_arms;
     const double d1m = fmin(sp->d1 + sp->d1_margin, 0.5 * (sp->d1 + sp->d2)); /* as mca_scheme_row_bound */
-    r->d2 = sp->d2;
+    r->sp = sp;
     for (int a = 0; a < na; a++) {
         const mca_kin_t *k = &ctrl->kin[a];
         const int dof = ctrl->cfg.chain[a].dof, vo = si->var_off[a];
-        const double t_stop = mca_scheme_stop_time(&ctrl->cfg.chain[a], dec ? dec[a] : 0.0);
+        r->t_stop[a] = mca_scheme_stop_time(&ctrl->cfg.chain[a], dec ? dec[a] : 0.0);
+        for (int b = 0; b < na; b++) {
+            r->share[a][b] = mca_scheme_row_share(priority, a, b);
+        }
         for (int l = 0; l <= dof; l++) {
             double v = 0.0; /* the link's fastest point */
             for (int j = 0; j < l; j++) {
@@ -302,22 +305,16 @@ static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const
                 v += qmax * fmax(mca_v3_dist(k->point[l], k->point[j + 1]),
                                  mca_v3_dist(k->point[l + 1], k->point[j + 1]));
             }
+            r->speed[a][l] = v;
             for (int b = 0; b < na; b++) {
-                const double share = mca_scheme_row_share(priority, a, b);
-                double cs = -INFINITY, css = INFINITY;
-                if (!isfinite(v) || !(share > 0.0) || !(sp->v_normal > 0.0)) {
+                const double share = r->share[a][b];
+                double cs = -INFINITY; /* share (d - d1m) / (2 t_stop) <= v */
+                if (!isfinite(v) || !(share > 0.0)) {
                     cs = INFINITY; /* nothing known: every pair may bind */
-                } else {
-                    if (t_stop > 0.0) { /* share (d - d1m) / (2 t_stop) <= v */
-                        cs = d1m + 2.0 * t_stop * v / share + NEAR_CUT_MARGIN;
-                    }
-                    const double x = v / (share * sp->v_normal); /* S(d) <= x */
-                    css = x >= 1.0 ? INFINITY
-                                   : d1m + (sp->d2 - d1m) * (2.0 / M_PI) * asin(sqrt(fmax(0.0, x))) +
-                                         NEAR_CUT_MARGIN;
+                } else if (r->t_stop[a] > 0.0) {
+                    cs = d1m + 2.0 * r->t_stop[a] * v / share;
                 }
                 r->cut_stop[a][l][b] = cs;
-                r->cut_s[a][l][b] = css;
             }
         }
     }
@@ -325,7 +322,13 @@ static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const
 
 /* Can the row of arm a's link l against arm b at distance d bind? (NaN d: yes.) */
 static int near_can_bind(const near_reach_t *r, int a, int l, int b, double d) {
-    return !(d > r->cut_stop[a][l][b]) || (!(d >= r->d2) && !(d > r->cut_s[a][l][b]));
+    if (!(d > r->cut_stop[a][l][b])) {
+        return 1;
+    }
+    if (d >= r->sp->d2) {
+        return 0; /* the S part is inactive beyond d2, and the stop part is above the speed */
+    }
+    return !(r->share[a][b] * mca_scheme_row_bound(r->sp, d, r->t_stop[a]) > r->speed[a][l]);
 }
 
 static void near_add(mca_link_critical_t list[MCA_NEAR_PAIRS], const near_reach_t *r, int a, int l, int b,
