@@ -587,7 +587,17 @@ static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, i
             c[j] = fmax(qp->lb[vo + j], fmin(qp->ub[vo + j], ctrl->box_center[vo + j]));
             dir[j] = ctrl->phi[vo + j] - c[j];
         }
-        const double lambda = rows_lambda(qp, si, a, dof, c, dir, cfg->sp.big);
+        double lambda = rows_lambda(qp, si, a, dof, c, dir, cfg->sp.big);
+        /* and inside the box: a capped PDNN's phi may lie outside it (the network's iterate is not
+         * projected), and the rows mca_scheme_prune_rows dropped hold only inside it */
+        for (int j = 0; j < dof && lambda > 0.0; j++) {
+            const double lo = qp->lb[vo + j], hi = qp->ub[vo + j];
+            if (c[j] + lambda * dir[j] > hi) {
+                lambda = dir[j] > 0.0 ? fmax(0.0, (hi - c[j]) / dir[j]) : lambda;
+            } else if (c[j] + lambda * dir[j] < lo) {
+                lambda = dir[j] < 0.0 ? fmax(0.0, (lo - c[j]) / dir[j]) : lambda;
+            }
+        }
         if (lambda >= 0.0) {
             for (int j = 0; j < dof; j++) {
                 ctrl->phi[vo + j] = c[j] + lambda * dir[j];
