@@ -48,7 +48,7 @@ arms:
 d1: 0.04
 d2: 0.13
 dds: {{enabled: true, domain: {DOMAIN}, config: {SRC}/config/dds/loopback.xml, publish_divisor: 10}}
-rt: {{period_us: 1000, priority: 60, overrun_limit: 100000}}
+rt: {{period_us: 1000, priority: 60, overrun_limit: 100000, pdnn_budget_us: 1000000}}
 stop_after: 2.0
 """
 

@@ -48,7 +48,7 @@ arms:
   - name: right
     backend: sim
 dds: {{enabled: true, domain: {DOMAIN}, config: {XML}, publish_divisor: 100}}
-rt: {{period_us: 1000, priority: 60, overrun_limit: 100000}}
+rt: {{period_us: 1000, priority: 60, overrun_limit: 100000, pdnn_budget_us: 1000000}}
 stop_after: 0
 """
 

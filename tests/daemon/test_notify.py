@@ -41,7 +41,7 @@ arms:
     base_xyz: [0.0, 0.6, 0.0]
     q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]
 dds: {{enabled: true, domain: {domain}, config: {src}/config/dds/loopback.xml, publish_divisor: 10}}
-rt: {{period_us: 1000, priority: 60, overrun_limit: 1000}}
+rt: {{period_us: 1000, priority: 60, overrun_limit: 1000, pdnn_budget_us: 1000000}}
 {extra}
 """
 
