@@ -289,7 +289,7 @@ static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const
                             const mca_scheme_info_t *si, const double *dec, const double *priority) {
     const mca_scheme_params_t *sp = &ctrl->cfg.sp;
     const int na = ctrl->cfg.n_arms;
-    const double d1m = fmin(sp->d1 + sp->d1_margin, 0.5 * (sp->d1 + sp->d2)); /* as mca_scheme_row_bound */
+    const double d1m = mca_scheme_rows_d1(sp);
     r->sp = sp;
     for (int a = 0; a < na; a++) {
         const mca_kin_t *k = &ctrl->kin[a];
@@ -612,6 +612,14 @@ static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, i
     }
 }
 
+/* The solver's parameters for a solve in the tick that began at t_enter: the step cap and, with a budget,
+ * the deadline (mcad's rt.pdnn_budget_us). */
+static mca_pdnn_params_t pdnn_params(const mca_controller_config_t *cfg, int64_t t_enter) {
+    mca_pdnn_params_t prm = cfg->pdnn;
+    prm.deadline_ns = cfg->pdnn_budget_ns > 0 ? t_enter + cfg->pdnn_budget_ns : 0;
+    return prm;
+}
+
 /* mca-ts and braking: only the active rows go to the PDNN (mca_scheme_compact_rows); each keeps its
  * slot of the full layout (arm, link, list entry) in @p key, and its dual from the last solve where that
  * slot was active then too. */
@@ -908,8 +916,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         }
         info->active_rows = si.active_rows;
         mca_pdnn_result_t pr = {0};
-        mca_pdnn_params_t prm = cfg->pdnn;
-        prm.deadline_ns = cfg->pdnn_budget_ns > 0 ? t_enter + cfg->pdnn_budget_ns : 0;
+        const mca_pdnn_params_t prm = pdnn_params(cfg, t_enter);
         rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &prm, ctrl->phi, &pr);
         info->pdnn_steps = pr.steps;
         info->pdnn_residual = pr.residual;
@@ -1100,8 +1107,7 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     compact_rows(qp, sp.big, &si, &ctrl->brake_pdnn, ctrl->brake_row_key, &ctrl->n_brake_row_key);
     mca_pdnn_result_t pr = {0};
     double phi[MCA_QP_MAX_VARS];
-    mca_pdnn_params_t prm = cfg->pdnn; /* out of time: no answer, so the keep-direction fallback */
-    prm.deadline_ns = cfg->pdnn_budget_ns > 0 ? t_enter + cfg->pdnn_budget_ns : 0;
+    const mca_pdnn_params_t prm = pdnn_params(cfg, t_enter); /* out of time: the keep-direction fallback */
     rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &prm, phi, &pr);
     info->pdnn_steps = pr.steps;
     info->pdnn_residual = pr.residual;

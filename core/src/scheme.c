@@ -273,6 +273,10 @@ static int merge_parallel(mca_qp_t *qp, int vo, int dof, int r, const int *kept,
     return 0;
 }
 
+double mca_scheme_rows_d1(const mca_scheme_params_t *p) {
+    return fmin(p->d1 + p->d1_margin, 0.5 * (p->d1 + p->d2));
+}
+
 double mca_scheme_stop_time(const mca_chain_t *chain, double dec) {
     double t_stop = 0.0;
     if (dec > 0.0) {
@@ -284,7 +288,7 @@ double mca_scheme_stop_time(const mca_chain_t *chain, double dec) {
 }
 
 double mca_scheme_row_bound(const mca_scheme_params_t *p, double d, double t_stop) {
-    const double d1m = fmin(p->d1 + p->d1_margin, 0.5 * (p->d1 + p->d2)); /* the rows aim above d1 */
+    const double d1m = mca_scheme_rows_d1(p);
     double bound = p->big;
     if (d < p->d2) {
         bound = mca_brake_s(d, d1m, p->d2) * p->v_normal;
@@ -327,7 +331,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     for (int a = n_arms; a < MCA_MAX_ARMS; a++) {
         si->row_off[a] = n_ineq;
     }
-    const double d1m = fmin(p->d1 + p->d1_margin, 0.5 * (p->d1 + p->d2)); /* the rows aim above d1 */
+    const double d1m = mca_scheme_rows_d1(p); /* the rows aim above d1 */
     for (int a = 0; a < n_arms; a++) {
         const int dof = chain[a]->dof, vo = si->var_off[a];
         int kept[MCA_NEAR_PAIRS * MCA_MAX_LINKS], n_kept = 0; /* arm a's active rows so far */

@@ -1068,6 +1068,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             rt->dma_latency = *r->dma_latency;
         }
     }
+    if (rt->pdnn_budget_ns == 0) {
+        rt->pdnn_budget_ns = rt->period_ns / 2; /* the default: half the period */
+    }
     /* the controller's prediction uses the loop period */
     scn->params.dt = (double)rt->period_ns * 1e-9;
     {
@@ -1129,6 +1132,7 @@ int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_sche
     }
     cell->rt.cpu = -1;
     cell->rt.overrun_limit = 10;
+    cell->rt.pdnn_budget_ns = cell->rt.period_ns / 2;
     cell->rt.lost_feedback_cycles = 10;
     return MCA_OK;
 }

@@ -1103,7 +1103,6 @@ static void warm_up(mca_daemon_t *d) {
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         qp[a] = d->q[a];
         qd[a] = qdot[a];
-        vl[a] = qdot[a];
         dl[a] = d->dec[a];
     }
     for (int a = 0; a < d->n_arms; a++) {
@@ -1227,8 +1226,7 @@ int mca_daemon_start(mca_daemon_t *d) {
     /* The loop's own clock: the PDNN's share of the period (rt.pdnn_budget_us, default half). Running out is
      * a named fault, not an overrun. A caller that steps the daemon itself (mca-sim in virtual time, the
      * tests) has no period to keep, and its runs stay deterministic. */
-    d->ccfg.pdnn_budget_ns =
-        d->cell.rt.pdnn_budget_ns > 0 ? d->cell.rt.pdnn_budget_ns : d->cell.rt.period_ns / 2;
+    d->ccfg.pdnn_budget_ns = d->cell.rt.pdnn_budget_ns;
     d->ctrl.cfg.pdnn_budget_ns = d->ccfg.pdnn_budget_ns;
     if (!d->opts.no_rt && d->cell.rt.lock_memory) {
         /* keep freed memory in the process, never use mmap for malloc: no page faults after start-up */

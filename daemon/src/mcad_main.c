@@ -75,8 +75,7 @@ static void print_cell(const mca_cell_t *c) {
         "  rt: period %lld us, priority %d, cpu %d, overrun limit %d, lost feedback %d cycles, PDNN budget "
         "%lld us\n",
         (long long)(c->rt.period_ns / 1000), c->rt.priority, c->rt.cpu, c->rt.overrun_limit,
-        c->rt.lost_feedback_cycles,
-        (long long)((c->rt.pdnn_budget_ns > 0 ? c->rt.pdnn_budget_ns : c->rt.period_ns / 2) / 1000));
+        c->rt.lost_feedback_cycles, (long long)(c->rt.pdnn_budget_ns / 1000));
     printf("  dds: %s, domain %u, config %s, publish every %u ticks\n", c->dds.enabled ? "on" : "off",
            c->dds.domain, c->dds.config[0] ? c->dds.config : "(default)", c->dds.publish_divisor);
 }

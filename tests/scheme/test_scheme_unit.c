@@ -644,16 +644,20 @@ static void test_controller_n_arms(void **state) {
 /* Run a scenario under mca-ts with the arms integrated exactly (q += qdot dt); calls back every tick. */
 typedef void (*ts_tick_fn)(const mca_controller_t *c, const mca_tick_info_t *info, void *user);
 
+/* An mca-ts config for a scenario, every arm's dec_limit 5 rad/s^2 (the stop bound's). */
+static void load_ts(const char *scenario, mca_scenario_t *s, mca_controller_config_t *cfg) {
+    char err[512];
+    assert_int_equal(mca_scenario_load(scenario, s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(cfg, s, MCA_SCHEME_MCA_TS, err, sizeof err), MCA_OK);
+    for (int a = 0; a < cfg->n_arms; a++) {
+        cfg->ts.dec_limit[a] = 5.0;
+    }
+}
+
 static void run_ts(const char *scenario, double seconds, ts_tick_fn fn, void *user, mca_tick_info_t *last) {
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
-    char err[512];
-    assert_int_equal(mca_scenario_load(scenario, &s, err, sizeof err), MCA_OK);
-    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
-                     MCA_OK);
-    for (int a = 0; a < cfg.n_arms; a++) {
-        cfg.ts.dec_limit[a] = 5.0;
-    }
+    load_ts(scenario, &s, &cfg);
     mca_controller_t *c = malloc(sizeof *c);
     assert_non_null(c);
     assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
@@ -904,13 +908,7 @@ static void test_pdnn_time_budget(void **state) {
     (void)state;
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
-    char err[512];
-    assert_int_equal(mca_scenario_load(SCN("negative.yaml"), &s, err, sizeof err), MCA_OK);
-    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
-                     MCA_OK);
-    for (int a = 0; a < cfg.n_arms; a++) {
-        cfg.ts.dec_limit[a] = 5.0;
-    }
+    load_ts(SCN("negative.yaml"), &s, &cfg);
     mca_controller_t *c = malloc(sizeof *c), *b = malloc(sizeof *b);
     assert_non_null(c);
     assert_non_null(b);

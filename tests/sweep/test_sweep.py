@@ -84,19 +84,24 @@ REGRESSIONS = ["jaco-mico:411"]
 STOP_REGRESSIONS = ["jaco-mico:19"]
 
 
-def regress(sim, tool, work, stopcheck=None):
-    os.makedirs(work, exist_ok=True)
-    out = os.path.join(work, "regress.json")
-    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--n", "500", "--seed", "1", "--only",
-           ",".join(REGRESSIONS), "--schemes", "mvn,mca-ts", "--jobs", "2", "--work", os.path.join(work, "tasks"),
-           "--json", out]
+def run_sweep(tool, sim, work, name, args, timeout):
+    """mca_sweep.py on seed 1 (jaco-mico tasks) with args, its work files under work/name; the JSON it wrote."""
+    out = os.path.join(work, name + ".json")
+    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--seed", "1", "--jobs", "2", "--work",
+           os.path.join(work, name), "--json", out] + args
     print(" ".join(cmd))
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=400)
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     print(p.stdout)
     if p.returncode != 0:
         print(p.stderr)
         sys.exit("mca_sweep.py failed (exit %d)" % p.returncode)
-    d = json.load(open(out))
+    return json.load(open(out))
+
+
+def regress(sim, tool, work, stopcheck=None):
+    os.makedirs(work, exist_ok=True)
+    d = run_sweep(tool, sim, work, "tasks", ["--n", "500", "--only", ",".join(REGRESSIONS), "--schemes", "mvn,mca-ts"],
+                  400)
     check(len(d["tasks"]) == len(REGRESSIONS), "%d tasks run" % len(d["tasks"]))
     for t in d["tasks"]:
         runs = t["runs"]
@@ -107,17 +112,8 @@ def regress(sim, tool, work, stopcheck=None):
             check(cls != "unsafe", "%s: mca-ts %s run keeps d1 (%s)" % (t["id"], r, cls))
     if not stopcheck:
         return
-    out = os.path.join(work, "regress-stops.json")
-    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--n", "50", "--seed", "1", "--only",
-           ",".join(STOP_REGRESSIONS), "--schemes", "mca-ts", "--no-stop", "--stopcheck", stopcheck, "--jobs", "2",
-           "--work", os.path.join(work, "stop-tasks"), "--json", out]
-    print(" ".join(cmd))
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    print(p.stdout)
-    if p.returncode != 0:
-        print(p.stderr)
-        sys.exit("mca_sweep.py --stopcheck failed (exit %d)" % p.returncode)
-    d = json.load(open(out))
+    d = run_sweep(tool, sim, work, "stop-tasks", ["--n", "50", "--only", ",".join(STOP_REGRESSIONS), "--schemes",
+                                                  "mca-ts", "--no-stop", "--stopcheck", stopcheck], 600)
     check(len(d["tasks"]) == len(STOP_REGRESSIONS), "%d stop-check tasks run" % len(d["tasks"]))
     for t in d["tasks"]:
         runs = t.get("stopcheck") or []

@@ -140,6 +140,9 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                          const mca_link_critical_t near[][MCA_MAX_LINKS][MCA_NEAR_PAIRS],
                          const mca_scheme_params_t *p, const double *dec, const double *priority);
 
+/** d1' = d1 + d1_margin, at most halfway to d2: the distance the mca-ts and braking rows aim to keep. */
+double mca_scheme_rows_d1(const mca_scheme_params_t *p);
+
 /** T_a of the stop bound: the longest stop of an arm from its fastest joint speed, max_j qdot_max,j / dec
  *  (0 when dec <= 0: no stop bound). */
 double mca_scheme_stop_time(const mca_chain_t *chain, double dec);
