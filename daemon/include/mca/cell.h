@@ -55,11 +55,12 @@ typedef struct mca_cell_dds {
 
 /** Real-time settings. */
 typedef struct mca_cell_rt {
-    int64_t period_ns;        /**< loop period (1 ms) */
-    int priority;             /**< SCHED_FIFO priority 1..99; 0 = SCHED_OTHER */
-    int cpu;                  /**< CPU to pin the loop to, -1 = none */
-    int overrun_limit;        /**< consecutive overruns that are a fault */
-    int64_t pdnn_budget_ns;   /**< the PDNN's time per tick (the loader's default: half the period): the
+    int64_t period_ns; /**< loop period (1 ms) */
+    int priority;      /**< SCHED_FIFO priority 1..99; 0 = SCHED_OTHER */
+    int cpu;           /**< CPU to pin the loop to, -1 = none */
+    int overrun_limit; /**< consecutive overruns that are a fault */
+    int64_t
+        pdnn_budget_ns;       /**< the PDNN's time per tick (the loader's default: half the period): the
                                  controller's   pdnn_budget_ns; running out is a named fault, never an overrun */
     int lost_feedback_cycles; /**< cycles without new feedback from an arm that are a fault */
     int lock_memory;          /**< mlockall + pre-faulting */
