@@ -15,6 +15,7 @@ import cantools
 BASE = 0x100
 CAN_ERR_FLAG = 0x20000000
 HEARTBEAT = 10  # MCA_CAN_HEARTBEAT_CYCLES
+DELIVERY_LAG = 3  # reads an error frame may be counted late when the kernel delivers it late (check_e)
 FAILS = []
 
 
@@ -373,10 +374,14 @@ def case_e(db, dump, ctl_stats, log):
         c = min((c for c, r in erc.items() if r[3] >= n_err), default=None)
         counted.append(c)
         # the first read after the frame: cycle F (it arrived after command F), or F + 1 if it arrived between
-        # that cycle's read and its write
-        check(c is not None and c in (F, F + 1),
+        # that cycle's read and its write. The capture's order is the order in which the kernel delivered the
+        # frames to the sockets; on a starved guest that delivery (softirq, then ksoftirqd, below the FIFO
+        # programs) can lag the writes by a cycle or two (seen: counted in F + 2 under host load). Up to
+        # DELIVERY_LAG reads later passes; an error frame held until later feedback (the bug this catches:
+        # the emulator is stopped for ~50 cycles after the bus-off frame) does not.
+        check(c is not None and F <= c <= F + 1 + DELIVERY_LAG,
               f'e: error frame {hex(ident)} after command {F} on the bus: counted by the read of cycle {c} '
-              f'(the first read after it: {F} or {F + 1})')
+              f'(the first read after it: {F} or {F + 1}, up to {DELIVERY_LAG} more when delivery lags)')
     if None in counted:
         return
     cb = counted[0]

@@ -31,7 +31,9 @@ if [ "$phase" = check ]; then
     chk c "$OUT/c.candump" "$C_WD" "$C_DEC" "$OUT/c.armsim" "$OUT/c.armlog"
     verdict "c: controller killed -> watchdog BRAKING after $C_WD cycles, ramp within $C_DEC rad/s^2, FAULT" $?
     [ "$D_RC$D_ARC" = 00 ] && chk d "$OUT/d.candump" "$OUT/d.ctl" "$OUT/d.armsim" && ! grep -q '^rx .* 3.0000000' "$OUT/d.log"
-    verdict "d: injected malformed frames counted by the receiving side, not applied (ctl rc $D_RC, armsim rc $D_ARC)" $?
+    drc=$?
+    [ "$D_RC$D_ARC" = 00 ] || note "d: what the programs said: $(tail -n 3 "$OUT/d.err" 2>/dev/null | tr '\n' ' ')"
+    verdict "d: injected malformed frames counted by the receiving side, not applied (ctl rc $D_RC, armsim rc $D_ARC)" $drc
     [ "$D_RC$D_ARC" = 00 ] && chk e "$OUT/d.candump" "$OUT/d.ctl" "$OUT/d.log"
     verdict "e: error frames counted by the first read after each, MCA_EIO in the cycles the read contract gives, bus-off held until the next feedback" $?
     cat "$OUT/f.out" >>"$RES" 2>/dev/null
@@ -73,7 +75,8 @@ note "CAN-SUITE kernel $(uname -r), $IF mtu $(cat /sys/class/net/$IF/mtu), $(npr
 # Controller and emulator at real-time priority when allowed (root): the shell and candump do not
 # delay their cycles.
 RT=""
-chrt -f 50 true 2>/dev/null && RT="chrt -f 50"
+RT_HI=""
+chrt -f 50 true 2>/dev/null && RT="chrt -f 50" && RT_HI="chrt -f 60"
 
 # candump writes to a tmpfs (the shared tree is 9p in the guest: slow), copied out afterwards.
 TMPD=$(mktemp -d /dev/shm/mca-can.XXXXXX 2>/dev/null || mktemp -d)
@@ -155,7 +158,7 @@ echo "C_WD=$WD C_DEC=5" >>"$ST"
 dump_start "$OUT/d.candump"
 $RT "$ARMSIM" --iface "$IF" --robot "$URDF" --q0 $Q0 --watchdog-cycles $WD_LONG --stats "$OUT/d.armsim" 2>>"$OUT/d.err" & ARM=$!
 seen 101 1
-$T $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles $WD_LONG --log "$OUT/d.log" --stats "$OUT/d.ctl" 2>>"$OUT/d.err" & C=$!
+$T $RT "$CTL" --iface "$IF" --joints 6 --mode sine --duration 60 --lost-cycles 10000 --log "$OUT/d.log" --stats "$OUT/d.ctl" 2>>"$OUT/d.err" & C=$!
 seen 100 300
 zeros64=$(printf '%0128d' 0)
 cansend "$IF" 100#1122334455667788                       # command id, classic 8 bytes: wrong length
@@ -173,10 +176,10 @@ cansend "$IF" 101##1$(echo "$hex" | cut -c1-8)C0C62D00$(echo "$hex" | cut -c17-1
 # (e) error frames. The bus-off frame goes out while the emulator is stopped (SIGSTOP), as on a real
 #     bus-off where no feedback gets through: the controller must hold bus_off (EIO every read) until the
 #     first feedback after it. 50 ms = ~50 cycles, far below the long watchdog / lost-feedback limits.
-kill -STOP "$ARM"
-cansend "$IF" 20000040#0000000000000000                  # error frame: bus-off
-sleep 0.05
-kill -CONT "$ARM"
+#     The stop window runs above the real-time programs' priority: as a normal shell on a starved guest
+#     (1 vCPU shared with two 1 kHz FIFO programs under TCG) it once stretched past the lost-feedback
+#     limit (CI: ctl rc 3). The controller's limit here is 10 s, far beyond the window.
+$RT_HI sh -c "kill -STOP $ARM; cansend $IF 20000040#0000000000000000; sleep 0.05; kill -CONT $ARM" # bus-off
 cansend "$IF" 20000004#0004000000000000                  # error frame: controller problem (rx warning)
 seen 100 100                                             # the run goes on after the injections
 kill -TERM "$C"; wait "$C"; echo "D_RC=$?" >>"$ST"
