@@ -283,6 +283,11 @@ typedef struct near_reach {
     const mca_scheme_params_t *sp;
 } near_reach_t;
 
+/* The larger of x and y; unlike fmax, a NaN is kept (and it is inlined). */
+static inline double max_or_nan(double x, double y) {
+    return x < y ? y : (isnan(y) ? y : x);
+}
+
 /* |J_p qdot| <= sum_j |qdot_j| |p - o_j| (unit axes, revolute joints), and on a segment |p - o_j| is
  * largest at one of its ends. */
 static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const mca_qp_t *qp,
@@ -298,12 +303,17 @@ static void near_reach_init(near_reach_t *r, const mca_controller_t *ctrl, const
         for (int b = 0; b < na; b++) {
             r->share[a][b] = mca_scheme_row_share(priority, a, b);
         }
+        double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF]; /* |point m - joint j's origin| */
+        for (int j = 0; j < dof; j++) {
+            qmax[j] = max_or_nan(fabs(qp->lb[vo + j]), fabs(qp->ub[vo + j]));
+            for (int m = j + 1; m <= dof + 1; m++) {
+                lever[m][j] = mca_v3_dist(k->point[m], k->point[j + 1]);
+            }
+        }
         for (int l = 0; l <= dof; l++) {
-            double v = 0.0; /* the link's fastest point */
+            double v = 0.0; /* the link's fastest point (NaN anywhere: NaN, so every pair may bind) */
             for (int j = 0; j < l; j++) {
-                const double qmax = fmax(fabs(qp->lb[vo + j]), fabs(qp->ub[vo + j]));
-                v += qmax * fmax(mca_v3_dist(k->point[l], k->point[j + 1]),
-                                 mca_v3_dist(k->point[l + 1], k->point[j + 1]));
+                v += qmax[j] * max_or_nan(lever[l][j], lever[l + 1][j]);
             }
             r->speed[a][l] = v;
             for (int b = 0; b < na; b++) {
@@ -329,6 +339,16 @@ static int near_can_bind(const near_reach_t *r, int a, int l, int b, double d) {
         return 0; /* the S part is inactive beyond d2, and the stop part is above the speed */
     }
     return !(r->share[a][b] * mca_scheme_row_bound(r->sp, d, r->t_stop[a]) > r->speed[a][l]);
+}
+
+/* Can any pair of arm a's link l against arm b bind, dmin the link's nearest pair (NaN: yes)? */
+static int near_link_live(const near_reach_t *r, int a, int l, int b, double dmin) {
+    return !(dmin >= r->sp->d2 && dmin > r->cut_stop[a][l][b]);
+}
+
+/* The least of m and d; a NaN sticks. */
+static double nan_min(double m, double d) {
+    return (d < m || isnan(d)) && !isnan(m) ? d : m;
 }
 
 static void near_add(mca_link_critical_t list[MCA_NEAR_PAIRS], const near_reach_t *r, int a, int l, int b,
@@ -359,11 +379,40 @@ static void near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_sch
     for (int a = 0; a < na; a++) {
         for (int b = a + 1; b < na; b++) {
             const mca_arm_distances_t *ad = &ctrl->dist[a][b];
+            /* A link whose nearest pair (NaN: any) is beyond d2 and its cut has no pair that can bind: its
+             * list is not looked at (most links, most ticks). */
+            double dmin_a[MCA_MAX_LINKS], dmin_b[MCA_MAX_LINKS];
+            int live_a[MCA_MAX_LINKS], live_b[MCA_MAX_LINKS], n_live = 0;
+            for (int l = 0; l < MCA_MAX_LINKS; l++) {
+                dmin_a[l] = dmin_b[l] = INFINITY;
+            }
+            for (int i = 0; i < ad->n_links_a; i++) {
+                for (int j = 0; j < ad->n_links_b; j++) {
+                    const double d = ad->pair[i][j].d;
+                    dmin_a[i] = nan_min(dmin_a[i], d);
+                    dmin_b[j] = nan_min(dmin_b[j], d);
+                }
+            }
+            for (int i = 0; i < ad->n_links_a; i++) {
+                live_a[i] = near_link_live(&r, a, i, b, dmin_a[i]);
+                n_live += live_a[i];
+            }
+            for (int j = 0; j < ad->n_links_b; j++) {
+                live_b[j] = near_link_live(&r, b, j, a, dmin_b[j]);
+                n_live += live_b[j];
+            }
+            if (n_live == 0) {
+                continue;
+            }
             for (int i = 0; i < ad->n_links_a; i++) {
                 for (int j = 0; j < ad->n_links_b; j++) {
                     const mca_link_pair_t *lp = &ad->pair[i][j];
-                    near_add(ctrl->near[a][i], &r, a, i, b, j, lp->d, lp->p, lp->e);
-                    near_add(ctrl->near[b][j], &r, b, j, a, i, lp->d, lp->e, lp->p);
+                    if (live_a[i]) {
+                        near_add(ctrl->near[a][i], &r, a, i, b, j, lp->d, lp->p, lp->e);
+                    }
+                    if (live_b[j]) {
+                        near_add(ctrl->near[b][j], &r, b, j, a, i, lp->d, lp->e, lp->p);
+                    }
                 }
             }
             /* the ends: never nearer than their pair's closest points, so only pairs that could enter a list
@@ -372,9 +421,14 @@ static void near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_sch
             const double *ra = ctrl->cfg.chain[a].link_radius, *rb = ctrl->cfg.chain[b].link_radius;
             for (int i = 0; i < ad->n_links_a; i++) {
                 for (int j = 0; j < ad->n_links_b; j++) {
+                    if (!live_a[i] && !live_b[j]) {
+                        continue;
+                    }
                     const double d0 = ad->pair[i][j].d;
-                    const int in_a = d0 < near_worst(ctrl->near[a][i]) && near_can_bind(&r, a, i, b, d0);
-                    const int in_b = d0 < near_worst(ctrl->near[b][j]) && near_can_bind(&r, b, j, a, d0);
+                    const int in_a =
+                        live_a[i] && d0 < near_worst(ctrl->near[a][i]) && near_can_bind(&r, a, i, b, d0);
+                    const int in_b =
+                        live_b[j] && d0 < near_worst(ctrl->near[b][j]) && near_can_bind(&r, b, j, a, d0);
                     if (!in_a && !in_b) {
                         continue;
                     }
@@ -895,6 +949,14 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (ts) {
             ts_plan(ctrl, info->task_t, target, lo, hi);
             accel_box(ctrl, &si, na); /* first: the lists keep the pairs this box can bring to a bound */
+            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack};
+            /* the path rates' columns before the rows: the rows are written at the QP's full width */
+            rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
+                                          ts_off, ctrl->ts_scale);
+            if (rc != MCA_OK) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+                goto fault;
+            }
             near_links(ctrl, &ctrl->qp, &si, cfg->ts.dec_limit, cfg->ts.priority);
             rc = mca_scheme_near_rows(&ctrl->qp, &si, na, chains, ctrl->kin,
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
@@ -904,13 +966,6 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                 goto fault;
             }
             info->brake = si.brake;
-            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack};
-            rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
-                                          ts_off, ctrl->ts_scale);
-            if (rc != MCA_OK) {
-                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
-                goto fault;
-            }
             mca_scheme_prune_rows(&ctrl->qp, cfg->sp.big, &si); /* rows the box cannot reach */
             compact_rows(&ctrl->qp, cfg->sp.big, &si, &ctrl->pdnn, ctrl->row_key, &ctrl->n_row_key);
         }

@@ -131,8 +131,10 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
  * (d1 here is d1 + d1_margin) so the pair's approach speeds sum to at most what both arms can brake away
  * within half the gap, and braking alone keeps each arm inside its row (docs/scheme.md, "Stoppability"). dec
  * NULL or dec[a] <= 0: no stop bound for arm a; priority NULL: equal shares. Rows without a pair, or
- * repeating a pair of the previous link (a shared joint), keep beta = big. Sets qp->n_ineq and si's row
- * layout, active_rows and brake.
+ * repeating a pair of the previous link (a shared joint), get beta = big, and their U row is left as it was
+ * (an inactive row is never read: mca_scheme_prune_rows and mca_scheme_compact_rows skip it; compact before
+ * the PDNN). Columns added later (mca_scheme_add_timescale) are not zero in the rows: add them first. Sets
+ * qp->n_ineq and si's row layout, active_rows and brake.
  * @retval MCA_OK, MCA_EINVAL, MCA_ERANGE (rows above the maximum)
  */
 int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
