@@ -214,7 +214,9 @@ static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats
         if (info.fault) {
             /* a faulted tick stops early: not a representative cost; restart the task from q0 */
             if (s->faults++ == 0) {
-                fprintf(stderr, "bench_tick: first fault at tick %d: %s\n", k, info.fault_text);
+                char why[192];
+                fprintf(stderr, "bench_tick: first fault at tick %d: %s\n", k,
+                        mca_ctrl_fault_format(&info.fault_why, why, sizeof why));
             }
             s->resets++;
             mca_controller_reset(ctrl);

@@ -3,7 +3,6 @@
 #include "mca/controller.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -162,7 +161,7 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->started = 0;
     ctrl->t_start = 0.0;
     ctrl->fault = MCA_CTRL_FAULT_NONE;
-    ctrl->fault_text[0] = 0;
+    ctrl->fault_why = (mca_ctrl_fault_why_t){0};
     ctrl->has_prev = 0;
     ctrl->ticks = 0;
     ctrl->pdnn.h = 0; /* cold start */
@@ -183,7 +182,7 @@ void mca_controller_reset(mca_controller_t *ctrl) {
 
 void mca_controller_clear_fault(mca_controller_t *ctrl) {
     ctrl->fault = MCA_CTRL_FAULT_NONE;
-    ctrl->fault_text[0] = 0;
+    ctrl->fault_why = (mca_ctrl_fault_why_t){0};
     ctrl->has_prev = 0;
     ctrl->pdnn.h = 0;
     mca_scheme_state_reset(&ctrl->sstate);
@@ -204,17 +203,94 @@ static int64_t now_ns(void) {
 }
 
 /* Latch a fault (the first cause wins) with a message; snprintf into a fixed buffer does not allocate. */
-static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void raise_fault(mca_controller_t *ctrl, int code, const char *fmt, ...) {
+/* A distance fault's cause: the pair and how near. */
+static mca_ctrl_fault_why_t why_distance(int why, const mca_tick_info_t *info, double d1) {
+    return (mca_ctrl_fault_why_t){.why = why,
+                                  .i = {info->min_arm_a, info->min_link_a, info->min_arm_b, info->min_link_b},
+                                  .x = {info->min_distance, d1}};
+}
+
+/* Latch a fault (the first wins) as a code and numbers: no formatting here, on the 1 kHz path. */
+static void raise_fault(mca_controller_t *ctrl, int code, mca_ctrl_fault_why_t why) {
     if (ctrl->fault != MCA_CTRL_FAULT_NONE) {
         return;
     }
     ctrl->fault = code;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(ctrl->fault_text, sizeof ctrl->fault_text, fmt, ap);
-    va_end(ap);
+    ctrl->fault_why = why;
+}
+
+const char *mca_ctrl_fault_format(const mca_ctrl_fault_why_t *w, char *buf, size_t len) {
+    if (!buf || len == 0) {
+        return buf;
+    }
+    if (!w) {
+        buf[0] = 0;
+        return buf;
+    }
+    const int *i = w->i;
+    const double *x = w->x;
+    switch (w->why) {
+    case MCA_WHY_NULL_JOINTS:
+        snprintf(buf, len, "NULL joint array for arm %d", i[0]);
+        break;
+    case MCA_WHY_NONFINITE_Q:
+        snprintf(buf, len, "arm %d: non-finite joint position", i[0]);
+        break;
+    case MCA_WHY_DISTANCES:
+        snprintf(buf, len, "distance computation failed");
+        break;
+    case MCA_WHY_BELOW_D1:
+        snprintf(buf, len, "distance %.4f m < d1 %.4f m (arm %d link %d, arm %d link %d)", x[0], x[1], i[0],
+                 i[1], i[2], i[3]);
+        break;
+    case MCA_WHY_BELOW_D1_NEXT:
+        snprintf(
+            buf, len,
+            "distance %.4f m predicted to fall below d1 %.4f m next tick (arm %d link %d, arm %d link %d)",
+            x[0], x[1], i[0], i[1], i[2], i[3]);
+        break;
+    case MCA_WHY_APF_SINGULAR:
+        snprintf(buf, len, "APF: singular Jacobian");
+        break;
+    case MCA_WHY_BOUNDS:
+        snprintf(buf, len, "joint bounds contradict (a joint is beyond its limit)");
+        break;
+    case MCA_WHY_ASSEMBLY:
+        snprintf(buf, len, "QP assembly failed: %s", mca_strerror(i[0]));
+        break;
+    case MCA_WHY_PDNN_INPUT:
+        snprintf(buf, len, "PDNN rejected the QP (non-finite data)");
+        break;
+    case MCA_WHY_PDNN_BUDGET:
+        snprintf(buf, len, "PDNN time budget %.3g us used up after %d steps (residual %.2e)", x[0], i[0],
+                 x[1]);
+        break;
+    case MCA_WHY_PDNN_OUTPUT:
+        snprintf(buf, len, "PDNN output not finite");
+        break;
+    case MCA_WHY_TRACKING:
+        snprintf(buf, len,
+                 "tracking contradicts avoidance: PDNN residual %.2e after %d steps, ||G phi - alpha|| = "
+                 "%.2e m/s, "
+                 "min distance %.4f m",
+                 x[0], i[0], x[1], x[2]);
+        break;
+    case MCA_WHY_NOT_CONVERGED:
+        snprintf(buf, len, "PDNN residual %.2e after %d steps (fault > %.1e)", x[0], i[0], x[1]);
+        break;
+    case MCA_WHY_EQ_RESIDUAL:
+        snprintf(buf, len,
+                 "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance",
+                 x[0], x[1]);
+        break;
+    case MCA_WHY_INJECTED:
+        snprintf(buf, len, "injected fault %s at t = %.3f s", mca_ctrl_fault_name(i[0]), x[0]);
+        break;
+    default:
+        buf[0] = 0;
+        break;
+    }
+    return buf;
 }
 
 void mca_controller_set_velocity(mca_controller_t *ctrl, const double *const v[MCA_MAX_ARMS]) {
@@ -228,8 +304,8 @@ void mca_controller_set_velocity(mca_controller_t *ctrl, const double *const v[M
     ctrl->has_v_meas = ok;
 }
 
-void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text) {
-    raise_fault(ctrl, code, "%s", text ? text : "");
+void mca_controller_raise_fault(mca_controller_t *ctrl, int code, double t) {
+    raise_fault(ctrl, code, (mca_ctrl_fault_why_t){.why = MCA_WHY_INJECTED, .i = {code}, .x = {t}});
 }
 
 /* Insert a witness pair (P on this link, E on link other_link of other_arm, surface distance d) into a
@@ -861,7 +937,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     for (int a = 0; a < na; a++) {
         if (!q[a] || !qdot[a]) {
             zero_cmd(ctrl, qdot);
-            raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "NULL joint array for arm %d", a);
+            raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
+                        (mca_ctrl_fault_why_t){.why = MCA_WHY_NULL_JOINTS, .i = {a}});
             goto fault;
         }
     }
@@ -880,7 +957,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     /* 1. kinematics */
     for (int a = 0; a < na; a++) {
         if (mca_fk(&cfg->chain[a], q[a], &ctrl->kin[a]) != MCA_OK) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "arm %d: non-finite joint position", a);
+            raise_fault(ctrl, MCA_CTRL_FAULT_NAN,
+                        (mca_ctrl_fault_why_t){.why = MCA_WHY_NONFINITE_Q, .i = {a}});
             goto fault;
         }
     }
@@ -905,21 +983,19 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
 
     /* 3. distances */
     if (distances(ctrl, info) != MCA_OK) {
-        raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "distance computation failed");
+        raise_fault(ctrl, MCA_CTRL_FAULT_NAN, (mca_ctrl_fault_why_t){.why = MCA_WHY_DISTANCES});
         goto fault;
     }
     const double d1 = cfg->sp.d1;
     if (cfg->fault_distance && info->min_distance < d1) {
-        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE,
-                    "distance %.4f m < d1 %.4f m (arm %d link %d, arm %d link %d)", info->min_distance, d1,
-                    info->min_arm_a, info->min_link_a, info->min_arm_b, info->min_link_b);
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_distance(MCA_WHY_BELOW_D1, info, d1));
         goto fault;
     }
 
     /* 4. scheme */
     if (cfg->scheme == MCA_SCHEME_APF) {
         if (apf_tick(ctrl, (const double(*)[3])r_d, (const double(*)[3])rdot_d, qdot) != MCA_OK) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "APF: singular Jacobian");
+            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, (mca_ctrl_fault_why_t){.why = MCA_WHY_APF_SINGULAR});
             goto fault;
         }
     } else {
@@ -935,12 +1011,12 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                                      (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
                                      ctrl->has_prev ? ctrl->phi_prev : NULL, &ctrl->sstate, &ctrl->qp, &si);
         if (rc == MCA_EINFEASIBLE) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_INFEASIBLE,
-                        "joint bounds contradict (a joint is beyond its limit)");
+            raise_fault(ctrl, MCA_CTRL_FAULT_INFEASIBLE, (mca_ctrl_fault_why_t){.why = MCA_WHY_BOUNDS});
             goto fault;
         }
         if (rc != MCA_OK) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+            raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
+                        (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
             goto fault;
         }
         info->brake = si.brake;
@@ -954,7 +1030,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
                                           ts_off, ctrl->ts_scale);
             if (rc != MCA_OK) {
-                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
+                            (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
                 goto fault;
             }
             near_links(ctrl, &ctrl->qp, &si, cfg->ts.dec_limit, cfg->ts.priority);
@@ -962,7 +1039,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
                                       &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
             if (rc != MCA_OK) {
-                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT, "QP assembly failed: %s", mca_strerror(rc));
+                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
+                            (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
                 goto fault;
             }
             info->brake = si.brake;
@@ -977,20 +1055,21 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         info->pdnn_residual = pr.residual;
         info->pdnn_converged = pr.converged;
         if (rc == MCA_EINVAL) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "PDNN rejected the QP (non-finite data)");
+            raise_fault(ctrl, MCA_CTRL_FAULT_NAN, (mca_ctrl_fault_why_t){.why = MCA_WHY_PDNN_INPUT});
             goto fault;
         }
         if (rc == MCA_ETIMEDOUT) {
             /* out of time before its step cap: a named fault, never an overrun of the loop */
             raise_fault(ctrl, MCA_CTRL_FAULT_TIME_BUDGET,
-                        "PDNN time budget %.3g us used up after %d steps (residual %.2e)",
-                        (double)cfg->pdnn_budget_ns * 1e-3, pr.steps, pr.residual);
+                        (mca_ctrl_fault_why_t){.why = MCA_WHY_PDNN_BUDGET,
+                                               .i = {pr.steps},
+                                               .x = {(double)cfg->pdnn_budget_ns * 1e-3, pr.residual}});
             goto fault;
         }
         const mca_qp_t *qp = &ctrl->qp;
         for (int j = 0; j < qp->n; j++) {
             if (!isfinite(ctrl->phi[j])) {
-                raise_fault(ctrl, MCA_CTRL_FAULT_NAN, "PDNN output not finite");
+                raise_fault(ctrl, MCA_CTRL_FAULT_NAN, (mca_ctrl_fault_why_t){.why = MCA_WHY_PDNN_OUTPUT});
                 goto fault;
             }
         }
@@ -1014,21 +1093,20 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             /* an infeasible QP (tracking against avoidance) never converges: name it as the paper does */
             if (eq > cfg->eq_tol) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
-                            "tracking contradicts avoidance: PDNN residual %.2e after %d steps, "
-                            "||G phi - alpha|| = %.2e m/s, min distance %.4f m",
-                            pr.residual, pr.steps, eq, info->min_distance);
+                            (mca_ctrl_fault_why_t){.why = MCA_WHY_TRACKING,
+                                                   .i = {pr.steps},
+                                                   .x = {pr.residual, eq, info->min_distance}});
             } else {
                 raise_fault(ctrl, MCA_CTRL_FAULT_NOT_CONVERGED,
-                            "PDNN residual %.2e after %d steps (fault > %.1e)", pr.residual, pr.steps,
-                            cfg->fault_residual);
+                            (mca_ctrl_fault_why_t){.why = MCA_WHY_NOT_CONVERGED,
+                                                   .i = {pr.steps},
+                                                   .x = {pr.residual, cfg->fault_residual}});
             }
             goto fault;
         }
         if (!ts && eq > cfg->eq_tol) {
-            raise_fault(
-                ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
-                "equality residual ||G phi - alpha|| = %.2e m/s > %.1e: tracking contradicts avoidance", eq,
-                cfg->eq_tol);
+            raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
+                        (mca_ctrl_fault_why_t){.why = MCA_WHY_EQ_RESIDUAL, .x = {eq, cfg->eq_tol}});
             goto fault;
         }
         for (int i = 0; i < qp->n_ineq; i++) {
@@ -1054,11 +1132,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         isfinite(ctrl->min_distance_prev)) {
         const double pred = 2.0 * info->min_distance - ctrl->min_distance_prev;
         if (pred < d1) {
-            raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE,
-                        "distance %.4f m predicted to fall below d1 %.4f m next tick (arm %d link %d, arm %d "
-                        "link %d)",
-                        info->min_distance, d1, info->min_arm_a, info->min_link_a, info->min_arm_b,
-                        info->min_link_b);
+            raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_distance(MCA_WHY_BELOW_D1_NEXT, info, d1));
             goto fault;
         }
     }
@@ -1067,7 +1141,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     ctrl->has_prev = 1;
     ctrl->ticks++;
     info->fault = MCA_CTRL_FAULT_NONE;
-    info->fault_text[0] = 0;
+    info->fault_why = (mca_ctrl_fault_why_t){0};
     fill_path_info(ctrl, info);
     ctrl->has_v_meas = 0;
     info->compute_ns = now_ns() - t_enter;
@@ -1080,7 +1154,7 @@ fault:
     ctrl->pdnn.h = 0;
     ctrl->ticks++;
     info->fault = ctrl->fault;
-    memcpy(info->fault_text, ctrl->fault_text, sizeof info->fault_text);
+    info->fault_why = ctrl->fault_why;
     if (ctrl->started) {
         fill_path_info(ctrl, info);
     }

@@ -88,7 +88,7 @@ struct mca_daemon {
     int fault_detail;   /* ARM: ARM_FAULT_*; FEEDBACK: mca_feedback_fault_t; CONTROLLER: mca_ctrl_fault_t */
     int fault_arm_code; /* ARM: the arm's fault code (reports FAULT, brakes) or state (does not servo) */
     int fault_count;    /* OVERRUN: periods missed in a row; LOST_FEEDBACK/BUS: cycles without feedback */
-    char ctrl_fault_text[160]; /* CONTROLLER: the controller's own text (core makes it), copied once */
+    mca_ctrl_fault_why_t ctrl_why; /* CONTROLLER: the controller's cause (a code and numbers, copied once) */
     double fault_t;
     int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
     int consecutive_overruns;
@@ -557,7 +557,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
  * fault kind needs them (see struct mca_daemon), @p ctrl_text the controller's own text (CONTROLLER only).
  * No text is made here: the log record carries the code, fault_describe() makes the text off the rt path. */
 static void latch_fault(mca_daemon_t *d, int fault, int code, double t, int arm, int detail, int arm_code,
-                        int count, const char *ctrl_text) {
+                        int count, const mca_ctrl_fault_why_t *ctrl_why) {
     if (d->fault != MCA_DAEMON_FAULT_NONE) {
         return;
     }
@@ -568,11 +568,7 @@ static void latch_fault(mca_daemon_t *d, int fault, int code, double t, int arm,
     d->fault_detail = detail;
     d->fault_arm_code = arm_code;
     d->fault_count = count;
-    size_t i = 0;
-    for (; ctrl_text && ctrl_text[i] && i + 1 < sizeof d->ctrl_fault_text; i++) {
-        d->ctrl_fault_text[i] = ctrl_text[i];
-    }
-    d->ctrl_fault_text[i] = 0;
+    d->ctrl_why = ctrl_why ? *ctrl_why : (mca_ctrl_fault_why_t){0};
     d->stop_pending = 0;
     atomic_store(&d->state, MCA_DAEMON_BRAKING);
     mca_rtlog_code(&d->log, MCA_LOG_ERR, LOGC_FAULT, 1, t, 0, 0, 0, NULL);
@@ -597,11 +593,11 @@ static int ctrl_fault_code(int f) {
 
 /* The text of a latched fault (non-rt: summary, log drainer, DDS publisher). */
 static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail, int arm_code, int count,
-                           const char *ctrl_text, char *buf, size_t len) {
+                           const mca_ctrl_fault_why_t *ctrl_why, char *buf, size_t len) {
     const char *name = arm >= 0 && arm < d->n_arms ? d->cell.scn.arm[arm].name : "?";
     switch (fault) {
     case MCA_DAEMON_FAULT_CONTROLLER:
-        snprintf(buf, len, "%s", ctrl_text);
+        mca_ctrl_fault_format(ctrl_why, buf, len);
         break;
     case MCA_DAEMON_FAULT_OVERRUN:
         snprintf(buf, len, "consecutive overruns: %d periods missed in a row (rt.overrun_limit %d)", count,
@@ -639,7 +635,7 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
 
 static void fault_text_of(const mca_daemon_t *d, char *buf, size_t len) {
     fault_describe(d, d->fault, d->fault_arm, d->fault_detail, d->fault_arm_code, d->fault_count,
-                   d->ctrl_fault_text, buf, len);
+                   &d->ctrl_why, buf, len);
 }
 
 /* mca_rtlog_code() records (the drainer, non-rt) */
@@ -1016,7 +1012,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         if (rc != MCA_OK) {
             d->ctrl_fault = d->info.fault;
             latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, ctrl_fault_code(d->info.fault), t, -1, d->info.fault,
-                        0, 0, d->info.fault_text);
+                        0, 0, &d->info.fault_why);
             state = MCA_DAEMON_BRAKING;
         } else {
             send_commands(d, 1);
@@ -1414,9 +1410,7 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->fault_detail = d->fault_detail;
     s->fault_arm_code = d->fault_arm_code;
     s->fault_count = d->fault_count;
-    for (size_t i = 0; i < sizeof s->fault_text - 1 && d->ctrl_fault_text[i]; i++) {
-        s->fault_text[i] = d->ctrl_fault_text[i];
-    }
+    s->ctrl_why = d->ctrl_why;
     s->fault_t = d->fault_t;
     s->log_dropped = mca_rtlog_dropped(&d->log);
     if (d->csv) {
@@ -1449,10 +1443,8 @@ void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
         compute_summary(d, s);
     }
     if (s->fault) {
-        char ctrl[sizeof s->fault_text];
-        memcpy(ctrl, s->fault_text, sizeof ctrl);
-        fault_describe(d, s->fault, s->fault_arm, s->fault_detail, s->fault_arm_code, s->fault_count, ctrl,
-                       s->fault_text, sizeof s->fault_text);
+        fault_describe(d, s->fault, s->fault_arm, s->fault_detail, s->fault_arm_code, s->fault_count,
+                       &s->ctrl_why, s->fault_text, sizeof s->fault_text);
     }
 }
 
@@ -1582,8 +1574,8 @@ const double *mca_daemon_positions(const mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? d->q[a] : NULL;
 }
 
-void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, const char *text) {
-    mca_controller_raise_fault(&d->ctrl, ctrl_fault, text);
+void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, double t) {
+    mca_controller_raise_fault(&d->ctrl, ctrl_fault, t);
 }
 
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a) {

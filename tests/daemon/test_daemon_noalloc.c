@@ -238,7 +238,7 @@ int main(int argc, char **argv) {
     run(d, &t, 500, -1);
     before = allocs;
     armed = 1;
-    mca_daemon_inject_fault(d, MCA_CTRL_FAULT_NAN, "injected NaN");
+    mca_daemon_inject_fault(d, MCA_CTRL_FAULT_NAN, t);
     armed = 0;
     k = run(d, &t, 20000, MCA_DAEMON_FAULT);
     k += run(d, &t, 50, -1);

@@ -544,7 +544,11 @@ static void test_controller_faults(void **state) {
     assert_int_equal(mca_controller_tick(c, 0.1, qs, qds, &info), MCA_EFAULT);
     assert_int_equal(info.fault, MCA_CTRL_FAULT_NAN);
     assert_string_equal(mca_ctrl_fault_name(info.fault), "nan");
-    assert_non_null(strstr(info.fault_text, "arm 1"));
+    char why[192];
+    assert_int_equal(info.fault_why.why, MCA_WHY_NONFINITE_Q);
+    assert_int_equal(info.fault_why.i[0], 1);
+    assert_string_equal(mca_ctrl_fault_format(&info.fault_why, why, sizeof why),
+                        "arm 1: non-finite joint position");
     for (int a = 0; a < 2; a++) {
         for (int j = 0; j < 8; j++) {
             assert_true(qd[a][j] == 0.0);
@@ -571,8 +575,10 @@ static void test_controller_faults(void **state) {
     assert_int_equal(mca_controller_init(c, &cfg2), MCA_OK);
     const int rc_mvn = mca_controller_tick(c, 0.0, qs, qds, &info);
     if (rc_mvn != MCA_OK) {
+        char why[192];
         print_message("MVN tick: %s (%s) steps %d residual %g\n", mca_ctrl_fault_name(info.fault),
-                      info.fault_text, info.pdnn_steps, info.pdnn_residual);
+                      mca_ctrl_fault_format(&info.fault_why, why, sizeof why), info.pdnn_steps,
+                      info.pdnn_residual);
     }
     assert_int_equal(rc_mvn, MCA_OK);
     assert_true(info.min_distance < 0.05);
@@ -951,11 +957,15 @@ static void test_pdnn_time_budget(void **state) {
     assert_non_null(r);
     *r = *b; /* for the braking below */
     assert_int_equal(mca_controller_tick(b, k_long * cfg.dt, qs, qds, &info), MCA_EFAULT);
-    print_message("1 ns budget: tick %d (%s): %s\n", k_long, mca_ctrl_fault_name(info.fault),
-                  info.fault_text);
+    char why[192];
+    mca_ctrl_fault_format(&info.fault_why, why, sizeof why);
+    print_message("1 ns budget: tick %d (%s): %s\n", k_long, mca_ctrl_fault_name(info.fault), why);
     assert_int_equal(info.fault, MCA_CTRL_FAULT_TIME_BUDGET);
     assert_string_equal(mca_ctrl_fault_name(info.fault), "pdnn-time-budget");
-    assert_non_null(strstr(info.fault_text, "time budget"));
+    assert_int_equal(info.fault_why.why, MCA_WHY_PDNN_BUDGET);
+    assert_int_equal(info.fault_why.i[0], info.pdnn_steps);
+    assert_true(info.fault_why.x[0] == 1e-3); /* 1 ns in us */
+    assert_non_null(strstr(why, "PDNN time budget 0.001 us used up after"));
     assert_true(info.pdnn_steps <= 16);
     for (int a = 0; a < cfg.n_arms; a++) {
         for (int j = 0; j < cfg.chain[a].dof; j++) {

@@ -205,10 +205,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             r->stop_requested = 1;
         }
         if (k == fault_k) {
-            char txt[96];
-            snprintf(txt, sizeof txt, "injected fault %s at t = %.3f s (mca-sim --fault-at)",
-                     mca_ctrl_fault_name(o->fault_kind), t);
-            mca_daemon_inject_fault(d, o->fault_kind, txt);
+            mca_daemon_inject_fault(d, o->fault_kind, t); /* named "injected fault KIND at t = T s" */
         }
         struct timespec c0, c1;
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);

@@ -155,8 +155,9 @@ static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every
         if (trc != MCA_OK) {
             /* a fault brakes from the last command, exactly as a stop */
             f->task_fault = info.fault;
+            char why[192];
             fprintf(stderr, "mca-stopcheck: dec %.3g: task fault at t = %.3f s: %s\n", dec, t,
-                    info.fault_text);
+                    mca_ctrl_fault_format(&info.fault_why, why, sizeof why));
             memcpy(copy, ctrl, sizeof *copy);
             memcpy(qb, q, sizeof qb);
             branch(copy, t, qb, (const double(*)[MCA_MAX_DOF])v_last, dec, f);

@@ -18,9 +18,9 @@
  * a distance below d1, a distance predicted to cross d1 within the next tick, or an equality residual
  * ||G phi - alpha||_inf above eq_tol (the contradiction of Section VI-E: tracking and avoidance cannot
  * both hold; the PDNN's "fake attractor") make the tick command ZERO velocity for all arms and return
- * MCA_EFAULT with info->fault / info->fault_text naming the cause. The fault LATCHES: every later tick
- * commands zero (and reports the same fault) until mca_controller_clear_fault(). The braking profile
- * itself is the arm's / daemon's job.
+ * MCA_EFAULT with info->fault / info->fault_why naming the cause (mca_ctrl_fault_format). The fault LATCHES:
+ * every later tick commands zero (and reports the same fault) until mca_controller_clear_fault(). The braking
+ * profile itself is the arm's / daemon's job.
  *
  * Context: mca_controller_config_from_scenario() and mca_controller_init() are start-up only
  * (URDF parsing allocates). mca_controller_tick(), _reset() and _clear_fault() are real-time safe:
@@ -99,6 +99,39 @@ typedef enum mca_ctrl_fault {
 /** Short constant name of a fault code ("fake-attractor", ...). */
 const char *mca_ctrl_fault_name(int fault);
 
+/** Why a fault latched, in detail. */
+typedef enum mca_ctrl_why {
+    MCA_WHY_NONE = 0,
+    MCA_WHY_NULL_JOINTS,   /**< a NULL joint array; i[0] arm */
+    MCA_WHY_NONFINITE_Q,   /**< i[0] arm */
+    MCA_WHY_DISTANCES,     /**< the distance computation failed */
+    MCA_WHY_BELOW_D1,      /**< x[0] distance, x[1] d1; i[0..3] arm, link, arm, link */
+    MCA_WHY_BELOW_D1_NEXT, /**< as MCA_WHY_BELOW_D1, predicted for the next tick */
+    MCA_WHY_APF_SINGULAR,  /**< APF: singular Jacobian */
+    MCA_WHY_BOUNDS,        /**< the joint bounds contradict (a joint beyond its limit) */
+    MCA_WHY_ASSEMBLY,      /**< i[0] the MCA error code of the QP assembly */
+    MCA_WHY_PDNN_INPUT,    /**< the PDNN rejected the QP (non-finite data) */
+    MCA_WHY_PDNN_BUDGET,   /**< x[0] budget [us], x[1] residual; i[0] steps */
+    MCA_WHY_PDNN_OUTPUT,   /**< the PDNN's output is not finite */
+    MCA_WHY_TRACKING, /**< not converged, tracking off: x[0] residual, x[1] ||G phi - alpha||, x[2] min d;
+                         i[0] steps */
+    MCA_WHY_NOT_CONVERGED, /**< x[0] residual, x[1] the fault threshold; i[0] steps */
+    MCA_WHY_EQ_RESIDUAL,   /**< x[0] ||G phi - alpha||, x[1] eq_tol */
+    MCA_WHY_INJECTED,      /**< latched from outside the tick (mca_controller_raise_fault): i[0] the fault,
+                              x[0] the time given */
+} mca_ctrl_why_t;
+
+/** A fault's cause as a code and numbers: the tick fills it without formatting anything (no text on the
+ *  1 kHz path); mca_ctrl_fault_format() makes the text where formatting is allowed. */
+typedef struct mca_ctrl_fault_why {
+    int why; /**< mca_ctrl_why_t */
+    int i[4];
+    double x[3];
+} mca_ctrl_fault_why_t;
+
+/** The text of a fault's cause (not real-time: log drainers, summaries, tools). Returns buf. */
+const char *mca_ctrl_fault_format(const mca_ctrl_fault_why_t *why, char *buf, size_t len);
+
 typedef struct mca_controller_config {
     int n_arms;                      /**< 1..MCA_MAX_ARMS */
     mca_chain_t chain[MCA_MAX_ARMS]; /**< copied; base placement set */
@@ -162,10 +195,10 @@ typedef struct mca_tick_info {
     int deadlock_arm;           /**< the arm that backs off (-1: none) */
     int deadlocks;              /**< deadlocks detected since the task started */
     /* outcome */
-    int fault; /**< mca_ctrl_fault_t */
-    char fault_text[160];
-    int brake_fallback; /**< braking: 1 when this tick used the scale-the-whole-vector fallback */
-    int64_t compute_ns; /**< CLOCK_MONOTONIC time spent in the tick */
+    int fault;                      /**< mca_ctrl_fault_t */
+    mca_ctrl_fault_why_t fault_why; /**< its cause (text: mca_ctrl_fault_format) */
+    int brake_fallback;             /**< braking: 1 when this tick used the scale-the-whole-vector fallback */
+    int64_t compute_ns;             /**< CLOCK_MONOTONIC time spent in the tick */
 } mca_tick_info_t;
 
 /** Controller state (~160 kB: keep it static or on the heap; allocated by the caller at start-up). */
@@ -174,7 +207,7 @@ typedef struct mca_controller {
     int started; /**< paths anchored */
     double t_start;
     int fault;
-    char fault_text[160];
+    mca_ctrl_fault_why_t fault_why;
     mca_kin_t kin[MCA_MAX_ARMS];
     mca_arm_distances_t dist[MCA_MAX_ARMS][MCA_MAX_ARMS]; /**< [a][b], a < b */
     mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
@@ -273,8 +306,9 @@ void mca_brake_scale_arm(const double *v, const double *dec, double dt, int dof,
  */
 void mca_controller_set_velocity(mca_controller_t *ctrl, const double *const v[MCA_MAX_ARMS]);
 
-/** Latch a fault from outside the tick (a test's injected fault, a backend fault). RT safe. */
-void mca_controller_raise_fault(mca_controller_t *ctrl, int code, const char *text);
+/** Latch a fault from outside the tick at time t (a test's injected fault; cause MCA_WHY_INJECTED). RT safe.
+ */
+void mca_controller_raise_fault(mca_controller_t *ctrl, int code, double t);
 
 /** Last QP assembled and the PDNN's phi (for --dump-qp; not meaningful for APF). */
 const mca_qp_t *mca_controller_last_qp(const mca_controller_t *ctrl, const double **phi);

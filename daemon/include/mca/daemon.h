@@ -161,7 +161,8 @@ typedef struct mca_daemon_summary {
                              mca_feedback_fault_t; CONTROLLER: the mca_ctrl_fault_t */
     int fault_arm_code; /**< ARM: the arm's fault code (1, 2) or state (3) */
     int fault_count;    /**< OVERRUN: periods missed in a row; LOST_FEEDBACK, BUS: cycles without feedback */
-    char fault_text[160]; /**< made by mca_daemon_summary() (non-rt) from the fields above */
+    mca_ctrl_fault_why_t ctrl_why; /**< CONTROLLER: the controller's cause */
+    char fault_text[160];          /**< made by mca_daemon_summary() (non-rt) from the fields above */
     double fault_t;
     uint64_t log_dropped, csv_dropped;
     /* braking (SIGTERM or a fault; through mca_controller_brake) */
@@ -234,7 +235,7 @@ const mca_controller_t *mca_daemon_controller(const mca_daemon_t *d);
 const double *mca_daemon_positions(const mca_daemon_t *d, int a);
 /** Latch a controller fault (mca_ctrl_fault_t) as if the next tick had found it: RUNNING -> BRAKING ->
  *  FAULT through the same path (mca-sim --fault-at; rt safe, from the thread that steps). */
-void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, const char *text);
+void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, double t);
 
 /** Last command sent to arm a (tests). NULL if a is out of range. */
 const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);
