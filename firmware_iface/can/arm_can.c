@@ -267,19 +267,31 @@ typedef struct can_backend {
     mca_can_link_t link;
 } can_backend_t;
 
+/* Drain the socket in batches (one recvmmsg each; usually one call a tick, as a short batch says the
+ * socket is empty), at most rx_burst frames. */
 static int can_read(void *ctx, mca_arm_feedback_t *fb) {
     can_backend_t *b = ctx;
-    mca_can_frame_t f;
-    for (int i = 0; i < b->opt.rx_burst; i++) {
-        int rc = mca_can_sock_recv(b->fd, &f);
-        if (rc == MCA_EAGAIN) {
+    mca_can_frame_t f[MCA_CAN_RX_BATCH];
+    for (int left = b->opt.rx_burst; left > 0;) {
+        const int want = left < MCA_CAN_RX_BATCH ? left : MCA_CAN_RX_BATCH;
+        int bad = 0;
+        const int n = mca_can_sock_recv_batch(b->fd, f, want, &bad);
+        if (n < 0) {
+            if (n != MCA_EAGAIN) {
+                b->link.err_pending = 1; /* reported like an error frame, never hiding feedback already in */
+            }
             break;
         }
-        if (rc != MCA_OK) {
-            b->link.err_pending = 1; /* reported like an error frame, never hiding feedback already in */
+        for (int i = 0; i < n; i++) {
+            mca_can_link_rx(&b->link, &f[i]);
+        }
+        if (bad) {
+            b->link.err_pending = 1;
+        }
+        left -= n + bad;
+        if (n + bad < want) {
             break;
         }
-        mca_can_link_rx(&b->link, &f);
     }
     return mca_can_link_take(&b->link, fb);
 }

@@ -135,51 +135,83 @@ static int64_t mono_minus_real_ns(void) {
     return off;
 }
 
-int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
-    if (fd < 0 || !f) {
+int mca_can_sock_recv_batch(int fd, mca_can_frame_t *f, int max, int *bad) {
+    if (fd < 0 || !f || max < 1 || max > MCA_CAN_RX_BATCH) {
         return MCA_EINVAL;
     }
-    struct canfd_frame cf;
-    struct iovec iov = {.iov_base = &cf, .iov_len = sizeof(cf)};
+    struct canfd_frame cf[MCA_CAN_RX_BATCH];
+    struct iovec iov[MCA_CAN_RX_BATCH];
     union {
         char buf[CMSG_SPACE(sizeof(struct timespec))];
         struct cmsghdr align;
-    } ctl;
-    struct msghdr msg;
-    memset(&msg, 0, sizeof(msg));
-    msg.msg_iov = &iov;
-    msg.msg_iovlen = 1;
-    msg.msg_control = ctl.buf;
-    msg.msg_controllen = sizeof(ctl.buf);
-    ssize_t nb = recvmsg(fd, &msg, MSG_DONTWAIT);
-    if (nb < 0) {
+    } ctl[MCA_CAN_RX_BATCH];
+    struct mmsghdr mm[MCA_CAN_RX_BATCH];
+    memset(mm, 0, sizeof(mm[0]) * (size_t)max);
+    for (int i = 0; i < max; i++) {
+        iov[i] = (struct iovec){.iov_base = &cf[i], .iov_len = sizeof(cf[i])};
+        mm[i].msg_hdr.msg_iov = &iov[i];
+        mm[i].msg_hdr.msg_iovlen = 1;
+        mm[i].msg_hdr.msg_control = ctl[i].buf;
+        mm[i].msg_hdr.msg_controllen = sizeof(ctl[i].buf);
+    }
+    const int got = recvmmsg(fd, mm, (unsigned)max, MSG_DONTWAIT, NULL);
+    if (got < 0) {
         return (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) ? MCA_EAGAIN : MCA_EIO;
     }
-    if (nb != (ssize_t)CAN_MTU && nb != (ssize_t)CANFD_MTU) {
-        return MCA_EIO;
+    if (got == 0) {
+        return MCA_EAGAIN;
     }
-    f->can_id = cf.can_id;
-    f->fd = nb == (ssize_t)CANFD_MTU;
-    f->len = cf.len > 64 ? 64 : cf.len;
-    memcpy(f->data, cf.data, f->len);
+    /* once per batch: the clock offset for the kernel's stamps, and the read time (the fallback) */
     struct timespec mono;
     clock_gettime(CLOCK_MONOTONIC, &mono);
-    /* Fallback when the kernel gave no stamp (cmsg missing or truncated): the read time, flagged as
-     * such (kstamp = 0) so the backend can count it instead of passing it off as a kernel stamp. */
-    f->stamp_ns = ts_ns(&mono);
-    f->kstamp = 0;
-    if (!(msg.msg_flags & MSG_CTRUNC)) {
-        for (struct cmsghdr *c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
+    int64_t off = 0;
+    int have_off = 0, n = 0, n_bad = 0;
+    for (int i = 0; i < got; i++) {
+        const unsigned nb = mm[i].msg_len;
+        if (nb != CAN_MTU && nb != CANFD_MTU) {
+            n_bad++; /* not a CAN frame: the caller reports it like an error frame */
+            continue;
+        }
+        mca_can_frame_t *o = &f[n++];
+        o->can_id = cf[i].can_id;
+        o->fd = nb == CANFD_MTU;
+        o->len = cf[i].len > 64 ? 64 : cf[i].len;
+        memcpy(o->data, cf[i].data, o->len);
+        /* Fallback when the kernel gave no stamp (cmsg missing or truncated): the read time, flagged as
+         * such (kstamp = 0) so the backend can count it instead of passing it off as a kernel stamp. */
+        o->stamp_ns = ts_ns(&mono);
+        o->kstamp = 0;
+        const struct msghdr *msg = &mm[i].msg_hdr;
+        if (msg->msg_flags & MSG_CTRUNC) {
+            continue;
+        }
+        for (struct cmsghdr *c = CMSG_FIRSTHDR(msg); c; c = CMSG_NXTHDR((struct msghdr *)msg, c)) {
             if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS &&
                 c->cmsg_len >= CMSG_LEN(sizeof(struct timespec))) {
                 struct timespec k;
                 memcpy(&k, CMSG_DATA(c), sizeof(k));
-                f->stamp_ns = ts_ns(&k) + mono_minus_real_ns();
-                f->kstamp = 1;
+                if (!have_off) {
+                    off = mono_minus_real_ns();
+                    have_off = 1;
+                }
+                o->stamp_ns = ts_ns(&k) + off;
+                o->kstamp = 1;
             }
         }
     }
-    return MCA_OK;
+    if (bad) {
+        *bad = n_bad;
+    }
+    return n;
+}
+
+int mca_can_sock_recv(int fd, mca_can_frame_t *f) {
+    int bad = 0;
+    const int n = mca_can_sock_recv_batch(fd, f, 1, &bad);
+    if (n < 0) {
+        return n;
+    }
+    return n == 1 ? MCA_OK : MCA_EIO; /* one datagram that was not a CAN frame */
 }
 
 int mca_can_sock_send(int fd, uint32_t can_id, const uint8_t *data, size_t len, int fd_frame, int brs) {

@@ -22,7 +22,7 @@ timeout -k 10 "$tmo" qemu-system-x86_64 -machine q35 -accel tcg -cpu max -m 1024
     -virtfs local,path=/,mount_tag=host,security_model=passthrough,id=host,multidevs=remap \
     </dev/null >"$log" 2>&1 || true
 cat "$log"
-rc=$(sed -n 's/^MCA-GUEST-EXIT=\([0-9]*\).*/\1/p' "$log" | tail -n 1)
+rc=$(sed -n 's/.*MCA-GUEST-EXIT=\([0-9]*\).*/\1/p' "$log" | tail -n 1)
 if [ -z "$rc" ]; then
     echo "vcan-guest: FAIL: the guest did not report an exit status (timeout ${tmo}s or boot failure; see $log)" >&2
     exit 1

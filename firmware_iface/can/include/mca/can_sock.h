@@ -46,6 +46,19 @@ int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err
 /** Receive one frame without blocking. @retval MCA_OK, MCA_EAGAIN (none queued), MCA_EIO, MCA_EINVAL */
 int mca_can_sock_recv(int fd, mca_can_frame_t *f);
 
+/** Most frames one mca_can_sock_recv_batch() call takes. */
+#define MCA_CAN_RX_BATCH 16
+
+/**
+ * Receive up to @p max (1..MCA_CAN_RX_BATCH) frames without blocking in one system call (recvmmsg); the
+ * clocks are read once per batch (the read time, and the offset that moves the kernel's stamps onto
+ * CLOCK_MONOTONIC). Fewer than @p max means the socket is empty now: no second call is needed to learn it.
+ * @param[out] bad datagrams of the wrong size, dropped (may be NULL)
+ * @return frames written to f (0 if every datagram had the wrong size), MCA_EAGAIN (none waiting), MCA_EIO,
+ *         MCA_EINVAL
+ */
+int mca_can_sock_recv_batch(int fd, mca_can_frame_t *f, int max, int *bad);
+
 /**
  * Send one frame without blocking: CAN FD (with bit-rate switch when @p brs) when @p fd_frame, else
  * classic CAN (len <= 8). @p len must be a valid DLC length.
