@@ -447,7 +447,9 @@ static void near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_sch
     near_reach_init(&r, ctrl, qp, si, dec, priority);
     for (int a = 0; a < na; a++) {
         for (int l = 0; l < MCA_MAX_LINKS; l++) {
-            for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
+            /* a list's valid pairs are its first ones: clearing stops at the first empty entry (most lists
+             * are empty, and this memory is cold at each tick) */
+            for (int k = 0; k < MCA_NEAR_PAIRS && ctrl->near[a][l][k].valid; k++) {
                 ctrl->near[a][l][k].valid = 0;
             }
         }

@@ -342,7 +342,10 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
             for (int k = 0; k < MCA_NEAR_PAIRS; k++) {
                 const mca_link_critical_t *c = &near[a][l][k];
                 const int r = si->row_off[a] + MCA_NEAR_PAIRS * l + k;
-                if (!c->valid || repeats_previous(near[a], l, c)) {
+                if (!c->valid) {
+                    break; /* a list's pairs come first, nearest first: the rest is empty */
+                }
+                if (repeats_previous(near[a], l, c)) {
                     continue;
                 }
                 double r_pe[3];

@@ -123,7 +123,8 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
 
 /**
  * The collision rows of mca-ts (normal form; on a QP assembled without collision rows; real-time safe).
- * Per arm a, per link l, one row per near pair near[a][l][k]: the link's MCA_NEAR_PAIRS nearest witness pairs
+ * Per arm a, per link l, one row per near pair near[a][l][k] (valid ones first: the first invalid entry
+ * ends the link's list): the link's MCA_NEAR_PAIRS nearest witness pairs
  * against the other arms' links (each link pair's closest points and the closest points of its four segment
  * ends, so that a pair approaching while it is not the closest one is bounded too; see the controller):
  *   n^T J_P qdot_a <= min{ 2 w_a S(d) v_normal (d < d2 only), w_a (d - d1) / T_a },
