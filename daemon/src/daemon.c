@@ -888,26 +888,9 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     int np = 0;
     for (int a = 0; a < d->n_arms; a++) {
         for (int b = a + 1; b < d->n_arms && np < MCA_MAX_PAIRS; b++) {
-            const mca_arm_distances_t *ad = &d->ctrl.dist[a][b];
-            mca_dds_pair_snapshot_t *p = &s->pair[np++];
-            p->arm_a = (uint8_t)a;
-            p->arm_b = (uint8_t)b;
-            p->link_a = (int16_t)ad->min.link;
-            p->link_b = (int16_t)ad->min.other_link;
-            p->n_links_a = (uint32_t)ad->n_links_a;
-            p->n_links_b = (uint32_t)ad->n_links_b;
-            p->min_distance = ad->min.d;
-            for (int k = 0; k < 3; k++) {
-                p->p[k] = ad->min.p[k];
-                p->e[k] = ad->min.e[k];
-            }
-            p->d1 = d->ccfg.sp.d1;
-            p->d2 = d->ccfg.sp.d2;
-            p->brake_factor = mca_brake_s(ad->min.d, p->d1, p->d2);
-            for (int k = 0; k < MCA_MAX_LINKS; k++) {
-                p->link_distance_a[k] = k < ad->n_links_a ? ad->a_to_b[k].d : 0.0;
-                p->link_distance_b[k] = k < ad->n_links_b ? ad->b_to_a[k].d : 0.0;
-            }
+            /* the bridge's own fill (d1 < d2 holds: the cell loader checked it) */
+            mca_dds_pair_fill(&s->pair[np++], &d->ctrl.dist[a][b], (uint8_t)a, (uint8_t)b, d->ccfg.sp.d1,
+                              d->ccfg.sp.d2);
         }
     }
     s->n_pairs = (uint32_t)np;

@@ -19,7 +19,8 @@
 #include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/ring.h"
-#include "mca_dds.h" /* idlc output: mca_dds_JointState, ... */
+#include "mca/scheme.h" /* mca_brake_s: S(d) */
+#include "mca_dds.h"    /* idlc output: mca_dds_JointState, ... */
 
 enum { W_STATE, W_COMMAND, W_DIST, W_STATUS, W_COUNT };
 static const char *const topic_names[W_COUNT] = {MCA_DDS_TOPIC_JOINT_STATE, MCA_DDS_TOPIC_JOINT_COMMAND,
@@ -76,17 +77,6 @@ void mca_dds_config_default(mca_dds_config_t *cfg) {
     cfg->frame_id = "world";
 }
 
-double mca_dds_brake_factor(double d, double d1, double d2) {
-    if (d >= d2) {
-        return 1.0;
-    }
-    if (d <= d1) {
-        return 0.0;
-    }
-    const double s = sin(M_PI / 2.0 * (d - d1) / (d2 - d1));
-    return s * s;
-}
-
 int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *dist, uint8_t arm_a,
                       uint8_t arm_b, double d1, double d2) {
     if (out == NULL || dist == NULL || dist->n_links_a < 0 || dist->n_links_a > MCA_MAX_LINKS ||
@@ -102,7 +92,7 @@ int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *d
     memcpy(out->e, dist->min.e, sizeof out->e);
     out->d1 = d1;
     out->d2 = d2;
-    out->brake_factor = mca_dds_brake_factor(dist->min.d, d1, d2);
+    out->brake_factor = mca_brake_s(dist->min.d, d1, d2); /* core's S(d), eq. (13): one definition */
     out->n_links_a = (uint32_t)dist->n_links_a;
     out->n_links_b = (uint32_t)dist->n_links_b;
     for (int l = 0; l < dist->n_links_a; ++l) {

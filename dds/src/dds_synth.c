@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mca/scheme.h" /* mca_brake_s: S(d) */
+
 void mca_dds_synth_fill(mca_dds_snapshot_t *snap, uint64_t k, int64_t stamp_ns, double *min_so_far,
                         int64_t *min_stamp) {
     static const uint32_t dof[2] = {7, 6};
@@ -49,7 +51,7 @@ void mca_dds_synth_fill(mca_dds_snapshot_t *snap, uint64_t k, int64_t stamp_ns, 
     for (uint32_t l = 0; l < p->n_links_b; ++l) {
         p->link_distance_b[l] = d + 0.02 * (double)l;
     }
-    p->brake_factor = mca_dds_brake_factor(d, p->d1, p->d2);
+    p->brake_factor = mca_brake_s(d, p->d1, p->d2);
 
     if (d < *min_so_far) {
         *min_so_far = d;

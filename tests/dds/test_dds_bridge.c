@@ -23,6 +23,7 @@
 #include "mca/dds_qos.h"
 #include "mca/dds_synth.h"
 #include "mca/err.h"
+#include "mca/scheme.h" /* mca_brake_s */
 #include "mca_dds.h"
 
 static const char *g_config;
@@ -509,15 +510,20 @@ static void test_invalid_snapshot_rejected(void **state) {
     assert_int_equal(st.published, 1);
 }
 
+/* The published brake factor is core's S(d) (eq. 13; its closed values: scheme.unit): the pair fill at the
+ * thresholds and at sin^2(pi/6). */
 static void test_brake_factor_eq13(void **state) {
     (void)state;
-    /* Closed values of S(d) = sin^2(pi/2 (d-d1)/(d2-d1)) between the thresholds. */
-    assert_true(mca_dds_brake_factor(0.20, 0.05, 0.12) == 1.0);
-    assert_true(mca_dds_brake_factor(0.12, 0.05, 0.12) == 1.0);
-    assert_true(mca_dds_brake_factor(0.05, 0.05, 0.12) == 0.0);
-    assert_true(mca_dds_brake_factor(0.01, 0.05, 0.12) == 0.0);
-    assert_true(fabs(mca_dds_brake_factor(0.085, 0.05, 0.12) - 0.5) < 1e-15);              /* midpoint */
-    assert_true(fabs(mca_dds_brake_factor(0.05 + 0.07 / 3.0, 0.05, 0.12) - 0.25) < 1e-15); /* sin^2(pi/6) */
+    mca_arm_distances_t d;
+    memset(&d, 0, sizeof d);
+    mca_dds_pair_snapshot_t p;
+    const double cases[][2] = {{0.20, 1.0}, {0.12, 1.0}, {0.05, 0.0}, {0.01, 0.0}, {0.05 + 0.07 / 3.0, 0.25}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        d.min.d = cases[k][0];
+        assert_int_equal(mca_dds_pair_fill(&p, &d, 0, 1, 0.05, 0.12), MCA_OK);
+        assert_true(fabs(p.brake_factor - cases[k][1]) < 1e-15);
+        assert_true(p.brake_factor == mca_brake_s(cases[k][0], 0.05, 0.12));
+    }
 }
 
 static void test_pair_fill_from_armdist(void **state) {

@@ -192,10 +192,6 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
  */
 void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats);
 
-/** Brake factor S(d) of the paper's eq. (13): 1 at or above d2, 0 at or below d1, sin^2 ramp between.
- *  Context: any. */
-double mca_dds_brake_factor(double d, double d1, double d2);
-
 /**
  * Fill one pair of a snapshot from the arm-to-arm distances of mca/armdist.h: global minimum with its
  * critical points and links, per-link closest distances of both arms, the thresholds and S(d) of
