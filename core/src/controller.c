@@ -202,7 +202,6 @@ static int64_t now_ns(void) {
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
-/* Latch a fault (the first cause wins) with a message; snprintf into a fixed buffer does not allocate. */
 /* A distance fault's cause: the pair and how near. */
 static mca_ctrl_fault_why_t why_distance(int why, const mca_tick_info_t *info, double d1) {
     return (mca_ctrl_fault_why_t){.why = why,
@@ -417,14 +416,9 @@ static int near_can_bind(const near_reach_t *r, int a, int l, int b, double d) {
     return !(r->share[a][b] * mca_scheme_row_bound(r->sp, d, r->t_stop[a]) > r->speed[a][l]);
 }
 
-/* Can any pair of arm a's link l against arm b bind, dmin the link's nearest pair (NaN: yes)? */
+/* Can any pair of arm a's link l against arm b bind, dmin the link's nearest pair? */
 static int near_link_live(const near_reach_t *r, int a, int l, int b, double dmin) {
     return !(dmin >= r->sp->d2 && dmin > r->cut_stop[a][l][b]);
-}
-
-/* The least of m and d; a NaN sticks. */
-static double nan_min(double m, double d) {
-    return (d < m || isnan(d)) && !isnan(m) ? d : m;
 }
 
 static void near_add(mca_link_critical_t list[MCA_NEAR_PAIRS], const near_reach_t *r, int a, int l, int b,
@@ -457,26 +451,16 @@ static void near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_sch
     for (int a = 0; a < na; a++) {
         for (int b = a + 1; b < na; b++) {
             const mca_arm_distances_t *ad = &ctrl->dist[a][b];
-            /* A link whose nearest pair (NaN: any) is beyond d2 and its cut has no pair that can bind: its
-             * list is not looked at (most links, most ticks). */
-            double dmin_a[MCA_MAX_LINKS], dmin_b[MCA_MAX_LINKS];
+            /* A link whose nearest pair (mca_arm_distances' a_to_b / b_to_a; finite, as the distances
+             * checked every point) is beyond d2 and its cut has no pair that can bind: its list is not
+             * looked at (most links, most ticks). */
             int live_a[MCA_MAX_LINKS], live_b[MCA_MAX_LINKS], n_live = 0;
-            for (int l = 0; l < MCA_MAX_LINKS; l++) {
-                dmin_a[l] = dmin_b[l] = INFINITY;
-            }
             for (int i = 0; i < ad->n_links_a; i++) {
-                for (int j = 0; j < ad->n_links_b; j++) {
-                    const double d = ad->pair[i][j].d;
-                    dmin_a[i] = nan_min(dmin_a[i], d);
-                    dmin_b[j] = nan_min(dmin_b[j], d);
-                }
-            }
-            for (int i = 0; i < ad->n_links_a; i++) {
-                live_a[i] = near_link_live(&r, a, i, b, dmin_a[i]);
+                live_a[i] = near_link_live(&r, a, i, b, ad->a_to_b[i].d);
                 n_live += live_a[i];
             }
             for (int j = 0; j < ad->n_links_b; j++) {
-                live_b[j] = near_link_live(&r, b, j, a, dmin_b[j]);
+                live_b[j] = near_link_live(&r, b, j, a, ad->b_to_a[j].d);
                 n_live += live_b[j];
             }
             if (n_live == 0) {

@@ -554,7 +554,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
 /* ---------------------------------------------------------------- the tick (rt) */
 
 /* Latch a fault (the first one wins) as a code and numbers: @p detail, @p arm_code and @p count as the
- * fault kind needs them (see struct mca_daemon), @p ctrl_text the controller's own text (CONTROLLER only).
+ * fault kind needs them (see struct mca_daemon), @p ctrl_why the controller's cause (CONTROLLER only).
  * No text is made here: the log record carries the code, fault_describe() makes the text off the rt path. */
 static void latch_fault(mca_daemon_t *d, int fault, int code, double t, int arm, int detail, int arm_code,
                         int count, const mca_ctrl_fault_why_t *ctrl_why) {

@@ -59,9 +59,9 @@ typedef struct mca_cell_rt {
     int priority;      /**< SCHED_FIFO priority 1..99; 0 = SCHED_OTHER */
     int cpu;           /**< CPU to pin the loop to, -1 = none */
     int overrun_limit; /**< consecutive overruns that are a fault */
-    int64_t
-        pdnn_budget_ns;       /**< the PDNN's time per tick (the loader's default: half the period): the
-                                 controller's   pdnn_budget_ns; running out is a named fault, never an overrun */
+    /** The PDNN's time per tick (the loader's default: half the period): the controller's pdnn_budget_ns;
+     *  running out is a named fault, never an overrun. */
+    int64_t pdnn_budget_ns;
     int lost_feedback_cycles; /**< cycles without new feedback from an arm that are a fault */
     int lock_memory;          /**< mlockall + pre-faulting */
     int dma_latency;          /**< hold /dev/cpu_dma_latency at 0 while running */
