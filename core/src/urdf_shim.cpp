@@ -386,6 +386,7 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
     std::unique_ptr<mca_chain_t> c(new mca_chain_t);
     memset(c.get(), 0, sizeof(*c));
     snprintf(c->name, sizeof(c->name), "%s", model->getName().c_str());
+    snprintf(c->root_link, sizeof(c->root_link), "%s", root->name.c_str());
     snprintf(c->source, sizeof(c->source), "%s", cx.path);
     c->dof = dof;
     mca_pose_identity(&c->base);

@@ -3,6 +3,7 @@
 #include "mca/cell.h"
 
 #include <cyaml/cyaml.h>
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -70,7 +71,15 @@ struct raw_solver {
     double *deadlock_time, *back_off_time;
 };
 
+struct raw_ros2 {
+    bool *enabled;
+    char *ns;
+    char *world_frame;
+    bool *joint_states, *robot_description, *tf_static, *markers, *diagnostics;
+};
+
 struct raw_dds {
+    struct raw_ros2 *ros2;
     bool *enabled;
     long long *domain;
     char *config;
@@ -178,7 +187,20 @@ static const cyaml_schema_field_t solver_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_schema_field_t ros2_fields[] = {
+    CYAML_FIELD_BOOL_PTR("enabled", OPT, struct raw_ros2, enabled),
+    CYAML_FIELD_STRING_PTR("namespace", OPT, struct raw_ros2, ns, 1, 31),
+    CYAML_FIELD_STRING_PTR("world_frame", OPT, struct raw_ros2, world_frame, 1, 31),
+    CYAML_FIELD_BOOL_PTR("joint_states", OPT, struct raw_ros2, joint_states),
+    CYAML_FIELD_BOOL_PTR("robot_description", OPT, struct raw_ros2, robot_description),
+    CYAML_FIELD_BOOL_PTR("tf_static", OPT, struct raw_ros2, tf_static),
+    CYAML_FIELD_BOOL_PTR("markers", OPT, struct raw_ros2, markers),
+    CYAML_FIELD_BOOL_PTR("diagnostics", OPT, struct raw_ros2, diagnostics),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t dds_fields[] = {
+    CYAML_FIELD_MAPPING_PTR("ros2", OPT, struct raw_dds, ros2, ros2_fields),
     CYAML_FIELD_BOOL_PTR("enabled", OPT, struct raw_dds, enabled),
     CYAML_FIELD_INT_PTR("domain", OPT, struct raw_dds, domain),
     CYAML_FIELD_STRING_PTR("config", OPT, struct raw_dds, config, 0, 400),
@@ -567,6 +589,43 @@ static void resolve(char *out, size_t outlen, const char *base_file, const char 
         snprintf(out, outlen, "%.*s/%s", (int)(slash - base_file), base_file, rel);
     } else {
         snprintf(out, outlen, "%s", rel);
+    }
+}
+
+/* A ROS 2 name token: a letter, then letters, digits and single '_', not ending in '_'. */
+static int ros2_name_ok(const char *s) {
+    if (!isalpha((unsigned char)s[0])) {
+        return 0;
+    }
+    for (const char *c = s; *c; c++) {
+        if (!(isalnum((unsigned char)*c) || *c == '_') || (c[0] == '_' && c[1] == '_')) {
+            return 0;
+        }
+    }
+    return s[strlen(s) - 1] != '_';
+}
+
+/* The default ROS 2 namespace of a cell: its name with every other character as one '_' ("monitor-vs-mcad"
+ * -> "monitor_vs_mcad"), "cell_" in front when it does not start with a letter. */
+static void ros2_name_from(char *out, size_t len, const char *name) {
+    size_t n = 0;
+    if (!isalpha((unsigned char)name[0]) && len > 5) {
+        n = (size_t)snprintf(out, len, "cell_");
+    }
+    for (const char *c = name; *c && n + 1 < len; c++) {
+        const int ok = isalnum((unsigned char)*c);
+        if (ok) {
+            out[n++] = *c;
+        } else if (n > 0 && out[n - 1] != '_') {
+            out[n++] = '_';
+        }
+    }
+    while (n > 0 && out[n - 1] == '_') {
+        n--;
+    }
+    out[n] = '\0';
+    if (n == 0) {
+        snprintf(out, len, "cell");
     }
 }
 
@@ -1001,6 +1060,43 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             CHECK(wd, "publish_divisor", &r_publish_divisor, (double)*d->publish_divisor,
                   "dds.publish_divisor");
             cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
+        }
+    }
+    /* ROS 2 topics: on with DDS unless switched off; every topic on unless switched off */
+    mca_cell_ros2_t *r2 = &cell->dds.ros2;
+    r2->enabled = r2->joint_states = r2->robot_description = r2->tf_static = r2->markers = r2->diagnostics =
+        1;
+    ros2_name_from(r2->ns, sizeof r2->ns, cell->name);
+    snprintf(r2->world_frame, sizeof r2->world_frame, "world");
+    if (raw->dds && raw->dds->ros2) {
+        const struct raw_ros2 *rr = raw->dds->ros2;
+        const struct where wr2 = {path, "dds", -1};
+        bool *const flag_src[] = {rr->enabled,   rr->joint_states, rr->robot_description,
+                                  rr->tf_static, rr->markers,      rr->diagnostics};
+        int *const flag_dst[] = {&r2->enabled,   &r2->joint_states, &r2->robot_description,
+                                 &r2->tf_static, &r2->markers,      &r2->diagnostics};
+        for (size_t k = 0; k < sizeof flag_src / sizeof flag_src[0]; k++) {
+            if (flag_src[k]) {
+                *flag_dst[k] = *flag_src[k];
+            }
+        }
+        if (rr->ns) {
+            if (!ros2_name_ok(rr->ns)) {
+                FAIL(MCA_ERANGE, wr2, "namespace",
+                     "dds.ros2.namespace: '%s' is not a ROS 2 name (a letter, then letters, digits and "
+                     "single '_')",
+                     rr->ns);
+            }
+            snprintf(r2->ns, sizeof r2->ns, "%s", rr->ns);
+        }
+        if (rr->world_frame) {
+            if (!ros2_name_ok(rr->world_frame)) {
+                FAIL(MCA_ERANGE, wr2, "world_frame",
+                     "dds.ros2.world_frame: '%s' is not a frame name (a letter, then letters, digits and "
+                     "single '_')",
+                     rr->world_frame);
+            }
+            snprintf(r2->world_frame, sizeof r2->world_frame, "%s", rr->world_frame);
         }
     }
 

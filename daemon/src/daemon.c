@@ -105,6 +105,7 @@ struct mca_daemon {
     int64_t min_d_stamp;
     mca_tick_info_t info;
     mca_dds_snapshot_t snap;
+    mca_ros2_config_t ros2; /* the bridge's ROS 2 topics (start-up only) */
     int64_t pct_cache[6];
     int sched_fifo, mem_locked, dma_fd;
     int non_rt_pinned; /* rt.cpu: the non-rt threads were moved off the loop's CPU */
@@ -154,6 +155,44 @@ enum { LOGC_FAULT = 1 };
 /* fault_detail of MCA_DAEMON_FAULT_ARM */
 enum { ARM_FAULT_REPORTS = 1, ARM_FAULT_BRAKES = 2, ARM_FAULT_NOT_SERVO = 3 };
 #define LOGN(d, lvl, fmt, n, a0, a1, a2, a3, txt) mca_rtlog(&(d)->log, lvl, fmt, n, a0, a1, a2, a3, txt)
+
+/* What ROS 2 sees of the cell: names from the scenario and the URDFs, bases, capsule radii. */
+static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err, size_t errlen) {
+    const mca_cell_t *cell = &d->cell;
+    mca_ros2_config_default(rc2);
+    rc2->enabled = 1;
+    snprintf(rc2->cell, sizeof rc2->cell, "%s", cell->dds.ros2.ns);
+    snprintf(rc2->world_frame, sizeof rc2->world_frame, "%s", cell->dds.ros2.world_frame);
+    rc2->joint_states = cell->dds.ros2.joint_states;
+    rc2->robot_description = cell->dds.ros2.robot_description;
+    rc2->tf_static = cell->dds.ros2.tf_static;
+    rc2->markers = cell->dds.ros2.markers;
+    rc2->diagnostics = cell->dds.ros2.diagnostics;
+    rc2->n_arms = (uint32_t)d->n_arms;
+    for (int a = 0; a < d->n_arms; a++) {
+        const mca_chain_t *ch = &d->ccfg.chain[a];
+        mca_ros2_arm_t *ra = &rc2->arm[a];
+        snprintf(ra->name, sizeof ra->name, "%s", cell->scn.arm[a].name);
+        snprintf(ra->urdf_path, sizeof ra->urdf_path, "%s", cell->scn.arm[a].urdf);
+        snprintf(ra->root_link, sizeof ra->root_link, "%s", ch->root_link);
+        ra->n_dof = (uint32_t)ch->dof;
+        for (int j = 0; j < ch->dof; j++) {
+            snprintf(ra->joint_name[j], sizeof ra->joint_name[j], "%s", ch->joint[j].name);
+        }
+        ra->base = ch->base;
+        ra->n_links = (uint32_t)ch->dof + 1u;
+        for (int l = 0; l <= ch->dof; l++) {
+            ra->link_radius[l] = ch->link_radius[l];
+        }
+    }
+    char why[200];
+    if (mca_ros2_config_check(rc2, why, sizeof why) != MCA_OK) {
+        set_err(err, errlen, "%s: dds.ros2: %s (ROS 2 topics are named after the cell and its arms)",
+                cell->source, why);
+        return MCA_EINVAL;
+    }
+    return MCA_OK;
+}
 
 /* --dds-ab: tick @p n publishes only in the odd blocks; without it every tick publishes */
 static inline int dds_ab_publishes(const mca_daemon_t *d, uint64_t n) {
@@ -493,14 +532,18 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         dc.config_path = cell->dds.config[0] ? cell->dds.config : NULL;
         dc.fault_text = dds_fault_text; /* the fault's text is made by the publisher thread */
         dc.fault_text_arg = d;
+        if (cell->dds.ros2.enabled) {
+            rc = ros2_config(d, &d->ros2, err, errlen);
+            dc.ros2 = &d->ros2;
+        }
         if (!opts->virtual_time) {
             /* the publisher wakes on the loop's grid, just after a publishing tick has pushed: the push then
              * makes no system call (only a late tick finds the publisher parked and wakes it) */
             dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;
             dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
         }
-        rc = mca_dds_bridge_create(&d->dds, &dc);
-        if (rc != MCA_OK) {
+        rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc) : rc;
+        if (rc != MCA_OK && !(err && err[0])) {
             set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
                     dc.config_path ? " (check dds.config)" : "");
         }
@@ -884,6 +927,10 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
             as->velocity_setpoint[j] = d->cmd[a].velocity[j];
             as->position_reference[j] = d->cmd[a].position_ref[j];
         }
+        /* the capsules' axes as the distances of this tick saw them (ROS 2 markers) */
+        const mca_kin_t *k = &d->ctrl.kin[a];
+        as->n_points = (uint32_t)k->n_points;
+        memcpy(as->point, k->point, sizeof as->point);
     }
     int np = 0;
     for (int a = 0; a < d->n_arms; a++) {

@@ -21,6 +21,7 @@
 #include "mca/ring.h"
 #include "mca/scheme.h" /* mca_brake_s: S(d) */
 #include "mca_dds.h"    /* idlc output: mca_dds_JointState, ... */
+#include "ros2_pub.h"
 
 enum { W_STATE, W_COMMAND, W_DIST, W_STATUS, W_COUNT };
 static const char *const topic_names[W_COUNT] = {MCA_DDS_TOPIC_JOINT_STATE, MCA_DDS_TOPIC_JOINT_COMMAND,
@@ -47,6 +48,7 @@ struct mca_dds_bridge {
 
     dds_entity_t domain, participant;
     dds_entity_t topic[W_COUNT], writer[W_COUNT];
+    mca_ros2_pub_t *ros2; /* NULL: no ROS 2 topics */
     pthread_t thread;
     int thread_started;
 
@@ -126,6 +128,10 @@ static int snapshot_valid(const mca_dds_snapshot_t *s) {
     return 1;
 }
 
+static void add(_Atomic uint64_t *c, uint64_t n) {
+    atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
+}
+
 static void write_one(mca_dds_bridge_t *b, int w, const void *sample) {
     if (dds_write(b->writer[w], sample) < 0) {
         bump(&b->write_errors);
@@ -168,6 +174,11 @@ static void write_status(mca_dds_bridge_t *b) {
     m.min_distance_stamp_ns = st->min_distance_stamp_ns;
     m.snapshots_dropped = rs.dropped;
     write_one(b, W_STATUS, &m);
+    if (b->ros2 != NULL) {
+        uint64_t errors = 0;
+        add(&b->samples, (uint64_t)mca_ros2_pub_status(b->ros2, &m, &errors));
+        add(&b->write_errors, errors);
+    }
     b->since_status = 0;
 }
 
@@ -218,6 +229,11 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
         };
         memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
         write_one(b, W_COMMAND, &jc);
+    }
+    if (b->ros2 != NULL) {
+        uint64_t errors = 0;
+        add(&b->samples, (uint64_t)mca_ros2_pub_snapshot(b->ros2, s, &errors));
+        add(&b->write_errors, errors);
     }
     const int changed = !b->have_status || s->status.state != b->last_status.state ||
                         s->status.fault_code != b->last_status.fault_code;
@@ -407,10 +423,19 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
     }
     dds_delete_qos(qs);
     dds_delete_qos(qst);
+    if (rc == MCA_OK && cfg->ros2 != NULL && cfg->ros2->enabled) {
+        char err[256];
+        rc = mca_ros2_pub_create(&b->ros2, p, cfg->ros2, err, sizeof err);
+        if (rc != MCA_OK) {
+            fprintf(stderr, "mca dds: %s\n", err);
+        }
+    }
+    b->cfg.ros2 = NULL; /* copied into b->ros2 */
     if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_main, b) != 0) {
         rc = MCA_ENOMEM;
     }
     if (rc != MCA_OK) {
+        mca_ros2_pub_destroy(b->ros2, 0);
         delete_entities(b);
         free(b->storage);
         free(b);
@@ -514,6 +539,7 @@ void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_sta
             dds_wait_for_acks(bridge->writer[w], DDS_SECS(1));
         }
     }
+    mca_ros2_pub_destroy(bridge->ros2, DDS_SECS(1));
     if (final_stats != NULL) {
         mca_dds_bridge_stats(bridge, final_stats);
     }

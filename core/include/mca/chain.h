@@ -47,9 +47,10 @@ typedef struct mca_joint_model {
 } mca_joint_model_t;
 
 typedef struct mca_chain {
-    char name[64];    /**< URDF robot name */
-    char source[256]; /**< file it was loaded from (for messages) */
-    int dof;          /**< number of revolute joints, 1..MCA_MAX_DOF */
+    char name[64];      /**< URDF robot name */
+    char source[256];   /**< file it was loaded from (for messages) */
+    char root_link[64]; /**< URDF root link (the frame base places in the world; ROS 2 TF names it) */
+    int dof;            /**< number of revolute joints, 1..MCA_MAX_DOF */
     mca_joint_model_t joint[MCA_MAX_DOF];
     mca_pose_t tool;                   /**< last joint frame -> tool tip (fixed joints folded in) */
     double link_radius[MCA_MAX_LINKS]; /**< capsule radius of link k [m] */

@@ -45,12 +45,21 @@ typedef struct mca_cell_arm {
                                  q += v dt, no limits, lag or rate limits */
 } mca_cell_arm_t;
 
+/** ROS 2-native topics of the DDS bridge (dds.ros2 in the cell, docs/ros2.md); each on by default. */
+typedef struct mca_cell_ros2 {
+    int enabled;
+    char ns[32];          /**< topic namespace /<ns>/ (default: the cell name, other characters as '_') */
+    char world_frame[32]; /**< frame of the markers and of /tf_static's parents ("world") */
+    int joint_states, robot_description, tf_static, markers, diagnostics;
+} mca_cell_ros2_t;
+
 /** DDS publishing. */
 typedef struct mca_cell_dds {
     int enabled;
     uint32_t domain;
     char config[512];         /**< Cyclone XML (absolute), "" = CYCLONEDDS_URI / defaults */
     uint32_t publish_divisor; /**< publish every Nth tick */
+    mca_cell_ros2_t ros2;
 } mca_cell_dds_t;
 
 /** Real-time settings. */

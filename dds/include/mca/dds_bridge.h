@@ -30,6 +30,7 @@
 
 #include "mca/armdist.h" /* mca_arm_distances_t */
 #include "mca/limits.h"
+#include "mca/ros2.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -62,6 +63,8 @@ typedef struct mca_dds_arm_snapshot {
     double effort[MCA_MAX_DOF];             /**< measured [N m] */
     double velocity_setpoint[MCA_MAX_DOF];  /**< commanded [rad/s] */
     double position_reference[MCA_MAX_DOF]; /**< commanded [rad] */
+    uint32_t n_points;                      /**< capsule axis points (n_dof + 2; 0: no link markers) */
+    double point[MCA_MAX_POINTS][3];        /**< world: root, joint origins, tool tip; link k = [k, k+1] */
 } mca_dds_arm_snapshot_t;
 
 /** Distance picture of one pair of arms (P on arm_a, E on arm_b). */
@@ -127,6 +130,9 @@ typedef struct mca_dds_config {
     /** How long after a publishing tick's wake-up its push is expected [ns] (a bit over the tick's
      *  compute time): a push later than that finds the publisher parked and wakes it. */
     uint64_t wake_offset_ns;
+    /** ROS 2 topics (mca/ros2.h), written from the same snapshots; NULL or !enabled: none. Copied. They are
+     *  in the default partition whatever `partition` says (ROS 2 uses none). */
+    const mca_ros2_config_t *ros2;
 } mca_dds_config_t;
 
 /** Bridge counters. */
@@ -161,6 +167,7 @@ void mca_dds_config_default(mca_dds_config_t *cfg);
  *                     frame id or partition too long
  * @retval MCA_ENOENT  config_path names a file that cannot be read
  * @retval MCA_EIO     Cyclone DDS refused (bad XML, no usable network interface, ...); reason on stderr
+ * @retval MCA_ENOENT  ros2: a URDF for robot_description cannot be read (reason on stderr)
  * @retval MCA_ENOMEM
  */
 int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);

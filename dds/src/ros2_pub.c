@@ -1,0 +1,557 @@
+/* SPDX-License-Identifier: MIT */
+/* ROS 2 topics of the DDS bridge (mca/ros2.h, docs/ros2.md). Every sample is built in scratch memory
+ * allocated at create; the publisher thread formats the diagnostics' numbers (non-rt). */
+#include "ros2_pub.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "mca/dds_qos.h"
+#include "mca/err.h"
+#include "ros2_msgs.h" /* idlc output of dds/ros2_msgs.idl */
+
+/* visualization_msgs/Marker types and actions, diagnostic_msgs/DiagnosticStatus levels */
+enum { MARKER_CYLINDER = 3, MARKER_SPHERE_LIST = 7, MARKER_LINE_LIST = 5, MARKER_TEXT = 9, MARKER_ADD = 0 };
+enum { DIAG_OK = 0, DIAG_WARN = 1, DIAG_ERROR = 2 };
+
+#define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2)
+#define N_KV 21
+#define URDF_MAX (4 * 1024 * 1024)
+
+typedef sensor_msgs_msg_dds__JointState_ JointState;
+typedef visualization_msgs_msg_dds__Marker_ Marker;
+typedef visualization_msgs_msg_dds__MarkerArray_ MarkerArray;
+typedef diagnostic_msgs_msg_dds__KeyValue_ KeyValue;
+
+struct mca_ros2_pub {
+    mca_ros2_config_t cfg;
+    int64_t realtime_offset_ns; /* CLOCK_REALTIME - CLOCK_MONOTONIC at create */
+    dds_entity_t w_joints[MCA_MAX_ARMS], w_desc[MCA_MAX_ARMS], w_tf, w_markers, w_diag;
+    char *joint_ptr[MCA_MAX_ARMS][MCA_MAX_DOF];
+    char arm_frame[MCA_MAX_ARMS][MCA_ROS2_NAME_MAX + 1 + 64 + 1];
+    char ns_links[MCA_MAX_ARMS][MCA_ROS2_NAME_MAX + 8];
+    Marker marker[MAX_MARKERS];
+    geometry_msgs_msg_dds__Point_ pts[MAX_MARKERS][2];
+    char text[MCA_MAX_PAIRS][48];
+    char hardware_id[MCA_ROS2_NAME_MAX + 1];
+    char diag_name[MCA_ROS2_NAME_MAX + 16];
+    char diag_message[160];
+    KeyValue kv[N_KV];
+    char kv_value[N_KV][80];
+};
+
+void mca_ros2_config_default(mca_ros2_config_t *cfg) {
+    if (cfg == NULL) {
+        return;
+    }
+    memset(cfg, 0, sizeof *cfg);
+    cfg->joint_states = cfg->robot_description = cfg->tf_static = cfg->markers = cfg->diagnostics = 1;
+    snprintf(cfg->world_frame, sizeof cfg->world_frame, "world");
+}
+
+/* ROS 2 name token: a letter, then letters, digits or '_' (no "__", no trailing '_'). */
+static int ros_token_ok(const char *s) {
+    if (!isalpha((unsigned char)s[0])) {
+        return 0;
+    }
+    for (const char *c = s; *c; c++) {
+        if (!(isalnum((unsigned char)*c) || *c == '_') || (c[0] == '_' && c[1] == '_')) {
+            return 0;
+        }
+    }
+    return s[strlen(s) - 1] != '_';
+}
+
+int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen) {
+    char dummy[8];
+    if (err == NULL) {
+        err = dummy;
+        errlen = sizeof dummy;
+    }
+    if (cfg == NULL) {
+        snprintf(err, errlen, "ros2: no configuration");
+        return MCA_EINVAL;
+    }
+    if (!ros_token_ok(cfg->cell)) {
+        snprintf(err, errlen,
+                 "ros2.namespace: '%s' is not a ROS 2 name (a letter, then letters, digits, '_')", cfg->cell);
+        return MCA_EINVAL;
+    }
+    if (cfg->world_frame[0] == '\0' || strchr(cfg->world_frame, ' ') != NULL) {
+        snprintf(err, errlen, "ros2.world_frame: '%s' is not a frame name", cfg->world_frame);
+        return MCA_EINVAL;
+    }
+    if (cfg->n_arms < 1 || cfg->n_arms > MCA_MAX_ARMS) {
+        snprintf(err, errlen, "ros2: %u arms (1..%d)", cfg->n_arms, MCA_MAX_ARMS);
+        return MCA_EINVAL;
+    }
+    for (uint32_t a = 0; a < cfg->n_arms; a++) {
+        const mca_ros2_arm_t *arm = &cfg->arm[a];
+        if (!ros_token_ok(arm->name)) {
+            snprintf(err, errlen,
+                     "arms[%u].name: '%s' is not a ROS 2 name (a letter, then letters, digits, '_')", a,
+                     arm->name);
+            return MCA_EINVAL;
+        }
+        for (uint32_t b = 0; b < a; b++) {
+            if (strcmp(cfg->arm[b].name, arm->name) == 0) {
+                snprintf(err, errlen, "arms[%u].name: '%s' again (arm %u): ROS 2 topics need distinct names",
+                         a, arm->name, b);
+                return MCA_EINVAL;
+            }
+        }
+        if (arm->n_dof < 1 || arm->n_dof > MCA_MAX_DOF || arm->n_links > MCA_MAX_LINKS) {
+            snprintf(err, errlen, "arms[%u]: %u joints, %u links", a, arm->n_dof, arm->n_links);
+            return MCA_EINVAL;
+        }
+        for (uint32_t l = 0; l < arm->n_links; l++) {
+            if (!(arm->link_radius[l] >= 0.0 && arm->link_radius[l] < 10.0)) {
+                snprintf(err, errlen, "arms[%u]: link %u radius %g", a, l, arm->link_radius[l]);
+                return MCA_EINVAL;
+            }
+        }
+    }
+    return MCA_OK;
+}
+
+static builtin_interfaces_msg_dds__Time_ ros_time(const mca_ros2_pub_t *r, int64_t mono_ns) {
+    const int64_t ns = mono_ns + r->realtime_offset_ns;
+    builtin_interfaces_msg_dds__Time_ t = {(int32_t)(ns / 1000000000LL), (uint32_t)(ns % 1000000000LL)};
+    return t;
+}
+
+static int64_t clock_ns(clockid_t c) {
+    struct timespec ts;
+    clock_gettime(c, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static void quat_from_R(const double R[3][3], double q[4]) {
+    /* (x, y, z, w), Shepperd's method: divide by the largest of the four candidates */
+    const double tr = R[0][0] + R[1][1] + R[2][2];
+    if (tr > 0.0) {
+        const double s = sqrt(tr + 1.0) * 2.0;
+        q[3] = 0.25 * s;
+        q[0] = (R[2][1] - R[1][2]) / s;
+        q[1] = (R[0][2] - R[2][0]) / s;
+        q[2] = (R[1][0] - R[0][1]) / s;
+    } else if (R[0][0] > R[1][1] && R[0][0] > R[2][2]) {
+        const double s = sqrt(1.0 + R[0][0] - R[1][1] - R[2][2]) * 2.0;
+        q[3] = (R[2][1] - R[1][2]) / s;
+        q[0] = 0.25 * s;
+        q[1] = (R[0][1] + R[1][0]) / s;
+        q[2] = (R[0][2] + R[2][0]) / s;
+    } else if (R[1][1] > R[2][2]) {
+        const double s = sqrt(1.0 + R[1][1] - R[0][0] - R[2][2]) * 2.0;
+        q[3] = (R[0][2] - R[2][0]) / s;
+        q[0] = (R[0][1] + R[1][0]) / s;
+        q[1] = 0.25 * s;
+        q[2] = (R[1][2] + R[2][1]) / s;
+    } else {
+        const double s = sqrt(1.0 + R[2][2] - R[0][0] - R[1][1]) * 2.0;
+        q[3] = (R[1][0] - R[0][1]) / s;
+        q[0] = (R[0][2] + R[2][0]) / s;
+        q[1] = (R[1][2] + R[2][1]) / s;
+        q[2] = 0.25 * s;
+    }
+}
+
+static char *read_text(const char *path, char *err, size_t errlen) {
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) {
+        snprintf(err, errlen, "ros2: robot_description: cannot read '%s'", path);
+        return NULL;
+    }
+    char *buf = malloc(URDF_MAX + 1);
+    const size_t n = buf ? fread(buf, 1, URDF_MAX, f) : 0;
+    const int too_long = buf && n == URDF_MAX && fgetc(f) != EOF;
+    fclose(f);
+    if (buf == NULL || too_long) {
+        snprintf(err, errlen, "ros2: robot_description: '%s' %s", path,
+                 buf ? "is longer than 4 MiB" : "does not fit in memory");
+        free(buf);
+        return NULL;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+static dds_entity_t make_writer(dds_entity_t pp, const dds_topic_descriptor_t *desc, const char *name,
+                                const dds_qos_t *qos, char *err, size_t errlen) {
+    const dds_entity_t t = dds_create_topic(pp, desc, name, qos, NULL);
+    const dds_entity_t w = t > 0 ? dds_create_writer(pp, t, qos, NULL) : t;
+    if (w < 0) {
+        snprintf(err, errlen, "ros2: cannot create topic/writer '%s': %s", name, dds_strretcode(w));
+    }
+    return w;
+}
+
+static int write_description_and_tf(mca_ros2_pub_t *r, dds_entity_t pp, const dds_qos_t *latched, char *err,
+                                    size_t errlen) {
+    const mca_ros2_config_t *c = &r->cfg;
+    char name[160];
+    for (uint32_t a = 0; a < c->n_arms && c->robot_description; a++) {
+        snprintf(name, sizeof name, "rt/%s/%s/robot_description", c->cell, c->arm[a].name);
+        r->w_desc[a] = make_writer(pp, &std_msgs_msg_dds__String__desc, name, latched, err, errlen);
+        if (r->w_desc[a] < 0) {
+            return MCA_EIO;
+        }
+        char *text = read_text(c->arm[a].urdf_path, err, errlen);
+        if (text == NULL) {
+            return MCA_ENOENT;
+        }
+        const std_msgs_msg_dds__String_ msg = {.data = text};
+        const dds_return_t rc = dds_write(r->w_desc[a], &msg);
+        free(text); /* the writer keeps its own serialized copy for late joiners */
+        if (rc < 0) {
+            snprintf(err, errlen, "ros2: %s: %s", name, dds_strretcode(rc));
+            return MCA_EIO;
+        }
+    }
+    if (!c->tf_static) {
+        return MCA_OK;
+    }
+    r->w_tf = make_writer(pp, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf_static", latched, err, errlen);
+    if (r->w_tf < 0) {
+        return MCA_EIO;
+    }
+    geometry_msgs_msg_dds__TransformStamped_ tf[MCA_MAX_ARMS];
+    const builtin_interfaces_msg_dds__Time_ now = ros_time(r, clock_ns(CLOCK_MONOTONIC));
+    for (uint32_t a = 0; a < c->n_arms; a++) {
+        const mca_pose_t *b = &c->arm[a].base;
+        double q[4];
+        quat_from_R(b->R, q);
+        tf[a] = (geometry_msgs_msg_dds__TransformStamped_){
+            .header = {.stamp = now, .frame_id = r->cfg.world_frame},
+            .child_frame_id = r->arm_frame[a],
+            .transform = {.translation = {b->p[0], b->p[1], b->p[2]}, .rotation = {q[0], q[1], q[2], q[3]}},
+        };
+    }
+    const tf2_msgs_msg_dds__TFMessage_ msg = {
+        .transforms = {._maximum = c->n_arms, ._length = c->n_arms, ._buffer = tf, ._release = false}};
+    const dds_return_t rc = dds_write(r->w_tf, &msg);
+    if (rc < 0) {
+        snprintf(err, errlen, "ros2: /tf_static: %s", dds_strretcode(rc));
+        return MCA_EIO;
+    }
+    return MCA_OK;
+}
+
+static void init_marker(Marker *m, const char *frame, const char *ns, int32_t id, int32_t type) {
+    memset(m, 0, sizeof *m);
+    m->header.frame_id = (char *)frame;
+    m->ns = (char *)ns;
+    m->id = id;
+    m->type = type;
+    m->action = MARKER_ADD;
+    m->pose.orientation.w = 1.0;
+    m->texture_resource = m->text = m->mesh_resource = m->mesh_file.filename = "";
+    m->texture.header.frame_id = m->texture.format = "";
+}
+
+int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg, char *err,
+                        size_t errlen) {
+    char dummy[8];
+    if (err == NULL) {
+        err = dummy;
+        errlen = sizeof dummy;
+    }
+    if (out == NULL) {
+        return MCA_EINVAL;
+    }
+    int rc = mca_ros2_config_check(cfg, err, errlen);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    mca_ros2_pub_t *r = calloc(1, sizeof *r);
+    if (r == NULL) {
+        return MCA_ENOMEM;
+    }
+    r->cfg = *cfg;
+    const mca_ros2_config_t *c = &r->cfg;
+    r->realtime_offset_ns = clock_ns(CLOCK_REALTIME) - clock_ns(CLOCK_MONOTONIC);
+    for (uint32_t a = 0; a < c->n_arms; a++) {
+        for (uint32_t j = 0; j < c->arm[a].n_dof; j++) {
+            r->joint_ptr[a][j] = r->cfg.arm[a].joint_name[j];
+        }
+        snprintf(r->arm_frame[a], sizeof r->arm_frame[a], "%s/%s", cfg->arm[a].name, cfg->arm[a].root_link);
+        snprintf(r->ns_links[a], sizeof r->ns_links[a], "%s/links", cfg->arm[a].name);
+    }
+    snprintf(r->hardware_id, sizeof r->hardware_id, "%s", cfg->cell);
+    snprintf(r->diag_name, sizeof r->diag_name, "mcad: %s", cfg->cell);
+    for (int k = 0; k < N_KV; k++) {
+        r->kv[k].value = r->kv_value[k];
+    }
+
+    dds_qos_t *stream =
+        mca_dds_qos_stream(); /* reliable, volatile: rclpy's default and sensor-data QoS match */
+    dds_qos_t *latched = mca_dds_qos_status(); /* reliable, transient-local, keep-last 1 */
+    char name[160];
+    rc = stream && latched ? MCA_OK : MCA_ENOMEM;
+    for (uint32_t a = 0; a < c->n_arms && c->joint_states && rc == MCA_OK; a++) {
+        snprintf(name, sizeof name, "rt/%s/%s/joint_states", c->cell, c->arm[a].name);
+        r->w_joints[a] = make_writer(pp, &sensor_msgs_msg_dds__JointState__desc, name, stream, err, errlen);
+        rc = r->w_joints[a] < 0 ? MCA_EIO : MCA_OK;
+    }
+    if (rc == MCA_OK && c->markers) {
+        snprintf(name, sizeof name, "rt/%s/distance_markers", c->cell);
+        r->w_markers =
+            make_writer(pp, &visualization_msgs_msg_dds__MarkerArray__desc, name, stream, err, errlen);
+        rc = r->w_markers < 0 ? MCA_EIO : MCA_OK;
+    }
+    if (rc == MCA_OK && c->diagnostics) {
+        r->w_diag = make_writer(pp, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "rt/diagnostics", stream,
+                                err, errlen);
+        rc = r->w_diag < 0 ? MCA_EIO : MCA_OK;
+    }
+    if (rc == MCA_OK) {
+        rc = write_description_and_tf(r, pp, latched, err, errlen);
+    }
+    dds_delete_qos(stream);
+    dds_delete_qos(latched);
+    if (rc != MCA_OK) {
+        free(r); /* the writers are the participant's: deleted with it */
+        return rc;
+    }
+    *out = r;
+    return MCA_OK;
+}
+
+static void write_counted(dds_entity_t w, const void *msg, int *samples, uint64_t *errors) {
+    if (dds_write(w, msg) < 0) {
+        (*errors)++;
+    } else {
+        (*samples)++;
+    }
+}
+
+/* zone colours: > d2 free (green), d1..d2 braking (amber), < d1 violated (red) */
+static std_msgs_msg_dds__ColorRGBA_ zone_color(double d, double d1, double d2) {
+    if (!(d < d2)) {
+        return (std_msgs_msg_dds__ColorRGBA_){0.2f, 0.75f, 0.3f, 0.6f};
+    }
+    if (d >= d1) {
+        return (std_msgs_msg_dds__ColorRGBA_){1.0f, 0.6f, 0.0f, 0.8f};
+    }
+    return (std_msgs_msg_dds__ColorRGBA_){1.0f, 0.0f, 0.0f, 0.9f};
+}
+
+/* cylinder along p0 -> p1: pose at the middle, z axis along the segment */
+static void cylinder_pose(Marker *m, const double p0[3], const double p1[3]) {
+    double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    const double len = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    m->pose.position =
+        (geometry_msgs_msg_dds__Point_){0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]), 0.5 * (p0[2] + p1[2])};
+    m->scale.z = len;
+    if (len < 1e-12) {
+        return; /* a point: any orientation */
+    }
+    for (int i = 0; i < 3; i++) {
+        u[i] /= len;
+    }
+    if (u[2] < -1.0 + 1e-12) {
+        m->pose.orientation =
+            (geometry_msgs_msg_dds__Quaternion_){1.0, 0.0, 0.0, 0.0}; /* half turn about x */
+        return;
+    }
+    /* rotation z -> u: axis z x u, quaternion (z x u, 1 + z.u) normalised */
+    const double x = -u[1], y = u[0], w = 1.0 + u[2];
+    const double n = sqrt(x * x + y * y + w * w);
+    m->pose.orientation = (geometry_msgs_msg_dds__Quaternion_){x / n, y / n, 0.0, w / n};
+}
+
+int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64_t *errors) {
+    const mca_ros2_config_t *c = &r->cfg;
+    const builtin_interfaces_msg_dds__Time_ stamp = ros_time(r, s->stamp_ns);
+    const uint32_t n_arms = s->n_arms < c->n_arms ? s->n_arms : c->n_arms;
+    int samples = 0;
+    for (uint32_t a = 0; a < n_arms && c->joint_states; a++) {
+        const mca_dds_arm_snapshot_t *as = &s->arm[a];
+        const uint32_t n = as->n_dof < c->arm[a].n_dof ? as->n_dof : c->arm[a].n_dof;
+        const JointState js = {
+            .header = {.stamp = stamp, .frame_id = ""},
+            .name = {._maximum = n, ._length = n, ._buffer = r->joint_ptr[a], ._release = false},
+            .position = {._maximum = n, ._length = n, ._buffer = (double *)as->position, ._release = false},
+            .velocity = {._maximum = n, ._length = n, ._buffer = (double *)as->velocity, ._release = false},
+            .effort = {._maximum = n, ._length = n, ._buffer = (double *)as->effort, ._release = false},
+        };
+        write_counted(r->w_joints[a], &js, &samples, errors);
+    }
+    if (!c->markers) {
+        return samples;
+    }
+    /* each link's zone: its closest distance to any other arm, against that pair's thresholds */
+    double link_d[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    double d1 = 0.0, d2 = 0.0;
+    for (uint32_t a = 0; a < MCA_MAX_ARMS; a++) {
+        for (int l = 0; l < MCA_MAX_LINKS; l++) {
+            link_d[a][l] = INFINITY;
+        }
+    }
+    for (uint32_t k = 0; k < s->n_pairs; k++) {
+        const mca_dds_pair_snapshot_t *p = &s->pair[k];
+        d1 = p->d1;
+        d2 = p->d2;
+        for (uint32_t l = 0; l < p->n_links_a && p->arm_a < MCA_MAX_ARMS; l++) {
+            link_d[p->arm_a][l] = fmin(link_d[p->arm_a][l], p->link_distance_a[l]);
+        }
+        for (uint32_t l = 0; l < p->n_links_b && p->arm_b < MCA_MAX_ARMS; l++) {
+            link_d[p->arm_b][l] = fmin(link_d[p->arm_b][l], p->link_distance_b[l]);
+        }
+    }
+    uint32_t nm = 0;
+    for (uint32_t a = 0; a < n_arms; a++) {
+        const mca_dds_arm_snapshot_t *as = &s->arm[a];
+        const uint32_t n_links = as->n_points >= 2 ? as->n_points - 1 : 0;
+        for (uint32_t l = 0; l < n_links && l < c->arm[a].n_links; l++) {
+            const double rad = c->arm[a].link_radius[l];
+            const double dia = rad > 0.002 ? 2.0 * rad : 0.004; /* a bare axis still shows */
+            const std_msgs_msg_dds__ColorRGBA_ col = zone_color(link_d[a][l], d1, d2);
+            Marker *cyl = &r->marker[nm++];
+            init_marker(cyl, c->world_frame, r->ns_links[a], (int32_t)(2 * l), MARKER_CYLINDER);
+            cylinder_pose(cyl, as->point[l], as->point[l + 1]);
+            cyl->scale.x = cyl->scale.y = dia;
+            cyl->color = col;
+            Marker *caps = &r->marker[nm];
+            init_marker(caps, c->world_frame, r->ns_links[a], (int32_t)(2 * l + 1), MARKER_SPHERE_LIST);
+            for (int e = 0; e < 2; e++) {
+                const double *p = as->point[l + (uint32_t)e];
+                r->pts[nm][e] = (geometry_msgs_msg_dds__Point_){p[0], p[1], p[2]};
+            }
+            caps->points = (dds_sequence_geometry_msgs_msg_dds__Point_){2, 2, r->pts[nm], false};
+            caps->scale.x = caps->scale.y = caps->scale.z = dia;
+            caps->color = col;
+            nm++;
+        }
+    }
+    for (uint32_t k = 0; k < s->n_pairs; k++) {
+        const mca_dds_pair_snapshot_t *p = &s->pair[k];
+        const std_msgs_msg_dds__ColorRGBA_ col = zone_color(p->min_distance, p->d1, p->d2);
+        Marker *line = &r->marker[nm];
+        init_marker(line, c->world_frame, "closest_points", (int32_t)k, MARKER_LINE_LIST);
+        r->pts[nm][0] = (geometry_msgs_msg_dds__Point_){p->p[0], p->p[1], p->p[2]};
+        r->pts[nm][1] = (geometry_msgs_msg_dds__Point_){p->e[0], p->e[1], p->e[2]};
+        line->points = (dds_sequence_geometry_msgs_msg_dds__Point_){2, 2, r->pts[nm], false};
+        line->scale.x = 0.005;
+        line->color = (std_msgs_msg_dds__ColorRGBA_){col.r, col.g, col.b, 1.0f};
+        nm++;
+        Marker *txt = &r->marker[nm++];
+        init_marker(txt, c->world_frame, "distances", (int32_t)k, MARKER_TEXT);
+        txt->pose.position = (geometry_msgs_msg_dds__Point_){
+            0.5 * (p->p[0] + p->e[0]), 0.5 * (p->p[1] + p->e[1]), 0.5 * (p->p[2] + p->e[2]) + 0.05};
+        txt->scale.z = 0.04;
+        txt->color = (std_msgs_msg_dds__ColorRGBA_){1.0f, 1.0f, 1.0f, 1.0f};
+        /* %.17g: a subscriber reads the distance back exactly */
+        snprintf(r->text[k], sizeof r->text[k], "%s-%s %.17g m", c->arm[p->arm_a % MCA_MAX_ARMS].name,
+                 c->arm[p->arm_b % MCA_MAX_ARMS].name, p->min_distance);
+        txt->text = r->text[k];
+    }
+    for (uint32_t m = 0; m < nm; m++) {
+        r->marker[m].header.stamp = stamp;
+    }
+    const MarkerArray ma = {
+        .markers = {._maximum = nm, ._length = nm, ._buffer = r->marker, ._release = false}};
+    write_counted(r->w_markers, &ma, &samples, errors);
+    return samples;
+}
+
+static const char *state_name(int32_t s) {
+    static const char *const names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
+    return s >= 0 && s <= 5 ? names[s] : "unknown";
+}
+
+int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t *errors) {
+    if (!r->cfg.diagnostics) {
+        return 0;
+    }
+    int n = 0;
+#define KV(k, ...)                                                                                           \
+    do {                                                                                                     \
+        r->kv[n].key = k;                                                                                    \
+        snprintf(r->kv_value[n], sizeof r->kv_value[n], __VA_ARGS__);                                        \
+        n++;                                                                                                 \
+    } while (0)
+    const builtin_interfaces_msg_dds__Time_ stamp = ros_time(r, st->stamp_ns);
+    KV("state", "%s", state_name(st->state));
+    KV("tick", "%llu", (unsigned long long)st->tick);
+    KV("fault_code", "%d", st->fault_code);
+    KV("fault", "%s", st->fault_text);
+    KV("ticks", "%llu", (unsigned long long)st->ticks);
+    KV("overruns", "%llu", (unsigned long long)st->overruns);
+    KV("skipped_periods", "%llu", (unsigned long long)st->skipped_periods);
+    KV("compute_p50_us", "%.1f", (double)st->compute_p50_ns / 1e3);
+    KV("compute_p99_us", "%.1f", (double)st->compute_p99_ns / 1e3);
+    KV("compute_max_us", "%.1f", (double)st->compute_max_ns / 1e3);
+    KV("jitter_p50_us", "%.1f", (double)st->jitter_p50_ns / 1e3);
+    KV("jitter_p99_us", "%.1f", (double)st->jitter_p99_ns / 1e3);
+    KV("jitter_p999_us", "%.1f", (double)st->jitter_p999_ns / 1e3);
+    KV("jitter_max_us", "%.1f", (double)st->jitter_max_ns / 1e3);
+    KV("pdnn_steps", "%u", st->pdnn_steps);
+    KV("pdnn_residual", "%.3g", st->pdnn_residual);
+    KV("min_distance_so_far_m", "%.17g", st->min_distance_so_far);
+    const builtin_interfaces_msg_dds__Time_ t_min = ros_time(r, st->min_distance_stamp_ns);
+    KV("min_distance_stamp", "%d.%09u", t_min.sec, t_min.nanosec);
+    KV("snapshots_dropped", "%llu", (unsigned long long)st->snapshots_dropped);
+#undef KV
+    const int fault = st->state == MCA_DDS_STATE_FAULT;
+    snprintf(r->diag_message, sizeof r->diag_message, "%s%s%s", state_name(st->state),
+             st->fault_text[0] ? ": " : "", st->fault_text);
+    diagnostic_msgs_msg_dds__DiagnosticStatus_ ds = {
+        .level = (uint8_t)(fault                                ? DIAG_ERROR
+                           : st->state == MCA_DDS_STATE_BRAKING ? DIAG_WARN
+                                                                : DIAG_OK),
+        .name = r->diag_name,
+        .message = r->diag_message,
+        .hardware_id = r->hardware_id,
+        .values = {._maximum = (uint32_t)n, ._length = (uint32_t)n, ._buffer = r->kv, ._release = false},
+    };
+    const diagnostic_msgs_msg_dds__DiagnosticArray_ da = {
+        .header = {.stamp = stamp, .frame_id = ""},
+        .status = {._maximum = 1, ._length = 1, ._buffer = &ds, ._release = false},
+    };
+    int samples = 0;
+    write_counted(r->w_diag, &da, &samples, errors);
+    return samples;
+}
+
+int mca_ros2_pub_matched(const mca_ros2_pub_t *r, uint32_t n) {
+    dds_entity_t w[2 * MCA_MAX_ARMS + 3];
+    int nw = 0;
+    for (uint32_t a = 0; a < r->cfg.n_arms; a++) {
+        w[nw++] = r->w_joints[a];
+        w[nw++] = r->w_desc[a];
+    }
+    w[nw++] = r->w_tf;
+    w[nw++] = r->w_markers;
+    w[nw++] = r->w_diag;
+    for (int k = 0; k < nw; k++) {
+        dds_publication_matched_status_t st;
+        if (w[k] > 0 &&
+            (dds_get_publication_matched_status(w[k], &st) != DDS_RETCODE_OK || st.current_count < n)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+void mca_ros2_pub_destroy(mca_ros2_pub_t *r, dds_duration_t timeout) {
+    if (r == NULL) {
+        return;
+    }
+    const dds_entity_t w[] = {r->w_markers, r->w_diag};
+    for (size_t k = 0; k < sizeof w / sizeof w[0]; k++) {
+        if (w[k] > 0) {
+            dds_wait_for_acks(w[k], timeout);
+        }
+    }
+    for (uint32_t a = 0; a < r->cfg.n_arms; a++) {
+        if (r->w_joints[a] > 0) {
+            dds_wait_for_acks(r->w_joints[a], timeout);
+        }
+    }
+    free(r);
+}
