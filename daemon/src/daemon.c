@@ -1345,16 +1345,16 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
     fprintf(f, "%.4f", r->t);
     for (int a = 0; a < d->n_arms; a++) {
         for (int j = 0; j < d->dof[a]; j++) {
-            fprintf(f, ",%.9g", r->q[a][j]);
+            fprintf(f, ",%.17g", r->q[a][j]); /* exact: subscribers compare samples with it */
         }
     }
     for (int a = 0; a < d->n_arms; a++) {
-        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1],
+        fprintf(f, ",%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1],
                 in->ee[a][2], in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
                 in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
                 in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
     }
-    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d,%d",
+    fprintf(f, ",%.17g,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d,%d",
             in->min_distance, in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0],
             in->min_p[1], in->min_p[2], in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows,
             in->binding_rows, in->pdnn_steps, in->pdnn_residual, in->eq_residual, (long long)in->compute_ns,

@@ -1,0 +1,427 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""mcad's ROS 2 topics against real ROS 2 nodes (rclpy on Fast DDS, another DDS vendor than mcad's Cyclone),
+run inside a network namespace of its own (tests/ros2/netns.sh). docs/ros2.md.
+
+topics: an rclpy node subscribes to every topic with rclpy's default QoS (reliable, volatile) but a history
+  of 200 instead of 10 (2 s at 100 Hz: a Python executor on a loaded 2-CPU machine falls behind), then mcad runs 3 s of the cross
+  circles task (paper task 1) with --csv at 100 Hz on DDS. Every JointState, MarkerArray and DiagnosticArray
+  received must be mcad's CSV at one tick: each JointState's positions equal one published tick's (ticks
+  0, 10, 20, ...) within 1e-9, ticks in order; >= 99 % of the published ticks from the first one received.
+  Markers of a stamp are the tick of the JointState with that stamp: the closest-point segment is the
+  CSV's P and E, its text the CSV's distance, its colour the zone of that distance, the capsules form one
+  chain from the base to the CSV's end effector. Diagnostics: the tick's state and the smallest distance
+  of the CSV up to that tick. A node that joins 2 s late (transient-local QoS) gets each arm's URDF text;
+  /tf_static (tf2_msgs has no rclpy wheel here) is read with the Cyclone Python binding, also late: one
+  transform per arm, world -> <arm>/<root link>, at the scenario's base placement.
+graph: mcad runs 3 s and links no ROS library (ldd); a second rclpy node sees the topics and types a ROS 2 user would see
+  (get_topic_names_and_types), the publishers' QoS (reliable; transient-local for the latched ones), and a
+  sensor-data (best-effort) subscriber receives JointState too.
+usage: test_ros2.py topics|graph MCAD SOURCE_DIR DOMAIN"""
+import csv
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+MODE, MCAD, SRC, DOMAIN = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+os.environ["ROS_DOMAIN_ID"] = str(DOMAIN)
+os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+
+import rclpy  # noqa: E402  (after ROS_DOMAIN_ID)
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+from rclpy.qos import (QoSProfile, DurabilityPolicy, ReliabilityPolicy, HistoryPolicy,  # noqa: E402
+                       qos_profile_sensor_data)
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+from std_msgs.msg import String  # noqa: E402
+from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
+
+NS = "ros2_check"
+ARMS = ["left", "right"]
+D1, D2 = 0.05, 0.12
+DIVISOR = 10
+XML = os.path.join(SRC, "config", "dds", "ros2.xml")
+RUN_S = 3.0
+
+CELL = f"""name: ros2-check
+task:
+  scenario: {SRC}/config/scenarios/cross_circles.yaml
+  duration: {RUN_S}
+scheme: mca
+d1: {D1}
+d2: {D2}
+arms:
+  - name: left
+    backend: sim
+  - name: right
+    backend: sim
+dds:
+  enabled: true
+  domain: {DOMAIN}
+  config: {XML}
+  publish_divisor: {DIVISOR}
+  ros2: {{namespace: {NS}}}
+rt: {{period_us: 1000, priority: 60, overrun_limit: 100000, pdnn_budget_us: 1000000}}
+stop_after: {RUN_S}
+"""
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def stamp_ns(h):
+    return h.stamp.sec * 1_000_000_000 + h.stamp.nanosec
+
+
+def topic(leaf, arm=None):
+    return f"/{NS}/{arm}/{leaf}" if arm else f"/{NS}/{leaf}"
+
+
+class Collector(Node):
+    def __init__(self, name, qos=QoSProfile(depth=200)):
+        super().__init__(name)
+        self.js = {a: [] for a in ARMS}
+        self.markers, self.diag, self.desc = [], [], {}
+        self.lock = threading.Lock()
+        for a in ARMS:
+            self.create_subscription(JointState, topic("joint_states", a), self._add(self.js[a]), qos)
+
+    def _add(self, lst):
+        def cb(m):
+            with self.lock:
+                lst.append(m)
+        return cb
+
+    def all_topics(self):
+        self.create_subscription(MarkerArray, topic("distance_markers"), self._add(self.markers), QoSProfile(depth=200))
+        self.create_subscription(DiagnosticArray, "/diagnostics", self._add(self.diag), QoSProfile(depth=200))
+
+    def descriptions(self):
+        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST)
+        for a in ARMS:
+            def cb(m, a=a):
+                self.desc[a] = m.data
+            self.create_subscription(String, topic("robot_description", a), cb, latched)
+
+
+def run_mcad(tmp):
+    cell, out_csv = os.path.join(tmp, "cell.yaml"), os.path.join(tmp, "mcad.csv")
+    with open(cell, "w") as f:
+        f.write(CELL)
+    return subprocess.Popen([MCAD, "--csv", out_csv, cell], stderr=subprocess.PIPE, text=True), out_csv
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def quat_rpy(r, p, y):
+    cr, sr, cp, sp, cy, sy = (math.cos(r / 2), math.sin(r / 2), math.cos(p / 2), math.sin(p / 2),
+                              math.cos(y / 2), math.sin(y / 2))
+    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy)
+
+
+def zone_color(d):
+    return (0.2, 0.75, 0.3) if not d < D2 else (1.0, 0.6, 0.0) if d >= D1 else (1.0, 0.0, 0.0)
+
+
+def tf_static_reader():
+    """/tf_static through the Cyclone Python binding (types written here, not from mcad's IDL)."""
+    from dataclasses import dataclass
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.topic import Topic
+    from cyclonedds.sub import DataReader
+    from cyclonedds.core import Qos, Policy
+    from cyclonedds.idl import IdlStruct
+    from cyclonedds.idl.annotations import final
+    import cyclonedds.idl.types as t
+
+    @final
+    @dataclass
+    class Time_(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
+        sec: t.int32
+        nanosec: t.uint32
+
+    @final
+    @dataclass
+    class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+        stamp: Time_
+        frame_id: str
+
+    @final
+    @dataclass
+    class Vector3_(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+        x: t.float64
+        y: t.float64
+        z: t.float64
+
+    @final
+    @dataclass
+    class Quaternion_(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+        x: t.float64
+        y: t.float64
+        z: t.float64
+        w: t.float64
+
+    @final
+    @dataclass
+    class Transform_(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
+        translation: Vector3_
+        rotation: Quaternion_
+
+    @final
+    @dataclass
+    class TransformStamped_(IdlStruct, typename="geometry_msgs::msg::dds_::TransformStamped_"):
+        header: Header_
+        child_frame_id: str
+        transform: Transform_
+
+    @final
+    @dataclass
+    class TFMessage_(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
+        transforms: t.sequence[TransformStamped_]
+
+    dp = DomainParticipant(DOMAIN)
+    qos = Qos(Policy.Reliability.Reliable(max_blocking_time=1_000_000_000), Policy.Durability.TransientLocal,
+              Policy.History.KeepLast(1))
+    return DataReader(dp, Topic(dp, "rt/tf_static", TFMessage_, qos=qos), qos=qos)
+
+
+def spin_in_background(*nodes):
+    ex = SingleThreadedExecutor()
+    for n in nodes:
+        ex.add_node(n)
+    th = threading.Thread(target=ex.spin, daemon=True)
+    th.start()
+    return ex
+
+
+def mode_topics(tmp):
+    main = Collector("mca_ros2_check")
+    main.all_topics()
+    ex = spin_in_background(main)
+    time.sleep(2.0)  # our readers exist before mcad's writers
+    proc, out_csv = run_mcad(tmp)
+    time.sleep(1.0)  # mcad wrote its URDFs and TF as it started: these two join later
+    late = Collector("mca_ros2_late")
+    late.descriptions()
+    ex.add_node(late)
+    tf_reader = tf_static_reader()
+    tfs = []
+    while proc.poll() is None:
+        tfs += tf_reader.take(N=10)
+        time.sleep(0.05)
+    _, err = proc.communicate(timeout=120)
+    time.sleep(2.0)  # the last samples
+    ex.shutdown()
+    check(proc.returncode == 0, f"mcad exit status {proc.returncode}")
+    if proc.returncode != 0:
+        print(err)
+    rows = read_csv(out_csv)
+    # every DIVISOR-th tick, and the final snapshot mcad sends as it closes (the last tick's state)
+    published = [k for k in range(len(rows)) if k % DIVISOR == 0 or k == len(rows) - 1]
+    print(f"mcad: {len(rows)} ticks in its CSV, {len(published)} published")
+
+    # JointState: each sample is one published tick, in order
+    tick_of_stamp = {}
+    for ai, a in enumerate(ARMS):
+        names = [f"q{ai}_{j}" for j in range(len(main.js[a][0].position))] if main.js[a] else []
+        ref = [[float(rows[k][n]) for n in names] for k in published]
+        nxt, matched, worst, bad = 0, [], 0.0, 0
+        for m in main.js[a]:
+            found = None
+            for i in range(nxt, len(ref)):
+                if max(abs(x - y) for x, y in zip(m.position, ref[i])) <= 1e-9:
+                    found = i
+                    break
+            if found is None:
+                bad += 1
+                continue
+            worst = max(worst, max(abs(x - y) for x, y in zip(m.position, ref[found])))
+            matched.append(published[found])
+            tick_of_stamp.setdefault(stamp_ns(m.header), published[found])
+            nxt = found + 1
+        n_exp = len([k for k in published if matched and k >= matched[0]])
+        missing = sorted(set(k for k in published if matched and k >= matched[0]) - set(matched))
+        if missing:
+            print(f"{a}: first received tick {matched[0]}, missing ticks {missing[:20]}")
+        share = len(matched) / n_exp if n_exp else 0.0
+        check(bad == 0 and len(matched) > 0,
+              f"{a}: {len(matched)} JointState samples, each one tick of mcad's CSV, in order "
+              f"(max |dq| {worst:.1e} rad; {bad} matched none)")
+        check(share >= 0.99, f"{a}: {len(matched)} of the {n_exp} ticks published from the first received "
+              f"({100 * share:.1f} % >= 99 %)")
+        urdf_joints = ["S1", "S2", "S3", "E1", "E2", "W1", "W2", "T"]
+        check(all(list(m.name) == urdf_joints for m in main.js[a]), f"{a}: joint names are the URDF's")
+
+    # Markers
+    n_mk, n_tick = 0, 0
+    mk_fail, mk_ticks = [], []
+    for ma in main.markers:
+        n_mk += 1
+        st = stamp_ns(ma.markers[0].header) if ma.markers else None
+        k = tick_of_stamp.get(st)
+        if k is None:
+            continue
+        n_tick += 1
+        mk_ticks.append(k)
+        r = rows[k]
+        by_ns = {}
+        for m in ma.markers:
+            by_ns.setdefault(m.ns, []).append(m)
+        line = by_ns.get("closest_points", [None])[0]
+        text = by_ns.get("distances", [None])[0]
+        if line is None or text is None or len(line.points) != 2:
+            mk_fail.append(f"tick {k}: no closest-point segment or text")
+            continue
+        p, e = line.points
+        pe_ref = [float(r[c]) for c in ("p_x", "p_y", "p_z", "e_x", "e_y", "e_z")]
+        dpe = max(abs(x - y) for x, y in zip((p.x, p.y, p.z, e.x, e.y, e.z), pe_ref))
+        d = float(text.text.split()[-2])
+        d_ref = float(r["min_d"])
+        col = (round(line.color.r, 2), round(line.color.g, 2), round(line.color.b, 2))
+        if dpe > 1e-12 or abs(d - d_ref) > 1e-12 or col != tuple(round(c, 2) for c in zone_color(d_ref)):
+            mk_fail.append(f"tick {k}: |PE - CSV| {dpe:.1e}, d {d!r} vs {d_ref!r}, colour {col}")
+        for ai, a in enumerate(ARMS):
+            links = sorted((m for m in by_ns.get(f"{a}/links", []) if m.type == Marker.SPHERE_LIST),
+                           key=lambda m: m.id)
+            pts = [(q.x, q.y, q.z) for m in links for q in m.points]
+            chain_ok = all(math.dist(pts[i], pts[i + 1]) < 1e-12 for i in range(1, len(pts) - 1, 2))
+            for cyl in (m for m in by_ns.get(f"{a}/links", []) if m.type == Marker.CYLINDER):
+                caps = [m for m in links if m.id == cyl.id + 1]
+                o, c0 = cyl.pose.orientation, cyl.pose.position
+                # the cylinder's z axis (the quaternion applied to (0, 0, 1)) times half its length
+                z = (2 * (o.x * o.z + o.w * o.y), 2 * (o.y * o.z - o.w * o.x), 1 - 2 * (o.x * o.x + o.y * o.y))
+                h = cyl.scale.z / 2
+                ends = [(c0.x - h * z[0], c0.y - h * z[1], c0.z - h * z[2]),
+                        (c0.x + h * z[0], c0.y + h * z[1], c0.z + h * z[2])]
+                if not caps or any(math.dist(ends[i], (caps[0].points[i].x, caps[0].points[i].y,
+                                                      caps[0].points[i].z)) > 1e-9 for i in range(2)):
+                    mk_fail.append(f"tick {k}: {a} cylinder {cyl.id} does not span its end caps")
+            ee = tuple(float(r[f"ee{ai}_{c}"]) for c in "xyz")
+            if not links or not chain_ok or math.dist(pts[-1], ee) > 1e-12:
+                mk_fail.append(f"tick {k}: {a}'s capsules are not one chain ending at the CSV's end effector")
+    check(n_mk > 0 and n_tick >= 0.99 * n_mk and not mk_fail,
+          f"{n_mk} MarkerArrays, {n_tick} at a tick whose JointState came; closest points, distance, zone colour "
+          f"and capsule chain as mcad's CSV" + (f": {mk_fail[:3]}" if mk_fail else ""))
+    n_exp = len([k for k in published if mk_ticks and k >= mk_ticks[0]])
+    check(n_exp and len(set(mk_ticks)) >= 0.99 * n_exp,
+          f"MarkerArrays: {len(set(mk_ticks))} of the {n_exp} ticks published from the first received (>= 99 %)")
+
+    # Diagnostics
+    states = ["init", "ready", "running", "braking", "stopped", "fault"]
+    dg_fail, n_dg, seen = [], 0, set()
+    for da in main.diag:
+        for s in da.status:
+            kv = {v.key: v.value for v in s.values}
+            if s.hardware_id != NS or "tick" not in kv:
+                continue
+            n_dg += 1
+            # the final status (sent as mcad closes) says the number of ticks run: its state is the last tick's
+            k = min(int(kv["tick"]), len(rows) - 1)
+            seen.add(kv["state"])
+            min_so_far = min(float(rows[i]["min_d"]) for i in range(k + 1))
+            if kv["state"] != states[int(rows[k]["state"])] or abs(float(kv["min_distance_so_far_m"]) - min_so_far) > 1e-12:
+                dg_fail.append(f"tick {k}: state {kv['state']} min {kv['min_distance_so_far_m']} vs CSV "
+                               f"{states[int(rows[k]['state'])]} {min_so_far!r}")
+            if stamp_ns(da.header) in tick_of_stamp and tick_of_stamp[stamp_ns(da.header)] != k:
+                dg_fail.append(f"stamp of tick {kv['tick']} is the stamp of tick {tick_of_stamp[stamp_ns(da.header)]}")
+    check(n_dg >= 3 and not dg_fail, f"{n_dg} diagnostics: state and minimum distance so far as mcad's CSV at "
+          f"their tick" + (f": {dg_fail[:3]}" if dg_fail else ""))
+    check({"running", "stopped"} <= seen, f"diagnostics went through running and stopped ({sorted(seen)})")
+
+    # Late joiners: descriptions over rclpy, TF over Cyclone
+    for a in ARMS:
+        with open(os.path.join(SRC, "config", "robots", "pa10plus.urdf")) as f:
+            urdf = f.read()
+        check(late.desc.get(a) == urdf, f"late node: {topic('robot_description', a)} is the URDF text "
+              f"({len(late.desc.get(a, ''))} of {len(urdf)} bytes)")
+    tf = [s for s in tfs if getattr(s, "transforms", None)]
+    check(len(tf) == 1, f"late Cyclone reader: {len(tf)} /tf_static sample (transient-local, one)")
+    if tf:
+        bases = scenario_placements()
+        got = {x.child_frame_id: x for x in tf[0].transforms}
+        for a in ARMS:
+            x = got.get(f"{a}/base_link")
+            xyz, rpy = bases[a]
+            q = quat_rpy(*rpy)
+            ok = x is not None and x.header.frame_id == "world"
+            if ok:
+                tr, ro = x.transform.translation, x.transform.rotation
+                ok = math.dist((tr.x, tr.y, tr.z), xyz) < 1e-12 and (
+                    math.dist((ro.x, ro.y, ro.z, ro.w), q) < 1e-12 or
+                    math.dist((ro.x, ro.y, ro.z, ro.w), tuple(-c for c in q)) < 1e-12)
+            check(ok, f"/tf_static: world -> {a}/base_link at xyz {xyz} rpy {rpy} "
+                  f"(have {sorted(got)})")
+
+
+def scenario_placements():
+    """base_xyz / base_rpy of each arm, read from the scenario YAML with PyYAML-free parsing."""
+    out, arm = {}, None
+    with open(os.path.join(SRC, "config", "scenarios", "cross_circles.yaml")) as f:
+        for line in f:
+            s = line.split("#")[0].strip()
+            if s.startswith("- name:"):
+                arm = s.split(":", 1)[1].strip()
+                out[arm] = [(0.0, 0.0, 0.0), (0.0, 0.0, 0.0)]
+            for i, k in enumerate(("base_xyz:", "base_rpy:")):
+                if arm and s.startswith(k):
+                    out[arm][i] = tuple(float(v) for v in s.split(":", 1)[1].strip(" []").split(","))
+    return {a: tuple(v) for a, v in out.items()}
+
+
+def mode_graph(tmp):
+    node = Node("mca_ros2_graph")
+    best_effort = []
+    node.create_subscription(JointState, topic("joint_states", "left"), best_effort.append, qos_profile_sensor_data)
+    ex = spin_in_background(node)
+    time.sleep(2.0)
+    proc, _ = run_mcad(tmp)
+    time.sleep(1.5)
+    names = dict(node.get_topic_names_and_types())
+    want = {topic("joint_states", a): "sensor_msgs/msg/JointState" for a in ARMS}
+    want.update({topic("robot_description", a): "std_msgs/msg/String" for a in ARMS})
+    want.update({"/tf_static": "tf2_msgs/msg/TFMessage", topic("distance_markers"): "visualization_msgs/msg/MarkerArray",
+                 "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"})
+    for n, ty in want.items():
+        check(names.get(n) == [ty], f"graph: {n} [{ty}] (seen {names.get(n)})")
+    extra = [n for n in names if n.startswith(f"/{NS}/") and n not in want]
+    check(not extra, f"graph: no other topics under /{NS}/ ({extra})")
+    for n in want:
+        infos = node.get_publishers_info_by_topic(n)
+        latched = n.endswith("robot_description") or n == "/tf_static"
+        ok = len(infos) == 1 and infos[0].qos_profile.reliability == ReliabilityPolicy.RELIABLE and (
+            infos[0].qos_profile.durability ==
+            (DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE))
+        check(ok, f"graph: {n}: one publisher, reliable, {'transient-local' if latched else 'volatile'} "
+              f"({[(i.qos_profile.reliability.name, i.qos_profile.durability.name) for i in infos]})")
+    _, err = proc.communicate(timeout=120)
+    time.sleep(0.5)
+    ex.shutdown()
+    check(proc.returncode == 0, f"mcad exit status {proc.returncode}")
+    libs = subprocess.run(["ldd", MCAD], capture_output=True, text=True).stdout
+    ros_libs = [ln.split()[0] for ln in libs.splitlines() if any(w in ln for w in ("rcl", "rmw", "fastr", "ros"))]
+    check("libddsc" in libs and not ros_libs, f"mcad links Cyclone DDS and no ROS library (ldd: {ros_libs})")
+    check(len(best_effort) >= 50, f"sensor-data QoS (best effort) subscriber: {len(best_effort)} JointStates "
+          f"in {RUN_S} s at 100 Hz")
+
+
+rclpy.init()
+with tempfile.TemporaryDirectory(prefix="mca-ros2-") as tmp:
+    {"topics": mode_topics, "graph": mode_graph}[MODE](tmp)
+rclpy.try_shutdown()
+print("FAILED: " + "; ".join(failures) if failures else "PASSED", flush=True)
+sys.exit(1 if failures else 0)
