@@ -17,7 +17,10 @@ topics: an rclpy node subscribes to every topic with rclpy's default QoS (reliab
 graph: mcad runs 3 s and links no ROS library (ldd); a second rclpy node sees the topics and types a ROS 2 user would see
   (get_topic_names_and_types), the publishers' QoS (reliable; transient-local for the latched ones), and a
   sensor-data (best-effort) subscriber receives JointState too.
-usage: test_ros2.py topics|graph MCAD SOURCE_DIR DOMAIN"""
+With a fifth argument (topics), the MarkerArray received at the tick of the smallest distance is written there
+as JSON: tools/plots/ros2_markers.py draws it (the README's picture).
+usage: test_ros2.py topics|graph MCAD SOURCE_DIR DOMAIN [MARKERS_JSON]"""
+import json
 import csv
 import math
 import os
@@ -92,6 +95,7 @@ class Collector(Node):
         super().__init__(name)
         self.js = {a: [] for a in ARMS}
         self.markers, self.diag, self.desc = [], [], {}
+        self.latency_ns = []  # JointState: receipt (CLOCK_REALTIME) - header stamp (the tick's wake-up)
         self.lock = threading.Lock()
         for a in ARMS:
             self.create_subscription(JointState, topic("joint_states", a), self._add(self.js[a]), qos)
@@ -100,6 +104,8 @@ class Collector(Node):
         def cb(m):
             with self.lock:
                 lst.append(m)
+                if isinstance(m, JointState):
+                    self.latency_ns.append(time.time_ns() - stamp_ns(m.header))
         return cb
 
     def all_topics(self):
@@ -267,6 +273,12 @@ def mode_topics(tmp):
         urdf_joints = ["S1", "S2", "S3", "E1", "E2", "W1", "W2", "T"]
         check(all(list(m.name) == urdf_joints for m in main.js[a]), f"{a}: joint names are the URDF's")
 
+    lat = sorted(main.latency_ns)
+    if lat:
+        print(f"latency tick wake-up -> rclpy callback (JointState, {len(lat)} samples): "
+              f"p50 {lat[len(lat) // 2] / 1e3:.0f} us, p99 {lat[int(len(lat) * 0.99)] / 1e3:.0f} us, "
+              f"max {lat[-1] / 1e3:.0f} us")
+
     # Markers
     n_mk, n_tick = 0, 0
     mk_fail, mk_ticks = [], []
@@ -314,6 +326,16 @@ def mode_topics(tmp):
             ee = tuple(float(r[f"ee{ai}_{c}"]) for c in "xyz")
             if not links or not chain_ok or math.dist(pts[-1], ee) > 1e-12:
                 mk_fail.append(f"tick {k}: {a}'s capsules are not one chain ending at the CSV's end effector")
+    if len(sys.argv) > 5 and mk_ticks:
+        closest = min(range(len(mk_ticks)), key=lambda i: float(rows[mk_ticks[i]]["min_d"]))
+        ma = [m for m in main.markers if m.markers and stamp_ns(m.markers[0].header) in tick_of_stamp][closest]
+        with open(sys.argv[5], "w") as f:
+            json.dump({"tick": mk_ticks[closest], "d1": D1, "d2": D2, "markers": [
+                {"ns": m.ns, "id": m.id, "type": m.type, "text": m.text, "scale": [m.scale.x, m.scale.y, m.scale.z],
+                 "color": [m.color.r, m.color.g, m.color.b, m.color.a],
+                 "points": [[q.x, q.y, q.z] for q in m.points],
+                 "position": [m.pose.position.x, m.pose.position.y, m.pose.position.z]} for m in ma.markers]}, f)
+        print(f"markers of tick {mk_ticks[closest]} (the smallest distance received) in {sys.argv[5]}")
     check(n_mk > 0 and n_tick >= 0.99 * n_mk and not mk_fail,
           f"{n_mk} MarkerArrays, {n_tick} at a tick whose JointState came; closest points, distance, zone colour "
           f"and capsule chain as mcad's CSV" + (f": {mk_fail[:3]}" if mk_fail else ""))
