@@ -180,6 +180,15 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->n_row_key = ctrl->n_brake_row_key = 0;
 }
 
+int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]) {
+    if (!ctrl || !v || arm < 0 || arm >= ctrl->cfg.n_arms || ctrl->cfg.path[arm].kind != MCA_PATH_STREAM ||
+        !isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2])) {
+        return MCA_EINVAL;
+    }
+    mca_v3_set(ctrl->cfg.path[arm].stream_v, v);
+    return MCA_OK;
+}
+
 void mca_controller_clear_fault(mca_controller_t *ctrl) {
     ctrl->fault = MCA_CTRL_FAULT_NONE;
     ctrl->fault_why = (mca_ctrl_fault_why_t){0};
@@ -816,7 +825,10 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
     }
     for (int a = 0; a < na; a++) {
         const double lag = fmax(0.0, task_t - ctrl->tau[a]);
-        target[a] = fmin(tp->sigma_max, 1.0 + MCA_TS_CATCH_UP_GAIN * lag);
+        /* a stream does not catch up: the operator's motion resumes at the operator's speed */
+        target[a] = ctrl->cfg.path[a].kind == MCA_PATH_STREAM
+                        ? 1.0
+                        : fmin(tp->sigma_max, 1.0 + MCA_TS_CATCH_UP_GAIN * lag);
         lo[a] = 0.0;
         hi[a] = tp->sigma_max;
         if (a == ctrl->deadlock_arm && ctrl->deadlock == MCA_DEADLOCK_BACK_OFF) {
@@ -1129,6 +1141,10 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->fault = MCA_CTRL_FAULT_NONE;
     info->fault_why = (mca_ctrl_fault_why_t){0};
     fill_path_info(ctrl, info);
+    for (int a = 0; a < na; a++) {
+        /* streamed references move at the rate the tick chose (the commanded motion follows them) */
+        mca_path_stream_advance(&ctrl->cfg.path[a], ctrl->sigma[a], cfg->dt);
+    }
     ctrl->has_v_meas = 0;
     info->compute_ns = now_ns() - t_enter;
     return MCA_OK;

@@ -19,6 +19,10 @@
 
 void mca_path_anchor(mca_path_t *path, const double ee_start[3]) {
     mca_v3_set(path->anchor, ee_start);
+    if (path->kind == MCA_PATH_STREAM) {
+        mca_v3_set(path->stream_r, ee_start);
+        path->stream_v[0] = path->stream_v[1] = path->stream_v[2] = 0.0;
+    }
     if (path->kind == MCA_PATH_WAYPOINTS && path->n_points > 0) {
         /* p[0] is the start: the anchor itself (offset 0 for relative paths) */
         if (path->relative) {
@@ -37,8 +41,25 @@ static void path_point(const mca_path_t *path, int i, double out[3]) {
     }
 }
 
+void mca_path_stream_advance(mca_path_t *path, double rate, double dt) {
+    if (path->kind != MCA_PATH_STREAM) {
+        return;
+    }
+    for (int i = 0; i < 3; i++) {
+        const double x = path->stream_r[i] + rate * path->stream_v[i] * dt;
+        /* a wall stops only the motion through it (a reference that started outside may move back in) */
+        if ((x > path->box_hi[i] && x > path->stream_r[i]) ||
+            (x < path->box_lo[i] && x < path->stream_r[i])) {
+            continue;
+        }
+        path->stream_r[i] = x;
+    }
+}
+
 double mca_path_end_time(const mca_path_t *path) {
     switch (path->kind) {
+    case MCA_PATH_STREAM:
+        return INFINITY;
     case MCA_PATH_CIRCLE:
         return path->t0 + path->period;
     case MCA_PATH_WAYPOINTS: {
@@ -60,6 +81,10 @@ int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
     double s = t - path->t0;
     rdot[0] = rdot[1] = rdot[2] = 0.0;
     switch (path->kind) {
+    case MCA_PATH_STREAM:
+        mca_v3_set(r, path->stream_r);
+        mca_v3_set(rdot, path->stream_v);
+        return MCA_OK;
     case MCA_PATH_CIRCLE: {
         const double T = path->period;
         if (s < 0.0) {

@@ -56,11 +56,21 @@ struct raw_arm {
     double *priority;
     struct raw_sim *sim;
     struct raw_path *path;
+    char *stream;
+};
+
+struct raw_stream {
+    double *max_speed, *pose_gain, *hold_after, *brake_after;
+    double *box_min;
+    unsigned box_min_count;
+    double *box_max;
+    unsigned box_max_count;
 };
 
 struct raw_task {
     char *scenario;
     double *duration;
+    struct raw_stream *stream;
 };
 
 struct raw_solver {
@@ -159,6 +169,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
     CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
     CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_STRING_PTR("stream", OPT, struct raw_arm, stream, 1, 15),
     CYAML_FIELD_END,
 };
 
@@ -166,9 +177,22 @@ static const cyaml_schema_value_t arm_entry = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct raw_arm, arm_fields),
 };
 
+static const cyaml_schema_field_t stream_fields[] = {
+    CYAML_FIELD_FLOAT_PTR("max_speed", OPT, struct raw_stream, max_speed),
+    CYAML_FIELD_FLOAT_PTR("pose_gain", OPT, struct raw_stream, pose_gain),
+    CYAML_FIELD_FLOAT_PTR("hold_after", OPT, struct raw_stream, hold_after),
+    CYAML_FIELD_FLOAT_PTR("brake_after", OPT, struct raw_stream, brake_after),
+    CYAML_FIELD_SEQUENCE("workspace_min", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_stream, box_min,
+                         &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("workspace_max", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_stream, box_max,
+                         &float_entry, 3, 3),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t task_fields[] = {
     CYAML_FIELD_STRING_PTR("scenario", OPT, struct raw_task, scenario, 1, 400),
     CYAML_FIELD_FLOAT_PTR("duration", OPT, struct raw_task, duration),
+    CYAML_FIELD_MAPPING_PTR("stream", OPT, struct raw_task, stream, stream_fields),
     CYAML_FIELD_END,
 };
 
@@ -786,6 +810,51 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         CHECK(wtask, "duration", mca_scenario_range("duration"), *raw->task.duration, "task.duration");
         scn->duration = *raw->task.duration;
     }
+    if (raw->task.stream) {
+        const struct raw_stream *rs = raw->task.stream;
+        mca_cell_stream_t *cs = &cell->stream;
+        cs->enabled = 1;
+        cs->max_speed = 0.25;
+        cs->pose_gain = 2.0;
+        cs->hold_after = 0.1;
+        cs->brake_after = 1.0;
+        const struct {
+            const char *key;
+            const double *v;
+            double *dst, lo, hi;
+        } nums[] = {
+            {"max_speed", rs->max_speed, &cs->max_speed, 1e-3, 2.0},
+            {"pose_gain", rs->pose_gain, &cs->pose_gain, 0.1, 50.0},
+            {"hold_after", rs->hold_after, &cs->hold_after, 0.002, 10.0},
+            {"brake_after", rs->brake_after, &cs->brake_after, 0.002, 60.0},
+        };
+        for (size_t k = 0; k < sizeof nums / sizeof nums[0]; k++) {
+            if (nums[k].v) {
+                if (!(*nums[k].v >= nums[k].lo && *nums[k].v <= nums[k].hi)) {
+                    FAIL(MCA_ERANGE, wtask, nums[k].key, "task.stream.%s: %g outside %g..%g", nums[k].key,
+                         *nums[k].v, nums[k].lo, nums[k].hi);
+                }
+                *nums[k].dst = *nums[k].v;
+            }
+        }
+        if (cs->hold_after > cs->brake_after) {
+            FAIL(MCA_ERANGE, wtask, "hold_after", "task.stream.hold_after: %g s after brake_after %g s",
+                 cs->hold_after, cs->brake_after);
+        }
+        for (int i = 0; i < 3; i++) {
+            CHECK(wtask, "workspace_min", mca_scenario_range("base_xyz"), rs->box_min[i],
+                  "task.stream.workspace_min[%d]", i);
+            CHECK(wtask, "workspace_max", mca_scenario_range("base_xyz"), rs->box_max[i],
+                  "task.stream.workspace_max[%d]", i);
+            if (!(rs->box_min[i] < rs->box_max[i])) {
+                FAIL(MCA_ERANGE, wtask, "workspace_max",
+                     "task.stream.workspace_max[%d]: %g not above workspace_min %g", i, rs->box_max[i],
+                     rs->box_min[i]);
+            }
+            cs->box_lo[i] = rs->box_min[i];
+            cs->box_hi[i] = rs->box_max[i];
+        }
+    }
 
     cell->scheme = MCA_SCHEME_MCA_TS; /* the default for cells (issue 11) */
     if (raw->scheme && mca_scheme_from_name(raw->scheme, &cell->scheme) != MCA_OK) {
@@ -977,6 +1046,22 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                 FAIL(MCA_ERANGE, wa, "path", "arms[%d].path.%s", ai, why);
             }
         }
+        if (ra->stream && !raw->task.stream) {
+            FAIL(MCA_EPARSE, wa, "stream", "arms[%d].stream: only in a streamed task (task.stream)", ai);
+        }
+        if (raw->task.stream) {
+            /* the arm follows its ROS 2 topic: the path from the scenario or the cell is replaced */
+            ca->stream = MCA_CELL_STREAM_TWIST;
+            if (ra->stream && strcmp(ra->stream, "pose") == 0) {
+                ca->stream = MCA_CELL_STREAM_POSE;
+            } else if (ra->stream && strcmp(ra->stream, "twist") != 0) {
+                FAIL(MCA_ERANGE, wa, "stream", "arms[%d].stream: '%s' (known: twist, pose)", ai, ra->stream);
+            }
+            memset(&sa->path, 0, sizeof sa->path);
+            sa->path.kind = MCA_PATH_STREAM;
+            memcpy(sa->path.box_lo, cell->stream.box_lo, sizeof sa->path.box_lo);
+            memcpy(sa->path.box_hi, cell->stream.box_hi, sizeof sa->path.box_hi);
+        }
         /* the model: DOF must match q0, q0 within the joint limits */
         mca_chain_t chain;
         char cerrbuf[400];
@@ -1061,6 +1146,12 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                   "dds.publish_divisor");
             cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
         }
+    }
+    if (cell->stream.enabled &&
+        !(cell->dds.enabled &&
+          (!raw->dds || !raw->dds->ros2 || !raw->dds->ros2->enabled || *raw->dds->ros2->enabled))) {
+        FAIL(MCA_ERANGE, wtask, "stream",
+             "task.stream: the targets come over ROS 2: needs dds.enabled and dds.ros2.enabled");
     }
     /* ROS 2 topics: on with DDS unless switched off; every topic on unless switched off */
     mca_cell_ros2_t *r2 = &cell->dds.ros2;

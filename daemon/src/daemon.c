@@ -169,7 +169,11 @@ static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err,
     rc2->markers = cell->dds.ros2.markers;
     rc2->diagnostics = cell->dds.ros2.diagnostics;
     rc2->n_arms = (uint32_t)d->n_arms;
+    rc2->stream_max_speed = cell->stream.max_speed;
+    memcpy(rc2->box_lo, cell->stream.box_lo, sizeof rc2->box_lo);
+    memcpy(rc2->box_hi, cell->stream.box_hi, sizeof rc2->box_hi);
     for (int a = 0; a < d->n_arms; a++) {
+        rc2->stream[a] = cell->stream.enabled ? cell->arm[a].stream : MCA_ROS2_STREAM_NONE;
         const mca_chain_t *ch = &d->ccfg.chain[a];
         mca_ros2_arm_t *ra = &rc2->arm[a];
         snprintf(ra->name, sizeof ra->name, "%s", cell->scn.arm[a].name);
@@ -525,6 +529,11 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         /* before DDS starts its threads: they, the CSV/log drainer and the supervisor inherit this mask */
         pin_non_rt(d);
     }
+    if (rc == MCA_OK && cell->stream.enabled && (!cell->dds.enabled || opts->no_dds)) {
+        set_err(err, errlen, "%s: task.stream: the targets come over ROS 2, but DDS is off%s", cell->source,
+                opts->no_dds ? " (--no-dds)" : "");
+        rc = MCA_EINVAL;
+    }
     if (rc == MCA_OK && cell->dds.enabled && !opts->no_dds) {
         mca_dds_config_t dc;
         mca_dds_config_default(&dc);
@@ -641,6 +650,10 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
     switch (fault) {
     case MCA_DAEMON_FAULT_CONTROLLER:
         mca_ctrl_fault_format(ctrl_why, buf, len);
+        break;
+    case MCA_DAEMON_FAULT_STREAM_STALE:
+        snprintf(buf, len, "arm %s: no target on its stream for %.3f s (task.stream.brake_after)", name,
+                 d->cell.stream.brake_after);
         break;
     case MCA_DAEMON_FAULT_OVERRUN:
         snprintf(buf, len, "consecutive overruns: %d periods missed in a row (rt.overrun_limit %d)", count,
@@ -1000,6 +1013,42 @@ static void deadlock_watch(mca_daemon_t *d, double t) {
     d->deadlocks = in->deadlocks;
 }
 
+/* task.stream: each arm's reference velocity from its latest accepted target (a seqlock read, no wait):
+ * a twist as it is, a pose target approached at pose_gain x the gap, at most max_speed; no target yet or
+ * none for hold_after: hold; none for brake_after: a fault of that arm, every arm brakes. */
+static void stream_targets(mca_daemon_t *d, double t, int64_t now_ns) {
+    const mca_cell_stream_t *cs = &d->cell.stream;
+    for (int a = 0; a < d->n_arms; a++) {
+        mca_ros2_target_t tg;
+        const int rc = mca_dds_bridge_stream_target(d->dds, a, &tg);
+        if (rc == MCA_EAGAIN) {
+            continue; /* being written this instant: last tick's velocity stays */
+        }
+        double v[3] = {0.0, 0.0, 0.0};
+        if (rc == MCA_OK && tg.accepted > 0) {
+            const double age = (double)(now_ns - tg.recv_ns) * 1e-9;
+            if (age > cs->brake_after) {
+                latch_fault(d, MCA_DAEMON_FAULT_STREAM_STALE, MCA_ETIMEDOUT, t, a, 0, 0, 0, NULL);
+            } else if (age <= cs->hold_after && tg.kind == MCA_ROS2_STREAM_TWIST) {
+                memcpy(v, tg.x, sizeof v);
+            } else if (age <= cs->hold_after && d->ctrl.started) {
+                /* pose: towards the target from where the reference is now */
+                const double *r = d->ctrl.cfg.path[a].stream_r;
+                double n2 = 0.0;
+                for (int i = 0; i < 3; i++) {
+                    v[i] = cs->pose_gain * (tg.x[i] - r[i]);
+                    n2 += v[i] * v[i];
+                }
+                const double n = sqrt(n2);
+                for (int i = 0; i < 3 && n > cs->max_speed; i++) {
+                    v[i] *= cs->max_speed / n;
+                }
+            }
+        }
+        mca_controller_stream(&d->ctrl, a, v);
+    }
+}
+
 int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     d->t_tick = t;
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
@@ -1016,6 +1065,10 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         LOGN(d, MCA_LOG_NOTICE, "stop requested at t = %.3f s: braking to zero", 1, t, 0, 0, 0, NULL);
     }
     read_feedback(d, t);
+    if (d->cell.stream.enabled &&
+        atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING) {
+        stream_targets(d, t, stamp_ns); /* a stale stream brakes from this tick on */
+    }
     state = atomic_load_explicit(&d->state, memory_order_relaxed);
 
     const double *qp[MCA_MAX_ARMS];

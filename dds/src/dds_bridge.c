@@ -459,6 +459,13 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
     }
 }
 
+int mca_dds_bridge_stream_target(mca_dds_bridge_t *bridge, int arm, mca_ros2_target_t *out) {
+    if (bridge == NULL || bridge->ros2 == NULL) {
+        return MCA_EINVAL;
+    }
+    return mca_ros2_pub_target(bridge->ros2, arm, out);
+}
+
 int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     if (bridge == NULL || out == NULL) {
         return MCA_EINVAL;

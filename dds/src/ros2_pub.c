@@ -5,6 +5,9 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,7 +22,7 @@ enum { MARKER_CYLINDER = 3, MARKER_SPHERE_LIST = 7, MARKER_LINE_LIST = 5, MARKER
 enum { DIAG_OK = 0, DIAG_WARN = 1, DIAG_ERROR = 2 };
 
 #define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2)
-#define N_KV 21
+#define N_KV 24
 #define URDF_MAX (4 * 1024 * 1024)
 
 typedef sensor_msgs_msg_dds__JointState_ JointState;
@@ -27,8 +30,30 @@ typedef visualization_msgs_msg_dds__Marker_ Marker;
 typedef visualization_msgs_msg_dds__MarkerArray_ MarkerArray;
 typedef diagnostic_msgs_msg_dds__KeyValue_ KeyValue;
 
+/* One arm's latest accepted target: a seqlock (the listener writes, the loop reads; odd seq = being
+ * written). Fields are relaxed atomics so that the reader's copy of a torn write is no data race. */
+typedef struct mailbox {
+    _Atomic uint32_t seq;
+    _Atomic double x[3];
+    _Atomic int64_t recv_ns;
+    _Atomic uint64_t accepted;
+} mailbox_t;
+
+struct mca_ros2_pub;
+typedef struct stream_in {
+    struct mca_ros2_pub *r;
+    int arm;
+    dds_entity_t reader;
+} stream_in_t;
+
 struct mca_ros2_pub {
     mca_ros2_config_t cfg;
+    mailbox_t box[MCA_MAX_ARMS];
+    stream_in_t in[MCA_MAX_ARMS];
+    /* rejections: counted and described by the listener, read by the publisher thread (both non-rt) */
+    pthread_mutex_t reject_lock;
+    uint64_t rejected;
+    char last_reject[160];
     int64_t realtime_offset_ns; /* CLOCK_REALTIME - CLOCK_MONOTONIC at create */
     dds_entity_t w_joints[MCA_MAX_ARMS], w_desc[MCA_MAX_ARMS], w_tf, w_markers, w_diag;
     char *joint_ptr[MCA_MAX_ARMS][MCA_MAX_DOF];
@@ -41,7 +66,7 @@ struct mca_ros2_pub {
     char diag_name[MCA_ROS2_NAME_MAX + 16];
     char diag_message[160];
     KeyValue kv[N_KV];
-    char kv_value[N_KV][80];
+    char kv_value[N_KV][168];
 };
 
 void mca_ros2_config_default(mca_ros2_config_t *cfg) {
@@ -90,6 +115,19 @@ int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen
         return MCA_EINVAL;
     }
     for (uint32_t a = 0; a < cfg->n_arms; a++) {
+        if (cfg->stream[a] < MCA_ROS2_STREAM_NONE || cfg->stream[a] > MCA_ROS2_STREAM_POSE) {
+            snprintf(err, errlen, "arms[%u].stream: kind %d", a, cfg->stream[a]);
+            return MCA_EINVAL;
+        }
+        if (cfg->stream[a] != MCA_ROS2_STREAM_NONE) {
+            const int box_ok = cfg->box_lo[0] < cfg->box_hi[0] && cfg->box_lo[1] < cfg->box_hi[1] &&
+                               cfg->box_lo[2] < cfg->box_hi[2];
+            if (!(cfg->stream_max_speed > 0.0 && cfg->stream_max_speed < 10.0) || !box_ok) {
+                snprintf(err, errlen, "task.stream: max_speed %g m/s (0..10) or an empty workspace box",
+                         cfg->stream_max_speed);
+                return MCA_EINVAL;
+            }
+        }
         const mca_ros2_arm_t *arm = &cfg->arm[a];
         if (!ros_token_ok(arm->name)) {
             snprintf(err, errlen,
@@ -253,6 +291,166 @@ static void init_marker(Marker *m, const char *frame, const char *ns, int32_t id
     m->texture.header.frame_id = m->texture.format = "";
 }
 
+static void reject(mca_ros2_pub_t *r, int arm, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void reject(mca_ros2_pub_t *r, int arm, const char *fmt, ...) {
+    pthread_mutex_lock(&r->reject_lock);
+    r->rejected++;
+    const int n = snprintf(r->last_reject, sizeof r->last_reject, "%s: ", r->cfg.arm[arm].name);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->last_reject + n, sizeof r->last_reject - (size_t)n, fmt, ap);
+    va_end(ap);
+    pthread_mutex_unlock(&r->reject_lock);
+}
+
+static void accept_target(mca_ros2_pub_t *r, int arm, const double x[3]) {
+    mailbox_t *b = &r->box[arm];
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    const uint32_t s0 = atomic_load_explicit(&b->seq, memory_order_relaxed);
+    atomic_store_explicit(&b->seq, s0 + 1u, memory_order_relaxed);
+    atomic_thread_fence(memory_order_release); /* odd seq visible before the fields change */
+    for (int i = 0; i < 3; i++) {
+        atomic_store_explicit(&b->x[i], x[i], memory_order_relaxed);
+    }
+    atomic_store_explicit(&b->recv_ns, (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec, memory_order_relaxed);
+    atomic_store_explicit(&b->accepted, atomic_load_explicit(&b->accepted, memory_order_relaxed) + 1u,
+                          memory_order_relaxed);
+    atomic_store_explicit(&b->seq, s0 + 2u, memory_order_release);
+}
+
+static int finite3(double a, double b, double c) {
+    return isfinite(a) && isfinite(b) && isfinite(c);
+}
+
+/* Check one received message; accept it into the arm's mailbox or count why not. */
+static void check_target(mca_ros2_pub_t *r, int arm, const std_msgs_msg_dds__Header_ *h, const double x[3],
+                         int finite) {
+    const mca_ros2_config_t *c = &r->cfg;
+    if (!finite) {
+        reject(r, arm, "not a number (NaN or infinity) in the target");
+        return;
+    }
+    if (h->frame_id == NULL || strcmp(h->frame_id, c->world_frame) != 0) {
+        reject(r, arm, "frame_id '%.40s' is not the cell's '%s'", h->frame_id ? h->frame_id : "",
+               c->world_frame);
+        return;
+    }
+    if (c->stream[arm] == MCA_ROS2_STREAM_TWIST) {
+        const double v = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+        if (v > c->stream_max_speed) {
+            reject(r, arm, "speed %.3g m/s above the limit %.3g m/s", v, c->stream_max_speed);
+            return;
+        }
+    } else {
+        for (int i = 0; i < 3; i++) {
+            if (x[i] < c->box_lo[i] || x[i] > c->box_hi[i]) {
+                reject(r, arm, "target (%.3g, %.3g, %.3g) m outside the workspace box", x[0], x[1], x[2]);
+                return;
+            }
+        }
+    }
+    accept_target(r, arm, x);
+}
+
+/* Cyclone listener (its receive thread, non-rt): every new sample of one arm's stream. */
+static void on_target(dds_entity_t reader, void *arg) {
+    stream_in_t *in = arg;
+    mca_ros2_pub_t *r = in->r;
+    void *buf[1] = {NULL};
+    dds_sample_info_t info[1];
+    while (dds_take(reader, buf, info, 1, 1) > 0) {
+        if (info[0].valid_data) {
+            if (r->cfg.stream[in->arm] == MCA_ROS2_STREAM_TWIST) {
+                const geometry_msgs_msg_dds__TwistStamped_ *m = buf[0];
+                const geometry_msgs_msg_dds__Vector3_ *l = &m->twist.linear, *w = &m->twist.angular;
+                const double x[3] = {l->x, l->y, l->z};
+                check_target(r, in->arm, &m->header, x,
+                             finite3(l->x, l->y, l->z) && finite3(w->x, w->y, w->z));
+            } else {
+                const geometry_msgs_msg_dds__PoseStamped_ *m = buf[0];
+                const geometry_msgs_msg_dds__Point_ *p = &m->pose.position;
+                const geometry_msgs_msg_dds__Quaternion_ *o = &m->pose.orientation;
+                const double x[3] = {p->x, p->y, p->z};
+                check_target(r, in->arm, &m->header, x,
+                             finite3(p->x, p->y, p->z) && finite3(o->x, o->y, o->z) && isfinite(o->w));
+            }
+        }
+        dds_return_loan(reader, buf, 1);
+        buf[0] = NULL;
+    }
+}
+
+static int create_stream_reader(mca_ros2_pub_t *r, dds_entity_t pp, int a, char *err, size_t errlen) {
+    const mca_ros2_config_t *c = &r->cfg;
+    if (c->stream[a] == MCA_ROS2_STREAM_NONE) {
+        return MCA_OK;
+    }
+    const int twist = c->stream[a] == MCA_ROS2_STREAM_TWIST;
+    char name[160];
+    snprintf(name, sizeof name, "rt/%s/%s/%s", c->cell, c->arm[a].name,
+             twist ? "target_twist" : "target_pose");
+    dds_qos_t *q = dds_create_qos();
+    dds_listener_t *l = dds_create_listener(&r->in[a]);
+    if (q == NULL || l == NULL) {
+        dds_delete_qos(q);
+        dds_delete_listener(l);
+        return MCA_ENOMEM;
+    }
+    /* best effort, keep-last 1: matches reliable and best-effort publishers; only the latest target counts */
+    dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    r->in[a] = (stream_in_t){.r = r, .arm = a};
+    dds_lset_data_available(l, on_target);
+    const dds_entity_t t = dds_create_topic(
+        pp, twist ? &geometry_msgs_msg_dds__TwistStamped__desc : &geometry_msgs_msg_dds__PoseStamped__desc,
+        name, q, NULL);
+    r->in[a].reader = t > 0 ? dds_create_reader(pp, t, q, l) : t;
+    dds_delete_qos(q);
+    dds_delete_listener(l);
+    if (r->in[a].reader < 0) {
+        snprintf(err, errlen, "ros2: cannot create topic/reader '%s': %s", name,
+                 dds_strretcode(r->in[a].reader));
+        return MCA_EIO;
+    }
+    return MCA_OK;
+}
+
+/* Readers first: their listeners use r, which is freed after. */
+static void delete_readers(mca_ros2_pub_t *r) {
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        if (r->in[a].reader > 0) {
+            dds_delete(r->in[a].reader);
+            r->in[a].reader = 0;
+        }
+    }
+}
+
+int mca_ros2_pub_target(mca_ros2_pub_t *r, int arm, mca_ros2_target_t *out) {
+    if (r == NULL || out == NULL || arm < 0 || arm >= (int)r->cfg.n_arms ||
+        r->cfg.stream[arm] == MCA_ROS2_STREAM_NONE) {
+        return MCA_EINVAL;
+    }
+    const mailbox_t *b = &r->box[arm];
+    for (int tries = 0; tries < 4; tries++) {
+        const uint32_t s0 = atomic_load_explicit(&b->seq, memory_order_acquire);
+        if (s0 & 1u) {
+            continue;
+        }
+        for (int i = 0; i < 3; i++) {
+            out->x[i] = atomic_load_explicit(&b->x[i], memory_order_relaxed);
+        }
+        out->recv_ns = atomic_load_explicit(&b->recv_ns, memory_order_relaxed);
+        out->accepted = atomic_load_explicit(&b->accepted, memory_order_relaxed);
+        atomic_thread_fence(memory_order_acquire); /* the fields read before seq is read again */
+        if (atomic_load_explicit(&b->seq, memory_order_relaxed) == s0) {
+            out->kind = r->cfg.stream[arm];
+            return MCA_OK;
+        }
+    }
+    return MCA_EAGAIN;
+}
+
 int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg, char *err,
                         size_t errlen) {
     char dummy[8];
@@ -271,6 +469,7 @@ int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_co
     if (r == NULL) {
         return MCA_ENOMEM;
     }
+    pthread_mutex_init(&r->reject_lock, NULL);
     r->cfg = *cfg;
     const mca_ros2_config_t *c = &r->cfg;
     r->realtime_offset_ns = clock_ns(CLOCK_REALTIME) - clock_ns(CLOCK_MONOTONIC);
@@ -311,9 +510,14 @@ int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_co
     if (rc == MCA_OK) {
         rc = write_description_and_tf(r, pp, latched, err, errlen);
     }
+    for (uint32_t a = 0; a < c->n_arms && rc == MCA_OK; a++) {
+        rc = create_stream_reader(r, pp, (int)a, err, errlen);
+    }
     dds_delete_qos(stream);
     dds_delete_qos(latched);
     if (rc != MCA_OK) {
+        delete_readers(r);
+        pthread_mutex_destroy(&r->reject_lock);
         free(r); /* the writers are the participant's: deleted with it */
         return rc;
     }
@@ -496,6 +700,19 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, u
     const builtin_interfaces_msg_dds__Time_ t_min = ros_time(r, st->min_distance_stamp_ns);
     KV("min_distance_stamp", "%d.%09u", t_min.sec, t_min.nanosec);
     KV("snapshots_dropped", "%llu", (unsigned long long)st->snapshots_dropped);
+    int streams = 0;
+    uint64_t accepted = 0;
+    for (uint32_t a = 0; a < r->cfg.n_arms; a++) {
+        streams += r->cfg.stream[a] != MCA_ROS2_STREAM_NONE;
+        accepted += atomic_load_explicit(&r->box[a].accepted, memory_order_relaxed);
+    }
+    if (streams) {
+        pthread_mutex_lock(&r->reject_lock);
+        KV("stream_accepted", "%llu", (unsigned long long)accepted);
+        KV("stream_rejected", "%llu", (unsigned long long)r->rejected);
+        KV("stream_last_reject", "%s", r->last_reject);
+        pthread_mutex_unlock(&r->reject_lock);
+    }
 #undef KV
     const int fault = st->state == MCA_DDS_STATE_FAULT;
     snprintf(r->diag_message, sizeof r->diag_message, "%s%s%s", state_name(st->state),
@@ -542,6 +759,7 @@ void mca_ros2_pub_destroy(mca_ros2_pub_t *r, dds_duration_t timeout) {
     if (r == NULL) {
         return;
     }
+    delete_readers(r); /* no listener runs after this */
     const dds_entity_t w[] = {r->w_markers, r->w_diag};
     for (size_t k = 0; k < sizeof w / sizeof w[0]; k++) {
         if (w[k] > 0) {
@@ -553,5 +771,6 @@ void mca_ros2_pub_destroy(mca_ros2_pub_t *r, dds_duration_t timeout) {
             dds_wait_for_acks(r->w_joints[a], timeout);
         }
     }
+    pthread_mutex_destroy(&r->reject_lock);
     free(r);
 }

@@ -24,6 +24,11 @@ int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64
 /** /diagnostics from the status just written on mca/controller_status. */
 int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t *errors);
 
+/** The latest accepted target of arm's stream (seqlock read: never waits). Context: rt.
+ *  @retval MCA_OK @retval MCA_EINVAL (no stream for that arm) @retval MCA_EAGAIN (being written: try next
+ *  tick) */
+int mca_ros2_pub_target(mca_ros2_pub_t *r, int arm, mca_ros2_target_t *out);
+
 /** Writers matched to at least n readers each (for tests). */
 int mca_ros2_pub_matched(const mca_ros2_pub_t *r, uint32_t n);
 

@@ -14,16 +14,26 @@ topics: an rclpy node subscribes to every topic with rclpy's default QoS (reliab
   of the CSV up to that tick. A node that joins 2 s late (transient-local QoS) gets each arm's URDF text;
   /tf_static (tf2_msgs has no rclpy wheel here) is read with the Cyclone Python binding, also late: one
   transform per arm, world -> <arm>/<root link>, at the scenario's base placement.
+stream: mcad runs config/cells/stream_sim.yaml (left follows a TwistStamped, right a PoseStamped); an rclpy
+  node finds the tool tips in the first MarkerArray and drives them at each other for 4 s (left at
+  0.15 m/s towards right's tip, right's pose target on left's tip): every tick of mcad's CSV >= d1, and
+  they came within d2 (the yield was needed). Then the stream backs off (left away, right to its start):
+  the distance grows past d2 and left's reference moves at the commanded speed again. Meanwhile bad
+  targets, each sent once: NaN, a frame_id that is not "world", a twist above max_speed, a pose outside
+  the workspace box: rejected, counted on /diagnostics with the last reason, and nothing moved by them.
+  Finally left's stream goes silent: its reference holds after hold_after, and after brake_after mcad
+  brakes both arms and exits 3 naming the stale stream; every tick >= d1 to the end.
 graph: mcad runs 3 s and links no ROS library (ldd); a second rclpy node sees the topics and types a ROS 2 user would see
   (get_topic_names_and_types), the publishers' QoS (reliable; transient-local for the latched ones), and a
   sensor-data (best-effort) subscriber receives JointState too.
 With a fifth argument (topics), the MarkerArray received at the tick of the smallest distance is written there
 as JSON: tools/plots/ros2_markers.py draws it (the README's picture).
-usage: test_ros2.py topics|graph MCAD SOURCE_DIR DOMAIN [MARKERS_JSON]"""
+usage: test_ros2.py topics|graph|stream MCAD SOURCE_DIR DOMAIN [MARKERS_JSON]"""
 import json
 import csv
 import math
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -40,6 +50,7 @@ from rclpy.node import Node  # noqa: E402
 from rclpy.qos import (QoSProfile, DurabilityPolicy, ReliabilityPolicy, HistoryPolicy,  # noqa: E402
                        qos_profile_sensor_data)
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from geometry_msgs.msg import PoseStamped, TwistStamped  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
@@ -441,9 +452,163 @@ def mode_graph(tmp):
           f"in {RUN_S} s at 100 Hz")
 
 
+def tips_of(ma):
+    """Tool tip of each arm: the last end cap of its last link."""
+    tips = {}
+    for a in ARMS:
+        caps = sorted((m for m in ma.markers if m.ns == f"{a}/links" and m.type == Marker.SPHERE_LIST),
+                      key=lambda m: m.id)
+        if caps:
+            q = caps[-1].points[-1]
+            tips[a] = (q.x, q.y, q.z)
+    return tips
+
+
+def mode_stream(tmp):
+    global NS
+    NS = "stream_sim"
+    src_cell = open(os.path.join(SRC, "config", "cells", "stream_sim.yaml")).read()
+    cell_text = (src_cell.replace("../scenarios/", f"{SRC}/config/scenarios/").replace("../dds/", f"{SRC}/config/dds/")
+                 .replace("domain: 0", f"domain: {DOMAIN}").replace("priority: 80", "priority: 60")
+                 .replace("stop_after: 0 ", "stop_after: 60 "))
+    cell, out_csv = os.path.join(tmp, "cell.yaml"), os.path.join(tmp, "mcad.csv")
+    with open(cell, "w") as f:
+        f.write(cell_text)
+    node = Collector("mca_ros2_stream")
+    node.all_topics()
+    pub_l = node.create_publisher(TwistStamped, topic("target_twist", "left"), 10)
+    pub_r = node.create_publisher(PoseStamped, topic("target_pose", "right"), 10)
+    ex = spin_in_background(node)
+    time.sleep(2.0)
+    proc = subprocess.Popen([MCAD, "--csv", out_csv, cell], stderr=subprocess.PIPE, text=True)
+    t_end = time.monotonic() + 20
+    while not node.markers and time.monotonic() < t_end:
+        time.sleep(0.05)
+    check(bool(node.markers), "mcad's markers arrived (the tool tips)")
+    tips0 = tips_of(node.markers[-1])
+    print("tool tips at start:", {a: tuple(round(x, 3) for x in p) for a, p in tips0.items()})
+
+    def twist(v, frame="world"):
+        m = TwistStamped()
+        m.header.frame_id = frame
+        m.header.stamp = node.get_clock().now().to_msg()
+        m.twist.linear.x, m.twist.linear.y, m.twist.linear.z = v
+        return m
+
+    def pose(p, frame="world"):
+        m = PoseStamped()
+        m.header.frame_id = frame
+        m.header.stamp = node.get_clock().now().to_msg()
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = p
+        m.pose.orientation.w = 1.0
+        return m
+
+    def drive(seconds, v_left, p_right, bad=None):
+        t0 = time.monotonic()
+        k = 0
+        while time.monotonic() - t0 < seconds:
+            if bad and k == 10:
+                bad()
+            pub_l.publish(twist(v_left))
+            pub_r.publish(pose(p_right))
+            sent_l.append(time.monotonic())
+            k += 1
+            time.sleep(0.02)  # 50 Hz
+
+    sent_bad = []
+    sent_l = []  # when each of left's twists went out
+
+    def bad_inputs():
+        pub_l.publish(twist((float("nan"), 0.0, 0.0)))
+        pub_l.publish(twist((0.05, 0.0, 0.0), frame="base_link"))
+        pub_l.publish(twist((0.5, 0.0, 0.0)))
+        pub_r.publish(pose((5.0, 0.0, 0.5)))
+        sent_bad.extend(["nan", "frame", "speed", "box"])
+
+    L, R = tips0["left"], tips0["right"]
+    gap = [r - l for l, r in zip(L, R)]
+    n = math.sqrt(sum(g * g for g in gap))
+    toward = [0.15 * g / n for g in gap]
+    t_phase = {}
+    t_phase["drive"] = time.time_ns()
+    drive(4.0, toward, L)                        # A: at each other
+    t_phase["back"] = time.time_ns()
+    drive(3.0, [-x for x in toward], R, bad_inputs)  # B: back off (right back to its start), bad inputs
+    t_phase["silent"] = time.time_ns()
+    # C: left silent; right keeps streaming its start (only left's stream goes stale)
+    t0 = time.monotonic()
+
+    def faulted():
+        with node.lock:
+            return any(kv.value == "fault" for da in node.diag[-3:] for st in da.status for kv in st.values
+                       if kv.key == "state")
+
+    while proc.poll() is None and time.monotonic() - t0 < 10 and not faulted():
+        pub_r.publish(pose(R))
+        time.sleep(0.02)
+    silent_s = time.monotonic() - sent_l[-1]
+    gaps = [b - a for a, b in zip(sent_l, sent_l[1:])]
+    print(f"left: {len(sent_l)} twists sent, largest gap {max(gaps) * 1e3:.0f} ms")
+    proc.send_signal(signal.SIGTERM)  # a faulted mcad holds the arms braked until it is told to go
+    try:
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err = proc.communicate()
+    time.sleep(1.5)
+    ex.shutdown()
+    print("mcad stderr (last lines):", "\n".join(err.strip().splitlines()[-6:]))
+    check(faulted() and 1.0 <= silent_s <= 3.0,
+          f"/diagnostics said fault {silent_s:.2f} s after left's last twist went out (brake_after 1 s; "
+          f"<= 3 s with delivery on a loaded machine)")
+    check(proc.returncode == 3, f"mcad exit status {proc.returncode} after SIGTERM (3: ended in a fault)")
+    check("no target on its stream" in err and "left" in err, "the fault names the stale stream and the arm")
+    rows = read_csv(out_csv)
+    d = [float(r["min_d"]) for r in rows]
+    states = [int(r["state"]) for r in rows]
+    check(min(d) >= D1, f"every one of {len(rows)} ticks at or above d1 = {D1} m (min {min(d):.4f} m)")
+    # phases in the CSV: mcad's t is task time from its first tick; map by the ticks the diagnostics stamped
+    running = [i for i, s_ in enumerate(states) if s_ == 2]
+    check(min(d[i] for i in running) < D2, f"the tips came within d2 = {D2} m while driven at each other "
+          f"(min {min(d[i] for i in running):.4f} m): the yield was needed")
+    brake_from = next((i for i, s_ in enumerate(states) if s_ in (3, 5)), None)
+    check(brake_from is not None and states[-1] == 5, "mcad braked and ended in FAULT")
+    # B: the distance grew past d2 again before the stale fault
+    if brake_from:
+        i_min = min(running, key=lambda i: d[i])
+        check(max(d[i_min:brake_from]) > D2, f"after backing off the distance grew to "
+              f"{max(d[i_min:brake_from]):.3f} m > d2 (the arms resumed)")
+        # left's reference held (rd0 constant) for the last (brake_after - hold_after - 0.1) s before braking
+        held = 0
+        while held < brake_from and all(rows[brake_from - 1 - held][c] == rows[brake_from - 1][c]
+                                        for c in ("rd0_x", "rd0_y", "rd0_z")):
+            held += 1
+        check(700 <= held <= 950, f"left's reference held {held} ticks before the brake: from hold_after (0.1 s) "
+              f"to brake_after (1 s) of silence")
+        # during back-off left's reference moved at the commanded 0.15 m/s at some point (sigma ~ 1)
+        speeds = [math.dist((float(rows[i]["rd0_x"]), float(rows[i]["rd0_y"]), float(rows[i]["rd0_z"])),
+                            (float(rows[i + 100]["rd0_x"]), float(rows[i + 100]["rd0_y"]),
+                             float(rows[i + 100]["rd0_z"]))) / 0.1 for i in range(i_min, brake_from - 800, 50)]
+        check(speeds and abs(max(speeds) - 0.15) < 0.01,
+              f"backing off, left's reference reached the commanded 0.15 m/s (max {max(speeds or [0]):.3f})")
+    # bad inputs: counted and reported
+    last = None
+    for da in node.diag:
+        for st in da.status:
+            kv = {v.key: v.value for v in st.values}
+            if "stream_rejected" in kv:
+                last = kv
+    check(last is not None and int(last["stream_rejected"]) == len(sent_bad),
+          f"/diagnostics: stream_rejected {last and last['stream_rejected']} = {len(sent_bad)} bad targets sent, "
+          f"last reason '{last and last['stream_last_reject']}'")
+    check(last is not None and "workspace" in last["stream_last_reject"],
+          "the last reason names the out-of-box pose")
+    check(last is not None and int(last["stream_accepted"]) > 300, f"accepted {last and last['stream_accepted']}")
+
+
 rclpy.init()
 with tempfile.TemporaryDirectory(prefix="mca-ros2-") as tmp:
-    {"topics": mode_topics, "graph": mode_graph}[MODE](tmp)
+    {"topics": mode_topics, "graph": mode_graph, "stream": mode_stream}[MODE](tmp)
 rclpy.try_shutdown()
 print("FAILED: " + "; ".join(failures) if failures else "PASSED", flush=True)
 sys.exit(1 if failures else 0)

@@ -248,6 +248,14 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
 /** Restart the task: next tick re-anchors paths, clears warm start, memory and any fault. RT safe. */
 void mca_controller_reset(mca_controller_t *ctrl);
 
+/**
+ * Velocity of arm @p arm's streamed reference from the next tick on (its path must be MCA_PATH_STREAM):
+ * the reference moves by sigma v dt per tick, sigma the arm's path rate (mca-ts: below 1 while it yields,
+ * negative while it backs off a deadlock; the other schemes: 1). RT safe.
+ * @retval MCA_OK, MCA_EINVAL (NULL, arm out of range, not a stream, non-finite v)
+ */
+int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]);
+
 /** Clear a latched fault (keeps the task clock and anchors). RT safe. */
 void mca_controller_clear_fault(mca_controller_t *ctrl);
 

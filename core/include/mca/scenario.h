@@ -28,6 +28,9 @@ typedef enum mca_path_kind {
     MCA_PATH_HOLD = 0,      /**< stay at the start position */
     MCA_PATH_CIRCLE = 1,    /**< circle through the start position, phase 2 pi sin^2(pi t / 2T) */
     MCA_PATH_WAYPOINTS = 2, /**< straight segments between waypoints, quintic timing per segment */
+    MCA_PATH_STREAM = 3,    /**< a streamed target (mcad's task kind `stream`): the reference starts at the
+                                 anchor and moves with the velocity set each tick (mca_controller_stream), at
+                                 the arm's path rate; it never ends */
 } mca_path_kind_t;
 
 typedef struct mca_path {
@@ -47,6 +50,10 @@ typedef struct mca_path {
     int n_points;
     double p[MCA_PATH_MAX_POINTS][3];
     double dur[MCA_PATH_MAX_POINTS]; /**< dur[i]: duration of segment i -> i+1 [s] (> 0) */
+    /* stream: reference position and velocity; the reference stays inside [box_lo, box_hi] (a component at a
+     * wall stops there while the velocity pushes outwards) */
+    double stream_r[3], stream_v[3];
+    double box_lo[3], box_hi[3];
 } mca_path_t;
 
 /** Fix a path's anchor (the end effector's position at task start). Start-up/rt safe. */
@@ -59,8 +66,12 @@ void mca_path_anchor(mca_path_t *path, const double ee_start[3]);
  */
 int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3]);
 
-/** Task time at which the path ends. */
+/** Task time at which the path ends (+INFINITY for a stream). */
 double mca_path_end_time(const mca_path_t *path);
+
+/** Stream: move the reference by rate * stream_v * dt, kept inside the box (real-time safe; other kinds:
+ *  nothing). */
+void mca_path_stream_advance(mca_path_t *path, double rate, double dt);
 
 /** One arm of a scenario. */
 typedef struct mca_scenario_arm {

@@ -30,6 +30,24 @@ typedef enum mca_cell_backend {
     MCA_CELL_BACKEND_SOCKETCAN = 1, /**< SocketCAN CAN FD (mca/arm_can.h) */
 } mca_cell_backend_t;
 
+/** What a streamed arm follows (task.stream; numbering as mca_ros2_stream_kind_t). */
+typedef enum mca_cell_stream_kind {
+    MCA_CELL_STREAM_NONE = 0,
+    MCA_CELL_STREAM_TWIST = 1, /**< geometry_msgs/TwistStamped on /<ns>/<arm>/target_twist */
+    MCA_CELL_STREAM_POSE = 2,  /**< geometry_msgs/PoseStamped on /<ns>/<arm>/target_pose */
+} mca_cell_stream_kind_t;
+
+/** A streamed task (task.stream, docs/ros2.md): each arm's tool tip follows a ROS 2 topic. */
+typedef struct mca_cell_stream {
+    int enabled;
+    double max_speed;  /**< twists faster are rejected; pose targets are approached at most this fast [m/s] */
+    double pose_gain;  /**< pose: approach velocity = gain x (target - reference), capped [1/s] */
+    double hold_after; /**< no accepted target for this long: the reference holds [s] */
+    double brake_after;          /**< no accepted target for this long: a named fault, every arm brakes [s] */
+    double box_lo[3], box_hi[3]; /**< workspace (world): pose targets outside are rejected, the reference
+                                      stops at its walls */
+} mca_cell_stream_t;
+
 /** Hardware side of one arm (the model and path live in the cell's scenario). */
 typedef struct mca_cell_arm {
     mca_cell_backend_t backend;
@@ -37,6 +55,7 @@ typedef struct mca_cell_arm {
     uint32_t id_base;              /**< socketcan: the arm's CAN id block */
     double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
     double priority;               /**< mca-ts: higher keeps its path, lower yields first (0: default 1) */
+    int stream;                    /**< mca_cell_stream_kind_t (task.stream: twist unless the arm says) */
     /* sim backend model */
     double sim_lag_tau;     /**< first-order velocity lag [s] */
     int sim_latency_cycles; /**< command transport delay [cycles] */
@@ -78,8 +97,9 @@ typedef struct mca_cell_rt {
 
 typedef struct mca_cell {
     char name[64];
-    char source[512];   /**< file it was loaded from */
-    mca_scenario_t scn; /**< task: arms' models, placements, q0, paths, duration, d1, d2, ... */
+    char source[512];         /**< file it was loaded from */
+    mca_scenario_t scn;       /**< task: arms' models, placements, q0, paths, duration, d1, d2, ... */
+    mca_cell_stream_t stream; /**< task.stream: the arms follow ROS 2 topics instead of the paths */
     mca_scheme_kind_t scheme;
     mca_cell_arm_t arm[MCA_MAX_ARMS];
     /* solver overrides (< 0 / 0: the controller's default) */

@@ -59,6 +59,7 @@ typedef enum mca_daemon_fault {
     MCA_DAEMON_FAULT_ARM = 4,           /**< an arm reports FAULT or brakes on its own */
     MCA_DAEMON_FAULT_BUS = 5,           /**< bus error on an arm's link */
     MCA_DAEMON_FAULT_FEEDBACK = 6, /**< implausible feedback from an arm (mca_feedback_fault_t says how) */
+    MCA_DAEMON_FAULT_STREAM_STALE = 7, /**< task.stream: an arm's target stream silent for brake_after */
 } mca_daemon_fault_t;
 
 /**

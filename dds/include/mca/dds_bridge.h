@@ -209,6 +209,14 @@ void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_sta
 int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *dist, uint8_t arm_a,
                       uint8_t arm_b, double d1, double d2);
 
+/**
+ * The latest accepted target of arm's ROS 2 stream (mca/ros2.h): a seqlock read, never waits, no system
+ * call. Context: rt.
+ * @retval MCA_OK @retval MCA_EINVAL (no bridge, no ROS 2 topics or no stream for that arm)
+ * @retval MCA_EAGAIN (a new target is being written just now: keep the last one this tick)
+ */
+int mca_dds_bridge_stream_target(mca_dds_bridge_t *bridge, int arm, mca_ros2_target_t *out);
+
 /** Topic names (also in docs/dds.md). */
 #define MCA_DDS_TOPIC_JOINT_STATE "mca/joint_state"
 #define MCA_DDS_TOPIC_JOINT_COMMAND "mca/joint_command"

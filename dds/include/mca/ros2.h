@@ -11,6 +11,15 @@
  *   /<cell>/distance_markers          visualization_msgs/msg/MarkerArray every published snapshot
  *   /diagnostics                      diagnostic_msgs/msg/DiagnosticArray with every mca/controller_status
  *
+ * In (a cell's `stream` task, per arm one of):
+ *   /<cell>/<arm>/target_twist        geometry_msgs/msg/TwistStamped     tool-tip velocity (linear part)
+ *   /<cell>/<arm>/target_pose         geometry_msgs/msg/PoseStamped      tool-tip position target
+ * read best-effort, keep-last 1 (matches reliable and best-effort publishers). Each message is checked
+ * where it arrives (a Cyclone thread, non-rt): NaN or infinity, a frame_id other than the world frame, a
+ * linear speed above stream_max_speed, a position outside the workspace box are rejected and counted (the
+ * count and the last reason go out on /diagnostics); an accepted one replaces the arm's target in a
+ * seqlock mailbox that the loop reads without waiting (mca_dds_bridge_stream_target).
+ *
  * Stamps are ROS time (CLOCK_REALTIME): the snapshot's CLOCK_MONOTONIC stamp plus the offset between the
  * two clocks taken once when the bridge starts, so that samples of one tick carry one stamp.
  */
@@ -30,6 +39,21 @@ extern "C" {
 /** Longest ROS 2 name part (cell, arm) accepted, bytes without NUL. */
 #define MCA_ROS2_NAME_MAX 31
 
+/** What an arm's stream carries. */
+typedef enum mca_ros2_stream_kind {
+    MCA_ROS2_STREAM_NONE = 0,
+    MCA_ROS2_STREAM_TWIST = 1, /**< geometry_msgs/TwistStamped on /<cell>/<arm>/target_twist */
+    MCA_ROS2_STREAM_POSE = 2,  /**< geometry_msgs/PoseStamped on /<cell>/<arm>/target_pose */
+} mca_ros2_stream_kind_t;
+
+/** The latest accepted target of one arm's stream. */
+typedef struct mca_ros2_target {
+    int kind;          /**< mca_ros2_stream_kind_t */
+    double x[3];       /**< twist: linear velocity [m/s]; pose: position [m]; world frame */
+    int64_t recv_ns;   /**< CLOCK_MONOTONIC when it was accepted */
+    uint64_t accepted; /**< targets accepted so far (0: none yet, x is zero) */
+} mca_ros2_target_t;
+
 /** One arm as ROS 2 sees it. */
 typedef struct mca_ros2_arm {
     char name[MCA_ROS2_NAME_MAX + 1]; /**< topic namespace /<cell>/<name>/ and TF prefix <name>/ */
@@ -48,6 +72,9 @@ typedef struct mca_ros2_config {
     char cell[MCA_ROS2_NAME_MAX + 1]; /**< topic namespace /<cell>/ */
     char world_frame[32];             /**< frame of markers and of the TF parents ("world") */
     int joint_states, robot_description, tf_static, markers, diagnostics;
+    int stream[MCA_MAX_ARMS];    /**< mca_ros2_stream_kind_t of each arm (NONE: no subscription) */
+    double stream_max_speed;     /**< twists faster than this are rejected [m/s] */
+    double box_lo[3], box_hi[3]; /**< workspace box (world): pose targets outside are rejected */
     uint32_t n_arms;
     mca_ros2_arm_t arm[MCA_MAX_ARMS];
 } mca_ros2_config_t;
