@@ -335,6 +335,37 @@ static void test_unknown_scheme(void **state) {
     expect_error(p, MCA_ERANGE, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
 }
 
+/* ROS 2 (issue 14): dds.ros2 and task.stream keys; bad values name file, line and field. */
+static void test_ros2_keys(void **state) {
+    (void)state;
+    const char *p = write_variant("r2ns", "  publish_divisor: 4\n",
+                                  "  publish_divisor: 4\n  ros2: {namespace: bad-name}\n");
+    expect_error(p, MCA_ERANGE, line_of(p, "namespace: bad-name"), "dds.ros2.namespace", "not a ROS 2 name",
+                 NULL);
+    p = write_variant("r2ok", "  publish_divisor: 4\n", "  publish_divisor: 4\n  ros2: {markers: false}\n");
+    char err[512] = "";
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    assert_string_equal(cell.dds.ros2.ns, "unit_cell"); /* the cell name */
+    assert_int_equal(cell.dds.ros2.markers, 0);
+    assert_int_equal(cell.dds.ros2.joint_states, 1);
+    const char *stream = "  duration: 3.5\n  stream:\n    max_speed: %s\n    workspace_min: [-1, -1, 0]\n"
+                         "    workspace_max: [1, 1, %s]\n";
+    char text[256];
+    snprintf(text, sizeof text, stream, "5.0", "1");
+    p = write_variant("stspeed", "  duration: 3.5\n", text);
+    expect_error(p, MCA_ERANGE, line_of(p, "max_speed"), "task.stream.max_speed", "5 outside", NULL);
+    snprintf(text, sizeof text, stream, "0.2", "-1");
+    p = write_variant("stbox", "  duration: 3.5\n", text);
+    expect_error(p, MCA_ERANGE, line_of(p, "workspace_max"), "task.stream.workspace_max[2]", "not above",
+                 NULL);
+    snprintf(text, sizeof text, stream, "0.2", "1");
+    p = write_variant("stdds", "  duration: 3.5\n", text); /* the good cell has DDS off */
+    expect_error(p, MCA_ERANGE, line_of(p, "stream:"), "task.stream", "needs dds.enabled", NULL);
+    p = write_variant("starm", "    path: {kind: circle", "    stream: pose\n    path: {kind: circle");
+    expect_error(p, MCA_EPARSE, line_of(p, "stream: pose"), "arms[1].stream", "only in a streamed task",
+                 NULL);
+}
+
 /* mca-ts (issue 11): the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
  * solver.back_off_time reach the controller config; bad values name file, line and field. */
 static void test_mca_ts_keys(void **state) {
@@ -437,8 +468,8 @@ int main(void) {
         cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
         cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
         cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_duplicate_arm),      cmocka_unit_test(test_shipped_cells),
-        cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_ros2_keys),          cmocka_unit_test(test_duplicate_arm),
+        cmocka_unit_test(test_shipped_cells),      cmocka_unit_test(test_mca_ts_keys),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[300];

@@ -132,10 +132,10 @@ class Collector(Node):
             self.create_subscription(String, topic("robot_description", a), cb, latched)
 
 
-def run_mcad(tmp):
+def run_mcad(tmp, cell_text=None):
     cell, out_csv = os.path.join(tmp, "cell.yaml"), os.path.join(tmp, "mcad.csv")
     with open(cell, "w") as f:
-        f.write(CELL)
+        f.write(cell_text or CELL)
     return subprocess.Popen([MCAD, "--csv", out_csv, cell], stderr=subprocess.PIPE, text=True), out_csv
 
 
@@ -422,8 +422,26 @@ def mode_graph(tmp):
     node.create_subscription(JointState, topic("joint_states", "left"), best_effort.append, qos_profile_sensor_data)
     ex = spin_in_background(node)
     time.sleep(2.0)
-    proc, _ = run_mcad(tmp)
+    # the right arm turned about all three axes (yaw past 90 deg: the other branches of the rotation ->
+    # quaternion conversion than an identity base); /tf_static must carry exactly that rotation
+    rpy = (0.3, -0.2, 2.8)
+    proc, _ = run_mcad(tmp, CELL.replace("  - name: right\n    backend: sim",
+                                         f"  - name: right\n    backend: sim\n    base_rpy: [{rpy[0]}, {rpy[1]}, {rpy[2]}]"))
+    tf_reader = tf_static_reader()
     time.sleep(1.5)
+    tfs = []
+    for _ in range(40):
+        tfs += [x for s in tf_reader.take(N=10) if getattr(s, "transforms", None) for x in s.transforms]
+        if tfs:
+            break
+        time.sleep(0.05)
+    got = {x.child_frame_id: x.transform.rotation for x in tfs}
+    q = quat_rpy(*rpy)
+    ro = got.get("right/base_link")
+    err = min(math.dist((ro.x, ro.y, ro.z, ro.w), q), math.dist((ro.x, ro.y, ro.z, ro.w), [-c for c in q])) \
+        if ro else 1.0
+    check(err < 1e-12, f"/tf_static: right/base_link turned by rpy {rpy}: quaternion within {err:.1e} of "
+          f"the one computed here from the rpy")
     names = dict(node.get_topic_names_and_types())
     want = {topic("joint_states", a): "sensor_msgs/msg/JointState" for a in ARMS}
     want.update({topic("robot_description", a): "std_msgs/msg/String" for a in ARMS})
