@@ -97,6 +97,7 @@ static mca_daemon_t *open_cell(const char *path, int dds, char *csv) {
     }
     cell.dds.enabled = dds;
     cell.dds.domain = domain;
+    snprintf(cell.dds.config, sizeof cell.dds.config, "%s/config/dds/loopback.xml", src); /* traffic on lo */
     cell.dds.publish_divisor = 1;
     mca_daemon_opts_t o = {.no_rt = 1, .no_dds = !dds, .log = stderr, .csv_path = csv, .virtual_time = 1};
     mca_daemon_t *d = NULL;
@@ -245,7 +246,19 @@ int main(int argc, char **argv) {
     report("injected controller fault (NaN), braking, FAULT", d, k, before);
     mca_daemon_close(d);
 
-    /* 4. the arms' faults */
+    /* 4. a streamed task (ROS 2 targets, issue 14), DDS with its ROS 2 topics every tick: the loop reads the
+     *    stream mailboxes each tick (no target comes: the arms hold), then a stop and braking */
+    snprintf(path, sizeof path, "%s/config/cells/stream_sim.yaml", src);
+    d = open_cell(path, 1, csv);
+    t = 0.0;
+    before = allocs;
+    k = run(d, &t, 2000, -1);
+    mca_daemon_request_stop(d);
+    k += run(d, &t, 20000, MCA_DAEMON_STOPPED);
+    report("streamed task: holding, ROS 2 topics every tick, stop, braking", d, k, before);
+    mca_daemon_close(d);
+
+    /* 5. the arms' faults */
     injected("lost feedback (right arm's firmware silent)", inline_cell, 500, 1, MCA_SIM_INJ_SILENT);
     injected("an arm's own FAULT (left actuator)", inline_cell, 500, 0, MCA_SIM_INJ_ACTUATOR);
     injected("an arm that does not servo (commands lost from the start)", inline_cell, 0, 1,
