@@ -464,6 +464,17 @@ def main():
                      f"{L['n']} samples, mca-dds-synth 1 kHz, loopback config, SCHED_OTHER"))
     if not (on or dds.get("ratio_p50") is not None):
         rows.append(("5. DDS on vs off", "not measured", "-", "-", "bench_dds / mcad outputs missing"))
+    r2 = read(os.path.join(raw, "ros2_latency.txt"))
+    r2l = {"p50": num(r"tick->rclpy p50 ([0-9.]+) us", r2), "p99": num(r"us p99 ([0-9.]+) us", r2),
+           "max": num(r"max ([0-9.]+) us \(n=", r2), "n": num(r"\(n=(\d+)\)", r2, cast=int)}
+    R["ros2_latency"] = r2l
+    if r2l["p50"] is not None:
+        rows.append(("5d. ROS 2 latency tick wake-up -> rclpy callback (JointState, Fast DDS)",
+                     f"p50 {fmt(r2l['p50'])} / p99 {fmt(r2l['p99'])} / max {fmt(r2l['max'])} us", "1 ms period",
+                     "-", f"{r2l['n']} samples at 100 Hz, mcad SCHED_FIFO, rclpy executor in Python, own netns"))
+    else:
+        rows.append(("5d. ROS 2 latency tick -> rclpy", "not measured", "-", "-",
+                     (r2.strip().splitlines() or ["raw/ros2_latency.txt missing"])[-1][:80]))
 
     # 6
     vc = load_json(os.path.join(out_dir, "vcan.json"))

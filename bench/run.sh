@@ -180,6 +180,13 @@ if have "$SYNTH" && have "$MON"; then
     wait $syn
 fi
 
+# 5d. ROS 2: tick wake-up -> rclpy callback (JointState), in a network namespace of its own (root)
+if have "$MCAD" && [ -x "$ROOT/.venv/bin/python3" ]; then
+    step "ros2: latency tick -> rclpy, ${JIT} s of mcad at 100 Hz"
+    "$ROOT/tests/ros2/netns.sh" "$ROOT/.venv/bin/python3" "$ROOT/bench/ros2/latency.py" "$MCAD" "$ROOT" "$JIT" \
+        >"$RAW/ros2_latency.txt" 2>&1 || true
+fi
+
 # 6. vcan round trip: SocketCAN lockstep between mca-can-ctl and mca-armsim (engineer "can"'s tools);
 #    this kernel has no vcan, so inside the QEMU guest of tools/vcan-guest
 ARMSIM=$B/sim_backend/armsim_can/mca-armsim
