@@ -295,7 +295,9 @@ static void reject(mca_ros2_pub_t *r, int arm, const char *fmt, ...) __attribute
 static void reject(mca_ros2_pub_t *r, int arm, const char *fmt, ...) {
     pthread_mutex_lock(&r->reject_lock);
     r->rejected++;
-    const int n = snprintf(r->last_reject, sizeof r->last_reject, "%s: ", r->cfg.arm[arm].name);
+    char name[MCA_ROS2_NAME_MAX + 1];
+    memcpy(name, r->cfg.arm[arm].name, sizeof name); /* not formatted from r into r (-Wrestrict) */
+    const int n = snprintf(r->last_reject, sizeof r->last_reject, "%s: ", name);
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(r->last_reject + n, sizeof r->last_reject - (size_t)n, fmt, ap);
@@ -650,8 +652,10 @@ int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64
         txt->scale.z = 0.04;
         txt->color = (std_msgs_msg_dds__ColorRGBA_){1.0f, 1.0f, 1.0f, 1.0f};
         /* %.17g: a subscriber reads the distance back exactly */
-        snprintf(r->text[k], sizeof r->text[k], "%s-%s %.17g m", c->arm[p->arm_a % MCA_MAX_ARMS].name,
+        char text[sizeof r->text[k]];
+        snprintf(text, sizeof text, "%s-%s %.17g m", c->arm[p->arm_a % MCA_MAX_ARMS].name,
                  c->arm[p->arm_b % MCA_MAX_ARMS].name, p->min_distance);
+        memcpy(r->text[k], text, sizeof text);
         txt->text = r->text[k];
     }
     for (uint32_t m = 0; m < nm; m++) {
@@ -710,7 +714,9 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, u
         pthread_mutex_lock(&r->reject_lock);
         KV("stream_accepted", "%llu", (unsigned long long)accepted);
         KV("stream_rejected", "%llu", (unsigned long long)r->rejected);
-        KV("stream_last_reject", "%s", r->last_reject);
+        char last[sizeof r->last_reject];
+        memcpy(last, r->last_reject, sizeof last);
+        KV("stream_last_reject", "%s", last);
         pthread_mutex_unlock(&r->reject_lock);
     }
 #undef KV
