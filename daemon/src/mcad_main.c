@@ -60,14 +60,24 @@ static double mono_s(void) {
 }
 
 static void print_cell(const mca_cell_t *c) {
-    printf("cell %s (%s): scheme %s, task '%s' %.3g s, d1 %.3g m, d2 %.3g m\n", c->name, c->source,
-           mca_scheme_name(c->scheme), c->scn.name, c->scn.duration, c->scn.params.d1, c->scn.params.d2);
+    char task[96];
+    if (c->stream.enabled) {
+        snprintf(task, sizeof task, "'%s' streamed (until stopped)", c->scn.name);
+    } else {
+        snprintf(task, sizeof task, "'%s' %.3g s", c->scn.name, c->scn.duration);
+    }
+    printf("cell %s (%s): scheme %s, task %s, d1 %.3g m, d2 %.3g m\n", c->name, c->source,
+           mca_scheme_name(c->scheme), task, c->scn.params.d1, c->scn.params.d2);
     for (int a = 0; a < c->scn.n_arms; a++) {
         const mca_scenario_arm_t *sa = &c->scn.arm[a];
         printf("  arm %d '%s': %s, %d joints, base [%g %g %g], backend %s", a, sa->name, sa->urdf, sa->n_q0,
                sa->base_xyz[0], sa->base_xyz[1], sa->base_xyz[2], mca_cell_backend_name(c->arm[a].backend));
         if (c->arm[a].backend == MCA_CELL_BACKEND_SOCKETCAN) {
             printf(" %s id_base 0x%x", c->arm[a].interface, c->arm[a].id_base);
+        }
+        if (c->stream.enabled) {
+            printf(", follows /%s/%s/%s", c->dds.ros2.ns, sa->name,
+                   c->arm[a].stream == MCA_CELL_STREAM_POSE ? "target_pose" : "target_twist");
         }
         printf("\n");
     }
@@ -78,6 +88,20 @@ static void print_cell(const mca_cell_t *c) {
         c->rt.lost_feedback_cycles, (long long)(c->rt.pdnn_budget_ns / 1000));
     printf("  dds: %s, domain %u, config %s, publish every %u ticks\n", c->dds.enabled ? "on" : "off",
            c->dds.domain, c->dds.config[0] ? c->dds.config : "(default)", c->dds.publish_divisor);
+    const mca_cell_ros2_t *r = &c->dds.ros2;
+    if (c->dds.enabled && r->enabled) {
+        printf("  ros2: namespace /%s, world frame %s,%s%s%s%s%s\n", r->ns, r->world_frame,
+               r->joint_states ? " joint_states" : "", r->robot_description ? " robot_description" : "",
+               r->tf_static ? " tf_static" : "", r->markers ? " distance_markers" : "",
+               r->diagnostics ? " diagnostics" : "");
+    }
+    if (c->stream.enabled) {
+        printf("  stream: max speed %g m/s, pose gain %g 1/s, hold after %g s, brake after %g s, workspace "
+               "[%g %g %g] .. [%g %g %g]\n",
+               c->stream.max_speed, c->stream.pose_gain, c->stream.hold_after, c->stream.brake_after,
+               c->stream.box_lo[0], c->stream.box_lo[1], c->stream.box_lo[2], c->stream.box_hi[0],
+               c->stream.box_hi[1], c->stream.box_hi[2]);
+    }
 }
 
 int main(int argc, char **argv) {
