@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* Real-time discipline: the distance functions must not allocate. Counts malloc/calloc/realloc calls by
  * interposing them (glibc __libc_* underneath), and documents which libccd entry points do allocate.
- * Skipped under AddressSanitizer (it owns malloc). */
+ * Under AddressSanitizer (it owns malloc) it exits 77, which ctest shows as skipped (issue 12: a test must not
+ * pass without having run); the normal build's run is the one that counts. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,8 +17,8 @@
 
 #if defined(__SANITIZE_ADDRESS__)
 int main(void) {
-    printf("skipped under AddressSanitizer\n");
-    return 0;
+    printf("SKIP: the allocation counter cannot run under AddressSanitizer (it replaces malloc)\n");
+    return 77;
 }
 #else
 extern void *__libc_malloc(size_t);
