@@ -474,7 +474,7 @@ def main():
                      "-", f"{r2l['n']} samples at 100 Hz, mcad SCHED_FIFO, rclpy executor in Python, own netns"))
     else:
         rows.append(("5d. ROS 2 latency tick -> rclpy", "not measured", "-", "-",
-                     (r2.strip().splitlines() or ["raw/ros2_latency.txt missing"])[-1][:80]))
+                     ((r2 or "").strip().splitlines() or ["raw/ros2_latency.txt missing"])[-1][:80]))
 
     # 6
     vc = load_json(os.path.join(out_dir, "vcan.json"))

@@ -138,8 +138,15 @@ def main():
         p.kill()
         err.seek(0)
         fail("no mcad-loop thread appeared: " + err.read()[-2000:])
-    st = subprocess.Popen([strace, "-qq", "-p", str(loop), "-o", trace])
-    time.sleep(1.0)
+    # strace's attach once failed in a starved guest (PTRACE_SEIZE: No such process, for a thread that ran on
+    # for 10 s): an attach that fails is tried again, with the thread looked up afresh, and said so
+    for attempt in range(3):
+        st = subprocess.Popen([strace, "-qq", "-p", str(loop), "-o", trace], stderr=subprocess.PIPE, text=True)
+        time.sleep(1.0)
+        if st.poll() is None or p.poll() is not None:
+            break
+        print(f"strace could not attach to thread {loop} (attempt {attempt + 1}): {st.stderr.read().strip()}")
+        loop = next((tid for tid, (name, _) in threads(p.pid).items() if name == "mcad-loop"), loop)
     affinity = threads(p.pid)
     rc = p.wait(timeout=300)
     st.wait(timeout=60)
