@@ -18,6 +18,7 @@
 
 #include "mca/arm_can.h"
 #include "mca/dds_bridge.h"
+#include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/sim_backend.h"
 #ifdef MCA_TEST_HOOKS
@@ -550,6 +551,10 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
              * makes no system call (only a late tick finds the publisher parked and wakes it) */
             dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;
             dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
+        }
+        if (rc == MCA_OK) {
+            mca_dds_log_capture(
+                1); /* Cyclone's warnings through the supervisor, never blocking a DDS thread */
         }
         rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc) : rc;
         if (rc != MCA_OK && !(err && err[0])) {
@@ -1427,6 +1432,9 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
 
 int mca_daemon_service(mca_daemon_t *d) {
     int n = mca_rtlog_drain(&d->log, d->opts.log);
+    if (d->dds) {
+        n += mca_dds_log_drain(d->opts.log, "<4>mcad: dds: ");
+    }
     if (d->csv) {
         int rows = 0;
         while (mca_ring_pop(&d->csv_ring, &d->csv_out) == MCA_OK) {
@@ -1627,8 +1635,21 @@ void mca_daemon_close(mca_daemon_t *d) {
         d->snap.tick = s.ticks;
         st->ticks = s.ticks;
         mca_dds_bridge_push(d->dds, &d->snap); /* the bridge queues every push: the final one goes out */
-        mca_dds_bridge_destroy(d->dds, NULL);
+        mca_dds_stats_t ds;
+        mca_dds_bridge_destroy(d->dds, &ds);
         d->dds = NULL;
+        mca_dds_log_drain(d->opts.log, "<4>mcad: dds: ");
+        mca_dds_log_capture(0);
+        if (d->opts.log) {
+            fprintf(d->opts.log,
+                    "<%d>mcad: summary: dds: %llu snapshots published, %llu lost to ring overrun (most "
+                    "waiting %llu), "
+                    "%llu samples, %llu write errors, longest publish %.1f us\n",
+                    ds.dropped || ds.write_errors ? 4 : 6, (unsigned long long)ds.published,
+                    (unsigned long long)ds.dropped, (unsigned long long)ds.max_pending,
+                    (unsigned long long)ds.samples, (unsigned long long)ds.write_errors,
+                    (double)ds.max_publish_ns / 1e3);
+        }
     }
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         mca_arm_close(d->arm[a]);

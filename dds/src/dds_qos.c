@@ -2,6 +2,8 @@
 /* QoS and participant set-up shared by every mca DDS endpoint. */
 #include "mca/dds_qos.h"
 
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +15,13 @@ dds_qos_t *mca_dds_qos_stream(void) {
     if (q == NULL) {
         return NULL;
     }
-    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+    /* max_blocking_time 0: a writer never waits for a slow or lost reader. Cyclone throttles a reliable
+     * writer whose unacknowledged data passes its high watermark for up to max_blocking_time on EVERY write,
+     * and with keep-last it then writes anyway: with 100 ms, a 1 Mbit/s link to one monitor held one
+     * snapshot's writes for 6.4 s (tests/dds/test_netns_faults.py) and mcad's ring overflowed. With 0 the
+     * oldest unacknowledged sample goes instead, inside DDS; reliable delivery to readers that keep up stays.
+     */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, 0);
     /* keep-last 1 lost samples at 1 kHz here: 16 absorbs a scheduling hiccup of the reader. */
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 16);
     dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
@@ -25,7 +33,7 @@ dds_qos_t *mca_dds_qos_status(void) {
     if (q == NULL) {
         return NULL;
     }
-    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, 0); /* never waits: see mca_dds_qos_stream */
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
     return q;
@@ -99,4 +107,74 @@ dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition) {
 
 dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition) {
     return create_in_partition(pp, partition, 0);
+}
+
+/* ---- Cyclone's log messages, captured (mca_dds_log_capture) */
+
+#define LOG_LINES 64
+#define LOG_LINE_MAX 200
+
+static struct {
+    pthread_mutex_t lock;
+    int n;
+    char line[LOG_LINES][LOG_LINE_MAX];
+    uint64_t repeats[LOG_LINES]; /* the same message again right after: counted, not stored */
+    _Atomic uint64_t lost;
+} captured = {.lock = PTHREAD_MUTEX_INITIALIZER};
+
+static void capture_sink(void *arg, const dds_log_data_t *m) {
+    (void)arg;
+    if (pthread_mutex_trylock(&captured.lock) != 0) {
+        atomic_fetch_add_explicit(&captured.lost, 1u, memory_order_relaxed);
+        return;
+    }
+    const char *text = m->message;
+    size_t len = strlen(text);
+    while (len > 0 && (text[len - 1] == '\n' || text[len - 1] == '\r')) {
+        len--;
+    }
+    if (len >= LOG_LINE_MAX) {
+        len = LOG_LINE_MAX - 1;
+    }
+    if (captured.n > 0 && strncmp(captured.line[captured.n - 1], text, len) == 0 &&
+        captured.line[captured.n - 1][len] == '\0') {
+        captured.repeats[captured.n - 1]++; /* a flood of one warning (one per failed send) is one line */
+    } else if (captured.n < LOG_LINES) {
+        memcpy(captured.line[captured.n], text, len);
+        captured.line[captured.n][len] = '\0';
+        captured.repeats[captured.n] = 0;
+        captured.n++;
+    } else {
+        atomic_fetch_add_explicit(&captured.lost, 1u, memory_order_relaxed);
+    }
+    pthread_mutex_unlock(&captured.lock);
+}
+
+void mca_dds_log_capture(int on) {
+    dds_set_log_sink(on ? capture_sink : NULL, NULL);
+}
+
+int mca_dds_log_drain(FILE *f, const char *prefix) {
+    static char out[LOG_LINES][LOG_LINE_MAX]; /* one drainer (the daemon's supervisor) */
+    static uint64_t reps[LOG_LINES];
+    pthread_mutex_lock(&captured.lock);
+    const int n = captured.n;
+    memcpy(out, captured.line, (size_t)n * LOG_LINE_MAX);
+    memcpy(reps, captured.repeats, (size_t)n * sizeof reps[0]);
+    captured.n = 0;
+    pthread_mutex_unlock(&captured.lock);
+    const uint64_t lost = atomic_exchange_explicit(&captured.lost, 0u, memory_order_relaxed);
+    for (int i = 0; i < n && f != NULL; i++) {
+        if (reps[i] > 0) {
+            fprintf(f, "%s%s (and %llu times more)\n", prefix ? prefix : "", out[i],
+                    (unsigned long long)reps[i]);
+        } else {
+            fprintf(f, "%s%s\n", prefix ? prefix : "", out[i]);
+        }
+    }
+    if (lost > 0 && f != NULL) {
+        fprintf(f, "%s%llu more Cyclone DDS messages not shown\n", prefix ? prefix : "",
+                (unsigned long long)lost);
+    }
+    return n;
 }

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* Real-time discipline: the distance functions must not allocate. Counts malloc/calloc/realloc calls by
  * interposing them (glibc __libc_* underneath), and documents which libccd entry points do allocate.
- * Under AddressSanitizer (it owns malloc) it exits 77, which ctest shows as skipped (issue 12: a test must not
- * pass without having run); the normal build's run is the one that counts. */
+ * Under AddressSanitizer (it owns malloc) it exits 77, which ctest shows as skipped (issue 12: a test must
+ * not pass without having run); the normal build's run is the one that counts. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -6,6 +6,8 @@
 #ifndef MCA_DDS_QOS_H
 #define MCA_DDS_QOS_H
 
+#include <stdio.h>
+
 #include <dds/dds.h>
 
 #ifdef __cplusplus
@@ -36,6 +38,19 @@ dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_pat
  *  @return handle (> 0) or a negative DDS return code. */
 dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition);
 dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition);
+
+/**
+ * Cyclone's warnings and errors (process-wide) into a bounded queue in memory instead of straight to stderr
+ * from whichever thread hits them: the DDS publisher thread writing to a stderr nobody drains (a full pipe,
+ * a slow journald) stalled publishing for 6 s while a link was down (one warning per failed send;
+ * tests/dds/test_netns_faults.py). The sink never waits (a busy queue or a full one counts the message as
+ * lost). Context: init. @param on 1: capture, 0: Cyclone's default sink (stderr) again.
+ */
+void mca_dds_log_capture(int on);
+
+/** Print the captured messages to f, each after prefix, then how many were lost since the last drain.
+ *  Context: non-rt. @return messages printed */
+int mca_dds_log_drain(FILE *f, const char *prefix);
 
 #ifdef __cplusplus
 }
