@@ -599,6 +599,20 @@ static const mca_range_t r_stop_after = {"stop_after", 0.0, 86400.0, 0, 0, "s"};
 
 /* Resolve `rel` against the directory of `base_file` (made absolute, so paths do not depend on the
  * current directory later). */
+/* The data search path after the cell's own folder: $MCA_PATH (':'-separated) or the FHS places. */
+#define CELL_SEARCH_PATH "/etc/mca:/usr/share/mca"
+
+static int readable(const char *p);
+
+static const char *search_path(void) {
+    const char *env = getenv("MCA_PATH");
+    return env && env[0] ? env : CELL_SEARCH_PATH;
+}
+
+/* A cell's relative path: against the cell file's own folder first; when nothing is there, against each
+ * folder of the search path with the leading "../" and "./" dropped ("../scenarios/x.yaml" ->
+ * /usr/share/mca/scenarios/x.yaml), so that a cell copied elsewhere still finds the shipped files. out is
+ * the cell-relative path when no candidate exists (the error names it). */
 static void resolve(char *out, size_t outlen, const char *base_file, const char *rel) {
     char abs_base[4096];
     if (realpath(base_file, abs_base)) {
@@ -613,6 +627,24 @@ static void resolve(char *out, size_t outlen, const char *base_file, const char 
         snprintf(out, outlen, "%.*s/%s", (int)(slash - base_file), base_file, rel);
     } else {
         snprintf(out, outlen, "%s", rel);
+    }
+    if (readable(out)) {
+        return;
+    }
+    const char *tail = rel;
+    while (strncmp(tail, "../", 3) == 0 || strncmp(tail, "./", 2) == 0) {
+        tail += tail[1] == '/' ? 2 : 3;
+    }
+    const char *path = search_path();
+    while (*path) {
+        const size_t n = strcspn(path, ":");
+        char cand[4096];
+        if (n > 0 && (size_t)snprintf(cand, sizeof cand, "%.*s/%s", (int)n, path, tail) < sizeof cand &&
+            readable(cand) && strlen(cand) < outlen) {
+            memcpy(out, cand, strlen(cand) + 1);
+            return;
+        }
+        path += n + (path[n] == ':');
     }
 }
 
@@ -790,7 +822,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         char sp[512];
         resolve(sp, sizeof sp, path, raw->task.scenario);
         if (!readable(sp)) {
-            FAIL(MCA_ENOENT, wtask, "scenario", "task.scenario: file '%s' not found", sp);
+            FAIL(MCA_ENOENT, wtask, "scenario",
+                 "task.scenario: file '%s' not found (nor in the search path %s)", sp, search_path());
         }
         char serr[512];
         int src = mca_scenario_load(sp, scn, serr, sizeof serr);
@@ -1016,7 +1049,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             resolve(sa->urdf, sizeof sa->urdf, path, ra->urdf);
         }
         if (!readable(sa->urdf)) {
-            FAIL(MCA_ENOENT, wa, "urdf", "arms[%d].urdf: file '%s' not found", ai, sa->urdf);
+            FAIL(MCA_ENOENT, wa, "urdf", "arms[%d].urdf: file '%s' not found (nor in the search path %s)", ai,
+                 sa->urdf, search_path());
         }
         if (ra->tip_link) {
             snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
@@ -1138,7 +1172,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (d->config && d->config[0]) {
             resolve(cell->dds.config, sizeof cell->dds.config, path, d->config);
             if (!readable(cell->dds.config)) {
-                FAIL(MCA_ENOENT, wd, "config", "dds.config: file '%s' not found", cell->dds.config);
+                FAIL(MCA_ENOENT, wd, "config", "dds.config: file '%s' not found (nor in the search path %s)",
+                     cell->dds.config, search_path());
             }
         }
         if (d->publish_divisor) {

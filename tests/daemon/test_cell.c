@@ -366,6 +366,35 @@ static void test_ros2_keys(void **state) {
                  NULL);
 }
 
+/* Issue 12: a cell copied away from config/cells still finds the shipped scenario through the search path
+ * ($MCA_PATH, default /etc/mca:/usr/share/mca), after its own folder. */
+static void test_search_path(void **state) {
+    (void)state;
+    char path[600], text[256];
+    snprintf(path, sizeof path, "%s/copied.yaml", tmpdir);
+    snprintf(text, sizeof text,
+             "name: copied\ntask:\n  scenario: ../scenarios/cross_circles.yaml\narms:\n"
+             "  - {name: left, backend: sim}\n  - {name: right, backend: sim}\ndds: {enabled: false}\n");
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+    char err[1024] = "";
+    unsetenv("MCA_PATH");
+    if (access("/usr/share/mca/scenarios/cross_circles.yaml", R_OK) != 0) {
+        expect_error(path, MCA_ENOENT, line_of(path, "scenario:"), "task.scenario", "not found", NULL);
+    }
+    char env[600];
+    snprintf(env, sizeof env, "/nonexistent:%s/config", MCA_SOURCE_DIR);
+    setenv("MCA_PATH", env, 1);
+    const int rc = mca_cell_load(path, &cell, err, sizeof err);
+    unsetenv("MCA_PATH");
+    if (rc != MCA_OK) {
+        fail_msg("with MCA_PATH=%s: %s", env, err);
+    }
+    assert_int_equal(cell.scn.n_arms, 2);
+}
+
 /* mca-ts (issue 11): the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
  * solver.back_off_time reach the controller config; bad values name file, line and field. */
 static void test_mca_ts_keys(void **state) {
@@ -468,8 +497,9 @@ int main(void) {
         cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
         cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
         cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_ros2_keys),          cmocka_unit_test(test_duplicate_arm),
-        cmocka_unit_test(test_shipped_cells),      cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_ros2_keys),          cmocka_unit_test(test_search_path),
+        cmocka_unit_test(test_duplicate_arm),      cmocka_unit_test(test_shipped_cells),
+        cmocka_unit_test(test_mca_ts_keys),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[300];
