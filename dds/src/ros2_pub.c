@@ -325,34 +325,52 @@ static int finite3(double a, double b, double c) {
     return isfinite(a) && isfinite(b) && isfinite(c);
 }
 
-/* Check one received message; accept it into the arm's mailbox or count why not. */
-static void check_target(mca_ros2_pub_t *r, int arm, const std_msgs_msg_dds__Header_ *h, const double x[3],
-                         int finite) {
-    const mca_ros2_config_t *c = &r->cfg;
-    if (!finite) {
-        reject(r, arm, "not a number (NaN or infinity) in the target");
-        return;
+int mca_ros2_target_check(const mca_ros2_config_t *c, int arm, const char *frame_id, const double x[3],
+                          int finite, char *why, size_t len) {
+    char dummy[8];
+    if (why == NULL || len == 0) {
+        why = dummy;
+        len = sizeof dummy;
     }
-    if (h->frame_id == NULL || strcmp(h->frame_id, c->world_frame) != 0) {
-        reject(r, arm, "frame_id '%.40s' is not the cell's '%s'", h->frame_id ? h->frame_id : "",
-               c->world_frame);
-        return;
+    if (c == NULL || x == NULL || arm < 0 || arm >= MCA_MAX_ARMS || c->stream[arm] == MCA_ROS2_STREAM_NONE) {
+        snprintf(why, len, "no stream");
+        return MCA_EINVAL;
+    }
+    if (!finite || !finite3(x[0], x[1], x[2])) {
+        snprintf(why, len, "not a number (NaN or infinity) in the target");
+        return MCA_ERANGE;
+    }
+    if (frame_id == NULL || strcmp(frame_id, c->world_frame) != 0) {
+        snprintf(why, len, "frame_id '%.40s' is not the cell's '%s'", frame_id ? frame_id : "",
+                 c->world_frame);
+        return MCA_ERANGE;
     }
     if (c->stream[arm] == MCA_ROS2_STREAM_TWIST) {
         const double v = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-        if (v > c->stream_max_speed) {
-            reject(r, arm, "speed %.3g m/s above the limit %.3g m/s", v, c->stream_max_speed);
-            return;
+        if (!(v <= c->stream_max_speed)) {
+            snprintf(why, len, "speed %.3g m/s above the limit %.3g m/s", v, c->stream_max_speed);
+            return MCA_ERANGE;
         }
     } else {
         for (int i = 0; i < 3; i++) {
-            if (x[i] < c->box_lo[i] || x[i] > c->box_hi[i]) {
-                reject(r, arm, "target (%.3g, %.3g, %.3g) m outside the workspace box", x[0], x[1], x[2]);
-                return;
+            if (!(x[i] >= c->box_lo[i] && x[i] <= c->box_hi[i])) {
+                snprintf(why, len, "target (%.3g, %.3g, %.3g) m outside the workspace box", x[0], x[1], x[2]);
+                return MCA_ERANGE;
             }
         }
     }
-    accept_target(r, arm, x);
+    return MCA_OK;
+}
+
+/* Check one received message; accept it into the arm's mailbox or count why not. */
+static void check_target(mca_ros2_pub_t *r, int arm, const std_msgs_msg_dds__Header_ *h, const double x[3],
+                         int finite) {
+    char why[120];
+    if (mca_ros2_target_check(&r->cfg, arm, h->frame_id, x, finite, why, sizeof why) == MCA_OK) {
+        accept_target(r, arm, x);
+    } else {
+        reject(r, arm, "%s", why);
+    }
 }
 
 /* Cyclone listener (its receive thread, non-rt): every new sample of one arm's stream. */

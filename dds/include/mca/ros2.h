@@ -89,6 +89,16 @@ void mca_ros2_config_default(mca_ros2_config_t *cfg);
  */
 int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen);
 
+/**
+ * The check every received target goes through before it can reach the loop: non-finite numbers (finite =
+ * 0: the caller saw NaN or infinity anywhere in the message), a frame_id other than cfg->world_frame (NULL
+ * counts as ""), for a twist arm a speed |x| above stream_max_speed, for a pose arm a position outside the
+ * box. Context: any (no allocation). @param[out] why the reason on rejection
+ * @retval MCA_OK accept @retval MCA_ERANGE reject @retval MCA_EINVAL NULL cfg or x, arm without a stream
+ */
+int mca_ros2_target_check(const mca_ros2_config_t *cfg, int arm, const char *frame_id, const double x[3],
+                          int finite, char *why, size_t len);
+
 #ifdef __cplusplus
 }
 #endif
