@@ -599,8 +599,13 @@ static const mca_range_t r_stop_after = {"stop_after", 0.0, 86400.0, 0, 0, "s"};
 
 /* Resolve `rel` against the directory of `base_file` (made absolute, so paths do not depend on the
  * current directory later). */
-/* The data search path after the cell's own folder: $MCA_PATH (':'-separated) or the FHS places. */
+/* The data search path after the cell's own folder: $MCA_PATH (':'-separated), or the build's
+ * MCA_SEARCH_PATH (this install's etc/mca and share/mca, then /etc/mca and /usr/share/mca). */
+#ifdef MCA_SEARCH_PATH
+#define CELL_SEARCH_PATH MCA_SEARCH_PATH
+#else
 #define CELL_SEARCH_PATH "/etc/mca:/usr/share/mca"
+#endif
 
 static int readable(const char *p);
 

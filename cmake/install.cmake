@@ -1,0 +1,75 @@
+# `cmake --install BUILD [--prefix P]`: mca as a Debian-style daemon package (docs/install.md). One place for
+# every install rule. FHS paths from GNUInstallDirs:
+#   sbin/mcad                              the daemon (the test build mcad-test is never installed)
+#   bin/mca-*                              tools: mca-sim, mca-monitor, mca-geom, mca-armsim, mca-stopcheck, ...
+#   include/mca/*.h                        the public headers of the exported libraries
+#   lib/libmca_*.a, lib/cmake/mca/         static libraries and the CMake package: find_package(mca) gives
+#                                          mca::core, mca::arm, mca::sim_arm, mca::sim, mca::arm_can, mca::dds
+#   etc/mca/cells, etc/mca/dds             what an operator edits (cells, Cyclone DDS configurations)
+#   share/mca/{robots,scenarios,can,ros2}  models, tasks, the DBC, the RViz view; share/doc/mca the docs
+#   lib/systemd/system/mcad@.service       the unit, with this prefix's paths
+# A cell's relative paths find share/mca through the search path (docs/daemon.md): the daemon is built
+# with this prefix's etc/mca and share/mca in it.
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+set(MCA_EXPORTED core arm sim_arm sim arm_can dds)
+foreach(lib ${MCA_EXPORTED})
+  set(t mca_${lib})
+  if(NOT TARGET ${t})
+    continue()
+  endif()
+  # source-tree include folders for the build, include/ once installed
+  get_target_property(inc ${t} INTERFACE_INCLUDE_DIRECTORIES)
+  if(NOT inc)
+    set(inc "")
+  endif()
+  set(fixed "")
+  foreach(d ${inc})
+    if(d MATCHES "^\\$<")
+      list(APPEND fixed "${d}")
+    else()
+      list(APPEND fixed "$<BUILD_INTERFACE:${d}>")
+      if(IS_DIRECTORY "${d}/mca" AND NOT d MATCHES "test_include")
+        install(DIRECTORY "${d}/mca" DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} FILES_MATCHING PATTERN "*.h")
+      endif()
+    endif()
+  endforeach()
+  list(APPEND fixed "$<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>")
+  set_target_properties(${t} PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${fixed}" EXPORT_NAME ${lib})
+  install(TARGETS ${t} EXPORT mcaTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+endforeach()
+install(EXPORT mcaTargets NAMESPACE mca:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/mca)
+configure_package_config_file("${CMAKE_SOURCE_DIR}/cmake/mcaConfig.cmake.in" "${CMAKE_BINARY_DIR}/mcaConfig.cmake"
+                              INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/mca)
+write_basic_package_version_file("${CMAKE_BINARY_DIR}/mcaConfigVersion.cmake" COMPATIBILITY SameMinorVersion)
+install(FILES "${CMAKE_BINARY_DIR}/mcaConfig.cmake" "${CMAKE_BINARY_DIR}/mcaConfigVersion.cmake"
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/mca)
+
+install(TARGETS mcad RUNTIME DESTINATION ${CMAKE_INSTALL_SBINDIR})
+foreach(tool mca-sim mca-monitor mca-geom mca-armsim mca-stopcheck mca-simarm-trace mca-dds-synth)
+  if(TARGET ${tool})
+    install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
+endforeach()
+
+install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/cells" "${CMAKE_SOURCE_DIR}/config/dds"
+        DESTINATION ${CMAKE_INSTALL_SYSCONFDIR}/mca)
+install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/robots" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca
+        FILES_MATCHING PATTERN "*.urdf")
+install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/scenarios" "${CMAKE_SOURCE_DIR}/config/can"
+                  "${CMAKE_SOURCE_DIR}/config/ros2" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca)
+if(IS_DIRECTORY "${CMAKE_SOURCE_DIR}/config/canopen")
+  install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/canopen" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca)
+endif()
+install(PROGRAMS "${CMAKE_SOURCE_DIR}/config/systemd/mcad-run.sh" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca)
+install(DIRECTORY "${CMAKE_SOURCE_DIR}/docs/" DESTINATION ${CMAKE_INSTALL_DOCDIR} PATTERN "bench-runs" EXCLUDE)
+install(FILES "${CMAKE_SOURCE_DIR}/README.md" DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
+# the unit with this prefix's paths (the file in config/systemd/ names /usr/local)
+file(READ "${CMAKE_SOURCE_DIR}/config/systemd/mcad@.service" unit)
+string(REPLACE "/usr/local/sbin/mcad" "${CMAKE_INSTALL_FULL_SBINDIR}/mcad" unit "${unit}")
+string(REPLACE "/etc/mca/" "${CMAKE_INSTALL_FULL_SYSCONFDIR}/mca/" unit "${unit}")
+string(REPLACE "/usr/local/share/doc/mca" "${CMAKE_INSTALL_FULL_DOCDIR}" unit "${unit}")
+file(WRITE "${CMAKE_BINARY_DIR}/mcad@.service" "${unit}")
+install(FILES "${CMAKE_BINARY_DIR}/mcad@.service" DESTINATION lib/systemd/system)

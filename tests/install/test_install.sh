@@ -1,0 +1,56 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# cmake --install into a fresh prefix, then what a user and an outside project do with it (issue 12):
+# the files where FHS puts them, the unit with the prefix's paths, the installed mcad checking an installed
+# cell that reaches the shared scenarios and robots through the search path, and an outside CMake project
+# that finds the package (find_package(mca)), builds against the installed headers and static libraries
+# and runs.
+# usage: test_install.sh BUILD_DIR SOURCE_DIR
+set -eu
+B=$(cd "$1" && pwd)
+S=$(cd "$2" && pwd)
+T=$(mktemp -d /tmp/mca-install-XXXXXX)
+trap 'rm -rf "$T"' EXIT
+P=$T/prefix
+fail=0
+check() { # check DESCRIPTION COMMAND...
+    d=$1
+    shift
+    if "$@" >/dev/null 2>&1; then echo "ok   $d"; else echo "FAIL $d"; fail=1; fi
+}
+cmake --install "$B" --prefix "$P" >"$T/install.log" 2>&1 || { cat "$T/install.log"; echo "FAIL cmake --install"; exit 1; }
+echo "installed $(find "$P" -type f | wc -l) files under $P"
+check "sbin/mcad" test -x "$P/sbin/mcad"
+check "bin/mca-sim, bin/mca-monitor, bin/mca-geom" test -x "$P/bin/mca-sim" -a -x "$P/bin/mca-monitor" -a -x "$P/bin/mca-geom"
+check "no test build installed (mcad-test)" test ! -e "$P/sbin/mcad-test" -a ! -e "$P/bin/mcad-test"
+check "include/mca/controller.h, dds_bridge.h, ros2.h" test -f "$P/include/mca/controller.h" -a -f "$P/include/mca/dds_bridge.h" -a -f "$P/include/mca/ros2.h"
+check "no test-only header (daemon_test.h)" test ! -e "$P/include/mca/daemon_test.h"
+check "lib*/libmca_core.a and the CMake package" sh -c "ls $P/lib*/libmca_core.a $P/lib*/cmake/mca/mcaConfig.cmake"
+check "etc/mca/cells, etc/mca/dds" test -f "$P/etc/mca/cells/cup_stacking_sim.yaml" -a -f "$P/etc/mca/dds/loopback.xml"
+check "share/mca/robots, scenarios, ros2" test -f "$P/share/mca/robots/jaco2.urdf" -a -f "$P/share/mca/scenarios/cup_stacking.yaml" -a -f "$P/share/mca/ros2/mca.rviz"
+check "share/doc/mca" test -f "$P/share/doc/mca/daemon.md"
+check "lib/systemd/system/mcad@.service" test -f "$P/lib/systemd/system/mcad@.service"
+# the unit names the paths of the build's install prefix (the --prefix here only moves the files)
+prefix=$(sed -n 's/^CMAKE_INSTALL_PREFIX:PATH=//p' "$B/CMakeCache.txt")
+check "the unit starts $prefix/sbin/mcad" grep -q "^ExecStart=$prefix/sbin/mcad " "$P/lib/systemd/system/mcad@.service"
+# an installed cell in etc/mca/cells names ../scenarios/...: found in share/mca by the search path
+if MCA_PATH="$P/etc/mca:$P/share/mca" "$P/sbin/mcad" --check "$P/etc/mca/cells/cup_stacking_sim.yaml" >"$T/check.log" 2>&1 &&
+    grep -q "$P/share/mca/scenarios/../robots/jaco2.urdf\|$P/share/mca/robots/jaco2.urdf" "$T/check.log"; then
+    echo "ok   installed mcad --check installed cell (scenario and robots from share/mca)"
+else
+    cat "$T/check.log"
+    echo "FAIL installed mcad --check installed cell"
+    fail=1
+fi
+# an outside project
+if cmake -S "$S/tests/install/consumer" -B "$T/consumer" -DCMAKE_PREFIX_PATH="$P" >"$T/consumer.log" 2>&1 &&
+    cmake --build "$T/consumer" >>"$T/consumer.log" 2>&1 &&
+    "$T/consumer/consumer" "$P/share/mca/robots/jaco2.urdf" >>"$T/consumer.log" 2>&1; then
+    echo "ok   outside project: find_package(mca), mca::core + mca::dds, built and ran: $(tail -1 "$T/consumer.log")"
+else
+    tail -30 "$T/consumer.log"
+    echo "FAIL outside project with find_package(mca)"
+    fail=1
+fi
+[ $fail -eq 0 ] && echo PASSED || echo FAILED
+exit $fail
