@@ -184,8 +184,10 @@ void mca_co_master_rx(mca_co_master_t *m, const mca_co_frame_t *f, int64_t now_n
             if (running) {
                 latch(m, MCA_CO_FAULT_HEARTBEAT, node, 0); /* the drive rebooted under us */
             }
-        } else if (running && f->data[0] != MCA_CO_NMT_OPERATIONAL) {
-            latch(m, MCA_CO_FAULT_NMT, node, f->data[0]);
+        } else if (running && f->data[0] == MCA_CO_NMT_OPERATIONAL) {
+            d->op_seen = 1;
+        } else if (running && d->op_seen) {
+            latch(m, MCA_CO_FAULT_NMT, node, f->data[0]); /* left OPERATIONAL */
         }
         return;
     case MCA_CO_K_EMCY: {
@@ -545,12 +547,14 @@ int mca_co_master_start(mca_co_master_t *m) {
     const int64_t now = mono_ns();
     for (int j = 0; j < m->cfg.n; j++) {
         m->d[j].hb_ns = now;
+        m->d[j].op_seen = 0;
         m->d[j].tpdo1_sync = m->syncs;
         m->d[j].tpdo2_sync = m->syncs;
         m->d[j].cw = 0;
         m->d[j].target = 0;
     }
     m->goal = MCA_CO402_GOAL_DISABLED;
+    m->start_ns = now;
     m->phase = MCA_CO_PHASE_RUNNING;
     return MCA_OK;
 }
@@ -604,6 +608,10 @@ int mca_co_master_tick(mca_co_master_t *m, int64_t now_ns) {
         if (now_ns - d->hb_ns > hb_tmo) {
             latch(m, MCA_CO_FAULT_HEARTBEAT, d->cfg.node, (uint32_t)((now_ns - d->hb_ns) / 1000000));
             d->hb_ns = now_ns; /* counted once per timeout */
+        }
+        if (!d->op_seen && now_ns - m->start_ns > hb_tmo) {
+            latch(m, MCA_CO_FAULT_NMT, d->cfg.node, d->nmt); /* never reported OPERATIONAL */
+            d->op_seen = 1;                                  /* counted once */
         }
         if (m->syncs - d->tpdo1_sync > (uint64_t)m->cfg.pdo_timeout_cycles) {
             latch(m, MCA_CO_FAULT_PDO, d->cfg.node, (uint32_t)(m->syncs - d->tpdo1_sync));

@@ -426,7 +426,12 @@ static void test_master_rx_faults(void **state) {
     assert_int_equal(m.fault.kind, MCA_CO_FAULT_HEARTBEAT);
     assert_int_equal(m.fault.node, 10);
     memset(&m.fault, 0, sizeof(m.fault));
-    f = fr(0x70B, 1, (const uint8_t[]){0x7F}); /* pre-operational while running */
+    f = fr(0x70B, 1, (const uint8_t[]){0x7F}); /* sent before the drive took the NMT start: no fault */
+    mca_co_master_rx(&m, &f, 1000);
+    assert_int_equal(m.fault.kind, MCA_CO_FAULT_NONE);
+    f = fr(0x70B, 1, (const uint8_t[]){0x05});
+    mca_co_master_rx(&m, &f, 1000);
+    f = fr(0x70B, 1, (const uint8_t[]){0x7F}); /* pre-operational after OPERATIONAL: it left */
     mca_co_master_rx(&m, &f, 1000);
     assert_int_equal(m.fault.kind, MCA_CO_FAULT_NMT);
     memset(&m.fault, 0, sizeof(m.fault));

@@ -372,6 +372,8 @@ typedef struct mca_co_drive {
     uint8_t nmt;         /**< last heartbeat state */
     int64_t hb_ns;       /**< time of the last heartbeat */
     uint8_t booted;      /**< a boot-up was seen since the reset */
+    uint8_t op_seen;     /**< an OPERATIONAL heartbeat was seen since the NMT start (a heartbeat the drive
+                              sent before it took the start may still arrive: not a fault) */
     uint16_t statusword; /**< from TPDO1 */
     int32_t pos_counts, vel_counts;
     int16_t torque_counts;
@@ -399,6 +401,7 @@ typedef struct mca_co_master {
     mca_co_drive_t d[MCA_CO_MAX_NODES];
     uint64_t syncs; /**< SYNCs sent */
     int64_t last_rx_ns;
+    int64_t start_ns;     /**< time of the NMT start (CLOCK_MONOTONIC) */
     mca_co_fault_t fault; /**< first latched fault (kind NONE: none) */
     uint64_t faults;      /**< faults seen (the first is latched) */
     uint64_t rx_frames, rx_unknown, tx_frames, tx_again, bus_errors;
