@@ -210,7 +210,9 @@ void mca_co_master_rx(mca_co_master_t *m, const mca_co_frame_t *f, int64_t now_n
                                       (uint32_t)f->data[4] << 16 | (uint32_t)f->data[5] << 24);
             d->tpdo1_sync = m->syncs;
             d->tpdo1_rx++;
-            if (running && !m->fault_reset && mca_co402_state(d->statusword) == MCA_CO402_FAULT) {
+            const mca_co402_state_t st = mca_co402_state(d->statusword);
+            if (running && !m->fault_reset &&
+                (st == MCA_CO402_FAULT || st == MCA_CO402_FAULT_REACTION_ACTIVE)) {
                 latch(m, MCA_CO_FAULT_DRIVE, node, d->statusword);
             }
         } else if (pdo == 2 && f->len >= 4) {

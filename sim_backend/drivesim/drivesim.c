@@ -801,7 +801,7 @@ int main(int argc, char **argv) {
         od_build(d);
     }
     if (logp) {
-        s.caplog = 2000000;
+        s.caplog = 400000; /* 66 s of six drives at 1 kHz */
         s.log = calloc(s.caplog, sizeof(*s.log));
         if (!s.log) {
             fprintf(stderr, "mca-drivesim: --log: out of memory\n");

@@ -17,6 +17,7 @@ import json
 import signal
 import sys
 import threading
+import time
 import types
 
 import can
@@ -209,6 +210,7 @@ while not stop.wait(0.2):
     pass
 for d in drives:
     d.node.nmt.stop_heartbeat()
+time.sleep(0.3)  # the thread-based heartbeat senders end their last period
 net.disconnect()
 with open(OUT, "w") as f:
     json.dump([d.report() for d in drives], f, indent=1)

@@ -321,7 +321,7 @@ mca_co402_state_t mca_co402_drive_next(mca_co402_state_t s, uint16_t cw, uint16_
 /** Named faults of a bus/arm (mca_co_master_t.fault). */
 typedef enum mca_co_fault_kind {
     MCA_CO_FAULT_NONE = 0,
-    MCA_CO_FAULT_DRIVE = 1,     /**< a drive reports FAULT (statusword) */
+    MCA_CO_FAULT_DRIVE = 1,     /**< a drive reports FAULT or FAULT_REACTION_ACTIVE (statusword) */
     MCA_CO_FAULT_EMCY = 2,      /**< an emergency message with a non-zero code */
     MCA_CO_FAULT_HEARTBEAT = 3, /**< a heartbeat missed its consumer time, or an unexpected boot-up */
     MCA_CO_FAULT_PDO = 4,       /**< a TPDO not refreshed within pdo_timeout_cycles SYNCs */
@@ -405,7 +405,7 @@ typedef struct mca_co_master {
     mca_co_fault_t fault; /**< first latched fault (kind NONE: none) */
     uint64_t faults;      /**< faults seen (the first is latched) */
     uint64_t rx_frames, rx_unknown, tx_frames, tx_again, bus_errors;
-    char err[160]; /**< start-up error text */
+    char err[256]; /**< start-up error text */
 } mca_co_master_t;
 
 /** Open the socket on cfg->iface (start-up). @retval MCA_OK, MCA_EINVAL, MCA_ENOTSUP (no SocketCAN),
