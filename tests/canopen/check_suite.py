@@ -177,7 +177,7 @@ for s, qs in ref.items():
             dmax = max(dmax, abs(r[1] - q))
             cnt += 1
 moved = max((abs(v[-1] - v[0]) for v in [[r[2] for r in ds[n]] for n in ds] if v), default=0)
-verdict("c: mcad-side master + six mca-drivesim JACO2 drives at 4 ms: joint trajectory within 1e-5 rad of "
+verdict("c: our master (mca-co-ctl) + six mca-drivesim JACO2 drives at 4 ms: joint trajectory within 1e-5 rad of "
         "the sim backend's arm model, SYNC by SYNC", rc("C_RC") == 0 and cnt >= 6 * 400 and dmax < 1e-5
         and moved > 0.05 and all(f"name{n}=mca-drivesim" in txt for n in range(1, 7)),
         f"ctl rc {rc('C_RC')}, {cnt} samples, max |dq| {dmax:.3g} rad, largest joint travel {moved:.3f} rad")
@@ -226,7 +226,8 @@ for tag, kind, node, what in cases:
         moving = {n: r[3] for n, r in last.items() if abs(r[3]) > 1e-9}
         ok = ok and len(last) == 6 and not moving
         extra = f"drives still moving at the end: {moving}" if moving else "every drive at v = 0"
-    verdict(f"{tag}: {what} -> named fault {kind} of node {node}, every arm braked", ok,
+    outcome = "start-up refused" if tag == "d5" else "every drive braked to standstill"
+    verdict(f"{tag}: {what} -> named fault {kind} of node {node}, {outcome}", ok,
             f"rc {rc(tag.upper() + '_RC')}, fault '{fault}', {extra}")
 
 
