@@ -265,6 +265,19 @@ verdict("f: controller killed (SYNCs stop) -> each drive brakes on its own clock
         "EMCY 0x8250", ok and own == 6 and faulted == 6,
         f"{own} drives braked on their own clock, {faulted} in FAULT with one EMCY, worst {worst:.4f} rad/s^2")
 
+# (g), (h) the backend through the arm interface
+for m in ("csv", "csp"):
+    kv, _, txt = ctl(f"g{m}.out")
+    verdict(f"g: mca/arm.h `canopen` backend, 1 kHz control, SYNC 4 ms, {m.upper()}: SERVOING, joint travel = "
+            "commanded integral within 1e-4 rad, READY at rest after the brake request",
+            rc(f"G{m.upper()}_RC") == 0 and kv.get("backend") == "canopen" and "state=READY" in txt,
+            f"rc {rc(f'G{m.upper()}_RC')}, travel_err {kv.get('travel_err')}, reads ok/again "
+            f"{kv.get('reads_ok')}/{kv.get('reads_again')}")
+kv, _, txt = ctl("h.out")
+verdict("h: EMCY of node 4 through mca/arm.h: fb.state FAULT, fault EMCY, every joint at rest, the backend "
+        "names node and code", rc("H_RC") == 0 and "expected_fault=EMCY seen" in txt
+        and "why=node 4: EMCY 0x4210" in txt, f"rc {rc('H_RC')}, {kv.get('why', '')}")
+
 print(f"CANOPEN-SUITE done: {fails} failing", flush=True)
 with open(os.path.join(OUT, "results.txt"), "w") as f:
     f.write("\n".join(lines) + "\n")

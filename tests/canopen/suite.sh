@@ -143,6 +143,20 @@ wait "$C" 2>/dev/null
 sleep 2
 ds_stop f
 note "e, f done"
+# (g) the `canopen` backend through mca/arm.h at 1 kHz, SYNC every 4th write, CSV and CSP: SERVOING, the
+#     travel of each joint = the integral of the commanded velocity, READY at rest after a brake request
+for m in csv csp; do
+    ds_start "g$m"
+    $T $RT "$B/tests/canopen/mca-co-arm" --iface "$IF" --mode $m >"$OUT/g$m.out" 2>&1
+    echo "G$(echo $m | tr a-z A-Z)_RC=$?" >>"$ST"
+    ds_stop "g$m"
+done
+# (h) an EMCY through the arm interface: fb.state FAULT, fault EMCY, every joint at rest
+ds_start h --inject emcy@300:4
+$T $RT "$B/tests/canopen/mca-co-arm" --iface "$IF" --expect-fault EMCY >"$OUT/h.out" 2>&1
+echo "H_RC=$?" >>"$ST"
+ds_stop h
+note "g, h done"
 rm -rf "$TMPD"
 echo "DONE=1" >>"$ST"
 note "CANOPEN-SUITE scenarios done"

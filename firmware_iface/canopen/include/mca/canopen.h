@@ -481,6 +481,35 @@ void mca_co_fault_describe(const mca_co_fault_t *f, char *buf, size_t len);
  *  @retval MCA_OK, MCA_EINVAL, MCA_ENOTSUP, MCA_ENOENT, MCA_EIO */
 int mca_co_sock_open(int *fd, const char *iface, char *err, size_t errlen);
 
+/* ---- the arm backend (mca/arm.h) ------------------------------------------------------------------ */
+
+struct mca_arm;
+
+/**
+ * Open the `canopen` backend of mca/arm.h: one arm = the drives of @p cfg on one bus, joint j = drive j
+ * (start-up: allocates, and runs mca_co_master_open + mca_co_master_start, blocking up to their timeouts).
+ * The controller writes every @p ctrl_period_us; the backend sends the RPDOs and a SYNC every
+ * cfg->sync_period_us / ctrl_period_us writes (an integer >= 1: e.g. 1 kHz control over a 4 ms SYNC) and
+ * holds the newest setpoint in between. Command flags: every joint SERVO_ENABLE|BRAKE_RELEASE -> the
+ * drives are enabled (CiA 402 OPERATION ENABLED); otherwise, or while a fault is latched -> quick stop
+ * (the drives brake at their own deceleration); CLEAR_FAULT on any joint -> fault reset (the operator).
+ * CSV: target velocity = cmd velocity; CSP: target position = the integral of cmd velocity from the
+ * position at enable. Feedback is new when every drive's TPDO1 and TPDO2 were refreshed since the last
+ * feedback; state SERVOING (all enabled), BRAKING (quick stop or fault, still moving), FAULT (a fault
+ * latched and stopped: fault_code MCA_ARM_FAULT_DRIVE/EMCY/HEARTBEAT/PDO/SDO/NMT/BUS), READY otherwise.
+ * @param[out] err the reason on failure (node, object, abort text; may be NULL)
+ * @retval MCA_OK, MCA_EINVAL (configuration, period ratio), MCA_ENOMEM, and mca_co_master_open/start codes
+ */
+int mca_canopen_backend_open(struct mca_arm **arm, const mca_co_master_config_t *cfg, uint32_t ctrl_period_us,
+                             char *err, size_t errlen);
+
+/** The latched CANopen fault of a `canopen` arm in words ("node 3: EMCY 0x2310 (current)"; "no fault");
+ *  non-real-time (the daemon's report). @retval MCA_OK, MCA_EINVAL (NULL or not a canopen arm) */
+int mca_canopen_backend_fault(const struct mca_arm *arm, char *buf, size_t len);
+
+/** The master of a `canopen` arm (tests, tools), or NULL. */
+const mca_co_master_t *mca_canopen_backend_master(const struct mca_arm *arm);
+
 #ifdef __cplusplus
 }
 #endif
