@@ -85,12 +85,13 @@ static int co_read(void *ctx, mca_arm_feedback_t *fb) {
     fb->fault_code = m->fault.kind != MCA_CO_FAULT_NONE ? arm_fault(m->fault.kind)
                      : drive_fault                      ? MCA_ARM_FAULT_DRIVE
                                                         : MCA_ARM_FAULT_NONE;
+    (void)quick;
     if (faulted) {
         fb->state = moving ? MCA_ARM_BRAKING : MCA_ARM_FAULT;
     } else if (all_enabled) {
         fb->state = MCA_ARM_SERVOING;
-    } else if (quick && moving) {
-        fb->state = MCA_ARM_BRAKING;
+    } else if (moving) {
+        fb->state = MCA_ARM_BRAKING; /* quick stop or disable-operation ramp */
     } else {
         fb->state = MCA_ARM_READY;
     }
@@ -120,7 +121,11 @@ static int co_write(void *ctx, const mca_arm_command_t *cmd) {
     }
     const int faulted = m->fault.kind != MCA_CO_FAULT_NONE;
     const int run = servo && !faulted;
-    mca_co_master_set_goal(m, run ? MCA_CO402_GOAL_ENABLED : MCA_CO402_GOAL_QUICK_STOP);
+    /* READY = SWITCHED_ON (operation disabled): the next servo enable is one controlword, taken at the
+       next SYNC together with its setpoint, as the sim backend's READY -> SERVOING in one cycle */
+    mca_co_master_set_goal(m, run       ? MCA_CO402_GOAL_ENABLED
+                              : faulted ? MCA_CO402_GOAL_QUICK_STOP
+                                        : MCA_CO402_GOAL_SWITCHED_ON);
     const int csp = m->cfg.mode == MCA_CO402_MODE_CSP;
     for (int j = 0; j < cmd->n; j++) {
         if (csp) {
@@ -198,6 +203,32 @@ int mca_canopen_backend_open(struct mca_arm **arm, const mca_co_master_config_t 
             mca_co_fault_describe(&a->m.fault, f, sizeof(f));
             snprintf(err, errlen, "%s (%s)", a->m.err, f);
         }
+        mca_co_master_close(&a->m);
+        free(a);
+        return rc;
+    }
+    /* start-up: bring every drive to SWITCHED_ON (READY), SYNC by SYNC, within 2 s + the boot timeout */
+    mca_co_master_set_goal(&a->m, MCA_CO402_GOAL_SWITCHED_ON);
+    const int64_t deadline = mono_ns() + 2000000000LL + (int64_t)cfg->boot_timeout_ms * 1000000;
+    int ready = 0;
+    while (!ready && rc == MCA_OK) {
+        struct timespec ts = {0, (long)cfg->sync_period_us * 1000};
+        nanosleep(&ts, NULL);
+        const int t = mca_co_master_tick(&a->m, mono_ns());
+        ready = 1;
+        for (int j = 0; j < a->m.cfg.n; j++) {
+            ready &= mca_co402_state(a->m.d[j].statusword) == MCA_CO402_SWITCHED_ON;
+        }
+        if (t == MCA_EFAULT || t == MCA_EIO || (!ready && mono_ns() > deadline)) {
+            char f[192];
+            mca_co_fault_describe(&a->m.fault, f, sizeof(f));
+            if (err && errlen) {
+                snprintf(err, errlen, "canopen: the drives did not reach SWITCHED_ON (%s)", f);
+            }
+            rc = t == MCA_EIO ? MCA_EIO : t == MCA_EFAULT ? MCA_EFAULT : MCA_ETIMEDOUT;
+        }
+    }
+    if (rc != MCA_OK) {
         mca_co_master_close(&a->m);
         free(a);
         return rc;

@@ -685,6 +685,18 @@ uint16_t mca_co402_controlword(mca_co402_state_t s, mca_co402_goal_t goal, int f
     if (goal == MCA_CO402_GOAL_DISABLED) {
         return MCA_CO402_CW_DISABLE_VOLTAGE;
     }
+    if (goal == MCA_CO402_GOAL_SWITCHED_ON) {
+        switch (s) {
+        case MCA_CO402_SWITCH_ON_DISABLED:
+            return MCA_CO402_CW_SHUTDOWN;
+        case MCA_CO402_READY_TO_SWITCH_ON:
+        case MCA_CO402_SWITCHED_ON:
+        case MCA_CO402_OPERATION_ENABLED:
+            return MCA_CO402_CW_SWITCH_ON; /* from OPERATION_ENABLED: disable operation */
+        default:
+            return MCA_CO402_CW_DISABLE_VOLTAGE;
+        }
+    }
     switch (s) {
     case MCA_CO402_SWITCH_ON_DISABLED:
         return MCA_CO402_CW_SHUTDOWN;

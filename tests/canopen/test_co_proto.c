@@ -353,6 +353,22 @@ static void test_cia402_walk(void **state) {
     }
     assert_int_equal(s, MCA_CO402_OPERATION_ENABLED);
 
+    /* goal SWITCHED_ON: up from SWITCH_ON_DISABLED, down from OPERATION_ENABLED (disable operation), and
+       OPERATION_ENABLED is then one controlword away */
+    s = MCA_CO402_SWITCH_ON_DISABLED;
+    for (int i = 0; i < 3; i++) {
+        cw = mca_co402_controlword(s, MCA_CO402_GOAL_SWITCHED_ON, 0, prev);
+        s = mca_co402_drive_next(s, cw, prev);
+        prev = cw;
+    }
+    assert_int_equal(s, MCA_CO402_SWITCHED_ON);
+    cw = mca_co402_controlword(s, MCA_CO402_GOAL_ENABLED, 0, prev);
+    assert_int_equal(mca_co402_drive_next(s, cw, prev), MCA_CO402_OPERATION_ENABLED);
+    assert_int_equal(mca_co402_controlword(MCA_CO402_OPERATION_ENABLED, MCA_CO402_GOAL_SWITCHED_ON, 0, 0x0F),
+                     0x0007);
+    assert_int_equal(mca_co402_drive_next(MCA_CO402_OPERATION_ENABLED, 0x0007, 0x000F),
+                     MCA_CO402_SWITCHED_ON);
+
     /* FAULT stays without the operator */
     s = MCA_CO402_FAULT;
     for (int i = 0; i < 5; i++) {

@@ -300,9 +300,12 @@ uint16_t mca_co402_statusword(mca_co402_state_t s);
 
 /** What the master wants of a drive. */
 typedef enum mca_co402_goal {
-    MCA_CO402_GOAL_DISABLED = 0,   /**< switch-on disabled (voltage off) */
-    MCA_CO402_GOAL_ENABLED = 1,    /**< operation enabled */
-    MCA_CO402_GOAL_QUICK_STOP = 2, /**< quick stop (from OPERATION_ENABLED), else disabled */
+    MCA_CO402_GOAL_DISABLED = 0,    /**< switch-on disabled (voltage off) */
+    MCA_CO402_GOAL_ENABLED = 1,     /**< operation enabled */
+    MCA_CO402_GOAL_QUICK_STOP = 2,  /**< quick stop (from OPERATION_ENABLED), else disabled */
+    MCA_CO402_GOAL_SWITCHED_ON = 3, /**< switched on, operation disabled ("ready": one controlword from
+                                         OPERATION_ENABLED; from OPERATION_ENABLED the drive stops with its
+                                         disable-operation ramp) */
 } mca_co402_goal_t;
 
 /**
@@ -490,12 +493,14 @@ struct mca_arm;
  * (start-up: allocates, and runs mca_co_master_open + mca_co_master_start, blocking up to their timeouts).
  * The controller writes every @p ctrl_period_us; the backend sends the RPDOs and a SYNC every
  * cfg->sync_period_us / ctrl_period_us writes (an integer >= 1: e.g. 1 kHz control over a 4 ms SYNC) and
- * holds the newest setpoint in between. Command flags: every joint SERVO_ENABLE|BRAKE_RELEASE -> the
- * drives are enabled (CiA 402 OPERATION ENABLED); otherwise, or while a fault is latched -> quick stop
- * (the drives brake at their own deceleration); CLEAR_FAULT on any joint -> fault reset (the operator).
+ * holds the newest setpoint in between. The open brings every drive to SWITCHED_ON (= READY). Command
+ * flags: every joint SERVO_ENABLE|BRAKE_RELEASE -> OPERATION ENABLED (one controlword: taken at the next
+ * SYNC with its setpoint); otherwise -> SWITCHED_ON (disable operation: the drive stops on its ramp);
+ * while a fault is latched -> quick stop (every drive of the arm brakes at its quick-stop deceleration);
+ * CLEAR_FAULT on any joint -> fault reset (the operator).
  * CSV: target velocity = cmd velocity; CSP: target position = the integral of cmd velocity from the
  * position at enable. Feedback is new when every drive's TPDO1 and TPDO2 were refreshed since the last
- * feedback; state SERVOING (all enabled), BRAKING (quick stop or fault, still moving), FAULT (a fault
+ * feedback; state SERVOING (all enabled), BRAKING (not all enabled and still moving), FAULT (a fault
  * latched and stopped: fault_code MCA_ARM_FAULT_DRIVE/EMCY/HEARTBEAT/PDO/SDO/NMT/BUS), READY otherwise.
  * @param[out] err the reason on failure (node, object, abort text; may be NULL)
  * @retval MCA_OK, MCA_EINVAL (configuration, period ratio), MCA_ENOMEM, and mca_co_master_open/start codes
