@@ -43,6 +43,7 @@ struct raw_canopen {
     int *sync_us;
     char *mode;
     double *pos_scale, *vel_scale;
+    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
 };
 
 struct raw_arm {
@@ -150,6 +151,8 @@ static const cyaml_schema_field_t canopen_fields[] = {
     CYAML_FIELD_STRING_PTR("mode", OPT, struct raw_canopen, mode, 3, 3),
     CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, struct raw_canopen, pos_scale),
     CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, struct raw_canopen, vel_scale),
+    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, struct raw_canopen, heartbeat_timeout_ms),
+    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, struct raw_canopen, pdo_timeout_syncs),
     CYAML_FIELD_END,
 };
 
@@ -889,6 +892,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         ca->co_mode = 9;
         ca->co_pos_scale = 1e6;
         ca->co_vel_scale = 1e6;
+        ca->co_hb_timeout_ms = 350;
+        ca->co_pdo_timeout = 5;
         if (ra->canopen) {
             const struct raw_canopen *rco = ra->canopen;
             if (ca->backend != MCA_CELL_BACKEND_CANOPEN) {
@@ -915,6 +920,17 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             ca->co_mode = rco->mode && strcmp(rco->mode, "csp") == 0 ? 8 : 9;
             ca->co_pos_scale = rco->pos_scale ? *rco->pos_scale : 1e6;
             ca->co_vel_scale = rco->vel_scale ? *rco->vel_scale : 1e6;
+            if ((rco->heartbeat_timeout_ms &&
+                 (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000)) ||
+                (rco->pdo_timeout_syncs &&
+                 (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
+                FAIL(MCA_ERANGE, wa, "canopen",
+                     "arms[%d].canopen: heartbeat_timeout_ms 101..60000 (the drives beat every 100 ms), "
+                     "pdo_timeout_syncs 1..100000",
+                     ai);
+            }
+            ca->co_hb_timeout_ms = rco->heartbeat_timeout_ms ? *rco->heartbeat_timeout_ms : 350;
+            ca->co_pdo_timeout = rco->pdo_timeout_syncs ? *rco->pdo_timeout_syncs : 5;
         }
         if (ra->interface) {
             snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);

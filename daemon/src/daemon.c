@@ -296,6 +296,8 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
         snprintf(cc.iface, sizeof cc.iface, "%s", ca->interface);
         cc.mode = ca->co_mode;
         cc.sync_period_us = ca->co_sync_us;
+        cc.hb_timeout_ms = (uint16_t)ca->co_hb_timeout_ms;
+        cc.pdo_timeout_cycles = ca->co_pdo_timeout;
         for (int j = 0; j < cc.n; j++) {
             cc.drive[j].pos_scale = ca->co_pos_scale;
             cc.drive[j].vel_scale = ca->co_vel_scale;

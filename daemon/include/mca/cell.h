@@ -42,6 +42,8 @@ typedef struct mca_cell_arm {
     int co_mode;                   /**< 9 CSV (default), 8 CSP */
     double co_pos_scale;           /**< counts per rad (default 1e6) */
     double co_vel_scale;           /**< counts per rad/s (default 1e6) */
+    int co_hb_timeout_ms;          /**< heartbeat consumer time (default 350) */
+    int co_pdo_timeout;            /**< SYNCs without a fresh TPDO before PDO_TIMEOUT (default 5) */
     double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
     double priority;               /**< mca-ts: higher keeps its path, lower yields first (0: default 1) */
     /* sim backend model */
