@@ -823,8 +823,26 @@ int main(int argc, char **argv) {
     }
     fprintf(stderr, "mca-drivesim: %d drives, nodes %ld..%ld on %s\n", s.n, first, first + s.n - 1, iface);
     while (!g_stop) {
+        /* sleep until a frame, the next heartbeat, the SYNC timeout of an enabled drive, or the next cycle of
+           a self-clocked one (at most 100 ms: SIGTERM is seen within that) */
+        const int64_t t0 = mono_ns();
+        int64_t wake = t0 + 100000000;
+        for (int j = 0; j < s.n; j++) {
+            const drive_t *d = &s.d[j];
+            if (d->v.hb_ms && !d->hb_dead && d->next_hb_ns < wake) {
+                wake = d->next_hb_ns;
+            }
+            if (d->self_clocked) {
+                wake = t0; /* catch up, then 1 ms polls */
+            } else if (d->last_sync_ns && d->last_sync_ns + s.sync_timeout_ns < wake &&
+                       (d->st == MCA_CO402_OPERATION_ENABLED || d->st == MCA_CO402_QUICK_STOP_ACTIVE ||
+                        d->st == MCA_CO402_FAULT_REACTION_ACTIVE)) {
+                wake = d->last_sync_ns + s.sync_timeout_ns + 1;
+            }
+        }
+        int tmo = wake <= t0 ? 1 : (int)((wake - t0 + 999999) / 1000000);
         struct pollfd p = {.fd = s.fd, .events = POLLIN};
-        (void)poll(&p, 1, 1);
+        (void)poll(&p, 1, tmo);
         mca_can_frame_t fr[MCA_CAN_RX_BATCH];
         int bad = 0;
         const int n = mca_can_sock_recv_batch(s.fd, fr, MCA_CAN_RX_BATCH, &bad);
