@@ -10,6 +10,9 @@
 #      host afterwards), tick by tick.
 #   B: SIGTERM at task time >= 12.3 s: exit 0, stopped; every per-tick change of every commanded joint
 #      velocity within dec_limit * dt, all reach 0; both emulators end with every drive at rest.
+#   C: an EMCY (0x4210) from the JACO2's node 4 at its SYNC 3000: mcad names the fault with arm, node and
+#      code, brakes both arms (the JACO2's drives by their quick stop), exits 3 at --stop-after 6; every drive
+#      of both buses at rest at the end.
 # Natively when this kernel has vcan and we are root, else in one QEMU guest boot; skipped (77) only when
 # neither vcan nor qemu exists.  usage: mcad_e2e.sh BUILD_DIR SOURCE_DIR [--in-guest]
 set -u
@@ -19,7 +22,7 @@ MCAD=$B/daemon/mcad
 DS=$B/sim_backend/drivesim/mca-drivesim
 SRC_CELL=$S/config/cells/cup_stacking_canopen.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
-PHASES=${MCA_E2E_PHASES:-A B}
+PHASES=${MCA_E2E_PHASES:-A B C}
 DQ_MAX=${MCA_E2E_DQ_MAX:-1e-5}
 now() { date +%s; }
 
@@ -204,5 +207,32 @@ if echo "$PHASES" | grep -q B; then
     done
     [ $fB = 0 ] && echo "CO-E2E ok   phase B: SIGTERM mid-task: both arms braked within dec_limit to rest ($(($(now) - t0)) s)"
     [ $fB = 0 ] || fail=1
+fi
+if echo "$PHASES" | grep -q C; then
+    t0=$(now)
+    $RTA $PIN "$DS" --iface vcan0 --robot "$URDF0" --q0 "$Q00" --dec-limit "$DEC" --acc-limit 10 --sync-timeout-ms 600000 \
+        --inject emcy@3000:4 --log "$TMPD/ds0C.log" 2>"$OUT/ds0C.err" &
+    P0=$!
+    $RTA $PIN "$DS" --iface vcan1 --robot "$URDF1" --q0 "$Q01" --dec-limit "$DEC" --acc-limit 10 --sync-timeout-ms 600000 \
+        --log "$TMPD/ds1C.log" 2>"$OUT/ds1C.err" &
+    P1=$!
+    sleep 0.5
+    $PIN2 "$MCAD" --no-dds --stop-after 6 --csv "$TMPD/mcadC.csv" "$CELL" 2>"$OUT/mcadC.log"
+    rc=$?
+    sleep 0.5
+    stop_drivesims
+    fC=0
+    grep -a "fault at" "$OUT/mcadC.log" | head -n 2
+    [ $rc -eq 3 ] || { echo "CO-E2E FAIL phase C: mcad exit status $rc (want 3: fault)"; fC=1; }
+    grep -q "arm jaco2 .*EMCY (node 4: EMCY 0x4210 (temperature))" "$OUT/mcadC.log" ||
+        { echo "CO-E2E FAIL phase C: the fault does not name arm, node and EMCY code"; fC=1; }
+    for i in 0 1; do
+        moving=$(awk '{ last[$2] = $6 } END { for (n in last) if (last[n] + 0 != 0) m++; print m + 0 }' "$TMPD/ds$i""C.log")
+        nodes=$(awk '{ seen[$2] = 1 } END { for (n in seen) k++; print k + 0 }' "$TMPD/ds$i""C.log")
+        echo "CO-E2E phase C: bus vcan$i: $nodes drives logged, still moving at the end: $moving"
+        [ "$moving" = 0 ] && [ "$nodes" = 6 ] || fC=1
+    done
+    [ $fC = 0 ] && echo "CO-E2E ok   phase C: EMCY of node 4 -> named fault, both arms braked to rest, exit 3 ($(($(now) - t0)) s)"
+    [ $fC = 0 ] || fail=1
 fi
 exit $fail
