@@ -13,6 +13,8 @@
 #   C: an EMCY (0x4210) from the JACO2's node 4 at its SYNC 3000: mcad names the fault with arm, node and
 #      code, brakes both arms (the JACO2's drives by their quick stop), exits 3 at --stop-after 6; every drive
 #      of both buses at rest at the end.
+#   D: the MICO2's node 6 aborts the SDO write of 0x60C2 at start-up: mcad does not start, and says which
+#      arm, node, object and abort code (0x08000022) and why.
 # Natively when this kernel has vcan and we are root, else in one QEMU guest boot; skipped (77) only when
 # neither vcan nor qemu exists.  usage: mcad_e2e.sh BUILD_DIR SOURCE_DIR [--in-guest]
 set -u
@@ -22,7 +24,7 @@ MCAD=$B/daemon/mcad
 DS=$B/sim_backend/drivesim/mca-drivesim
 SRC_CELL=$S/config/cells/cup_stacking_canopen.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
-PHASES=${MCA_E2E_PHASES:-A B C}
+PHASES=${MCA_E2E_PHASES:-A B C D}
 DQ_MAX=${MCA_E2E_DQ_MAX:-1e-5}
 now() { date +%s; }
 
@@ -234,5 +236,22 @@ if echo "$PHASES" | grep -q C; then
     done
     [ $fC = 0 ] && echo "CO-E2E ok   phase C: EMCY of node 4 -> named fault, both arms braked to rest, exit 3 ($(($(now) - t0)) s)"
     [ $fC = 0 ] || fail=1
+fi
+if echo "$PHASES" | grep -q D; then
+    $RTA $PIN "$DS" --iface vcan0 --robot "$URDF0" --q0 "$Q00" 2>"$OUT/ds0D.err" &
+    P0=$!
+    $RTA $PIN "$DS" --iface vcan1 --robot "$URDF1" --q0 "$Q01" --sdo-abort 6:0x60C2 2>"$OUT/ds1D.err" &
+    P1=$!
+    sleep 0.5
+    $PIN2 "$MCAD" --no-dds --stop-after 1 "$CELL" 2>"$OUT/mcadD.log"
+    rc=$?
+    stop_drivesims
+    grep -a "cannot open" "$OUT/mcadD.log" | head -n 1
+    if [ $rc -ne 0 ] && grep -q "arm 'mico2' (canopen): cannot open: canopen: node 6: SDO download 0x60C2:1 aborted by the drive: 0x08000022 .*present device state" "$OUT/mcadD.log"; then
+        echo "CO-E2E ok   phase D: SDO abort at start-up -> mcad does not start, names arm, node, object and abort (exit $rc)"
+    else
+        echo "CO-E2E FAIL phase D: mcad exit $rc; want a refused start naming arm mico2, node 6, 0x60C2 and abort 0x08000022"
+        fail=1
+    fi
 fi
 exit $fail
