@@ -13,7 +13,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(MCA_EXPORTED core arm sim_arm sim arm_can dds)
+set(MCA_EXPORTED core arm sim_arm sim arm_can canopen dds)
 foreach(lib ${MCA_EXPORTED})
   set(t mca_${lib})
   if(NOT TARGET ${t})
@@ -47,7 +47,7 @@ install(FILES "${CMAKE_BINARY_DIR}/mcaConfig.cmake" "${CMAKE_BINARY_DIR}/mcaConf
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/mca)
 
 install(TARGETS mcad RUNTIME DESTINATION ${CMAKE_INSTALL_SBINDIR})
-foreach(tool mca-sim mca-monitor mca-geom mca-armsim mca-stopcheck mca-simarm-trace mca-dds-synth)
+foreach(tool mca-sim mca-monitor mca-geom mca-armsim mca-drivesim mca-stopcheck mca-simarm-trace mca-dds-synth)
   if(TARGET ${tool})
     install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()

@@ -123,6 +123,18 @@ const char *mca_arm_fault_name(unsigned fault_code) {
         return "FEEDBACK";
     case MCA_ARM_FAULT_JOINT_COUNT:
         return "JOINT_COUNT";
+    case MCA_ARM_FAULT_DRIVE:
+        return "DRIVE_FAULT";
+    case MCA_ARM_FAULT_EMCY:
+        return "EMCY";
+    case MCA_ARM_FAULT_HEARTBEAT:
+        return "HEARTBEAT";
+    case MCA_ARM_FAULT_PDO:
+        return "PDO_TIMEOUT";
+    case MCA_ARM_FAULT_SDO:
+        return "SDO_ABORT";
+    case MCA_ARM_FAULT_NMT:
+        return "NMT";
     default:
         return "UNKNOWN";
     }

@@ -11,7 +11,7 @@ secs=$2
 shift 2
 src=$(cd "$(dirname "$0")" && pwd)
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(can_link armsim_rx cell scenario urdf inject ros2_target)
+[ ${#targets[@]} -gt 0 ] || targets=(can_link armsim_rx cell scenario urdf inject ros2_target canopen)
 fail=0
 summary=()
 for t in "${targets[@]}"; do

@@ -39,6 +39,14 @@ struct raw_sim {
     double *noise_pos;
 };
 
+struct raw_canopen {
+    int *first_node;
+    int *sync_us;
+    char *mode;
+    double *pos_scale, *vel_scale;
+    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
+};
+
 struct raw_arm {
     char *name;
     char *backend;
@@ -55,6 +63,7 @@ struct raw_arm {
     double *dec_limit;
     double *priority;
     struct raw_sim *sim;
+    struct raw_canopen *canopen;
     struct raw_path *path;
     char *stream;
 };
@@ -155,6 +164,17 @@ static const cyaml_schema_field_t sim_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_schema_field_t canopen_fields[] = {
+    CYAML_FIELD_INT_PTR("first_node", OPT, struct raw_canopen, first_node),
+    CYAML_FIELD_INT_PTR("sync_us", OPT, struct raw_canopen, sync_us),
+    CYAML_FIELD_STRING_PTR("mode", OPT, struct raw_canopen, mode, 3, 3),
+    CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, struct raw_canopen, pos_scale),
+    CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, struct raw_canopen, vel_scale),
+    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, struct raw_canopen, heartbeat_timeout_ms),
+    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, struct raw_canopen, pdo_timeout_syncs),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_arm, name, 1, 31),
     CYAML_FIELD_STRING_PTR("backend", CYAML_FLAG_POINTER, struct raw_arm, backend, 1, 31),
@@ -168,6 +188,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_FLOAT_PTR("dec_limit", OPT, struct raw_arm, dec_limit),
     CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
     CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
+    CYAML_FIELD_MAPPING_PTR("canopen", OPT, struct raw_arm, canopen, canopen_fields),
     CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, path_fields),
     CYAML_FIELD_STRING_PTR("stream", OPT, struct raw_arm, stream, 1, 15),
     CYAML_FIELD_END,
@@ -695,7 +716,7 @@ static int readable(const char *p) {
 }
 
 const char *mca_cell_backend_name(mca_cell_backend_t b) {
-    return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : "sim";
+    return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : b == MCA_CELL_BACKEND_CANOPEN ? "canopen" : "sim";
 }
 
 /* "KEY: must be in ..." into why when v is outside the scenario range of key. */
@@ -1023,9 +1044,59 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             if (!ra->id_base) {
                 FAIL(MCA_EPARSE, wa, "backend", "arms[%d].id_base: required with backend socketcan", ai);
             }
+        } else if (strcmp(ra->backend, "canopen") == 0) {
+            ca->backend = MCA_CELL_BACKEND_CANOPEN;
+            if (!ra->interface) {
+                FAIL(MCA_EPARSE, wa, "backend", "arms[%d].interface: required with backend canopen", ai);
+            }
         } else {
-            FAIL(MCA_ERANGE, wa, "backend", "arms[%d].backend: unknown backend '%s' (known: sim, socketcan)",
-                 ai, ra->backend);
+            FAIL(MCA_ERANGE, wa, "backend",
+                 "arms[%d].backend: unknown backend '%s' (known: sim, socketcan, canopen)", ai, ra->backend);
+        }
+        ca->co_first_node = 1;
+        ca->co_sync_us = 4000;
+        ca->co_mode = 9;
+        ca->co_pos_scale = 1e6;
+        ca->co_vel_scale = 1e6;
+        ca->co_hb_timeout_ms = 350;
+        ca->co_pdo_timeout = 5;
+        if (ra->canopen) {
+            const struct raw_canopen *rco = ra->canopen;
+            if (ca->backend != MCA_CELL_BACKEND_CANOPEN) {
+                FAIL(MCA_EPARSE, wa, "canopen", "arms[%d].canopen: only with backend canopen", ai);
+            }
+            if (rco->first_node && (*rco->first_node < 1 || *rco->first_node > 127)) {
+                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen.first_node: 1..127 (got %d)", ai,
+                     *rco->first_node);
+            }
+            if (rco->sync_us && *rco->sync_us < 100) {
+                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen.sync_us: >= 100 (got %d)", ai,
+                     *rco->sync_us);
+            }
+            if (rco->mode && strcmp(rco->mode, "csv") != 0 && strcmp(rco->mode, "csp") != 0) {
+                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen.mode: csv or csp (got '%s')", ai,
+                     rco->mode);
+            }
+            if ((rco->pos_scale && !(*rco->pos_scale > 0 && isfinite(*rco->pos_scale))) ||
+                (rco->vel_scale && !(*rco->vel_scale > 0 && isfinite(*rco->vel_scale)))) {
+                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
+            }
+            ca->co_first_node = rco->first_node ? *rco->first_node : 1;
+            ca->co_sync_us = rco->sync_us ? (uint32_t)*rco->sync_us : 4000;
+            ca->co_mode = rco->mode && strcmp(rco->mode, "csp") == 0 ? 8 : 9;
+            ca->co_pos_scale = rco->pos_scale ? *rco->pos_scale : 1e6;
+            ca->co_vel_scale = rco->vel_scale ? *rco->vel_scale : 1e6;
+            if ((rco->heartbeat_timeout_ms &&
+                 (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000)) ||
+                (rco->pdo_timeout_syncs &&
+                 (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
+                FAIL(MCA_ERANGE, wa, "canopen",
+                     "arms[%d].canopen: heartbeat_timeout_ms 101..60000 (the drives beat every 100 ms), "
+                     "pdo_timeout_syncs 1..100000",
+                     ai);
+            }
+            ca->co_hb_timeout_ms = rco->heartbeat_timeout_ms ? *rco->heartbeat_timeout_ms : 350;
+            ca->co_pdo_timeout = rco->pdo_timeout_syncs ? *rco->pdo_timeout_syncs : 5;
         }
         if (ra->interface) {
             snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);
@@ -1038,6 +1109,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                      MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
             }
             ca->id_base = (uint32_t)*ra->id_base;
+        }
+        /* a CANopen bus has one SYNC producer and NMT master: one canopen arm per bus */
+        for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_CANOPEN; b++) {
+            if (strcmp(cell->arm[b].interface, ca->interface) == 0) {
+                FAIL(MCA_ERANGE, wa, "interface",
+                     "arms[%d].interface: %s is already arms[%u]'s (one bus per canopen arm)", ai,
+                     ca->interface, b);
+            }
         }
         /* two arms on one bus with one id block would each take the other's frames */
         for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_SOCKETCAN; b++) {

@@ -21,6 +21,7 @@
 #include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/sim_backend.h"
+#include "mca/canopen.h" /* mca_canopen_backend_open, mca_canopen_backend_fault (issue 15) */
 #ifdef MCA_TEST_HOOKS
 #include "mca/daemon_test.h"
 #endif
@@ -332,6 +333,21 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
 #endif
             rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
         }
+    } else if (ca->backend == MCA_CELL_BACKEND_CANOPEN) {
+        /* issue 15: joint j = CiA 402 drive ca->co_first_node + j on ca->interface (docs/canopen.md) */
+        mca_co_master_config_t cc;
+        mca_co_master_config_default(&cc, d->dof[a], (uint8_t)ca->co_first_node);
+        snprintf(cc.iface, sizeof cc.iface, "%s", ca->interface);
+        cc.mode = ca->co_mode;
+        cc.sync_period_us = ca->co_sync_us;
+        cc.hb_timeout_ms = (uint16_t)ca->co_hb_timeout_ms;
+        cc.pdo_timeout_cycles = ca->co_pdo_timeout;
+        for (int j = 0; j < cc.n; j++) {
+            cc.drive[j].pos_scale = ca->co_pos_scale;
+            cc.drive[j].vel_scale = ca->co_vel_scale;
+        }
+        rc = mca_canopen_backend_open(&d->arm[a], &cc, (uint32_t)(d->cell.rt.period_ns / 1000), berr,
+                                      sizeof berr);
     } else {
         /* the link refuses feedback outside the same bounds the daemon checks (issue 16: at the decoder) */
         mca_can_options_t co;
@@ -674,9 +690,20 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
         if (detail == ARM_FAULT_NOT_SERVO) {
             snprintf(buf, len, "arm %s does not servo: state %s", name, mca_arm_state_name(arm_code));
         } else {
-            snprintf(buf, len, "arm %s %s%s", name,
+            char co[200] = "";
+            if (arm >= 0 && arm < d->n_arms && d->cell.arm[arm].backend == MCA_CELL_BACKEND_CANOPEN) {
+                /* which drive and why (the master's first latched fault: written once by the loop) */
+                co[0] = ' ';
+                co[1] = '(';
+                if (mca_canopen_backend_fault(d->arm[arm], co + 2, sizeof co - 3) == MCA_OK) {
+                    strcat(co, ")");
+                } else {
+                    co[0] = 0;
+                }
+            }
+            snprintf(buf, len, "arm %s %s%s%s", name,
                      detail == ARM_FAULT_REPORTS ? "reports FAULT " : "brakes on its own: ",
-                     mca_arm_fault_name(arm_code));
+                     mca_arm_fault_name(arm_code), co);
         }
         break;
     case MCA_DAEMON_FAULT_FEEDBACK:

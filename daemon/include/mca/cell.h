@@ -28,6 +28,7 @@ extern "C" {
 typedef enum mca_cell_backend {
     MCA_CELL_BACKEND_SIM = 0,       /**< in-process simulated arm (mca/sim_backend.h) */
     MCA_CELL_BACKEND_SOCKETCAN = 1, /**< SocketCAN CAN FD (mca/arm_can.h) */
+    MCA_CELL_BACKEND_CANOPEN = 2, /**< CiA 402 drives, one node per joint, one bus per arm (mca/canopen.h) */
 } mca_cell_backend_t;
 
 /** What a streamed arm follows (task.stream; numbering as mca_ros2_stream_kind_t). */
@@ -51,8 +52,16 @@ typedef struct mca_cell_stream {
 /** Hardware side of one arm (the model and path live in the cell's scenario). */
 typedef struct mca_cell_arm {
     mca_cell_backend_t backend;
-    char interface[32];            /**< socketcan: "vcan0", "can0" */
-    uint32_t id_base;              /**< socketcan: the arm's CAN id block */
+    char interface[32]; /**< socketcan: "vcan0", "can0" */
+    uint32_t id_base;   /**< socketcan: the arm's CAN id block */
+    /* canopen (docs/canopen.md): joint j = node first_node + j */
+    int co_first_node;             /**< 1..127 (default 1) */
+    uint32_t co_sync_us;           /**< SYNC period, a multiple of the loop period (default 4000) */
+    int co_mode;                   /**< 9 CSV (default), 8 CSP */
+    double co_pos_scale;           /**< counts per rad (default 1e6) */
+    double co_vel_scale;           /**< counts per rad/s (default 1e6) */
+    int co_hb_timeout_ms;          /**< heartbeat consumer time (default 350) */
+    int co_pdo_timeout;            /**< SYNCs without a fresh TPDO before PDO_TIMEOUT (default 5) */
     double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
     double priority;               /**< mca-ts: higher keeps its path, lower yields first (0: default 1) */
     int stream;                    /**< mca_cell_stream_kind_t (task.stream: twist unless the arm says) */

@@ -60,6 +60,13 @@ enum mca_arm_fault {
     MCA_ARM_FAULT_BUS = 5,         /**< bus error / bus-off */
     MCA_ARM_FAULT_FEEDBACK = 6,    /**< the link refused implausible feedback (link_fault only, issue 16) */
     MCA_ARM_FAULT_JOINT_COUNT = 7, /**< the arm's heartbeat names another joint count (link_fault only) */
+    /* CANopen backend (mca/canopen.h, issue 15): which node and why via mca_canopen_backend_fault() */
+    MCA_ARM_FAULT_DRIVE = 8,      /**< a CiA 402 drive in FAULT (statusword) */
+    MCA_ARM_FAULT_EMCY = 9,       /**< a drive sent an emergency message */
+    MCA_ARM_FAULT_HEARTBEAT = 10, /**< a drive's heartbeat missed its consumer time, or the drive rebooted */
+    MCA_ARM_FAULT_PDO = 11,       /**< a drive's TPDO was not refreshed in time */
+    MCA_ARM_FAULT_SDO = 12,       /**< an SDO abort or timeout at start-up */
+    MCA_ARM_FAULT_NMT = 13,       /**< a drive left OPERATIONAL */
 };
 
 /** Per-actuator fault flag bits (feedback.fault_flags[j]); latched until MCA_ACT_CLEAR_FAULT. */
