@@ -135,8 +135,10 @@ def main():
     loop = None
     t0 = time.time()
     while loop is None and time.time() - t0 < 30 and p.poll() is None:
-        loop = next((tid for tid, (name, _) in threads(p.pid).items() if name == "mcad-loop"), None)
+        seen = threads(p.pid)
+        loop = next((tid for tid, (name, _) in seen.items() if name == "mcad-loop"), None)
         time.sleep(0.01)
+    found_in = {tid: name for tid, (name, _) in seen.items()} if loop else {}
     if loop is None:
         p.kill()
         err.seek(0)
@@ -188,8 +190,17 @@ def main():
     if not calls:
         # strace recorded not one call of a loop that ran (seen twice in CI, in a guest starved by a busy host,
         # once with PTRACE_SEIZE failing): a tracer failure, not a verdict on mcad
+        def first_line(path):
+            try:
+                return open(path).read().splitlines()[0]
+            except (OSError, IndexError):
+                return "?"
+        sv = subprocess.run([strace, "-V"], capture_output=True, text=True).stdout.splitlines()
         print(f"strace traced nothing (its stderr: {st.stderr.read().strip() if st.stderr else ''!r}; "
-              f"load {open('/proc/loadavg').read().split()[0]})")
+              f"load {open('/proc/loadavg').read().split()[0]}; {sv[0] if sv else 'strace -V ?'}; "
+              f"yama ptrace_scope {first_line('/proc/sys/kernel/yama/ptrace_scope')}; "
+              f"{first_line('/proc/version')[:60]}; loop tid {loop}, pid {p.pid}; threads when found {found_in}; "
+              f"after the run {affinity and {t: n for t, (n, _) in affinity.items()}})")
         return NOTHING_TRACED
     sleeps = [i for i, (n, _) in enumerate(calls) if n == "clock_nanosleep"]
     last_sleep = sleeps[-1] if sleeps else -1
