@@ -98,6 +98,13 @@ def start_emulators(armsim, cell_src, tmp):
 NOTHING_TRACED = 75
 
 
+def ns_of(pid):
+    try:
+        return os.readlink(f"/proc/{pid}/ns/pid")
+    except OSError as e:
+        return f"? ({e.strerror})"
+
+
 def main():
     mcad, src, domain = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
     extra = sys.argv[4:]
@@ -153,6 +160,7 @@ def main():
         print(f"strace could not attach to thread {loop} (attempt {attempt + 1}): {st.stderr.read().strip()}")
         loop = next((tid for tid, (name, _) in threads(p.pid).items() if name == "mcad-loop"), loop)
     affinity = threads(p.pid)
+    mcad_ns = ns_of(p.pid)  # while it runs (diagnostics when strace traces nothing)
     rc = p.wait(timeout=300)
     st.wait(timeout=60)
     for e in emulators:
@@ -200,7 +208,8 @@ def main():
               f"load {open('/proc/loadavg').read().split()[0]}; {sv[0] if sv else 'strace -V ?'}; "
               f"yama ptrace_scope {first_line('/proc/sys/kernel/yama/ptrace_scope')}; "
               f"{first_line('/proc/version')[:60]}; loop tid {loop}, pid {p.pid}; threads when found {found_in}; "
-              f"after the run {affinity and {t: n for t, (n, _) in affinity.items()}})")
+              f"after the run {affinity and {t: n for t, (n, _) in affinity.items()}}; pid namespace of mcad "
+              f"{mcad_ns}, of this test {ns_of(os.getpid())})")
         return NOTHING_TRACED
     sleeps = [i for i, (n, _) in enumerate(calls) if n == "clock_nanosleep"]
     last_sleep = sleeps[-1] if sleeps else -1
