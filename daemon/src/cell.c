@@ -17,6 +17,7 @@
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/scheme.h"
+#include "mca/ros2.h" /* mca_ros2_name_ok */
 #include "mca/vec3.h"
 
 /* ---------------------------------------------------------------- schema */
@@ -674,19 +675,6 @@ static void resolve(char *out, size_t outlen, const char *base_file, const char 
     }
 }
 
-/* A ROS 2 name token: a letter, then letters, digits and single '_', not ending in '_'. */
-static int ros2_name_ok(const char *s) {
-    if (!isalpha((unsigned char)s[0])) {
-        return 0;
-    }
-    for (const char *c = s; *c; c++) {
-        if (!(isalnum((unsigned char)*c) || *c == '_') || (c[0] == '_' && c[1] == '_')) {
-            return 0;
-        }
-    }
-    return s[strlen(s) - 1] != '_';
-}
-
 /* The default ROS 2 namespace of a cell: its name with every other character as one '_' ("monitor-vs-mcad"
  * -> "monitor_vs_mcad"), "cell_" in front when it does not start with a letter. */
 static void ros2_name_from(char *out, size_t len, const char *name) {
@@ -1291,7 +1279,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         if (rr->ns) {
-            if (!ros2_name_ok(rr->ns)) {
+            if (!mca_ros2_name_ok(rr->ns)) {
                 FAIL(MCA_ERANGE, wr2, "namespace",
                      "dds.ros2.namespace: '%s' is not a ROS 2 name (a letter, then letters, digits and "
                      "single '_')",
@@ -1300,7 +1288,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             snprintf(r2->ns, sizeof r2->ns, "%s", rr->ns);
         }
         if (rr->world_frame) {
-            if (!ros2_name_ok(rr->world_frame)) {
+            if (!mca_ros2_name_ok(rr->world_frame)) {
                 FAIL(MCA_ERANGE, wr2, "world_frame",
                      "dds.ros2.world_frame: '%s' is not a frame name (a letter, then letters, digits and "
                      "single '_')",

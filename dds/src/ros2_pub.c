@@ -78,9 +78,8 @@ void mca_ros2_config_default(mca_ros2_config_t *cfg) {
     snprintf(cfg->world_frame, sizeof cfg->world_frame, "world");
 }
 
-/* ROS 2 name token: a letter, then letters, digits or '_' (no "__", no trailing '_'). */
-static int ros_token_ok(const char *s) {
-    if (!isalpha((unsigned char)s[0])) {
+int mca_ros2_name_ok(const char *s) {
+    if (s == NULL || !isalpha((unsigned char)s[0])) {
         return 0;
     }
     for (const char *c = s; *c; c++) {
@@ -101,7 +100,7 @@ int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen
         snprintf(err, errlen, "ros2: no configuration");
         return MCA_EINVAL;
     }
-    if (!ros_token_ok(cfg->cell)) {
+    if (!mca_ros2_name_ok(cfg->cell)) {
         snprintf(err, errlen,
                  "ros2.namespace: '%s' is not a ROS 2 name (a letter, then letters, digits, '_')", cfg->cell);
         return MCA_EINVAL;
@@ -129,7 +128,7 @@ int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen
             }
         }
         const mca_ros2_arm_t *arm = &cfg->arm[a];
-        if (!ros_token_ok(arm->name)) {
+        if (!mca_ros2_name_ok(arm->name)) {
             snprintf(err, errlen,
                      "arms[%u].name: '%s' is not a ROS 2 name (a letter, then letters, digits, '_')", a,
                      arm->name);

@@ -79,6 +79,10 @@ typedef struct mca_ros2_config {
     mca_ros2_arm_t arm[MCA_MAX_ARMS];
 } mca_ros2_config_t;
 
+/** 1 when s is a ROS 2 name token: a letter, then letters, digits and single '_', not ending in '_'.
+ *  Context: any. */
+int mca_ros2_name_ok(const char *s);
+
 /** Off, every topic selected, world frame "world", no arms. Context: any. */
 void mca_ros2_config_default(mca_ros2_config_t *cfg);
 
