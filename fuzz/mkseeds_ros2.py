@@ -1,83 +1,20 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Seed corpus of fuzz_ros2_target (fuzz/corpus/ros2_target/): TwistStamped and PoseStamped as a ROS 2 node
-sends them, serialized by the PyPI cyclonedds binding (XCDR1, the 4-byte encapsulation header dropped), in
-both byte orders. First byte as fuzz_ros2_target.c reads it. Run: .venv/bin/python fuzz/mkseeds_ros2.py"""
+sends them, serialized by the PyPI cyclonedds binding with the types of tests/ros2/ros2_types.py (XCDR1, the
+4-byte encapsulation header dropped), in both byte orders. First byte as fuzz_ros2_target.c reads it.
+Run: .venv/bin/python fuzz/mkseeds_ros2.py"""
 import os
-from dataclasses import dataclass
+import sys
 
-from cyclonedds.idl import Endianness, IdlStruct
-from cyclonedds.idl.annotations import final
-import cyclonedds.idl.types as t
+from cyclonedds.idl import Endianness
 
-OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corpus", "ros2_target")
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "ros2"))
+from ros2_types import (Header_, Point_, Pose_, PoseStamped_, Quaternion_, Time_, Twist_,  # noqa: E402
+                        TwistStamped_, Vector3_)
 
-
-@final
-@dataclass
-class Time_(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: t.int32
-    nanosec: t.uint32
-
-
-@final
-@dataclass
-class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time_
-    frame_id: str
-
-
-@final
-@dataclass
-class Vector3_(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
-    x: t.float64
-    y: t.float64
-    z: t.float64
-
-
-@final
-@dataclass
-class Twist_(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
-    linear: Vector3_
-    angular: Vector3_
-
-
-@final
-@dataclass
-class TwistStamped_(IdlStruct, typename="geometry_msgs::msg::dds_::TwistStamped_"):
-    header: Header_
-    twist: Twist_
-
-
-@final
-@dataclass
-class Point_(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
-    x: t.float64
-    y: t.float64
-    z: t.float64
-
-
-@final
-@dataclass
-class Quaternion_(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
-    x: t.float64
-    y: t.float64
-    z: t.float64
-    w: t.float64
-
-
-@final
-@dataclass
-class Pose_(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
-    position: Point_
-    orientation: Quaternion_
-
-
-@final
-@dataclass
-class PoseStamped_(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
-    header: Header_
-    pose: Pose_
+OUT = os.path.join(HERE, "corpus", "ros2_target")
 
 
 def hdr(frame):

@@ -157,59 +157,11 @@ def zone_color(d):
 
 def tf_static_reader():
     """/tf_static through the Cyclone Python binding (types written here, not from mcad's IDL)."""
-    from dataclasses import dataclass
     from cyclonedds.domain import DomainParticipant
     from cyclonedds.topic import Topic
     from cyclonedds.sub import DataReader
     from cyclonedds.core import Qos, Policy
-    from cyclonedds.idl import IdlStruct
-    from cyclonedds.idl.annotations import final
-    import cyclonedds.idl.types as t
-
-    @final
-    @dataclass
-    class Time_(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-        sec: t.int32
-        nanosec: t.uint32
-
-    @final
-    @dataclass
-    class Header_(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-        stamp: Time_
-        frame_id: str
-
-    @final
-    @dataclass
-    class Vector3_(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
-        x: t.float64
-        y: t.float64
-        z: t.float64
-
-    @final
-    @dataclass
-    class Quaternion_(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
-        x: t.float64
-        y: t.float64
-        z: t.float64
-        w: t.float64
-
-    @final
-    @dataclass
-    class Transform_(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
-        translation: Vector3_
-        rotation: Quaternion_
-
-    @final
-    @dataclass
-    class TransformStamped_(IdlStruct, typename="geometry_msgs::msg::dds_::TransformStamped_"):
-        header: Header_
-        child_frame_id: str
-        transform: Transform_
-
-    @final
-    @dataclass
-    class TFMessage_(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
-        transforms: t.sequence[TransformStamped_]
+    from ros2_types import TFMessage_
 
     dp = DomainParticipant(DOMAIN)
     qos = Qos(Policy.Reliability.Reliable(max_blocking_time=1_000_000_000), Policy.Durability.TransientLocal,
