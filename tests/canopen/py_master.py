@@ -194,11 +194,19 @@ try:
     # --- fault injection, EMCY, fault reset ---
     node.state = "OPERATION ENABLED"
     node.emcy.reset()
-    node.sdo[0x2000].raw = 1
     try:
-        e = node.emcy.wait(0xFF00, timeout=5)
-    except Exception:  # noqa: BLE001
-        e = None
+        node.sdo[0x2000].raw = 1
+    except canopen.SdoCommunicationError as exc:
+        # seen once in CI: the drive took the write (it faulted, sent its EMCY and its SDO answer, tx_fail 0)
+        # but python-canopen in the starved guest saw no answer within 2 s; the checks below still demand
+        # the fault's EMCY, statusword and 0x603F
+        print(f"note: the fault-injection write got no SDO answer in time ({exc}); judging by its effects")
+    e = next((x for x in node.emcy.log if x.code == 0xFF00), None)
+    if e is None:
+        try:
+            e = node.emcy.wait(0xFF00, timeout=5)
+        except Exception:  # noqa: BLE001
+            e = None
     check("emcy: injected drive fault -> EMCY 0xFF00", e is not None and e.code == 0xFF00, e)
     ok = wait_until(lambda: node.state == "FAULT", 5)
     check("cia402: statusword FAULT, 0x603F = 0xFF00", ok and node.sdo[0x603F].raw == 0xFF00,
