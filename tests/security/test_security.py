@@ -1,0 +1,288 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""dds.security: who may command a streamed cell (docs/security.md).
+
+Run in a network namespace of its own (tests/ros2/netns.sh): every participant here is a real Cyclone DDS
+participant on Debian's libddsc (mcad, mca-target-pub, mca-monitor), talking over lo with multicast.
+
+0. Sanity, security OFF: mcad runs config/cells/stream_secure_sim.yaml with dds.config ros2.xml; a
+   participant without credentials streams a twist: it matches and left's reference moves. (So the
+   refusal checks below would fail if security were off.)
+1. Monitoring PROTECTED (the cell as shipped, config/dds/secure.xml, files from
+   config/security/make_security.sh): left is streamed -0.1 m/s in x for 1.5 s by, in turn,
+   a. a participant without credentials,
+   b. a valid identity (monitor) without write permission on targets,
+   c. an expired certificate of the permitted subject (CN=commander; the publisher runs under faketime on
+      a day the certificate was valid, so that its own Cyclone lets it start and mcad is the one to refuse),
+   d. a certificate of the permitted subject signed by another CA (its publisher trusts that CA),
+   each refused: left's reference does not move by one bit during the attempt, and the refusal is logged
+   (a: Cyclone's discovery trace of mcad "Non secure remote writer ... is not allowed"; b: the publisher's
+   own Cyclone refuses the writer, "Not Allowed By Security"; c, d: mcad's log, the handshake failure with
+   the reason). Then a plain mca-monitor (no credentials) gets no distances, mca-monitor as monitor does,
+   and e. the permitted commander streams: left's reference moves at the commanded 0.1 m/s.
+2. Monitoring OPEN (secure-monitor-open.xml): a plain mca-monitor gets distances, a participant without
+   credentials is still refused on the target (nothing moves), the commander commands.
+Also: mcad pointed at security files that are not there exits 1 (start-up failed) naming the file,
+before its loop starts.
+
+usage: test_security.py MCAD TARGET_PUB MONITOR SOURCE_DIR DOMAIN"""
+import csv
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+MCAD, TARGET_PUB, MONITOR, SRC, DOMAIN = sys.argv[1:6]
+NS = "stream_secure_sim"
+TOPIC = f"rt/{NS}/left/target_twist"
+V = -0.10  # m/s along x: left's tip away from right's
+FAILS = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        FAILS.append(what)
+
+
+class Mcad:
+    """mcad on a copy of the shipped secure cell; its stderr collected by a thread (with arrival times)."""
+
+    def __init__(self, tmp, tag, dds_config, env):
+        cell = open(os.path.join(SRC, "config", "cells", "stream_secure_sim.yaml")).read()
+        cell = (cell.replace("../scenarios/", f"{SRC}/config/scenarios/")
+                .replace("config: ../dds/secure.xml", f"config: {dds_config}")
+                .replace("domain: 0", f"domain: {DOMAIN}").replace("priority: 80", "priority: 60")
+                # the refused attempts must not make a stale-stream fault of the silence between them
+                .replace("brake_after: 1.0 ", "brake_after: 60 ").replace("stop_after: 0 ", "stop_after: 120 "))
+        self.cell = os.path.join(tmp, f"cell_{tag}.yaml")
+        self.csv = os.path.join(tmp, f"mcad_{tag}.csv")
+        with open(self.cell, "w") as f:
+            f.write(cell)
+        self.lines = []  # (monotonic, line)
+        self.t_running = None
+        self.p = subprocess.Popen([MCAD, "--csv", self.csv, self.cell], stderr=subprocess.PIPE, text=True, env=env)
+        self.th = threading.Thread(target=self._read, daemon=True)
+        self.th.start()
+        t_end = time.monotonic() + 30
+        while self.t_running is None and self.p.poll() is None and time.monotonic() < t_end:
+            time.sleep(0.02)
+
+    def _read(self):
+        for line in self.p.stderr:
+            now = time.monotonic()
+            self.lines.append((now, line.rstrip("\n")))
+            if "mcad: running" in line and self.t_running is None:
+                self.t_running = now
+
+    def stop(self):
+        if self.p.poll() is None:
+            self.p.send_signal(signal.SIGTERM)
+        try:
+            self.p.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.p.kill()
+            self.p.wait()
+        self.th.join(timeout=5)
+        with open(self.csv) as f:
+            self.rows = list(csv.DictReader(f))
+        return self.p.returncode
+
+    def log_between(self, t0, t1):
+        return [l for t, l in self.lines if t0 <= t <= t1]
+
+
+def target_pub(env, config, seconds=1.5, match_timeout=3.0, prefix=()):
+    """Streams V on left's target for `seconds` (after a match or match_timeout). -> (rc, out, err, t0, t1)"""
+    t0 = time.monotonic()
+    r = subprocess.run([*prefix, TARGET_PUB, "--domain", DOMAIN, "--config", config, "--topic", TOPIC,
+                        "--twist", f"{V},0,0", "--hz", "50", "--duration", str(seconds),
+                        "--match-timeout", str(match_timeout)], env=env, capture_output=True, text=True,
+                       timeout=60)
+    return r.returncode, r.stdout, r.stderr, t0, time.monotonic()
+
+
+def monitor(env, config, seconds, tmp, tag):
+    """mca-monitor for `seconds`: -> Distances samples received (rows of its CSV)."""
+    out = os.path.join(tmp, f"monitor_{tag}.csv")
+    subprocess.run([MONITOR, "--domain", DOMAIN, "--config", config, "--duration", str(seconds), "--csv", out,
+                    "--no-color"], env=env, capture_output=True, text=True, timeout=seconds + 30)
+    if not os.path.exists(out):
+        return 0
+    with open(out) as f:
+        return max(0, sum(1 for _ in f) - 1)
+
+
+def rd0(rows):
+    return [(float(r["t"]), float(r["rd0_x"]), float(r["rd0_y"]), float(r["rd0_z"])) for r in rows]
+
+
+def moved_in(m, t0, t1):
+    """Largest change of left's reference (m) over the CSV ticks between monotonic t0 and t1 (the CSV's t is
+    task time from the first tick, which is when mcad printed 'running', to a few ms)."""
+    a, b = t0 - m.t_running, t1 - m.t_running
+    pts = [p for p in rd0(m.rows) if a <= p[0] <= b]
+    if not pts:
+        return None, 0
+    x0 = pts[0]
+    return max(max(abs(p[k] - x0[k]) for k in (1, 2, 3)) for p in pts), len(pts)
+
+
+def first_move(m):
+    pts = rd0(m.rows)
+    for p in pts:
+        if p[1:] != pts[0][1:]:
+            return p[0] + m.t_running
+    return None
+
+
+def commanded_speed(m, t0, t1):
+    """Speed of left's reference (m/s, along x) between the first and the last tick it moved in [t0, t1]."""
+    pts = [p for p in rd0(m.rows) if t0 - m.t_running <= p[0] <= t1 - m.t_running]
+    mv = [i for i in range(1, len(pts)) if pts[i][1:] != pts[i - 1][1:]]
+    if len(mv) < 2:
+        return 0.0, 0.0
+    a, b = pts[mv[0] - 1], pts[mv[-1]]
+    return (b[1] - a[1]) / (b[0] - a[0]), b[0] - a[0]
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="mca-sec-")
+    sec = os.path.join(tmp, "security")
+    r = subprocess.run([os.path.join(SRC, "config", "security", "make_security.sh"), sec], capture_output=True,
+                       text=True)
+    check(r.returncode == 0, f"make_security.sh made the files ({r.stderr.strip()[-300:]})")
+    env = dict(os.environ, MCA_SECURITY_DIR=sec)
+    env.pop("CYCLONEDDS_URI", None)
+    env_id = {k: dict(env, MCA_DDS_IDENTITY=k) for k in ("mcad", "commander", "monitor", "expired", "rogue")}
+    plain = os.path.join(SRC, "config", "dds", "ros2.xml")  # no security: a participant without credentials
+    secure = os.path.join(SRC, "config", "dds", "secure.xml")
+    secure_open = os.path.join(SRC, "config", "dds", "secure-monitor-open.xml")
+    # mcad's Cyclone also writes its discovery trace to a file: only there does Cyclone 0.10.2 say that it
+    # ignores a participant without credentials (at its default verbosity it logs nothing of it). The
+    # security settings are the shipped file's, unchanged.
+    trace = os.path.join(tmp, "mcad_dds_trace.log")
+    secure_traced = os.path.join(tmp, "secure_traced.xml")
+    with open(secure) as f:
+        x = f.read()
+    with open(secure_traced, "w") as f:
+        f.write(x.replace("</Domain>", f"  <Tracing><Category>discovery</Category><OutputFile>{trace}</OutputFile>"
+                                       "</Tracing>\n  </Domain>"))
+    t_all = time.monotonic()
+
+    # --- missing files: mcad refuses to start (never falls back to no security)
+    t0 = time.monotonic()
+    r = subprocess.run([MCAD, "--stop-after", "1", os.path.join(SRC, "config", "cells", "stream_secure_sim.yaml")],
+                       env=dict(env, MCA_SECURITY_DIR=os.path.join(tmp, "nowhere")), capture_output=True, text=True,
+                       timeout=60)
+    why = [l for l in r.stderr.splitlines() if "mcad: dds:" in l]
+    check(r.returncode == 1 and "start-up failed" in r.stderr and why and "nowhere/mcad/" in why[0],
+          f"without its security files mcad exits {r.returncode} (1: start-up failed) before its loop starts, "
+          f"{time.monotonic() - t0:.1f} s, saying why: '{why[0] if why else None}'")
+
+    # --- 0. sanity: security off, the same attempt as (a) moves the arm
+    m = Mcad(tmp, "off", plain, env_id["mcad"])
+    check(m.t_running is not None, "mcad (security off) running")
+    rc, out, err, t0, t1 = target_pub(env, plain, seconds=1.0, match_timeout=10)
+    m.stop()
+    d, n = moved_in(m, t0, t1 + 0.3)
+    check(rc == 0 and d is not None and d > 0.05,
+          f"security OFF: a participant without credentials commands (rc {rc}, left's reference moved "
+          f"{(d or 0) * 1e3:.1f} mm over {n} ticks): the refusals below are security's doing")
+
+    # --- 1. monitoring protected: four refusals, one success
+    m = Mcad(tmp, "protected", secure_traced, env_id["mcad"])
+    check(m.t_running is not None, f"mcad (secure.xml) running: {m.lines[-1][1] if m.lines else ''}")
+    cases = {}
+    cases["a"] = target_pub(env, plain)
+    cases["b"] = target_pub(env_id["monitor"], secure)
+    ft = shutil.which("faketime")
+    cases["c"] = target_pub(dict(env_id["expired"], FAKETIME_DONT_FAKE_MONOTONIC="1"), secure,
+                            prefix=(ft, "2021-01-01 12:00:00"))
+    cases["d"] = target_pub(env_id["rogue"], secure)
+    time.sleep(1.0)  # mcad's supervisor prints Cyclone's captured messages about once a second
+    n_plain = monitor(env, plain, 2.0, tmp, "protected_plain")
+    n_mon = monitor(env_id["monitor"], secure, 2.0, tmp, "protected_monitor")
+    cases["e"] = target_pub(env_id["commander"], secure, seconds=1.5, match_timeout=10)
+    time.sleep(0.5)
+    rc_m = m.stop()
+    log = "\n".join(l for _, l in m.lines)
+    with open(trace, errors="replace") as f:
+        tr = f.read()
+    check(rc_m == 0, f"mcad (secure) exit status {rc_m} after SIGTERM")
+    what = {"a": "no credentials", "b": "valid identity (monitor), no write permission",
+            "c": "expired certificate of CN=commander", "d": "CN=commander signed by another CA"}
+    for k in "abcd":
+        rc, out, err, t0, t1 = cases[k]
+        d, n = moved_in(m, t0, t1 + 0.3)
+        print(f"     {k} ({what[k]}): {t1 - t0:.2f} s, exit {rc}; stdout: {' | '.join(out.split(chr(10))).strip()}")
+        if err.strip():
+            print(f"     {k} stderr: {err.strip()[:300]}")
+        check(d == 0.0 and n > 500, f"{k}: {what[k]}: left's reference did not move over the {n} ticks of "
+                                    f"the attempt ({t1 - t0:.1f} s)")
+    fm = first_move(m)
+    check(fm is not None and fm >= cases["e"][3],
+          f"left's reference first moved {fm and fm - cases['e'][3]:.2f} s after the permitted commander "
+          f"started, not before")
+    # what each refusal left in the logs
+    rc, out, *_ = cases["a"]
+    hits = re.findall(r"Non secure remote writer \S+ is not allowed", tr)
+    check(rc == 5 and "matched no reader" in out and len(hits) > 0,
+          f"a: never matched mcad's reader; mcad's discovery trace: '{hits[0] if hits else None}' "
+          f"({len(hits)} such lines)")
+    rc, out, err, *_ = cases["b"]
+    check(rc == 4 and "writer refused: Not Allowed By Security" in out,
+          "b: its own Cyclone refused the writer: 'Not Allowed By Security' (the same identity reads: below)")
+    exp = [l for l in log.splitlines() if "mcad: dds:" in l and "certificate has expired" in l]
+    rc, out, err, *_ = cases["c"]
+    check(rc == 5 and "participant ok" in out and len(exp) > 0 and "CN=commander" in exp[0],
+          f"c: it started (faked date), matched nothing, mcad logged: '{exp[0] if exp else None}'")
+    rog = [l for l in log.splitlines() if "mcad: dds:" in l and "unable to get local issuer certificate" in l]
+    rc, out, err, *_ = cases["d"]
+    check(rc == 5 and "participant ok" in out and len(rog) > 0 and "CN=commander" in rog[0],
+          f"d: it started, matched nothing, mcad logged: '{rog[0] if rog else None}'")
+    check(n_plain == 0, f"monitoring protected: mca-monitor without credentials got {n_plain} Distances in 2 s (0)")
+    check(n_mon > 20, f"monitoring protected: mca-monitor as 'monitor' got {n_mon} Distances in 2 s (> 20): "
+                      f"b's identity is valid, only writing targets is denied it")
+    rc, out, err, t0, t1 = cases["e"]
+    v, span = commanded_speed(m, t0, t1 + 0.3)
+    print(f"     e (commander): exit {rc}; stdout: {' | '.join(out.split(chr(10))).strip()}")
+    check(rc == 0 and "matched 1 reader" in out, "e: the permitted commander matched mcad's reader")
+    check(abs(v - V) < 0.1 * abs(V) and span > 1.0,
+          f"e: left's reference moved at {v:.4f} m/s for {span:.2f} s (commanded {V} m/s, within 10 %)")
+
+    # --- 2. monitoring open: anyone reads, still only the commander commands
+    m = Mcad(tmp, "open", secure_open, env_id["mcad"])
+    check(m.t_running is not None, f"mcad (secure-monitor-open.xml) running: {m.lines[-1][1] if m.lines else ''}")
+    res = {}
+    th = threading.Thread(target=lambda: res.update(n=monitor(env, plain, 3.0, tmp, "open_plain")))
+    th.start()
+    ca = target_pub(env, plain)
+    th.join()
+    ce = target_pub(env_id["commander"], secure_open, seconds=1.0, match_timeout=10)
+    time.sleep(0.3)
+    rc_m = m.stop()
+    d, n = moved_in(m, ca[3], ca[4] + 0.3)
+    check(res.get("n", 0) > 20, f"monitoring open: mca-monitor without credentials got {res.get('n')} Distances "
+                                f"in 3 s (> 20)")
+    check(ca[0] == 5 and d == 0.0 and n > 500,
+          f"monitoring open: a participant without credentials is still refused on the target (exit {ca[0]}, "
+          f"left moved {(d or 0) * 1e3:.1f} mm over {n} ticks)")
+    v, span = commanded_speed(m, ce[3], ce[4] + 0.3)
+    check(ce[0] == 0 and abs(v - V) < 0.1 * abs(V),
+          f"monitoring open: the commander commands ({v:.4f} m/s for {span:.2f} s); mcad exit {rc_m}")
+
+    print(f"dds.security: {time.monotonic() - t_all:.1f} s")
+    if FAILS:
+        print(f"{len(FAILS)} check(s) failed; files kept in {tmp}")
+        sys.exit(1)
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
