@@ -13,6 +13,9 @@
 #       expired     CN=commander, signed by the identity CA, valid 2021-01-01 to 2021-01-02 only
 #       rogue       CN=commander, signed by ANOTHER CA (rogue/rogue_ca.pem), which its identity_ca.pem names:
 #                   a participant that trusts its own forger
+#   forged/permissions_ca.pem, forged/permissions.p7s, forged/governance_protected.p7s: a forger's own
+#       permissions CA and, signed by it, permissions that also let CN=monitor write targets (a valid
+#       identity that forges its permissions: the forger's own Cyclone accepts them, the cell must not)
 #
 # Keys are EC P-256 (Cyclone's authentication plugin takes P-256 and RSA-2048), made here and never
 # committed. The CAs are valid from 2020-01-01 to 2040-01-01 (the expired certificate must chain to a CA
@@ -97,6 +100,7 @@ make_id() { # IDENTITY SUBJECT CA START END
 make_ca identity_ca "/O=mca/CN=mca identity CA" "$out/private/identity_ca.pem"
 make_ca permissions_ca "/O=mca/CN=mca permissions CA" "$out/private/permissions_ca.pem"
 make_ca rogue_ca "/O=mca/CN=mca identity CA" "$out/private/rogue_ca.pem" # same name, another key
+make_ca forger_ca "/O=mca/CN=mca permissions CA" "$out/private/forger_ca.pem"
 cp "$out/private/identity_ca.pem" "$out/private/permissions_ca.pem" "$out/"
 
 now=$(date -u +%Y%m%d%H%M%SZ)
@@ -107,14 +111,23 @@ make_id expired "/O=mca/CN=commander" identity_ca 20210101000000Z 20210102000000
 make_id rogue "/O=mca/CN=commander" rogue_ca "$now" 20400101000000Z
 
 umask 022
-sign() { # TEMPLATE OUT
-    sed -e "s/@NOT_BEFORE@/$NOT_BEFORE/g" -e "s/@NOT_AFTER@/$NOT_AFTER/g" "$src/$1" >"$out/private/$1"
-    q openssl smime -sign -text -in "$out/private/$1" -out "$out/$2" -signer "$out/permissions_ca.pem" \
-        -inkey "$out/private/permissions_ca.key"
+sign() { # TEMPLATE OUT.p7s [CA]   (the signed XML is kept in private/)
+    x="$out/private/$(echo "$2" | tr / _ | sed 's/\.p7s$//').xml"
+    sed -e "s/@NOT_BEFORE@/$NOT_BEFORE/g" -e "s/@NOT_AFTER@/$NOT_AFTER/g" "$1" >"$x"
+    q openssl smime -sign -text -in "$x" -out "$out/$2" -signer "$out/private/${3:-permissions_ca}.pem" \
+        -inkey "$out/private/${3:-permissions_ca}.key"
 }
-sign governance_protected.xml governance_protected.p7s
-sign governance_open.xml governance_open.p7s
-sign permissions.xml permissions.p7s
-chmod 644 "$out"/*.pem "$out"/*.p7s "$out"/*/cert.pem "$out"/*/identity_ca.pem
-chmod 755 "$out"/mcad "$out"/commander "$out"/monitor "$out"/expired "$out"/rogue
+sign "$src/governance_protected.xml" governance_protected.p7s
+sign "$src/governance_open.xml" governance_open.p7s
+sign "$src/permissions.xml" permissions.p7s
+# the forger: the cell's permissions with CN=monitor also allowed to publish targets, signed by its own CA
+mkdir -p "$out/forged"
+cp "$out/private/forger_ca.pem" "$out/forged/permissions_ca.pem"
+sign "$src/governance_protected.xml" forged/governance_protected.p7s forger_ca
+sed -e 's#<subscribe><topics><topic>\*</topic></topics></subscribe>#&<publish><topics><topic>rt/*/target_twist</topic><topic>rt/*/target_pose</topic></topics></publish>#' \
+    "$src/permissions.xml" >"$out/private/permissions_forged.in"
+grep -q '</subscribe><publish>' "$out/private/permissions_forged.in" || { echo "make_security.sh: forging failed" >&2; exit 1; }
+sign "$out/private/permissions_forged.in" forged/permissions.p7s forger_ca
+chmod 644 "$out"/*.pem "$out"/*.p7s "$out"/*/cert.pem "$out"/*/identity_ca.pem "$out"/forged/*
+chmod 755 "$out"/mcad "$out"/commander "$out"/monitor "$out"/expired "$out"/rogue "$out"/forged
 echo "make_security.sh: DDS Security files in $out"

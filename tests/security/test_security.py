@@ -20,6 +20,9 @@ participant on Debian's libddsc (mcad, mca-target-pub, mca-monitor), talking ove
    own Cyclone refuses the writer, "Not Allowed By Security"; c, d: mcad's log, the handshake failure with
    the reason). Then a plain mca-monitor (no credentials) gets no distances, mca-monitor as monitor does,
    and e. the permitted commander streams: left's reference moves at the commanded 0.1 m/s.
+   b2. (beyond the issue's list) the monitor identity with permissions signed by a CA of its own that let it
+      write targets: its own Cyclone creates the writer, mcad refuses the permissions ("Verify error").
+   The same participant without credentials also sends right's pose target: right never moves.
 2. Monitoring OPEN (secure-monitor-open.xml): a plain mca-monitor gets distances, a participant without
    credentials is still refused on the target (nothing moves), the commander commands.
 Also: mcad pointed at security files that are not there exits 1 (start-up failed) naming the file,
@@ -41,6 +44,8 @@ MCAD, TARGET_PUB, MONITOR, SRC, DOMAIN = sys.argv[1:6]
 NS = "stream_secure_sim"
 TOPIC = f"rt/{NS}/left/target_twist"
 V = -0.10  # m/s along x: left's tip away from right's
+TOPIC_POSE = f"rt/{NS}/right/target_pose"
+POSE = "0.45,-0.45,1.2214"  # right's tip 0.106 m further from left's (start: 0.45, -0.344, 1.2214)
 FAILS = []
 
 
@@ -97,14 +102,19 @@ class Mcad:
         return [l for t, l in self.lines if t0 <= t <= t1]
 
 
-def target_pub(env, config, seconds=1.5, match_timeout=3.0, prefix=()):
-    """Streams V on left's target for `seconds` (after a match or match_timeout). -> (rc, out, err, t0, t1)"""
+def target_pub(env, config, seconds=1.5, match_timeout=3.0, prefix=(), pose=False, wait=True):
+    """Streams V on left's twist target (or POSE on right's pose target) for `seconds` (after a match or
+    match_timeout). -> (rc, out, err, t0, t1), or with wait=False a function that waits and returns that."""
     t0 = time.monotonic()
-    r = subprocess.run([*prefix, TARGET_PUB, "--domain", DOMAIN, "--config", config, "--topic", TOPIC,
-                        "--twist", f"{V},0,0", "--hz", "50", "--duration", str(seconds),
-                        "--match-timeout", str(match_timeout)], env=env, capture_output=True, text=True,
-                       timeout=60)
-    return r.returncode, r.stdout, r.stderr, t0, time.monotonic()
+    what = ["--topic", TOPIC_POSE, "--pose", POSE] if pose else ["--topic", TOPIC, "--twist", f"{V},0,0"]
+    p = subprocess.Popen([*prefix, TARGET_PUB, "--domain", DOMAIN, "--config", config, *what, "--hz", "50",
+                          "--duration", str(seconds), "--match-timeout", str(match_timeout)], env=env,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    def done():
+        out, err = p.communicate(timeout=60)
+        return p.returncode, out, err, t0, time.monotonic()
+    return done() if wait else done
 
 
 def monitor(env, config, seconds, tmp, tag):
@@ -118,8 +128,14 @@ def monitor(env, config, seconds, tmp, tag):
         return max(0, sum(1 for _ in f) - 1)
 
 
-def rd0(rows):
-    return [(float(r["t"]), float(r["rd0_x"]), float(r["rd0_y"]), float(r["rd0_z"])) for r in rows]
+def rd0(rows, arm=0):
+    return [(float(r["t"]), float(r[f"rd{arm}_x"]), float(r[f"rd{arm}_y"]), float(r[f"rd{arm}_z"])) for r in rows]
+
+
+def right_moved(m):
+    """Largest change of right's reference (m) over the whole run."""
+    pts = rd0(m.rows, 1)
+    return max(max(abs(p[k] - pts[0][k]) for k in (1, 2, 3)) for p in pts)
 
 
 def moved_in(m, t0, t1):
@@ -173,6 +189,13 @@ def main():
     with open(secure_traced, "w") as f:
         f.write(x.replace("</Domain>", f"  <Tracing><Category>discovery</Category><OutputFile>{trace}</OutputFile>"
                                        "</Tracing>\n  </Domain>"))
+    # a valid identity (monitor) with permissions of its own making: the forger's Cyclone trusts the forger's
+    # CA (forged/permissions_ca.pem) and so lets it write targets; mcad checks them against the cell's CA
+    forged = os.path.join(tmp, "forged.xml")
+    with open(forged, "w") as f:
+        f.write(x.replace("/permissions_ca.pem", "/forged/permissions_ca.pem")
+                .replace("/governance_protected.p7s", "/forged/governance_protected.p7s")
+                .replace("/permissions.p7s", "/forged/permissions.p7s"))
     t_all = time.monotonic()
 
     # --- missing files: mcad refuses to start (never falls back to no security)
@@ -188,19 +211,26 @@ def main():
     # --- 0. sanity: security off, the same attempt as (a) moves the arm
     m = Mcad(tmp, "off", plain, env_id["mcad"])
     check(m.t_running is not None, "mcad (security off) running")
+    pose = target_pub(env, plain, seconds=1.0, match_timeout=10, pose=True, wait=False)
     rc, out, err, t0, t1 = target_pub(env, plain, seconds=1.0, match_timeout=10)
+    rc_p = pose()[0]
     m.stop()
     d, n = moved_in(m, t0, t1 + 0.3)
     check(rc == 0 and d is not None and d > 0.05,
           f"security OFF: a participant without credentials commands (rc {rc}, left's reference moved "
           f"{(d or 0) * 1e3:.1f} mm over {n} ticks): the refusals below are security's doing")
+    check(rc_p == 0 and right_moved(m) > 0.05,
+          f"security OFF: ... and right's pose target moves it too ({right_moved(m) * 1e3:.1f} mm)")
 
     # --- 1. monitoring protected: four refusals, one success
     m = Mcad(tmp, "protected", secure_traced, env_id["mcad"])
     check(m.t_running is not None, f"mcad (secure.xml) running: {m.lines[-1][1] if m.lines else ''}")
     cases = {}
+    pose = target_pub(env, plain, pose=True, wait=False)  # right's pose target too, at the same time
     cases["a"] = target_pub(env, plain)
+    cases["a pose"] = pose()
     cases["b"] = target_pub(env_id["monitor"], secure)
+    cases["b2"] = target_pub(env_id["monitor"], forged)
     ft = shutil.which("faketime")
     cases["c"] = target_pub(dict(env_id["expired"], FAKETIME_DONT_FAKE_MONOTONIC="1"), secure,
                             prefix=(ft, "2021-01-01 12:00:00"))
@@ -216,8 +246,9 @@ def main():
         tr = f.read()
     check(rc_m == 0, f"mcad (secure) exit status {rc_m} after SIGTERM")
     what = {"a": "no credentials", "b": "valid identity (monitor), no write permission",
+            "b2": "valid identity (monitor), permissions signed by its own CA",
             "c": "expired certificate of CN=commander", "d": "CN=commander signed by another CA"}
-    for k in "abcd":
+    for k in ("a", "b", "b2", "c", "d"):
         rc, out, err, t0, t1 = cases[k]
         d, n = moved_in(m, t0, t1 + 0.3)
         print(f"     {k} ({what[k]}): {t1 - t0:.2f} s, exit {rc}; stdout: {' | '.join(out.split(chr(10))).strip()}")
@@ -235,9 +266,17 @@ def main():
     check(rc == 5 and "matched no reader" in out and len(hits) > 0,
           f"a: never matched mcad's reader; mcad's discovery trace: '{hits[0] if hits else None}' "
           f"({len(hits)} such lines)")
+    rc, out, err, *_ = cases["a pose"]
+    check(rc == 5 and right_moved(m) == 0.0,
+          f"a: right's pose target from it too: never matched (exit {rc}), right's reference did not move by one "
+          f"bit over the whole run")
     rc, out, err, *_ = cases["b"]
     check(rc == 4 and "writer refused: Not Allowed By Security" in out,
           "b: its own Cyclone refused the writer: 'Not Allowed By Security' (the same identity reads: below)")
+    forg = [l for l in log.splitlines() if "mcad: dds:" in l and "permissions" in l and "Verify error" in l]
+    rc, out, err, *_ = cases["b2"]
+    check(rc == 5 and "writer ok" in out and len(forg) > 0,
+          f"b2: its own Cyclone let it write, mcad refused its permissions: '{forg[0] if forg else None}'")
     exp = [l for l in log.splitlines() if "mcad: dds:" in l and "certificate has expired" in l]
     rc, out, err, *_ = cases["c"]
     check(rc == 5 and "participant ok" in out and len(exp) > 0 and "CN=commander" in exp[0],
