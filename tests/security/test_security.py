@@ -232,6 +232,8 @@ def main():
     cases["b"] = target_pub(env_id["monitor"], secure)
     cases["b2"] = target_pub(env_id["monitor"], forged)
     ft = shutil.which("faketime")
+    check(ft is not None, "faketime found (Debian package faketime, make deps)")
+    ft = ft or "faketime"
     cases["c"] = target_pub(dict(env_id["expired"], FAKETIME_DONT_FAKE_MONOTONIC="1"), secure,
                             prefix=(ft, "2021-01-01 12:00:00"))
     cases["d"] = target_pub(env_id["rogue"], secure)
