@@ -24,21 +24,17 @@
 #
 # usage: make_security.sh OUTDIR [SOURCE_DIR]    (SOURCE_DIR: where the XML templates are, default: this
 #        script's folder). Needs openssl. Existing OUTDIR contents are replaced.
+#        make_security.sh OUTDIR --add NAME CN [NOT_AFTER [NOT_BEFORE]]   one more identity OUTDIR/NAME
+#        (subject CN=<CN>,O=mca) from OUTDIR's identity CA, valid from NOT_BEFORE (default now) to NOT_AFTER
+#        (YYYYMMDDHHMMSSZ, UTC; default 20400101000000Z); it may write targets only if permissions.xml has a
+#        grant for its subject.
 set -eu
-out=${1:?usage: make_security.sh OUTDIR [SOURCE_DIR]}
-src=${2:-$(dirname "$0")}
+out=${1:?usage: make_security.sh OUTDIR [SOURCE_DIR] | OUTDIR --add NAME CN [NOT_AFTER [NOT_BEFORE]]}
 command -v openssl >/dev/null || { echo "make_security.sh: openssl not found (apt-get install openssl)" >&2; exit 2; }
-for f in governance_protected.xml governance_open.xml permissions.xml; do
-    [ -r "$src/$f" ] || { echo "make_security.sh: $src/$f not found" >&2; exit 2; }
-done
 
 NOT_BEFORE=2020-01-01T00:00:00
 NOT_AFTER=2040-01-01T00:00:00
 
-rm -rf "$out"
-mkdir -p "$out/private"
-chmod 700 "$out/private"
-umask 077
 q() { "$@" >/dev/null 2>&1 || { echo "make_security.sh: failed: $*" >&2; "$@" >&2 || true; exit 1; }; }
 
 # A minimal 'openssl ca' set-up per CA: only 'openssl ca' sets both validity dates of a certificate
@@ -96,6 +92,28 @@ make_id() { # IDENTITY SUBJECT CA START END
         -in "$out/private/$1.csr" -out "$out/$1/cert.pem" -notext
     cp "$out/private/$3.pem" "$out/$1/identity_ca.pem"
 }
+
+if [ "${2:-}" = "--add" ]; then
+    name=${3:?--add NAME CN [NOT_AFTER]}
+    cn=${4:?--add NAME CN [NOT_AFTER]}
+    [ -r "$out/private/identity_ca.key" ] || { echo "make_security.sh: no identity CA in $out/private" >&2; exit 2; }
+    umask 077
+    rm -rf "${out:?}/$name"
+    make_id "$name" "/O=mca/CN=$cn" identity_ca "${6:-$(date -u +%Y%m%d%H%M%SZ)}" "${5:-20400101000000Z}"
+    chmod 755 "$out/$name"
+    chmod 644 "$out/$name/cert.pem" "$out/$name/identity_ca.pem"
+    echo "make_security.sh: identity $name (CN=$cn,O=mca) in $out/$name"
+    exit 0
+fi
+
+src=${2:-$(dirname "$0")}
+for f in governance_protected.xml governance_open.xml permissions.xml; do
+    [ -r "$src/$f" ] || { echo "make_security.sh: $src/$f not found" >&2; exit 2; }
+done
+rm -rf "$out"
+mkdir -p "$out/private"
+chmod 700 "$out/private"
+umask 077
 
 make_ca identity_ca "/O=mca/CN=mca identity CA" "$out/private/identity_ca.pem"
 make_ca permissions_ca "/O=mca/CN=mca permissions CA" "$out/private/permissions_ca.pem"

@@ -23,6 +23,9 @@ participant on Debian's libddsc (mcad, mca-target-pub, mca-monitor), talking ove
    b2. (beyond the issue's list) the monitor identity with permissions signed by a CA of its own that let it
       write targets: its own Cyclone creates the writer, mcad refuses the permissions ("Verify error").
    The same participant without credentials also sends right's pose target: right never moves.
+   f. (beyond the list) a CN=commander certificate that runs out while it commands: obeyed until then, not
+      after (mcad's Cyclone drops the participant at the certificate's end; the publisher's clock runs 30 s
+      late, so its own Cyclone still takes the certificate as valid), while it keeps sending.
 2. Monitoring OPEN (secure-monitor-open.xml): a plain mca-monitor gets distances, a participant without
    credentials is still refused on the target (nothing moves), the commander commands.
 Also: mcad pointed at security files that are not there exits 1 (start-up failed) naming the file,
@@ -45,6 +48,7 @@ NS = "stream_secure_sim"
 TOPIC = f"rt/{NS}/left/target_twist"
 V = -0.10  # m/s along x: left's tip away from right's
 TOPIC_POSE = f"rt/{NS}/right/target_pose"
+V_F = 0.03  # m/s, case f: back towards left's start (case e took it 0.15 m away)
 POSE = "0.45,-0.45,1.2214"  # right's tip 0.106 m further from left's (start: 0.45, -0.344, 1.2214)
 FAILS = []
 
@@ -102,11 +106,11 @@ class Mcad:
         return [l for t, l in self.lines if t0 <= t <= t1]
 
 
-def target_pub(env, config, seconds=1.5, match_timeout=3.0, prefix=(), pose=False, wait=True):
+def target_pub(env, config, seconds=1.5, match_timeout=3.0, prefix=(), pose=False, wait=True, v=V):
     """Streams V on left's twist target (or POSE on right's pose target) for `seconds` (after a match or
     match_timeout). -> (rc, out, err, t0, t1), or with wait=False a function that waits and returns that."""
     t0 = time.monotonic()
-    what = ["--topic", TOPIC_POSE, "--pose", POSE] if pose else ["--topic", TOPIC, "--twist", f"{V},0,0"]
+    what = ["--topic", TOPIC_POSE, "--pose", POSE] if pose else ["--topic", TOPIC, "--twist", f"{v},0,0"]
     p = subprocess.Popen([*prefix, TARGET_PUB, "--domain", DOMAIN, "--config", config, *what, "--hz", "50",
                           "--duration", str(seconds), "--match-timeout", str(match_timeout)], env=env,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -241,6 +245,20 @@ def main():
     n_plain = monitor(env, plain, 2.0, tmp, "protected_plain")
     n_mon = monitor(env_id["monitor"], secure, 2.0, tmp, "protected_monitor")
     cases["e"] = target_pub(env_id["commander"], secure, seconds=1.5, match_timeout=10)
+    # f. the commander's certificate runs out while it commands (beyond the issue's list): a new CN=commander
+    # identity valid until 8 s from now streams +0.03 m/s until 3 s after that. Its publisher's clock is 30 s
+    # behind (faketime), so that for its own Cyclone the certificate is still valid: mcad must drop it.
+    time.sleep(0.5)  # e's last target held (hold_after 0.1 s): f's window starts still
+    not_after = time.time() + 8.0
+    na = time.strftime("%Y%m%d%H%M%SZ", time.gmtime(not_after))
+    not_after = float(int(not_after))  # openssl keeps whole seconds
+    r = subprocess.run([os.path.join(SRC, "config", "security", "make_security.sh"), sec, "--add", "shortlived",
+                        "commander", na, "20200101000000Z"], capture_output=True, text=True)
+    check(r.returncode == 0, f"make_security.sh --add: a CN=commander valid until {na} ({r.stderr.strip()[-200:]})")
+    na_mono = not_after - time.time() + time.monotonic()
+    cases["f"] = target_pub(dict(env, MCA_DDS_IDENTITY="shortlived", FAKETIME_DONT_FAKE_MONOTONIC="1"), secure,
+                            match_timeout=10, v=V_F, prefix=(ft, "-f", "-30s"),
+                            seconds=max(1.0, na_mono + 3.0 - time.monotonic() - 0.6))
     time.sleep(0.5)
     rc_m = m.stop()
     log = "\n".join(l for _, l in m.lines)
@@ -296,6 +314,21 @@ def main():
     check(rc == 0 and "matched 1 reader" in out, "e: the permitted commander matched mcad's reader")
     check(abs(v - V) < 0.1 * abs(V) and span > 1.0,
           f"e: left's reference moved at {v:.4f} m/s for {span:.2f} s (commanded {V} m/s, within 10 %)")
+
+    rc, out, err, t0, t1 = cases["f"]
+    pts = [p for p in rd0(m.rows) if t0 - m.t_running <= p[0] <= t1 - m.t_running]
+    mv = [pts[i][0] + m.t_running for i in range(1, len(pts)) if pts[i][1] > pts[i - 1][1]]  # +x: f's, not e's
+    sent = re.search(r"sent (\d+) samples in ([\d.]+) s", out)
+    last = mv[-1] - na_mono if mv else None
+    print(f"     f (commander, certificate runs out at {na}): exit {rc}; stdout: {' | '.join(out.split(chr(10))).strip()}")
+    check(rc == 0 and len(mv) > 500 and mv[0] < na_mono - 1.0,
+          f"f: a commander whose certificate is still valid commands ({len(mv)} ticks moved, from "
+          f"{na_mono - mv[0] if mv else 0:.2f} s before the certificate's end)")
+    check(last is not None and -1.0 <= last <= 2.0 and sent and t1 - 0.5 > na_mono + 2.0,
+          f"f: ... and mcad stops obeying it when the certificate runs out: left's reference last moved "
+          f"{last if last is not None else float('nan'):+.2f} s after notAfter (within -1..+2 s) while it kept sending "
+          f"until {t1 - na_mono:+.2f} s ({sent.group(0) if sent else None}); mcad's log: "
+          f"{[l for l in log.splitlines() if 'mcad: dds:' in l and 'expired' in l and 'Begin handshake' not in l][:1]}")
 
     # --- 2. monitoring open: anyone reads, still only the commander commands
     m = Mcad(tmp, "open", secure_open, env_id["mcad"])
