@@ -6,23 +6,22 @@ Run in a network namespace of its own (tests/ros2/netns.sh): every participant h
 participant on Debian's libddsc (mcad, mca-target-pub, mca-monitor), talking over lo with multicast.
 
 0. Sanity, security OFF: mcad runs config/cells/stream_secure_sim.yaml with dds.config ros2.xml; a
-   participant without credentials streams a twist: it matches and left's reference moves. (So the
-   refusal checks below would fail if security were off.)
+   participant without credentials streams left's twist and right's pose: both match, both references
+   move. (So the refusal checks below would fail if security were off.)
 1. Monitoring PROTECTED (the cell as shipped, config/dds/secure.xml, files from
    config/security/make_security.sh): left is streamed -0.1 m/s in x for 1.5 s by, in turn,
-   a. a participant without credentials,
+   a. a participant without credentials (which also sends right's pose target),
    b. a valid identity (monitor) without write permission on targets,
+   b2. (beyond the issue's list) the monitor identity with permissions signed by a CA of its own that let it
+      write targets: its own Cyclone creates the writer, mcad must refuse the permissions,
    c. an expired certificate of the permitted subject (CN=commander; the publisher runs under faketime on
       a day the certificate was valid, so that its own Cyclone lets it start and mcad is the one to refuse),
    d. a certificate of the permitted subject signed by another CA (its publisher trusts that CA),
-   each refused: left's reference does not move by one bit during the attempt, and the refusal is logged
-   (a: Cyclone's discovery trace of mcad "Non secure remote writer ... is not allowed"; b: the publisher's
-   own Cyclone refuses the writer, "Not Allowed By Security"; c, d: mcad's log, the handshake failure with
-   the reason). Then a plain mca-monitor (no credentials) gets no distances, mca-monitor as monitor does,
-   and e. the permitted commander streams: left's reference moves at the commanded 0.1 m/s.
-   b2. (beyond the issue's list) the monitor identity with permissions signed by a CA of its own that let it
-      write targets: its own Cyclone creates the writer, mcad refuses the permissions ("Verify error").
-   The same participant without credentials also sends right's pose target: right never moves.
+   each refused: left's reference (and right's) does not move by one bit during the attempt, and the
+   refusal is logged (a: Cyclone's discovery trace of mcad "Non secure remote writer ... is not allowed";
+   b: the publisher's own Cyclone refuses the writer, "Not Allowed By Security"; b2, c, d: mcad's log, with
+   the reason). Then a plain mca-monitor (no credentials) gets no distances, mca-monitor as monitor does;
+   e. the permitted commander streams: left's reference moves at the commanded 0.1 m/s;
    f. (beyond the list) a CN=commander certificate that runs out while it commands: obeyed until then, not
       after (mcad's Cyclone drops the participant at the certificate's end; the publisher's clock runs 30 s
       late, so its own Cyclone still takes the certificate as valid), while it keeps sending.
