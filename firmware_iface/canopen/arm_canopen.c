@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* The `canopen` backend of mca/arm.h: an arm whose joints are CiA 402 drives on one bus (mca/canopen.h). */
+#include <limits.h> /* INT_MAX */
 #include <math.h>   /* fabs */
 #include <stdio.h>  /* snprintf */
 #include <stdlib.h> /* calloc, free */
@@ -61,7 +62,13 @@ static int co_read(void *ctx, mca_arm_feedback_t *fb) {
     const int bus = m->fault.kind == MCA_CO_FAULT_BUS;
     a->st.bus_off = bus;
     a->st.link_fault = bus ? MCA_ARM_FAULT_BUS : MCA_ARM_FAULT_NONE;
-    for (int j = 0; j < m->cfg.n; j++) {
+    /* A fault the master latched (a drive's TPDOs stopped, its heartbeat, an EMCY, ...) is reported at once
+     * with the last values known, even while a node's TPDOs are missing: waiting for a complete sample would
+     * hold the fault back until the daemon's lost-feedback limit, and the controller would meanwhile work
+     * on a frozen arm (seen: the PDNN gave up 8 ticks after a node's TPDOs stopped, a fault without its
+     * cause). Bus-off stays a link error (EIO): nothing is heard then. */
+    const int latched = m->fault.kind != MCA_CO_FAULT_NONE && !bus;
+    for (int j = 0; j < m->cfg.n && !latched; j++) {
         if (m->d[j].tpdo1_rx <= a->fb_t1[j] || m->d[j].tpdo2_rx <= a->fb_t2[j]) {
             return bus ? MCA_EIO : MCA_EAGAIN;
         }
@@ -210,6 +217,10 @@ int mca_canopen_backend_open(struct mca_arm **arm, const mca_co_master_config_t 
     /* start-up: bring every drive to SWITCHED_ON (READY), SYNC by SYNC, within 2 s + the boot timeout */
     mca_co_master_set_goal(&a->m, MCA_CO402_GOAL_SWITCHED_ON);
     const int64_t deadline = mono_ns() + 2000000000LL + (int64_t)cfg->boot_timeout_ms * 1000000;
+    /* No PDO timeout during the walk: nothing moves yet, and the deadline already names a drive that never
+     * answers (seen in the emulated guest: 4-6 SYNCs without a TPDO1 at start-up, with the shipped 5) */
+    const int pdo_timeout = a->m.cfg.pdo_timeout_cycles;
+    a->m.cfg.pdo_timeout_cycles = INT_MAX;
     int ready = 0;
     while (!ready && rc == MCA_OK) {
         struct timespec ts = {0, (long)cfg->sync_period_us * 1000};
@@ -233,6 +244,10 @@ int mca_canopen_backend_open(struct mca_arm **arm, const mca_co_master_config_t 
         free(a);
         return rc;
     }
+    a->m.cfg.pdo_timeout_cycles = pdo_timeout;
+    for (int j = 0; j < a->m.cfg.n; j++) {
+        a->m.d[j].tpdo1_sync = a->m.syncs; /* counted from here */
+    }
     rc = mca_arm_wrap(arm, &co_ops, a);
     if (rc != MCA_OK) {
         co_close(a);
@@ -245,7 +260,13 @@ int mca_canopen_backend_fault(const struct mca_arm *arm, char *buf, size_t len) 
     if (!a || !buf || !len) {
         return MCA_EINVAL;
     }
-    mca_co_fault_describe(&a->m.fault, buf, len);
+    /* the loop latches the fault while this (non-rt) reader may run: kind is published last (co_master.c) */
+    mca_co_fault_t f = {.kind = __atomic_load_n(&a->m.fault.kind, __ATOMIC_ACQUIRE)};
+    if (f.kind != MCA_CO_FAULT_NONE) {
+        f.node = a->m.fault.node;
+        f.code = a->m.fault.code;
+    }
+    mca_co_fault_describe(&f, buf, len);
     return MCA_OK;
 }
 

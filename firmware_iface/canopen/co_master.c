@@ -100,9 +100,11 @@ void mca_co_master_config_default(mca_co_master_config_t *cfg, int n, uint8_t fi
 static void latch(mca_co_master_t *m, uint8_t kind, uint8_t node, uint32_t code) {
     m->faults++;
     if (m->fault.kind == MCA_CO_FAULT_NONE) {
-        m->fault.kind = kind;
         m->fault.node = node;
         m->fault.code = code;
+        /* kind last, with release: a non-rt reader (mca_canopen_backend_fault) that sees it sees node and
+         * code */
+        __atomic_store_n(&m->fault.kind, kind, __ATOMIC_RELEASE);
     }
 }
 
