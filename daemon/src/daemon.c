@@ -57,7 +57,8 @@ struct mca_daemon {
     int have_fb[MCA_MAX_ARMS];
     int lost[MCA_MAX_ARMS];
     uint64_t bus_errors[MCA_MAX_ARMS];
-    int not_servo[MCA_MAX_ARMS]; /* ticks RUNNING with the arm not servoing */
+    int not_servo[MCA_MAX_ARMS];      /* ticks RUNNING with the arm not servoing */
+    int arm_fault_told[MCA_MAX_ARMS]; /* an arm's own fault after the first fault was logged (once) */
     /* feedback plausibility (mca_feedback_fault_t), bounds set at open */
     double fb_lo[MCA_MAX_ARMS][MCA_MAX_DOF], fb_hi[MCA_MAX_ARMS][MCA_MAX_DOF]; /* limits -+ margin */
     double fb_vmax[MCA_MAX_ARMS][MCA_MAX_DOF];                                 /* factor x vel limit */
@@ -149,7 +150,7 @@ static void set_err(char *err, size_t errlen, const char *fmt, const char *a, co
 
 #define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
 /* codes of mca_rtlog_code() records (formatted by log_format, non-rt) */
-enum { LOGC_FAULT = 1 };
+enum { LOGC_FAULT = 1, LOGC_ARM_FAULT_TOO = 2 };
 /* fault_detail of MCA_DAEMON_FAULT_FEEDBACK when the arm's link refused the feedback (arm_code: its
  * link_fault), not the daemon's own check (mca_feedback_fault_t) */
 #define FB_DETAIL_LINK (-1)
@@ -738,6 +739,12 @@ static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t 
         char txt[192];
         fault_text_of(d, txt, sizeof txt);
         snprintf(buf, len, "fault at t = %.3f s: braking both arms: %s", rec->arg[0], txt);
+    } else if (rec->code == LOGC_ARM_FAULT_TOO) {
+        char txt[192];
+        fault_describe(d, MCA_DAEMON_FAULT_ARM, (int)rec->arg[1],
+                       rec->arg[3] != 0.0 ? ARM_FAULT_REPORTS : ARM_FAULT_BRAKES, (int)rec->arg[2], 0, NULL,
+                       txt, sizeof txt);
+        snprintf(buf, len, "also at t = %.3f s, while braking: %s", rec->arg[0], txt);
     } else {
         snprintf(buf, len, "code %d", rec->code);
     }
@@ -800,6 +807,13 @@ static void read_feedback(mca_daemon_t *d, double t) {
                 latch_fault(d, MCA_DAEMON_FAULT_ARM, MCA_EFAULT, t, a,
                             fb.state == MCA_ARM_FAULT ? ARM_FAULT_REPORTS : ARM_FAULT_BRAKES, fb.fault_code,
                             0, NULL);
+            } else if (!running && d->fault != MCA_DAEMON_FAULT_NONE && fb.fault_code != MCA_ARM_FAULT_NONE &&
+                       !d->arm_fault_told[a] && !(d->fault == MCA_DAEMON_FAULT_ARM && d->fault_arm == a)) {
+                /* the first fault names one cause; an arm's own fault after it may be the root (a drive whose
+                 * TPDOs stopped froze the arm and the controller gave up first): logged too, once per arm */
+                d->arm_fault_told[a] = 1;
+                mca_rtlog_code(&d->log, MCA_LOG_ERR, LOGC_ARM_FAULT_TOO, 4, t, a, fb.fault_code,
+                               fb.state == MCA_ARM_FAULT, NULL);
             }
             /* an arm that keeps its brakes on while commanded (commands rejected) is a fault too */
             d->not_servo[a] =
