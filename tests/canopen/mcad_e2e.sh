@@ -12,10 +12,14 @@
 #      braking would show nothing): exit 0, stopped; every per-tick change of every commanded joint
 #      velocity within dec_limit * dt, all reach 0; both emulators end with every drive at rest.
 #   C: an EMCY (0x4210) from the JACO2's node 4 at its SYNC 3000: mcad names the fault with arm, node and
-#      code, brakes both arms (the JACO2's drives by their quick stop), exits 3 at --stop-after 6; every drive
-#      of both buses at rest at the end.
+#      code, brakes both arms (the JACO2's drives by their quick stop; every commanded velocity within
+#      dec_limit * dt per tick, no distance at or below d1), exits 3 at --stop-after 6; every drive of both
+#      buses at rest at the end.
 #   D: the MICO2's node 6 aborts the SDO write of 0x60C2 at start-up: mcad does not start, and says which
 #      arm, node, object and abort code (0x08000022) and why.
+#   E, F, G: as C, the MICO2's node 2 in an actuator fault (FAULT, EMCY 0xFF00), the JACO2's node 5 stops its
+#      heartbeat (consumer time 3 s), the MICO2's node 3 stops its TPDOs (5 SYNCs): each a named fault
+#      with arm, node and cause; both arms braked within dec_limit, every drive at rest, exit 3.
 # Natively when this kernel has vcan and we are root, else in one QEMU guest boot; skipped (77) only when
 # neither vcan nor qemu exists.  usage: mcad_e2e.sh BUILD_DIR SOURCE_DIR [--in-guest]
 set -u
@@ -25,7 +29,7 @@ MCAD=$B/daemon/mcad
 DS=$B/sim_backend/drivesim/mca-drivesim
 SRC_CELL=$S/config/cells/cup_stacking_canopen.yaml
 SCN=$S/config/scenarios/cup_stacking.yaml
-PHASES=${MCA_E2E_PHASES:-A B C D}
+PHASES=${MCA_E2E_PHASES:-A B C D E F G}
 DQ_MAX=${MCA_E2E_DQ_MAX:-1e-5}
 now() { date +%s; }
 
@@ -213,33 +217,80 @@ if echo "$PHASES" | grep -q B; then
     [ $fB = 0 ] && echo "CO-E2E ok   phase B: SIGTERM mid-task: both arms braked within dec_limit to rest ($(($(now) - t0)) s)"
     [ $fB = 0 ] || fail=1
 fi
-if echo "$PHASES" | grep -q C; then
+# One drive misbehaves mid-task (mca-drivesim --inject KIND@SYNC:NODE on one bus): mcad must end in the fault
+# that names the arm, the node and the cause (pattern WANT), brake both arms (every per-tick change of a
+# commanded velocity within dec_limit * dt after the last running tick, nothing at or below d1), exit 3,
+# and every drive of both buses must be at rest at the end.
+# usage: fault_phase TAG BUS INJECT STOP_AFTER CELL WANT WHAT
+fault_phase() {
+    tag=$1 bus=$2 inj=$3 stop=$4 cell=$5 want=$6 what=$7
     t0=$(now)
+    i0="" i1=""
+    [ "$bus" = 0 ] && i0="--inject $inj"
+    [ "$bus" = 1 ] && i1="--inject $inj"
     $RTA $PIN "$DS" --iface vcan0 --robot "$URDF0" --q0 "$Q00" --dec-limit "$DEC" --acc-limit 10 --sync-timeout-ms 600000 \
-        --inject emcy@3000:4 --log "$TMPD/ds0C.log" 2>"$OUT/ds0C.err" &
+        $i0 --log "$TMPD/ds0$tag.log" 2>"$OUT/ds0$tag.err" &
     P0=$!
     $RTA $PIN "$DS" --iface vcan1 --robot "$URDF1" --q0 "$Q01" --dec-limit "$DEC" --acc-limit 10 --sync-timeout-ms 600000 \
-        --log "$TMPD/ds1C.log" 2>"$OUT/ds1C.err" &
+        $i1 --log "$TMPD/ds1$tag.log" 2>"$OUT/ds1$tag.err" &
     P1=$!
     sleep 0.5
-    $PIN2 "$MCAD" --no-dds --stop-after 6 --csv "$TMPD/mcadC.csv" "$CELL" 2>"$OUT/mcadC.log"
+    $PIN2 "$MCAD" --no-dds --stop-after "$stop" --csv "$TMPD/mcad$tag.csv" "$cell" 2>"$OUT/mcad$tag.log"
     rc=$?
     sleep 0.5
     stop_drivesims
-    fC=0
-    grep -a "fault at" "$OUT/mcadC.log" | head -n 2
-    [ $rc -eq 3 ] || { echo "CO-E2E FAIL phase C: mcad exit status $rc (want 3: fault)"; fC=1; }
-    grep -q "arm jaco2 .*EMCY (node 4: EMCY 0x4210 (temperature))" "$OUT/mcadC.log" ||
-        { echo "CO-E2E FAIL phase C: the fault does not name arm, node and EMCY code"; fC=1; }
+    f=0
+    grep -a "fault at\|also at" "$OUT/mcad$tag.log" | head -n 3
+    [ $rc -eq 3 ] || { echo "CO-E2E FAIL phase $tag: mcad exit status $rc (want 3: fault)"; f=1; }
+    grep -Eq "$want" "$OUT/mcad$tag.log" ||
+        { echo "CO-E2E FAIL phase $tag: the fault does not name arm, node and cause (want /$want/)"; f=1; }
+    STEP=$(awk -v d="$DEC" 'BEGIN { print d * 0.001 }')
+    res=$(awk -F, -v step="$STEP" -v d1="$D1" '
+        NR == 1 { for (i = 1; i <= NF; i++) if ($i ~ /^qdot/) q[++nq] = i; else if ($i == "state") cs = i; else if ($i == "min_d") cd = i; next }
+        { if ($cs == 2) { r0 = NR; t_f = $1; for (j = 1; j <= nq; j++) v[j] = $q[j]; next }
+          if (!r0) next
+          if (!($cd > d1)) below++
+          for (j = 1; j <= nq; j++) { x = $q[j] - v[j]; if (x < 0) x = -x; if (x > dmax) dmax = x
+                                      if (x > step + 2e-6) bad++; v[j] = $q[j] } }
+        END { printf "%d %.4f %.6f %d %d\n", r0 && !bad && !below, t_f, dmax, bad + 0, below + 0 }' "$TMPD/mcad$tag.csv")
+    set -- $res
+    echo "CO-E2E phase $tag: last running tick t = $2 s; after it the largest per-tick change of a command $3 rad/s (limit $STEP), violations $4, rows at or below d1: $5"
+    [ "$1" = 1 ] || { echo "CO-E2E FAIL phase $tag: braking (ramp beyond dec_limit, a distance at or below d1, or no running tick)"; f=1; }
     for i in 0 1; do
-        moving=$(awk '{ last[$2] = $6 } END { for (n in last) if (last[n] + 0 != 0) m++; print m + 0 }' "$TMPD/ds$i""C.log")
-        nodes=$(awk '{ seen[$2] = 1 } END { for (n in seen) k++; print k + 0 }' "$TMPD/ds$i""C.log")
-        echo "CO-E2E phase C: bus vcan$i: $nodes drives logged, still moving at the end: $moving"
-        [ "$moving" = 0 ] && [ "$nodes" = 6 ] || fC=1
+        moving=$(awk '{ last[$2] = $6 } END { for (n in last) if (last[n] + 0 != 0) m++; print m + 0 }' "$TMPD/ds$i$tag.log")
+        nodes=$(awk '{ seen[$2] = 1 } END { for (n in seen) k++; print k + 0 }' "$TMPD/ds$i$tag.log")
+        states=$(grep -o 'state=[A-Z_]*' "$OUT/ds$i$tag.err" | sort | uniq -c | tr '\n' ' ')
+        echo "CO-E2E phase $tag: bus vcan$i: $nodes drives logged, still moving at the end: $moving; $states"
+        [ "$moving" = 0 ] && [ "$nodes" = 6 ] || f=1
     done
-    [ $fC = 0 ] && echo "CO-E2E ok   phase C: EMCY of node 4 -> named fault, both arms braked to rest, exit 3 ($(($(now) - t0)) s)"
-    [ $fC = 0 ] || fail=1
-fi
+    [ $f = 0 ] && echo "CO-E2E ok   phase $tag: $what -> named fault, both arms braked to rest, exit 3 ($(($(now) - t0)) s)"
+    [ $f = 0 ] || fail=1
+}
+# C: an EMCY 0x4210 of the JACO2's node 4 (no state change)
+echo "$PHASES" | grep -q C && fault_phase C 0 emcy@3000:4 6 "$CELL" \
+    "arm jaco2 .*EMCY \(node 4: EMCY 0x4210 \(temperature\)\)" "EMCY of node 4"
+# E: an actuator fault of the MICO2's node 2: the drive brakes itself, goes to FAULT and sends EMCY 0xFF00;
+# whichever the master sees first (the EMCY or the statusword) is the named fault
+echo "$PHASES" | grep -q E && fault_phase E 1 fault@2000:2 6 "$CELL" \
+    "arm mico2 .*\(node 2: (DRIVE_FAULT \(statusword|EMCY 0xFF00)" "drive fault of node 2"
+# F, G: each timeout needs a cell with a real value (the other phases keep the TCG-wide ones): F a heartbeat
+# consumer time of 3 s (the drives produce every 100 ms; 3 s rides out the guest's stalls); G TPDO1 missing for
+# 5 SYNCs, the shipped cell's value (counted in SYNCs the master sent, and the drives answer each SYNC at once
+# above the loop, so a stalled guest does not count). Seen with 50 SYNCs: 5 ticks of the MICO2's frozen
+# feedback made the PDNN give up first ("tracking contradicts avoidance"), a fault without its cause; with 3
+# SYNCs the start-up walk itself timed out (node 1: 4 SYNCs without TPDO1 in the guest). With 5, the PDNN and the
+# PDO timeout come in the same tick (seen: the PDNN first, at the 6th frozen tick): mcad logs the arm's own fault
+# after the first one ("also at t = ...: arm mico2 ... (node 3: PDO_TIMEOUT ...)"), and that line names the cause.
+CELL_F=$OUT/cup_stacking_canopen_hb.yaml CELL_G=$OUT/cup_stacking_canopen_pdo.yaml
+sed -e 's/^\(      heartbeat_timeout_ms:\).*/\1 3000   # mcad_e2e.sh phase F/' "$CELL" >"$CELL_F"
+sed -e 's/^\(      pdo_timeout_syncs:\).*/\1 5   # mcad_e2e.sh phase G: the shipped value/' "$CELL" >"$CELL_G"
+for c in "$CELL_F" "$CELL_G"; do
+    echo "$PHASES" | grep -Eq "F|G" && { "$MCAD" --check "$c" >/dev/null 2>&1 || { echo "CO-E2E FAIL: mcad --check $c"; fail=1; }; }
+done
+echo "$PHASES" | grep -q F && fault_phase F 0 hbloss@1500:5 8 "$CELL_F" \
+    "arm jaco2 .*\(node 5: HEARTBEAT lost\)" "heartbeat loss of node 5"
+echo "$PHASES" | grep -q G && fault_phase G 1 pdoloss@1500:3 6 "$CELL_G" \
+    "arm mico2 .*\(node 3: PDO_TIMEOUT \(TPDO1 not refreshed" "TPDO loss of node 3"
 if echo "$PHASES" | grep -q D; then
     $RTA $PIN "$DS" --iface vcan0 --robot "$URDF0" --q0 "$Q00" 2>"$OUT/ds0D.err" &
     P0=$!
