@@ -22,7 +22,8 @@ void (*mca_ring_test_hook)(mca_ring_t *ring);
 
 /* Slot layout: [seq word][payload words...]; everything is an _Atomic uint64_t. */
 static inline _Atomic uint64_t *slot_at(const mca_ring_t *ring, uint64_t n) {
-    return (_Atomic uint64_t *)(void *)(ring->slots + (size_t)(n & ring->mask) * ring->slot_size);
+    unsigned char *slots = (unsigned char *)(uintptr_t)((uintptr_t)ring + (uintptr_t)ring->slots_off);
+    return (_Atomic uint64_t *)(void *)(slots + (size_t)(n & ring->mask) * ring->slot_size);
 }
 
 int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t elem_size, size_t capacity) {
@@ -35,7 +36,7 @@ int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t e
         storage_size < MCA_RING_STORAGE_SIZE(elem_size, capacity)) {
         return MCA_EINVAL;
     }
-    ring->slots = storage;
+    ring->slots_off = (int64_t)((uintptr_t)storage - (uintptr_t)ring); /* position independent */
     ring->elem_size = elem_size;
     ring->slot_size = MCA_RING_SLOT_SIZE(elem_size);
     ring->mask = (uint64_t)capacity - 1u;

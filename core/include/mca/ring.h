@@ -47,6 +47,12 @@
  *
  * Threading: exactly one producer thread and one consumer thread (they may be the same). Counters may
  * be read from any thread. 64-bit counters do not wrap in practice (5.8e8 years at 1 kHz).
+ *
+ * Between processes: the ring holds no pointer (its storage is an offset from the ring itself) and no
+ * lock, so a ring and its storage in one MAP_SHARED mapping (memfd) work in two processes mapping it at
+ * different addresses, as long as storage and ring lie in the same mapping. The lock-free 64-bit
+ * atomics used here are address-free on the platforms mca supports (x86-64, aarch64). The DDS bridge's
+ * publisher process (mca/dds_bridge.h) uses it so.
  */
 #ifndef MCA_RING_H
 #define MCA_RING_H
@@ -80,7 +86,10 @@ typedef struct mca_ring {
     _Alignas(64) _Atomic uint64_t tail; /**< consumer: next record to read */
     _Atomic uint64_t popped;
     _Atomic uint64_t dropped;
-    _Alignas(64) unsigned char *slots; /**< caller storage, read-only after init */
+    /** Caller storage as an offset from this struct's own address (read-only after init): a ring and its
+     *  storage placed in one shared mapping work at whatever address each process maps it (no pointer
+     *  inside). */
+    _Alignas(64) int64_t slots_off;
     size_t elem_size;
     size_t slot_size;
     uint64_t mask;
