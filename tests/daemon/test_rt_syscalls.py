@@ -160,6 +160,13 @@ def main():
         print(f"strace could not attach to thread {loop} (attempt {attempt + 1}): {st.stderr.read().strip()}")
         loop = next((tid for tid, (name, _) in threads(p.pid).items() if name == "mcad-loop"), loop)
     affinity = threads(p.pid)
+    # issue 16: the DDS bridge is a child process of mcad's main thread; its threads must be off the loop's CPU too
+    try:
+        children = open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()
+    except OSError:
+        children = []
+    for child in children:
+        affinity.update({tid: ("bridge:" + name, cpus) for tid, (name, cpus) in threads(int(child)).items()})
     mcad_ns = ns_of(p.pid)  # while it runs (diagnostics when strace traces nothing)
     rc = p.wait(timeout=300)
     st.wait(timeout=60)
