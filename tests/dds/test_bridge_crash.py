@@ -24,7 +24,8 @@ Asserted:
     (RUNNING) from its first samples; the first mca-monitor, if the peer spared it, receives again;
   - the Python reader gets a ControllerStatus from the restarted bridge at once (its first status: the
     current one, RUNNING, with the tick it was published at) and the final STOPPED one.
-Printed: restart time (death seen -> restarted bridge up; monitor gap), the loop's command gap and compute time
+Printed, not asserted: whether the test's own Distances reader, on the PyPI wheel's newer libddsc (11.0.1),
+lives through the same peer (seen: it does, in every run, while mca-monitor on 0.10.2 dies). Printed: restart time (death seen -> restarted bridge up; monitor gap), the loop's command gap and compute time
 per phase (before the peer, the crash and restart window, after), from mcad's CSV.
 
 usage: test_bridge_crash.py MCAD MONITOR SOURCE_DIR DOMAIN"""
@@ -117,6 +118,9 @@ def main():
         # readers first: discovery matches them as soon as the bridge's writers exist
         dp = DomainParticipant(DOMAIN)
         rs = DataReader(dp, Topic(dp, m.TOPIC_STATUS, m.ControllerStatus, qos=m.status_qos()), qos=m.status_qos())
+        # a Distances reader on the PyPI wheel's own libddsc (11.0.1): does a newer Cyclone live through the peer?
+        rdist = DataReader(dp, Topic(dp, m.TOPIC_DISTANCES, m.Distances, qos=m.stream_qos()), qos=m.stream_qos())
+        dist_rx = []
         mon = subprocess.Popen([MONITOR, "--domain", str(DOMAIN), "--config", XML, "--csv", mon_csv, "--no-color"],
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         statuses = []  # (rx monotonic, tick, state, ticks)
@@ -127,6 +131,9 @@ def main():
                 for s in rs.take(N=100):
                     if isinstance(s, m.ControllerStatus):
                         statuses.append((time.monotonic(), s.tick, s.state, s.ticks))
+                for s in rdist.take(N=1000):
+                    if isinstance(s, m.Distances):
+                        dist_rx.append((time.monotonic(), s.tick))
                 time.sleep(0.002)
 
         reader = threading.Thread(target=read_status, daemon=True)
@@ -302,6 +309,14 @@ def main():
               "the restarted bridge published the current status at once (RUNNING, within 1 s, a tick after the "
               "death)")
         check(bool(statuses) and STATES[statuses[-1][2]] == "STOPPED", "the final status (STOPPED) arrived")
+        # informational: the same peer against libddsc 11.0.1 (the PyPI wheel's, in this very process)
+        import importlib.metadata
+        after_py = [k for t, k in dist_rx if t > t_up]
+        print(f"newer Cyclone: this test's own reader of mca/distances (PyPI cyclonedds "
+              f"{importlib.metadata.version('cyclonedds')}, its bundled libddsc) lived through the peer: "
+              f"{len([1 for t, _ in dist_rx if t < t_death])} samples before the death, {len(after_py)} after the "
+              f"restart, up to tick {max(after_py, default=0)}; mca-monitor on Debian's libddsc 0.10.2 "
+              f"{'died (SIGSEGV)' if mon.returncode == -signal.SIGSEGV else 'lived'}", flush=True)
         print(f"run: {t_end - t_start:.1f} s; mcad 'running' at +{t_running - t_start:.2f} s")
     return 1 if failures else 0
 
