@@ -61,7 +61,9 @@ struct mca_dds_bridge {
     mca_dds_shm_t *shm; /* heap (in-process) or the memfd mapping (process) */
     size_t shm_size;
     int process;
-    int n_stream_arms; /* owner-private copies: the loop does not trust the region for these */
+    /* owner-private copies: the loop reads no size, index bound or address from memory a bridge can write */
+    mca_ring_producer_t producer;
+    int n_stream_arms;
     int stream_kind[MCA_MAX_ARMS];
     /* in-process */
     publisher_t *pub;
@@ -742,6 +744,9 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
     if (rc == MCA_OK) {
         rc = mca_dds_shm_init(b->shm, b->shm_size, cfg);
     }
+    if (rc == MCA_OK) {
+        mca_ring_producer_init(&b->producer, &b->shm->ring);
+    }
     if (rc == MCA_OK && b->shm->cfg.has_ros2) {
         b->n_stream_arms = (int)(cfg->ros2->n_arms <= MCA_MAX_ARMS ? cfg->ros2->n_arms : MCA_MAX_ARMS);
         for (int a = 0; a < b->n_stream_arms; a++) {
@@ -775,7 +780,7 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
     mca_dds_shm_t *shm = bridge->shm;
     bump(&shm->offered);
-    mca_ring_push(&shm->ring, snap);
+    mca_ring_producer_push(&bridge->producer, snap);
     /* pairs with the fence in park(): the publisher sees the record or we see it parked */
     atomic_thread_fence(memory_order_seq_cst);
     if (atomic_load_explicit(&shm->parked, memory_order_relaxed) &&

@@ -127,6 +127,24 @@ int mca_ring_pop(mca_ring_t *ring, void *out);
  *  are exactly consistent only when producer and consumer are quiet. */
 void mca_ring_stats(const mca_ring_t *ring, mca_ring_stats_t *out);
 
+/** The producer's own copy of a ring's geometry (storage address, record and slot size, mask), for a ring in
+ *  memory its consumer can write (another process, mca/dds_bridge.h): a push through it reads nothing from
+ *  the ring but `head`, which it alone writes and only uses masked, so a consumer that scribbles over the
+ *  ring's fields cannot make the producer write outside the storage. */
+typedef struct mca_ring_producer {
+    mca_ring_t *ring;
+    unsigned char *slots;
+    size_t elem_size;
+    size_t slot_size;
+    uint64_t mask;
+} mca_ring_producer_t;
+
+/** Take the geometry of a ring this process initialised (mca_ring_init). Context: init. */
+void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring);
+
+/** mca_ring_push() through the producer's copy of the geometry. Context: rt (the single producer). */
+void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec);
+
 /** Capacity in records. */
 static inline size_t mca_ring_capacity(const mca_ring_t *ring) {
     return (size_t)ring->mask + 1u;
