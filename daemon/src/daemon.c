@@ -1087,24 +1087,26 @@ static void stream_targets(mca_daemon_t *d, double t, int64_t now_ns) {
             continue; /* being written this instant: last tick's velocity stays */
         }
         double v[3] = {0.0, 0.0, 0.0};
+        /* The bridge process checked the target (finite, in the box, under max_speed); the loop does not take
+         * its word for it: a target from the shared mailbox that is not finite is no target (hold), and no
+         * velocity goes beyond max_speed (issue 16: the bridge is another process) */
+        const int finite = isfinite(tg.x[0]) && isfinite(tg.x[1]) && isfinite(tg.x[2]);
         if (rc == MCA_OK && tg.accepted > 0) {
             const double age = (double)(now_ns - tg.recv_ns) * 1e-9;
             if (age > cs->brake_after) {
                 latch_fault(d, MCA_DAEMON_FAULT_STREAM_STALE, MCA_ETIMEDOUT, t, a, 0, 0, 0, NULL);
-            } else if (age <= cs->hold_after && tg.kind == MCA_ROS2_STREAM_TWIST) {
+            } else if (finite && age <= cs->hold_after && tg.kind == MCA_ROS2_STREAM_TWIST) {
                 memcpy(v, tg.x, sizeof v);
-            } else if (age <= cs->hold_after && d->ctrl.started) {
+            } else if (finite && age <= cs->hold_after && d->ctrl.started) {
                 /* pose: towards the target from where the reference is now */
                 const double *r = d->ctrl.cfg.path[a].stream_r;
-                double n2 = 0.0;
                 for (int i = 0; i < 3; i++) {
                     v[i] = cs->pose_gain * (tg.x[i] - r[i]);
-                    n2 += v[i] * v[i];
                 }
-                const double n = sqrt(n2);
-                for (int i = 0; i < 3 && n > cs->max_speed; i++) {
-                    v[i] *= cs->max_speed / n;
-                }
+            }
+            const double n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            for (int i = 0; i < 3 && n > cs->max_speed; i++) {
+                v[i] *= cs->max_speed / n;
             }
         }
         mca_controller_stream(&d->ctrl, a, v);
