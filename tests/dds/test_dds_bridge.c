@@ -26,6 +26,7 @@
 #include "mca/err.h"
 #include "mca/scheme.h" /* mca_brake_s */
 #include "mca_dds.h"
+#include "ros2_msgs.h" /* geometry_msgs TwistStamped as ROS 2 puts it on DDS (idlc) */
 
 static const char *g_config;
 static uint32_t g_domain;
@@ -673,6 +674,109 @@ static void test_process_mode_restart(void **state) {
     dds_delete(r.pp);
 }
 
+/* Process mode: an arm's stream target lives in the shared region, so it outlives the bridge process. After a
+ * death the loop still reads the last target with its old receive time (its age grows: task.stream's
+ * hold_after and brake_after act on it) and after the restart new targets are accepted on top of it (the
+ * count goes on). */
+static void test_process_mode_stream_target_survives(void **state) {
+    (void)state;
+    if (g_bridge_exe == NULL) {
+        skip();
+    }
+    static mca_ros2_config_t rc;
+    mca_ros2_config_default(&rc);
+    rc.enabled = 1;
+    snprintf(rc.cell, sizeof rc.cell, "bridge_test_%ld",
+             (long)getpid()); /* ROS 2 topics: default partition */
+    rc.joint_states = rc.robot_description = rc.tf_static = rc.markers = rc.diagnostics = 0;
+    rc.n_arms = 1;
+    rc.stream[0] = MCA_ROS2_STREAM_TWIST;
+    rc.stream_max_speed = 0.5;
+    for (int i = 0; i < 3; i++) {
+        rc.box_lo[i] = -1.0;
+        rc.box_hi[i] = 1.0;
+    }
+    snprintf(rc.arm[0].name, sizeof rc.arm[0].name, "left");
+    rc.arm[0].n_dof = 1;
+    snprintf(rc.arm[0].joint_name[0], sizeof rc.arm[0].joint_name[0], "j1");
+    snprintf(rc.arm[0].root_link, sizeof rc.arm[0].root_link, "base");
+    rc.arm[0].n_links = 2;
+    rc.arm[0].link_radius[0] = rc.arm[0].link_radius[1] = 0.05;
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.partition = g_partition;
+    cfg.ros2 = &rc;
+    cfg.process_exe = g_bridge_exe;
+    mca_dds_bridge_t *b = NULL;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    mca_ros2_target_t tg;
+    assert_int_equal(mca_dds_bridge_stream_target(b, 1, &tg), MCA_EINVAL); /* no such arm */
+    assert_int_equal(mca_dds_bridge_stream_target(b, 0, &tg), MCA_OK);
+    assert_int_equal(tg.accepted, 0);
+
+    dds_entity_t dom = 0;
+    const dds_entity_t pp = mca_dds_open_participant(g_domain, NULL, &dom);
+    assert_true(pp > 0);
+    char name[160];
+    snprintf(name, sizeof name, "rt/%s/left/target_twist", rc.cell);
+    const dds_entity_t tp =
+        dds_create_topic(pp, &geometry_msgs_msg_dds__TwistStamped__desc, name, NULL, NULL);
+    const dds_entity_t w = dds_create_writer(pp, tp, NULL, NULL);
+    assert_true(w > 0);
+    geometry_msgs_msg_dds__TwistStamped_ m;
+    memset(&m, 0, sizeof m);
+    m.header.frame_id = "world";
+    m.twist.linear.x = 0.1;
+    for (int i = 0; i < 400 && tg.accepted == 0; ++i) { /* until the bridge's reader matched */
+        dds_write(w, &m);
+        const struct timespec nap = {0, 10 * 1000 * 1000};
+        nanosleep(&nap, NULL);
+        assert_int_equal(mca_dds_bridge_stream_target(b, 0, &tg), MCA_OK);
+    }
+    assert_true(tg.accepted >= 1);
+    assert_true(tg.x[0] == 0.1 && tg.kind == MCA_ROS2_STREAM_TWIST);
+    nanosleep(&(struct timespec){0, 50 * 1000 * 1000}, NULL);
+    assert_int_equal(mca_dds_bridge_stream_target(b, 0, &tg),
+                     MCA_OK); /* settled: the writes in flight are in */
+    const mca_ros2_target_t before = tg;
+
+    mca_dds_stats_t st;
+    mca_dds_bridge_stats(b, &st);
+    assert_int_equal(kill(st.pid, SIGSEGV), 0);
+    for (int i = 0; i < 1000 && st.deaths == 0; ++i) {
+        mca_dds_bridge_supervise(b, NULL, NULL);
+        mca_dds_bridge_stats(b, &st);
+        nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
+    }
+    assert_int_equal(st.deaths, 1);
+    /* down: the last target is still there, as old as it was */
+    assert_int_equal(mca_dds_bridge_stream_target(b, 0, &tg), MCA_OK);
+    assert_int_equal(tg.accepted, before.accepted);
+    assert_int_equal(tg.recv_ns, before.recv_ns);
+    assert_true(tg.x[0] == 0.1);
+    for (int i = 0; i < 1500 && (st.pid == 0 || st.restarts == 0); ++i) {
+        mca_dds_bridge_supervise(b, NULL, NULL);
+        mca_dds_bridge_stats(b, &st);
+        nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
+    }
+    assert_int_equal(st.restarts, 1);
+    m.twist.linear.x = 0.2;
+    for (int i = 0; i < 500 && tg.x[0] != 0.2; ++i) { /* the restarted bridge's reader matches */
+        dds_write(w, &m);
+        nanosleep(&(struct timespec){0, 10 * 1000 * 1000}, NULL);
+        mca_dds_bridge_supervise(b, NULL, NULL);
+        assert_int_equal(mca_dds_bridge_stream_target(b, 0, &tg), MCA_OK);
+    }
+    assert_true(tg.x[0] == 0.2);
+    assert_true(tg.accepted > before.accepted); /* counted on, not from 0 */
+    assert_true(tg.recv_ns > before.recv_ns);
+    print_message("target accepted %llu before the death, %llu after the restart\n",
+                  (unsigned long long)before.accepted, (unsigned long long)tg.accepted);
+    mca_dds_bridge_destroy(b, NULL);
+    dds_delete(pp);
+}
+
 int main(int argc, char **argv) {
     if (argc != 3 && argc != 4) {
         fprintf(stderr, "usage: test_dds_bridge LOOPBACK_XML DOMAIN [MCA_DDS_BRIDGE]\n");
@@ -694,6 +798,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(test_brake_factor_eq13),
         cmocka_unit_test(test_pair_fill_from_armdist),
         cmocka_unit_test(test_process_mode_restart),
+        cmocka_unit_test(test_process_mode_stream_target_survives),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
