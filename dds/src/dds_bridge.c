@@ -54,6 +54,7 @@ typedef struct publisher {
     uint64_t last_tick;
     int64_t last_stamp;
     uint64_t since_status;
+    int32_t waited_code; /* the fault code whose text it waited for once already */
 } publisher_t;
 
 /* The owner's handle. */
@@ -168,7 +169,8 @@ static void write_one(publisher_t *b, int w, const void *sample) {
 
 /* The text of a status's fault: the owner's (mca_dds_bridge_fault_text), else the in-process callback. In
  * mca-dds-bridge the owner's supervising thread hands it over a few ms after the fault reached its log, so a
- * publisher that sees the fault first waits for it, at most 200 ms (non-rt, once per fault). */
+ * publisher that sees the fault first waits for it, at most 200 ms, once per fault (non-rt); a text that
+ * never comes leaves the field empty. */
 static void fault_text_for(publisher_t *b, const mca_dds_status_snapshot_t *st, char *text, size_t len) {
     mca_dds_shm_t *shm = b->shm;
     for (int waited = 0;; waited += 5) {
@@ -180,7 +182,8 @@ static void fault_text_for(publisher_t *b, const mca_dds_status_snapshot_t *st, 
             b->fault_text(b->fault_text_arg, st, text, len);
             return;
         }
-        if (!b->process || waited >= 200) {
+        if (!b->process || waited >= 200 || b->waited_code == st->fault_code) {
+            b->waited_code = st->fault_code; /* once per fault: never 200 ms for every status */
             return;
         }
         const struct timespec nap = {0, 5 * 1000 * 1000};
