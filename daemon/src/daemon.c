@@ -1710,11 +1710,10 @@ void mca_daemon_close(mca_daemon_t *d) {
                     (double)ds.max_publish_ns / 1e3);
             fprintf(d->opts.log,
                     "<%d>mcad: summary: dds bridge: died %llu times, restarted %llu times%s, %llu stale "
-                    "snapshots "
-                    "skipped at restarts\n",
+                    "snapshots skipped at restarts, %llu killed as hung\n",
                     ds.deaths ? 4 : 6, (unsigned long long)ds.deaths, (unsigned long long)ds.restarts,
                     ds.down ? " (then left down: too many deaths in a row)" : "",
-                    (unsigned long long)ds.stale);
+                    (unsigned long long)ds.stale, (unsigned long long)ds.hung);
         }
     }
     for (int a = 0; a < MCA_MAX_ARMS; a++) {

@@ -80,6 +80,9 @@ struct mca_dds_bridge {
     double next_start_s; /* when to restart it (pid 0, not down) */
     uint32_t announced;  /* generation whose readiness was logged */
     uint64_t deaths;
+    uint64_t hung;          /* publishers killed for making no progress */
+    uint64_t seen_progress; /* published + invalid + stale when last looked at */
+    double progress_s;      /* when it last made progress (or had nothing to do); 0: not yet looked */
 };
 
 static void bump(_Atomic uint64_t *c) {
@@ -626,6 +629,7 @@ static int spawn_publisher(mca_dds_bridge_t *b) {
     }
     b->pid = pid;
     b->started_s = mono_s();
+    b->progress_s = 0.0; /* the hang watch starts afresh */
     return MCA_OK;
 }
 
@@ -825,6 +829,7 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     out->stale = atomic_load_explicit(&shm->stale, memory_order_relaxed);
     out->restarts = atomic_load_explicit(&shm->restarts, memory_order_relaxed);
     out->deaths = bridge->deaths;
+    out->hung = bridge->hung;
     out->pid = bridge->process ? (int32_t)bridge->pid : 0;
     out->down = bridge->process && bridge->down;
     return MCA_OK;
@@ -934,6 +939,31 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                             atomic_load(&b->shm->open_rc) != MCA_OK ? " (NOT: its DDS set-up failed)" : "");
                 }
                 lines++;
+            }
+            /* alive and up: one that publishes nothing for MCA_DDS_BRIDGE_HUNG_S while snapshots wait is hung
+             * (a deadlock inside Cyclone, a stopped process): killed, then restarted as after any death */
+            if (atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
+                const uint64_t progress = atomic_load_explicit(&b->shm->published, memory_order_relaxed) +
+                                          atomic_load_explicit(&b->shm->invalid, memory_order_relaxed) +
+                                          atomic_load_explicit(&b->shm->stale, memory_order_relaxed);
+                mca_ring_stats_t rs;
+                mca_ring_stats(&b->shm->ring, &rs);
+                if (b->progress_s == 0.0 || progress != b->seen_progress || rs.pending == 0) {
+                    b->seen_progress = progress;
+                    b->progress_s = now;
+                } else if (now - b->progress_s > MCA_DDS_BRIDGE_HUNG_S) {
+                    if (log != NULL) {
+                        fprintf(
+                            log,
+                            "<3>%sdds bridge (pid %d) hung: nothing published for %.1f s with %llu snapshots "
+                            "waiting: killing it\n",
+                            pre, (int)b->pid, now - b->progress_s, (unsigned long long)rs.pending);
+                    }
+                    kill(b->pid, SIGKILL); /* reaped and restarted by the next calls */
+                    b->hung++;
+                    b->progress_s = now;
+                    lines++;
+                }
             }
             return lines;
         }

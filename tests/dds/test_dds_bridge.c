@@ -786,6 +786,70 @@ static void test_process_mode_stream_target_survives(void **state) {
     dds_delete(pp);
 }
 
+/* Process mode: a bridge that is alive but publishes nothing while snapshots wait (here: SIGSTOP, as a
+ * deadlock inside Cyclone would look) is killed after MCA_DDS_BRIDGE_HUNG_S and restarted. */
+static void test_process_mode_hung_bridge_killed(void **state) {
+    (void)state;
+    if (g_bridge_exe == NULL) {
+        skip();
+    }
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.partition = g_partition;
+    cfg.process_exe = g_bridge_exe;
+    mca_dds_bridge_t *b = NULL;
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    uint64_t k = 0;
+    mca_dds_stats_t st;
+    mca_dds_bridge_stats(b, &st);
+    const int pid0 = st.pid;
+    char logbuf[4096] = "";
+    FILE *log = fmemopen(logbuf, sizeof logbuf - 1, "w");
+    assert_non_null(log);
+    setvbuf(log, NULL, _IONBF, 0);
+    mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms);
+    mca_dds_bridge_push(b, &snap);
+    k++;
+    assert_true(wait_published(b, 1, &st));
+    mca_dds_bridge_supervise(b, log, "test: "); /* starts the hang watch */
+    assert_int_equal(kill(pid0, SIGSTOP), 0);
+    struct timespec t0, now;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    double hung_after = -1.0;
+    for (int i = 0; i < 1000 && st.restarts == 0; ++i) { /* 10 s at most */
+        mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms);
+        mca_dds_bridge_push(b, &snap);
+        k++;
+        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_stats(b, &st);
+        if (hung_after < 0.0 && st.hung > 0) {
+            clock_gettime(CLOCK_MONOTONIC, &now);
+            hung_after = (double)(now.tv_sec - t0.tv_sec) + 1e-9 * (double)(now.tv_nsec - t0.tv_nsec);
+        }
+        nanosleep(&(struct timespec){0, 10 * 1000 * 1000}, NULL);
+    }
+    print_message("%skilled as hung %.2f s after SIGSTOP\n", logbuf, hung_after);
+    assert_int_equal(st.hung, 1);
+    assert_true(hung_after >= MCA_DDS_BRIDGE_HUNG_S && hung_after < MCA_DDS_BRIDGE_HUNG_S + 2.0);
+    assert_non_null(strstr(logbuf, "hung: nothing published for"));
+    assert_non_null(strstr(logbuf, "died: signal 9 (SIGKILL); restart 1 in 0.5 s"));
+    assert_int_equal(st.deaths, 1);
+    assert_int_equal(st.restarts, 1);
+    const uint64_t published = st.published;
+    for (int i = 0; i < 500 && st.published == published; ++i) { /* the restarted one publishes */
+        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_stats(b, &st);
+        nanosleep(&(struct timespec){0, 10 * 1000 * 1000}, NULL);
+    }
+    assert_true(st.published > published);
+    mca_dds_bridge_destroy(b, &st);
+    fclose(log);
+}
+
 int main(int argc, char **argv) {
     if (argc != 3 && argc != 4) {
         fprintf(stderr, "usage: test_dds_bridge LOOPBACK_XML DOMAIN [MCA_DDS_BRIDGE]\n");
@@ -808,6 +872,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(test_pair_fill_from_armdist),
         cmocka_unit_test(test_process_mode_restart),
         cmocka_unit_test(test_process_mode_stream_target_survives),
+        cmocka_unit_test(test_process_mode_hung_bridge_killed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

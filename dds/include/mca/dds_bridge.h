@@ -166,6 +166,7 @@ typedef struct mca_dds_stats {
     uint64_t stale;         /**< snapshots a restarted publisher skipped (older than the newest it found) */
     uint64_t restarts;      /**< process mode: publisher processes started after a death */
     uint64_t deaths;        /**< process mode: publisher processes that died (not at destroy) */
+    uint64_t hung;          /**< process mode: of those, killed by the supervisor as hung */
     int32_t pid;            /**< process mode: the running publisher's pid, 0: none (down or restarting) */
     int down;               /**< process mode: 1 = it died too often and is not restarted any more */
 } mca_dds_stats_t;
@@ -176,6 +177,9 @@ typedef struct mca_dds_stats {
 #define MCA_DDS_BRIDGE_BACKOFF_MAX_S 8.0
 /** A publisher that lived this long [s] was stable: the next death starts the back-off afresh. */
 #define MCA_DDS_BRIDGE_STABLE_S 30.0
+/** A publisher process that publishes nothing this long [s] while snapshots wait is hung: killed (SIGKILL),
+ *  then restarted as after a death. */
+#define MCA_DDS_BRIDGE_HUNG_S 5.0
 /** Deaths in a row (each within MCA_DDS_BRIDGE_STABLE_S of its start) after which it is not restarted. */
 #define MCA_DDS_BRIDGE_MAX_RESTARTS 5
 
@@ -211,7 +215,8 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
 
 /**
- * Process mode: notice a dead publisher (waitpid, WNOHANG: never blocks), log it with its cause on log
+ * Process mode: notice a dead publisher (waitpid, WNOHANG: never blocks) or a hung one (nothing published for
+ * MCA_DDS_BRIDGE_HUNG_S while snapshots wait: logged and killed), log a death with its cause on log
  * (`<3>PREFIXdds bridge (pid N) died: signal 11 (SIGSEGV); restart 1 in 0.5 s ...`), restart it when its
  * back-off has passed (the restarted one publishes the newest snapshot and the current status at once, and
  * the restart count on /diagnostics), log that it is up again, and give up after MCA_DDS_BRIDGE_MAX_RESTARTS
