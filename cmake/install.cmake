@@ -8,6 +8,7 @@
 #                                          mca::core, mca::arm, mca::sim_arm, mca::sim, mca::arm_can, mca::dds
 #   etc/mca/cells, etc/mca/dds             what an operator edits (cells, Cyclone DDS configurations)
 #   share/mca/{robots,scenarios,can,ros2}  models, tasks, the DBC, the RViz view; share/doc/mca the docs
+#   share/mca/security                     make_security.sh and the DDS Security templates (docs/security.md)
 #   lib/systemd/system/mcad@.service       the unit, with this prefix's paths
 # A cell's relative paths find share/mca through the search path (docs/daemon.md): the daemon is built
 # with this prefix's etc/mca and share/mca in it.
@@ -66,6 +67,12 @@ if(IS_DIRECTORY "${CMAKE_SOURCE_DIR}/config/canopen")
   install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/canopen" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca)
 endif()
 install(PROGRAMS "${CMAKE_SOURCE_DIR}/config/systemd/mcad-run.sh" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca)
+# DDS Security (docs/security.md): the script and the unsigned templates; the signed files and keys it makes
+# are the site's (MCA_SECURITY_DIR, default /etc/mca/security), never installed from here
+install(PROGRAMS "${CMAKE_SOURCE_DIR}/config/security/make_security.sh" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca/security)
+install(FILES "${CMAKE_SOURCE_DIR}/config/security/governance_protected.xml"
+              "${CMAKE_SOURCE_DIR}/config/security/governance_open.xml"
+              "${CMAKE_SOURCE_DIR}/config/security/permissions.xml" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca/security)
 install(DIRECTORY "${CMAKE_SOURCE_DIR}/docs/" DESTINATION ${CMAKE_INSTALL_DOCDIR} PATTERN "bench-runs" EXCLUDE)
 install(FILES "${CMAKE_SOURCE_DIR}/README.md" DESTINATION ${CMAKE_INSTALL_DOCDIR})
 

@@ -112,7 +112,9 @@ dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition) {
 /* ---- Cyclone's log messages, captured (mca_dds_log_capture) */
 
 #define LOG_LINES 64
-#define LOG_LINE_MAX 200
+/* DDS Security's refusals are long (OpenSSL's error stack, then the reason at the end: "... Verify error:
+ * self-signed certificate"); 200 cut the reason off */
+#define LOG_LINE_MAX 400
 
 static struct {
     pthread_mutex_t lock;
@@ -121,6 +123,17 @@ static struct {
     uint64_t repeats[LOG_LINES]; /* the same message again right after: counted, not stored */
     _Atomic uint64_t lost;
 } captured = {.lock = PTHREAD_MUTEX_INITIALIZER};
+
+/* The stored line equals the first len characters of text, whose line breaks were stored as spaces. */
+static int same_line(const char *line, const char *text, size_t len) {
+    for (size_t i = 0; i < len; i++) {
+        const char c = text[i] == '\n' || text[i] == '\r' ? ' ' : text[i];
+        if (line[i] != c) {
+            return 0;
+        }
+    }
+    return line[len] == '\0';
+}
 
 static void capture_sink(void *arg, const dds_log_data_t *m) {
     (void)arg;
@@ -136,12 +149,17 @@ static void capture_sink(void *arg, const dds_log_data_t *m) {
     if (len >= LOG_LINE_MAX) {
         len = LOG_LINE_MAX - 1;
     }
-    if (captured.n > 0 && strncmp(captured.line[captured.n - 1], text, len) == 0 &&
-        captured.line[captured.n - 1][len] == '\0') {
+    if (captured.n > 0 && same_line(captured.line[captured.n - 1], text, len)) {
         captured.repeats[captured.n - 1]++; /* a flood of one warning (one per failed send) is one line */
     } else if (captured.n < LOG_LINES) {
-        memcpy(captured.line[captured.n], text, len);
-        captured.line[captured.n][len] = '\0';
+        char *line = captured.line[captured.n];
+        memcpy(line, text, len);
+        line[len] = '\0';
+        for (char *c = line; *c; c++) {
+            if (*c == '\n' || *c == '\r') {
+                *c = ' '; /* one message, one log line (the security plugins' messages carry newlines) */
+            }
+        }
         captured.repeats[captured.n] = 0;
         captured.n++;
     } else {

@@ -27,13 +27,22 @@ static void usage(void) {
     fprintf(stderr, "usage: mca-dds-bridge --shm-fd FD [--owner PID]   (started by mcad, not by hand)\n");
 }
 
-/* Cyclone's own messages, printed from here so that a slow stderr never holds the publisher. */
+/* Cyclone's own messages, printed from here so that a slow stderr never holds the publisher. They are mcad's
+ * DDS side's, so they read as they did when DDS ran inside mcad: "<4>mcad: dds: ..." (operators' and tests'
+ * patterns keep working). Before the DDS set-up has succeeded they stay queued: a failed set-up prints them
+ * as errors ("<3>mcad: dds: ...", the reason mcad's start-up failed: a missing security file, a bad XML). */
+static atomic_int drain_stop;
+
 static void *drain_main(void *arg) {
-    (void)arg;
-    for (;;) {
+    const mca_dds_shm_t *shm = arg;
+    while (!atomic_load(&drain_stop)) {
         const struct timespec nap = {0, 200 * 1000 * 1000};
         nanosleep(&nap, NULL);
-        mca_dds_log_drain(stderr, "<4>" PREFIX "dds: ");
+        if (atomic_load_explicit(&shm->ready_gen, memory_order_acquire) ==
+                atomic_load_explicit(&shm->start_gen, memory_order_acquire) &&
+            atomic_load_explicit(&shm->open_rc, memory_order_acquire) == MCA_OK) {
+            mca_dds_log_drain(stderr, "<4>mcad: dds: ");
+        }
     }
     return NULL;
 }
@@ -83,11 +92,13 @@ int main(int argc, char **argv) {
     close(fd);
     mca_dds_log_capture(1);
     pthread_t drain;
-    if (pthread_create(&drain, NULL, drain_main, NULL) == 0) {
-        pthread_detach(drain);
-    }
+    const int drain_started = pthread_create(&drain, NULL, drain_main, shm) == 0;
     const int rc = mca_dds_publisher_process(shm);
-    mca_dds_log_drain(stderr, "<4>" PREFIX "dds: ");
+    atomic_store(&drain_stop, 1);
+    if (drain_started) {
+        pthread_join(drain, NULL); /* one drainer at a time (mca_dds_log_drain) */
+    }
+    mca_dds_log_drain(stderr, rc == MCA_OK ? "<4>mcad: dds: " : "<3>mcad: dds: ");
     if (rc != MCA_OK) {
         fprintf(stderr, "<3>" PREFIX "DDS set-up failed: %s\n", mca_strerror(rc));
         return 1;

@@ -103,6 +103,103 @@ verdict(f"a: python-canopen NMT master + SDO client drives mca-drivesim through 
         "EMCY fault + reset)", rc("A_RC") == 0 and len(res) >= 20 and not bad,
         f"rc {rc('A_RC')}; failing: {bad}" if bad or rc("A_RC") != 0 else f"{len(res)} ok")
 
+
+
+def sdo_transfers(frames, node):
+    """The SDO transfers of one server on the bus, decoded from a capture (CiA 301 7.2.4: expedited and
+    segmented upload and download, aborts from either side): [{op, index, sub, data | abort | open}]."""
+    out, cur = [], None
+    for _, cid, b in frames:
+        if len(b) != 8 or cid not in (0x600 + node, 0x580 + node):
+            continue
+        cs = b[0] >> 5
+        if cid == 0x600 + node:  # client -> server
+            if b[0] == 0x80:  # abort by the client
+                if cur:
+                    cur["abort"] = i32(b[4:8]) & 0xFFFFFFFF
+                    out.append(cur)
+                cur = None
+            elif cs in (1, 2):  # initiate download / upload
+                if cur:  # the previous one never finished (no answer on the bus)
+                    cur["open"] = True
+                    out.append(cur)
+                cur = {"op": "down" if cs == 1 else "up", "index": u16(b[1:3]), "sub": b[3], "buf": b"",
+                       "expedited": bool(b[0] & 0x02)}
+                if cs == 1 and cur["expedited"]:  # the data is in this frame
+                    n = (b[0] >> 2) & 3 if b[0] & 0x01 else 0
+                    cur["buf"] = b[4:8 - n]
+            elif cs == 0 and cur and cur["op"] == "down":  # download segment
+                cur["buf"] += b[1:8 - ((b[0] >> 1) & 7)]
+                cur["last"] = b[0] & 0x01
+            continue
+        if not cur:  # server -> client with nothing open
+            continue
+        if b[0] == 0x80:
+            cur["abort"] = i32(b[4:8]) & 0xFFFFFFFF
+        elif cur["op"] == "up" and cs == 2:  # initiate upload response
+            if b[0] & 0x02:
+                n = (b[0] >> 2) & 3 if b[0] & 0x01 else 0
+                cur["buf"] = b[4:8 - n]
+            else:
+                continue  # segmented: the segments follow
+        elif cur["op"] == "up" and cs == 0:  # upload segment
+            cur["buf"] += b[1:8 - ((b[0] >> 1) & 7)]
+            if not b[0] & 0x01:
+                continue
+        elif cur["op"] == "down" and cs == 3:  # initiate download response
+            if not cur["expedited"]:
+                continue  # segmented: the segments follow
+        elif cur["op"] == "down" and cs == 1:  # download segment response
+            if not cur.get("last"):
+                continue
+        else:
+            continue
+        if "abort" not in cur:
+            cur["data"] = cur["buf"].hex()
+        out.append({k: v for k, v in cur.items() if k not in ("buf", "expedited", "last")})
+        cur = None
+    if cur:
+        cur["open"] = True
+        out.append(cur)
+    return out
+
+
+def same_transfer(py, bus):
+    if (py["op"], py["index"], py["sub"]) != (bus["op"], bus["index"], bus["sub"]):
+        return False
+    if py.get("timeout"):  # python-canopen gave up waiting: the request was on the bus, the answer may be too
+        return True
+    if "abort" in py or "abort" in bus:
+        return py.get("abort") == bus.get("abort")
+    if py["op"] == "up" and bus.get("data") is not None and py.get("data") is not None:
+        # python-canopen cuts an upload to the object's size in its EDS (a drive may send 4 bytes for a U16)
+        return bus["data"].startswith(py["data"]) and len(py["data"]) > 0
+    return py.get("data") == bus.get("data")
+
+
+try:
+    abus = json.loads(read("a.bus.json") or "{}")
+except ValueError:
+    abus = {}
+fr = candump("a.candump")
+NODE_A = 5
+seen = sdo_transfers(fr, NODE_A)
+py_sdo = abus.get("sdo", [])
+diff = [f"#{i}: python {p} / bus {b}" for i, (p, b) in enumerate(zip(py_sdo, seen)) if not same_transfer(p, b)]
+if len(py_sdo) != len(seen):
+    diff.append(f"python logged {len(py_sdo)} SDO transfers, the capture holds {len(seen)}")
+nmt = [b[0] for _, cid, b in fr if cid == 0 and len(b) == 2 and b[1] in (NODE_A, 0)]
+emcy = [u16(b[0:2]) for _, cid, b in fr if cid == 0x80 + NODE_A and len(b) == 8]
+n_up = sum(1 for t in seen if t["op"] == "up")
+n_abort = sum(1 for t in seen if "abort" in t)
+n_seg = sum(1 for t in seen if len(bytes.fromhex(t.get("data", ""))) > 4)
+verdict(f"a: candump decoded: every SDO transfer (index, sub-index, data or abort code) = what python-canopen "
+        "did, in order; NMT commands and EMCYs = python-canopen's",
+        len(fr) > 0 and len(py_sdo) >= 60 and not diff and nmt == abus.get("nmt") and emcy == abus.get("emcy"),
+        f"{len(fr)} frames; {len(seen)} SDO transfers ({n_up} uploads, {n_seg} over 4 bytes, {n_abort} aborts); "
+        f"NMT {[hex(c) for c in nmt]} vs {[hex(c) for c in abus.get('nmt', [])]}; EMCY {[hex(c) for c in emcy]} vs "
+        f"{[hex(c) for c in abus.get('emcy', [])]}" + (f"; differences: {diff[:4]}" if diff else ""))
+
 # (b) our master against python-canopen LocalNode drives
 kv, nodes, txt = ctl("b.out")
 try:

@@ -17,7 +17,9 @@ periodic sender, not in step with its SYNC), this checks, each as an "ok"/"FAIL"
     target velocity * interpolation period exactly (in counts);
   - quick stop -> QUICK STOP ACTIVE at velocity 0; fault injected over SDO (0x2000) -> EMCY 0xFF00 and
     FAULT; fault reset -> SWITCH ON DISABLED and EMCY 0x0000 (error reset).
-Exit 0 only if every check passed. The results also go to OUT_JSON.
+Exit 0 only if every check passed. The results also go to OUT_JSON, and what this side did on the bus (each SDO
+transfer with its data or abort code, each NMT command, each EMCY received) to OUT.bus.json (OUT_JSON without
+".json"), which check_suite.py compares with the candump capture.
 """
 import json
 import sys
@@ -72,6 +74,38 @@ node.TIMEOUT_SWITCH_STATE_FINAL = 10.0
 node.TIMEOUT_CHECK_TPDO = 1.0
 node.sdo.RESPONSE_TIMEOUT = 2.0
 net.add_node(node)
+
+# What this side did on the bus, for the comparison with the candump capture (check_suite.py): every SDO
+# transfer with its data or abort code, every NMT command, every EMCY received; written to OUT.bus.json
+bus_log = {"sdo": [], "nmt": [], "emcy": []}
+
+
+def logged(kind, fn):
+    def call(index, subindex, *args):
+        rec = {"op": kind, "index": index, "sub": subindex}
+        if kind == "down":
+            rec["data"] = bytes(args[0]).hex()
+        try:
+            out = fn(index, subindex, *args)
+            if kind == "up":
+                rec["data"] = bytes(out).hex()
+            return out
+        except SdoAbortedError as e:
+            rec["abort"] = e.code
+            raise
+        except canopen.SdoCommunicationError:
+            rec["timeout"] = True
+            raise
+        finally:
+            bus_log["sdo"].append(rec)
+    return call
+
+
+node.sdo.upload = logged("up", node.sdo.upload)
+node.sdo.download = logged("down", node.sdo.download)
+_nmt_send = node.nmt.send_command
+node.nmt.send_command = lambda code: (bus_log["nmt"].append(code), _nmt_send(code))[1]
+node.emcy.add_callback(lambda e: bus_log["emcy"].append(e.code))
 
 try:
     # --- NMT boot-up (collected by a heartbeat callback registered before the reset: the emulator answers
@@ -231,6 +265,8 @@ finally:
 
 with open(OUT, "w") as f:
     json.dump(results, f, indent=1)
+with open(OUT.replace(".json", "") + ".bus.json", "w") as f:
+    json.dump(bus_log, f)
 fails = [r for r in results if not r["ok"]]
 print(f"py_master: {len(results) - len(fails)} ok, {len(fails)} failing", flush=True)
 sys.exit(1 if fails or not results else 0)

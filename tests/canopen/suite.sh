@@ -68,12 +68,14 @@ ds_stop() { # tag
 CTL_COMMON="--iface $IF --nodes 6 --period-us 4000 --pdo-timeout 25 --hb-timeout-ms 1000 --sdo-timeout-ms 1000"
 
 # (a) python-canopen master + SDO client against mca-drivesim (node 5), driven through the EDS
+dump_start
 $RT "$DS" --iface "$IF" --joints 1 --first-node 5 --watchdog-cycles 1000000 2>"$OUT/a.ds.err" &
 DSP=$!
 sleep 0.3
 $T "$PY" "$S/tests/canopen/py_master.py" "$IF" "$EDS" 5 "$OUT/a.json" >"$OUT/a.out" 2>&1
 echo "A_RC=$?" >>"$ST"
 kill "$DSP"; wait "$DSP"; echo "A_DS_RC=$?" >>"$ST"
+dump_stop "$OUT/a.candump"
 note "a done"
 
 # (b) our master against six python-canopen LocalNode drives built from the same EDS (40 ms: what the

@@ -30,6 +30,8 @@ check "lib*/libmca_core.a and the CMake package" sh -c "ls $P/lib*/libmca_core.a
 check "etc/mca/cells, etc/mca/dds" test -f "$P/etc/mca/cells/cup_stacking_sim.yaml" -a -f "$P/etc/mca/dds/loopback.xml"
 check "share/mca/robots, scenarios, ros2" test -f "$P/share/mca/robots/jaco2.urdf" -a -f "$P/share/mca/scenarios/cup_stacking.yaml" -a -f "$P/share/mca/ros2/mca.rviz"
 check "share/doc/mca" test -f "$P/share/doc/mca/daemon.md"
+check "etc/mca/dds/secure.xml; share/mca/security/make_security.sh makes the signed files from the installed templates" \
+    sh -c "test -f $P/etc/mca/dds/secure.xml && $P/share/mca/security/make_security.sh $T/sec && test -s $T/sec/permissions.p7s -a -s $T/sec/governance_open.p7s -a -s $T/sec/mcad/cert.pem"
 check "lib/systemd/system/mcad@.service" test -f "$P/lib/systemd/system/mcad@.service"
 # the unit names the paths of the build's install prefix (the --prefix here only moves the files)
 prefix=$(sed -n 's/^CMAKE_INSTALL_PREFIX:PATH=//p' "$B/CMakeCache.txt")
