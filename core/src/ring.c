@@ -22,7 +22,8 @@ void (*mca_ring_test_hook)(mca_ring_t *ring);
 
 /* Slot layout: [seq word][payload words...]; everything is an _Atomic uint64_t. */
 static inline _Atomic uint64_t *slot_at(const mca_ring_t *ring, uint64_t n) {
-    return (_Atomic uint64_t *)(void *)(ring->slots + (size_t)(n & ring->mask) * ring->slot_size);
+    unsigned char *slots = (unsigned char *)(uintptr_t)((uintptr_t)ring + (uintptr_t)ring->slots_off);
+    return (_Atomic uint64_t *)(void *)(slots + (size_t)(n & ring->mask) * ring->slot_size);
 }
 
 int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t elem_size, size_t capacity) {
@@ -35,7 +36,7 @@ int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t e
         storage_size < MCA_RING_STORAGE_SIZE(elem_size, capacity)) {
         return MCA_EINVAL;
     }
-    ring->slots = storage;
+    ring->slots_off = (int64_t)((uintptr_t)storage - (uintptr_t)ring); /* position independent */
     ring->elem_size = elem_size;
     ring->slot_size = MCA_RING_SLOT_SIZE(elem_size);
     ring->mask = (uint64_t)capacity - 1u;
@@ -53,14 +54,16 @@ int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t e
     return MCA_OK;
 }
 
-void mca_ring_push(mca_ring_t *ring, const void *rec) {
+/* The producer's side, from the geometry given (the ring's own, or the producer's copy of it). */
+static inline void push_at(_Atomic uint64_t *head, unsigned char *slots, size_t elem_size, size_t slot_size,
+                           uint64_t mask, const void *rec) {
     /* Only this thread writes head, so a relaxed load reads our own last store. */
-    const uint64_t n = atomic_load_explicit(&ring->head, memory_order_relaxed);
-    _Atomic uint64_t *s = slot_at(ring, n);
+    const uint64_t n = atomic_load_explicit(head, memory_order_relaxed);
+    _Atomic uint64_t *s = (_Atomic uint64_t *)(void *)(slots + (size_t)(n & mask) * slot_size);
     _Atomic uint64_t *payload = s + 1;
     const unsigned char *src = rec;
-    const size_t full = ring->elem_size / 8u;
-    const size_t rest = ring->elem_size % 8u;
+    const size_t full = elem_size / 8u;
+    const size_t rest = elem_size % 8u;
 
     atomic_store_explicit(&s[0], 2u * n + 1u, memory_order_relaxed); /* W1: writing */
     atomic_thread_fence(memory_order_release);                       /* W2 */
@@ -74,8 +77,25 @@ void mca_ring_push(mca_ring_t *ring, const void *rec) {
         memcpy(&v, src + 8u * full, rest);
         atomic_store_explicit(&payload[full], v, memory_order_relaxed);
     }
-    atomic_store_explicit(&s[0], 2u * n + 2u, memory_order_release);  /* W4: complete */
-    atomic_store_explicit(&ring->head, n + 1u, memory_order_release); /* W5 */
+    atomic_store_explicit(&s[0], 2u * n + 2u, memory_order_release); /* W4: complete */
+    atomic_store_explicit(head, n + 1u, memory_order_release);       /* W5 */
+}
+
+void mca_ring_push(mca_ring_t *ring, const void *rec) {
+    push_at(&ring->head, (unsigned char *)(void *)slot_at(ring, 0), ring->elem_size, ring->slot_size,
+            ring->mask, rec);
+}
+
+void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring) {
+    p->ring = ring;
+    p->slots = (unsigned char *)(void *)slot_at(ring, 0);
+    p->elem_size = ring->elem_size;
+    p->slot_size = ring->slot_size;
+    p->mask = ring->mask;
+}
+
+void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec) {
+    push_at(&p->ring->head, p->slots, p->elem_size, p->slot_size, p->mask, rec);
 }
 
 /* First record that can still be intact when a slot shows sequence word s (record (s-1)/2 is in it). */

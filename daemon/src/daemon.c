@@ -4,6 +4,8 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <libgen.h> /* dirname */
+#include <limits.h> /* PATH_MAX */
 #include <malloc.h>
 #include <math.h>
 #include <sched.h>
@@ -128,7 +130,6 @@ struct mca_daemon {
 
 static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
 static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len);
-static void dds_fault_text(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len);
 
 static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
 
@@ -483,6 +484,26 @@ static void pin_non_rt(mca_daemon_t *d) {
     d->non_rt_pinned = 1;
 }
 
+/* The DDS publisher program: the option's, else next to this executable (the build tree: build/daemon), else
+ * the install's libexec/mca. Start-up. */
+static int find_bridge_exe(const mca_daemon_opts_t *opts, char *out, size_t len) {
+    if (opts->dds_bridge_exe != NULL) {
+        snprintf(out, len, "%s", opts->dds_bridge_exe);
+        return access(out, X_OK) == 0 ? MCA_OK : MCA_ENOENT;
+    }
+    char self[PATH_MAX];
+    const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n > 0) {
+        self[n] = 0;
+        snprintf(out, len, "%s/mca-dds-bridge", dirname(self));
+        if (access(out, X_OK) == 0) {
+            return MCA_OK;
+        }
+    }
+    snprintf(out, len, "%s/mca-dds-bridge", MCA_LIBEXECDIR);
+    return access(out, X_OK) == 0 ? MCA_OK : MCA_ENOENT;
+}
+
 int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen) {
     if (!out || !cell || !opts) {
@@ -557,8 +578,6 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         mca_dds_config_default(&dc);
         dc.domain_id = cell->dds.domain;
         dc.config_path = cell->dds.config[0] ? cell->dds.config : NULL;
-        dc.fault_text = dds_fault_text; /* the fault's text is made by the publisher thread */
-        dc.fault_text_arg = d;
         if (cell->dds.ros2.enabled) {
             rc = ros2_config(d, &d->ros2, err, errlen);
             dc.ros2 = &d->ros2;
@@ -569,10 +588,17 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;
             dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
         }
-        if (rc == MCA_OK) {
-            mca_dds_log_capture(
-                1); /* Cyclone's warnings through the supervisor, never blocking a DDS thread */
+        /* the publisher is a process of its own (issue 16): no DDS, and so no peer on the network, in this
+         * one */
+        char exe[PATH_MAX];
+        if (rc == MCA_OK && find_bridge_exe(opts, exe, sizeof exe) != MCA_OK) {
+            set_err(err, errlen,
+                    "DDS: the publisher program mca-dds-bridge is neither next to this program nor "
+                    "in %s%s (install it, or --no-dds)",
+                    MCA_LIBEXECDIR, "");
+            rc = MCA_ENOENT;
         }
+        dc.process_exe = exe;
         rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc) : rc;
         if (rc != MCA_OK) {
             /* Cyclone's reason (a security file missing, a certificate refused, ...) was captured: say it */
@@ -582,6 +608,11 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         if (rc != MCA_OK && !(err && err[0])) {
             set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
                     dc.config_path ? " (check dds.config)" : "");
+        }
+        if (rc == MCA_OK) {
+            mca_dds_stats_t ds;
+            mca_dds_bridge_stats(d->dds, &ds);
+            fprintf(d->opts.log, "<6>mcad: dds bridge: pid %d (%s)\n", (int)ds.pid, exe);
         }
     }
     if (rc == MCA_OK && opts->csv_path) {
@@ -739,6 +770,10 @@ static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t 
         char txt[192];
         fault_text_of(d, txt, sizeof txt);
         snprintf(buf, len, "fault at t = %.3f s: braking both arms: %s", rec->arg[0], txt);
+        if (d->dds) {
+            /* the DDS publisher (another process) cannot call fault_describe(): it gets the text from here */
+            mca_dds_bridge_fault_text(d->dds, d->fault_code, txt);
+        }
     } else if (rec->code == LOGC_ARM_FAULT_TOO) {
         char txt[192];
         fault_describe(d, MCA_DAEMON_FAULT_ARM, (int)rec->arg[1],
@@ -748,12 +783,6 @@ static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t 
     } else {
         snprintf(buf, len, "code %d", rec->code);
     }
-}
-
-/* DDS ControllerStatus text (the publisher thread, non-rt) */
-static void dds_fault_text(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len) {
-    (void)st;
-    fault_text_of(arg, text, len);
 }
 
 /* An implausible sample of arm a: dropped (the caller keeps the last good one), counted, the first of each
@@ -1008,7 +1037,8 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     mca_dds_status_snapshot_t *st = &s->status;
     st->state = (mca_dds_state_t)state;
     st->fault_code = d->fault ? d->fault_code : 0;
-    st->fault_text[0] = 0; /* the publisher thread writes it (dds_fault_text): no text on the rt path */
+    st->fault_text[0] =
+        0; /* the publisher gets it from log_format (mca_dds_bridge_fault_text): no text here */
     st->ticks = s->tick;
     st->overruns = d->overruns;
     st->skipped_periods = d->skipped;
@@ -1076,24 +1106,26 @@ static void stream_targets(mca_daemon_t *d, double t, int64_t now_ns) {
             continue; /* being written this instant: last tick's velocity stays */
         }
         double v[3] = {0.0, 0.0, 0.0};
+        /* The bridge process checked the target (finite, in the box, under max_speed); the loop does not take
+         * its word for it: a target from the shared mailbox that is not finite is no target (hold), and no
+         * velocity goes beyond max_speed (issue 16: the bridge is another process) */
+        const int finite = isfinite(tg.x[0]) && isfinite(tg.x[1]) && isfinite(tg.x[2]);
         if (rc == MCA_OK && tg.accepted > 0) {
             const double age = (double)(now_ns - tg.recv_ns) * 1e-9;
             if (age > cs->brake_after) {
                 latch_fault(d, MCA_DAEMON_FAULT_STREAM_STALE, MCA_ETIMEDOUT, t, a, 0, 0, 0, NULL);
-            } else if (age <= cs->hold_after && tg.kind == MCA_ROS2_STREAM_TWIST) {
+            } else if (finite && age <= cs->hold_after && tg.kind == MCA_ROS2_STREAM_TWIST) {
                 memcpy(v, tg.x, sizeof v);
-            } else if (age <= cs->hold_after && d->ctrl.started) {
+            } else if (finite && age <= cs->hold_after && d->ctrl.started) {
                 /* pose: towards the target from where the reference is now */
                 const double *r = d->ctrl.cfg.path[a].stream_r;
-                double n2 = 0.0;
                 for (int i = 0; i < 3; i++) {
                     v[i] = cs->pose_gain * (tg.x[i] - r[i]);
-                    n2 += v[i] * v[i];
                 }
-                const double n = sqrt(n2);
-                for (int i = 0; i < 3 && n > cs->max_speed; i++) {
-                    v[i] *= cs->max_speed / n;
-                }
+            }
+            const double n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            for (int i = 0; i < 3 && n > cs->max_speed; i++) {
+                v[i] *= cs->max_speed / n;
             }
         }
         mca_controller_stream(&d->ctrl, a, v);
@@ -1479,7 +1511,9 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
 int mca_daemon_service(mca_daemon_t *d) {
     int n = mca_rtlog_drain(&d->log, d->opts.log);
     if (d->dds) {
-        n += mca_dds_log_drain(d->opts.log, "<4>mcad: dds: ");
+        /* the DDS publisher process: its death noticed, logged, a restart after the back-off (never blocks)
+         */
+        n += mca_dds_bridge_supervise(d->dds, d->opts.log, "mcad: ");
     }
     if (d->csv) {
         int rows = 0;
@@ -1684,8 +1718,6 @@ void mca_daemon_close(mca_daemon_t *d) {
         mca_dds_stats_t ds;
         mca_dds_bridge_destroy(d->dds, &ds);
         d->dds = NULL;
-        mca_dds_log_drain(d->opts.log, "<4>mcad: dds: ");
-        mca_dds_log_capture(0);
         if (d->opts.log) {
             fprintf(d->opts.log,
                     "<%d>mcad: summary: dds: %llu snapshots published, %llu lost to ring overrun (most "
@@ -1695,6 +1727,12 @@ void mca_daemon_close(mca_daemon_t *d) {
                     (unsigned long long)ds.dropped, (unsigned long long)ds.max_pending,
                     (unsigned long long)ds.samples, (unsigned long long)ds.write_errors,
                     (double)ds.max_publish_ns / 1e3);
+            fprintf(d->opts.log,
+                    "<%d>mcad: summary: dds bridge: died %llu times, restarted %llu times%s, %llu stale "
+                    "snapshots skipped at restarts, %llu killed as hung\n",
+                    ds.deaths ? 4 : 6, (unsigned long long)ds.deaths, (unsigned long long)ds.restarts,
+                    ds.down ? " (then left down: too many deaths in a row)" : "",
+                    (unsigned long long)ds.stale, (unsigned long long)ds.hung);
         }
     }
     for (int a = 0; a < MCA_MAX_ARMS; a++) {

@@ -1,21 +1,31 @@
 /* SPDX-License-Identifier: MIT */
-/* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher thread -> Cyclone DDS writers. The publisher
- * parks on a futex when the ring is empty; a push wakes it only when it is parked. */
+/* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher -> Cyclone DDS writers. The publisher is a thread
+ * of the caller (in-process mode) or the program mca-dds-bridge (process mode, issue 16: a crash in Cyclone
+ * cannot take the loop's process with it); both run the same code below over the same shared region
+ * (dds_shm.h). The publisher parks on a futex when the ring is empty; a push wakes it only when it is parked.
+ */
 #include "mca/dds_bridge.h"
 
+#include <errno.h>
+#include <fcntl.h> /* F_ADD_SEALS */
+#include <limits.h>
+#include <linux/futex.h> /* FUTEX_WAIT, FUTEX_WAKE (shared: the word may be in a memfd) */
 #include <math.h>
 #include <pthread.h>
+#include <signal.h> /* kill */
+#include <spawn.h>  /* posix_spawn: vfork semantics, no copy-on-write of the owner's locked memory */
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <errno.h>
-#include <linux/futex.h> /* FUTEX_WAIT_PRIVATE, FUTEX_WAKE_PRIVATE */
+#include <sys/mman.h>    /* memfd_create, mmap */
 #include <sys/prctl.h>   /* PR_SET_TIMERSLACK */
 #include <sys/syscall.h> /* SYS_futex */
+#include <sys/wait.h>    /* waitpid */
 #include <time.h>
 #include <unistd.h> /* syscall */
 
+#include "dds_shm.h"
 #include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/ring.h"
@@ -23,47 +33,67 @@
 #include "mca_dds.h"    /* idlc output: mca_dds_JointState, ... */
 #include "ros2_pub.h"
 
+extern char **environ;
+
 enum { W_STATE, W_COMMAND, W_DIST, W_STATUS, W_COUNT };
 static const char *const topic_names[W_COUNT] = {MCA_DDS_TOPIC_JOINT_STATE, MCA_DDS_TOPIC_JOINT_COMMAND,
                                                  MCA_DDS_TOPIC_DISTANCES, MCA_DDS_TOPIC_STATUS};
 
-struct mca_dds_bridge {
-    mca_ring_t ring; /* first: cache-line aligned by aligned_alloc */
-    void *storage;
-    mca_dds_config_t cfg;
-    char frame_id[MCA_DDS_FRAME_ID_MAX + 1];
-    char partition[MCA_DDS_PARTITION_MAX + 1];
-
-    _Atomic uint64_t offered; /* written by the rt thread only */
-    _Atomic uint64_t wakes;   /* written by the rt thread only */
-    /* Park/wake (futex): the publisher sets `parked` before it re-checks the ring and sleeps on `wake_seq`;
-     * a push that finds `parked` set clears it, bumps `wake_seq` and wakes the futex. */
-    _Atomic uint32_t wake_seq;
-    _Atomic int parked;
-    _Atomic uint64_t parks, grid_sleeps; /* written by the publisher thread only */
-    /* Written by the publisher thread only. */
-    _Atomic uint64_t published, samples, write_errors, invalid, max_pending;
-    _Atomic int64_t max_publish_ns;
-    _Atomic int stop;
-
+/* The publisher: DDS entities and its working state, in the process that publishes. */
+typedef struct publisher {
+    mca_dds_shm_t *shm;
+    int process; /* 1: in mca-dds-bridge */
+    void (*fault_text)(void *arg, const mca_dds_status_snapshot_t *st, char *text, size_t len);
+    void *fault_text_arg;
     dds_entity_t domain, participant;
     dds_entity_t topic[W_COUNT], writer[W_COUNT];
     mca_ros2_pub_t *ros2; /* NULL: no ROS 2 topics */
-    pthread_t thread;
-    int thread_started;
-
-    /* Publisher thread state. */
     mca_dds_snapshot_t work;
     int have_status;
     mca_dds_status_snapshot_t last_status;
     uint64_t last_tick;
     int64_t last_stamp;
     uint64_t since_status;
+    int32_t waited_code; /* the fault code whose text it waited for once already */
+} publisher_t;
+
+/* The owner's handle. */
+struct mca_dds_bridge {
+    mca_dds_shm_t *shm; /* heap (in-process) or the memfd mapping (process) */
+    size_t shm_size;
+    int process;
+    /* owner-private copies: the loop reads no size, index bound or address from memory a bridge can write */
+    mca_ring_producer_t producer;
+    int n_stream_arms;
+    int stream_kind[MCA_MAX_ARMS];
+    /* in-process */
+    publisher_t *pub;
+    pthread_t thread;
+    int thread_started;
+    /* process mode (the owner's supervising thread only) */
+    int memfd;
+    char exe[PATH_MAX];
+    pid_t pid;           /* the running publisher, 0: none */
+    int down;            /* 1: gave up restarting */
+    int quick_deaths;    /* deaths in a row, each within MCA_DDS_BRIDGE_STABLE_S of its start */
+    double started_s;    /* when the running publisher was started */
+    double next_start_s; /* when to restart it (pid 0, not down) */
+    uint32_t announced;  /* generation whose readiness was logged */
+    uint64_t deaths;
+    uint64_t hung;          /* publishers killed for making no progress */
+    uint64_t seen_progress; /* published + invalid + stale when last looked at */
+    double progress_s;      /* when it last made progress (or had nothing to do); 0: not yet looked */
 };
 
 static void bump(_Atomic uint64_t *c) {
     /* Single writer per counter: load + store, no locked instruction. */
     atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + 1u, memory_order_relaxed);
+}
+
+static double mono_s(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
 void mca_dds_config_default(mca_dds_config_t *cfg) {
@@ -132,30 +162,54 @@ static void add(_Atomic uint64_t *c, uint64_t n) {
     atomic_store_explicit(c, atomic_load_explicit(c, memory_order_relaxed) + n, memory_order_relaxed);
 }
 
-static void write_one(mca_dds_bridge_t *b, int w, const void *sample) {
+static void write_one(publisher_t *b, int w, const void *sample) {
     if (dds_write(b->writer[w], sample) < 0) {
-        bump(&b->write_errors);
+        bump(&b->shm->write_errors);
     } else {
-        bump(&b->samples);
+        bump(&b->shm->samples);
     }
 }
 
-static void write_status(mca_dds_bridge_t *b) {
+/* The text of a status's fault: the owner's (mca_dds_bridge_fault_text), else the in-process callback. In
+ * mca-dds-bridge the owner's supervising thread hands it over a few ms after the fault reached its log, so a
+ * publisher that sees the fault first waits for it, at most 200 ms, once per fault (non-rt); a text that
+ * never comes leaves the field empty. */
+static void fault_text_for(publisher_t *b, const mca_dds_status_snapshot_t *st, char *text, size_t len) {
+    mca_dds_shm_t *shm = b->shm;
+    for (int waited = 0;; waited += 5) {
+        if (atomic_load_explicit(&shm->fault_code, memory_order_acquire) == st->fault_code) {
+            snprintf(text, len, "%.*s", MCA_DDS_FAULT_TEXT_MAX, shm->fault_text);
+            return;
+        }
+        if (b->fault_text != NULL) {
+            b->fault_text(b->fault_text_arg, st, text, len);
+            return;
+        }
+        if (!b->process || waited >= 200 || b->waited_code == st->fault_code) {
+            b->waited_code = st->fault_code; /* once per fault: never 200 ms for every status */
+            return;
+        }
+        const struct timespec nap = {0, 5 * 1000 * 1000};
+        nanosleep(&nap, NULL);
+    }
+}
+
+static void write_status(publisher_t *b) {
     const mca_dds_status_snapshot_t *st = &b->last_status;
     mca_ring_stats_t rs;
-    mca_ring_stats(&b->ring, &rs);
+    mca_ring_stats(&b->shm->ring, &rs);
     mca_dds_ControllerStatus m;
     memset(&m, 0, sizeof m);
-    m.controller_id = b->cfg.controller_id;
+    m.controller_id = b->shm->cfg.controller_id;
     m.tick = b->last_tick;
     m.stamp_ns = b->last_stamp;
     m.state = (int32_t)st->state;
     m.fault_code = st->fault_code;
     memcpy(m.fault_text, st->fault_text, sizeof m.fault_text - 1);
     m.fault_text[sizeof m.fault_text - 1] = '\0';
-    if (m.fault_code != 0 && m.fault_text[0] == '\0' && b->cfg.fault_text != NULL) {
-        /* the owner's rt side latched a code and numbers: the text is made here, off the rt path */
-        b->cfg.fault_text(b->cfg.fault_text_arg, st, m.fault_text, sizeof m.fault_text);
+    if (m.fault_code != 0 && m.fault_text[0] == '\0') {
+        /* the owner's rt side latched a code and numbers: the text is made off the rt path */
+        fault_text_for(b, st, m.fault_text, sizeof m.fault_text);
         m.fault_text[sizeof m.fault_text - 1] = '\0';
     }
     m.ticks = st->ticks;
@@ -176,15 +230,16 @@ static void write_status(mca_dds_bridge_t *b) {
     write_one(b, W_STATUS, &m);
     if (b->ros2 != NULL) {
         uint64_t errors = 0;
-        add(&b->samples, (uint64_t)mca_ros2_pub_status(b->ros2, &m, &errors));
-        add(&b->write_errors, errors);
+        const uint64_t restarts = atomic_load_explicit(&b->shm->restarts, memory_order_relaxed);
+        add(&b->shm->samples, (uint64_t)mca_ros2_pub_status(b->ros2, &m, restarts, &errors));
+        add(&b->shm->write_errors, errors);
     }
     b->since_status = 0;
 }
 
-static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
+static void publish(publisher_t *b, mca_dds_snapshot_t *s) {
     if (!snapshot_valid(s)) {
-        bump(&b->invalid);
+        bump(&b->shm->invalid);
         return;
     }
     /* Distances first: the safety picture is what subscribers wait for (tick -> monitor latency) */
@@ -227,13 +282,13 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
             .velocity_setpoint = seq_of(a->velocity_setpoint, a->n_dof),
             .position_reference = seq_of(a->position_reference, a->n_dof),
         };
-        memcpy(jc.frame_id, b->frame_id, sizeof jc.frame_id);
+        memcpy(jc.frame_id, b->shm->cfg.frame_id, sizeof jc.frame_id);
         write_one(b, W_COMMAND, &jc);
     }
     if (b->ros2 != NULL) {
         uint64_t errors = 0;
-        add(&b->samples, (uint64_t)mca_ros2_pub_snapshot(b->ros2, s, &errors));
-        add(&b->write_errors, errors);
+        add(&b->shm->samples, (uint64_t)mca_ros2_pub_snapshot(b->ros2, s, &errors));
+        add(&b->shm->write_errors, errors);
     }
     const int changed = !b->have_status || s->status.state != b->last_status.state ||
                         s->status.fault_code != b->last_status.fault_code;
@@ -242,12 +297,13 @@ static void publish(mca_dds_bridge_t *b, mca_dds_snapshot_t *s) {
     b->last_tick = s->tick;
     b->last_stamp = s->stamp_ns;
     b->have_status = 1;
-    if (changed || ++b->since_status >= b->cfg.status_divisor) {
+    if (changed || ++b->since_status >= b->shm->cfg.status_divisor) {
         write_status(b);
     }
-    bump(&b->published);
+    bump(&b->shm->published);
 }
 
+/* Shared futex operations (no FUTEX_PRIVATE_FLAG): the word may be in a memfd two processes map. */
 static long futex(_Atomic uint32_t *addr, int op, uint32_t val) {
     return syscall(SYS_futex, (uint32_t *)addr, op, val, NULL, NULL, 0);
 }
@@ -256,36 +312,36 @@ static long futex(_Atomic uint32_t *addr, int op, uint32_t val) {
  * and re-checks the ring after a full fence; the pusher stores into the ring, fences and then reads
  * `parked`: one of the two sees the other (no lost wake-up). A bump between the re-check and the sleep
  * makes FUTEX_WAIT return at once (the value differs from `seen`). */
-static void park(mca_dds_bridge_t *b) {
-    const uint32_t seen = atomic_load_explicit(&b->wake_seq, memory_order_acquire);
-    atomic_store_explicit(&b->parked, 1, memory_order_relaxed);
+static void park(mca_dds_shm_t *shm) {
+    const uint32_t seen = atomic_load_explicit(&shm->wake_seq, memory_order_acquire);
+    atomic_store_explicit(&shm->parked, 1, memory_order_relaxed);
     atomic_thread_fence(memory_order_seq_cst);
     mca_ring_stats_t rs;
-    mca_ring_stats(&b->ring, &rs);
-    if (rs.pending == 0 && !atomic_load_explicit(&b->stop, memory_order_acquire)) {
-        bump(&b->parks);
-        futex(&b->wake_seq, FUTEX_WAIT_PRIVATE, seen); /* EAGAIN / EINTR: look again */
+    mca_ring_stats(&shm->ring, &rs);
+    if (rs.pending == 0 && !atomic_load_explicit(&shm->stop, memory_order_acquire)) {
+        bump(&shm->parks);
+        futex(&shm->wake_seq, FUTEX_WAIT, seen); /* EAGAIN / EINTR: look again */
     }
-    atomic_store_explicit(&b->parked, 0, memory_order_relaxed);
+    atomic_store_explicit(&shm->parked, 0, memory_order_relaxed);
 }
 
-static void wake(mca_dds_bridge_t *b) {
-    atomic_fetch_add_explicit(&b->wake_seq, 1u, memory_order_release);
-    futex(&b->wake_seq, FUTEX_WAKE_PRIVATE, 1);
+static void wake(mca_dds_shm_t *shm) {
+    atomic_fetch_add_explicit(&shm->wake_seq, 1u, memory_order_release);
+    futex(&shm->wake_seq, FUTEX_WAKE, 1);
 }
 
 /* wake_period_ns: sleep until the next publishing tick of the caller's grid has pushed (the last
  * snapshot's stamp + period + offset), unless that is already past or the ring is not empty. */
-static void sleep_on_grid(mca_dds_bridge_t *b, int64_t stamp_ns) {
+static void sleep_on_grid(mca_dds_shm_t *shm, int64_t stamp_ns) {
     mca_ring_stats_t rs;
-    mca_ring_stats(&b->ring, &rs);
-    if (rs.pending > 0 || atomic_load_explicit(&b->stop, memory_order_acquire)) {
+    mca_ring_stats(&shm->ring, &rs);
+    if (rs.pending > 0 || atomic_load_explicit(&shm->stop, memory_order_acquire)) {
         return;
     }
     struct timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
     const int64_t t_now = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
-    const int64_t step = (int64_t)(b->cfg.wake_period_ns + b->cfg.wake_offset_ns);
+    const int64_t step = (int64_t)(shm->cfg.wake_period_ns + shm->cfg.wake_offset_ns);
     int64_t target = stamp_ns + step;
     if (target <= t_now) {
         return; /* late already: look now, park if nothing is there */
@@ -293,43 +349,68 @@ static void sleep_on_grid(mca_dds_bridge_t *b, int64_t stamp_ns) {
     if (target > t_now + step) {
         target = t_now + step; /* a stamp not on this clock: never sleep longer than one period */
     }
-    bump(&b->grid_sleeps);
+    bump(&shm->grid_sleeps);
     const struct timespec ts = {(time_t)(target / 1000000000LL), (long)(target % 1000000000LL)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
     }
 }
 
-static void *publisher_main(void *arg) {
-    mca_dds_bridge_t *b = arg;
+static void publish_timed(publisher_t *b) {
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    publish(b, &b->work);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    const int64_t dt = (t1.tv_sec - t0.tv_sec) * 1000000000LL + (t1.tv_nsec - t0.tv_nsec);
+    if (dt > atomic_load_explicit(&b->shm->max_publish_ns, memory_order_relaxed)) {
+        atomic_store_explicit(&b->shm->max_publish_ns, dt, memory_order_relaxed);
+    }
+}
+
+/* A publisher (re)started while the loop already pushes (mca-dds-bridge): what the ring holds is the backlog
+ * of the time it was down. Publish only the newest snapshot, at once (with it the current status, written
+ * because it is this publisher's first), and count the older ones as stale. */
+static void skip_backlog(publisher_t *b) {
+    uint64_t n = 0;
+    while (mca_ring_pop(&b->shm->ring, &b->work) == MCA_OK) {
+        n++;
+    }
+    if (n > 0) {
+        add(&b->shm->stale, n - 1u);
+        publish_timed(b);
+    }
+}
+
+static void publisher_run(publisher_t *b) {
+    mca_dds_shm_t *shm = b->shm;
     /* wake at the grid point itself, not up to 50 us later (the default slack of a normal thread) */
     prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+    if (b->process) {
+        skip_backlog(b);
+    }
     for (;;) {
         /* Read stop BEFORE trying the ring: once stop is seen, one more empty pop means drained. */
-        const int stop = atomic_load_explicit(&b->stop, memory_order_acquire);
-        if (mca_ring_pop(&b->ring, &b->work) == MCA_OK) {
+        const int stop = atomic_load_explicit(&shm->stop, memory_order_acquire);
+        if (mca_ring_pop(&shm->ring, &b->work) == MCA_OK) {
             mca_ring_stats_t rs;
-            mca_ring_stats(&b->ring, &rs);
-            if (rs.pending + 1u > atomic_load_explicit(&b->max_pending, memory_order_relaxed)) {
-                atomic_store_explicit(&b->max_pending, rs.pending + 1u, memory_order_relaxed);
+            mca_ring_stats(&shm->ring, &rs);
+            if (rs.pending + 1u > atomic_load_explicit(&shm->max_pending, memory_order_relaxed)) {
+                atomic_store_explicit(&shm->max_pending, rs.pending + 1u, memory_order_relaxed);
             }
-            struct timespec t0, t1;
-            clock_gettime(CLOCK_MONOTONIC, &t0);
-            publish(b, &b->work);
-            clock_gettime(CLOCK_MONOTONIC, &t1);
-            const int64_t dt = (t1.tv_sec - t0.tv_sec) * 1000000000LL + (t1.tv_nsec - t0.tv_nsec);
-            if (dt > atomic_load_explicit(&b->max_publish_ns, memory_order_relaxed)) {
-                atomic_store_explicit(&b->max_publish_ns, dt, memory_order_relaxed);
-            }
-            if (b->cfg.wake_period_ns > 0) {
-                sleep_on_grid(b, b->work.stamp_ns);
+            publish_timed(b);
+            if (shm->cfg.wake_period_ns > 0) {
+                sleep_on_grid(shm, b->work.stamp_ns);
             }
             continue;
         }
         if (stop) {
             break;
         }
-        park(b);
+        park(shm);
     }
+}
+
+static void *publisher_thread(void *arg) {
+    publisher_run(arg);
     return NULL;
 }
 
@@ -337,76 +418,34 @@ static int is_pow2(uint32_t x) {
     return x >= 2 && (x & (x - 1u)) == 0;
 }
 
-static void delete_entities(mca_dds_bridge_t *b) {
+static void publisher_delete_entities(publisher_t *b) {
     if (b->participant > 0) {
         dds_delete(b->participant); /* deletes topics and writers too */
     }
     if (b->domain > 0) {
         dds_delete(b->domain);
     }
+    b->participant = b->domain = 0;
 }
 
-int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
-    if (out == NULL || cfg == NULL || cfg->status_divisor == 0 || !is_pow2(cfg->ring_capacity) ||
-        cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN ||
-        cfg->wake_period_ns > 10000000000ULL || cfg->wake_offset_ns > 10000000000ULL) {
-        return MCA_EINVAL;
-    }
-    const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
-    if (strlen(frame) > MCA_DDS_FRAME_ID_MAX) {
-        fprintf(stderr, "mca dds: frame id '%s' longer than %d bytes\n", frame, MCA_DDS_FRAME_ID_MAX);
-        return MCA_EINVAL;
-    }
-    if (cfg->partition != NULL && strlen(cfg->partition) > MCA_DDS_PARTITION_MAX) {
-        fprintf(stderr, "mca dds: partition '%s' longer than %d bytes\n", cfg->partition,
-                MCA_DDS_PARTITION_MAX);
-        return MCA_EINVAL;
-    }
-    const size_t sz = (sizeof(mca_dds_bridge_t) + 63u) & ~(size_t)63u;
-    mca_dds_bridge_t *b = aligned_alloc(64, sz);
-    if (b == NULL) {
-        return MCA_ENOMEM;
-    }
-    memset(b, 0, sizeof *b);
-    b->cfg = *cfg;
-    snprintf(b->frame_id, sizeof b->frame_id, "%s", frame);
-    b->cfg.frame_id = b->frame_id;
-    if (cfg->partition != NULL) {
-        snprintf(b->partition, sizeof b->partition, "%s", cfg->partition);
-        b->cfg.partition = b->partition;
-    }
-    b->cfg.config_path = NULL; /* not kept: the caller's string may go away */
-
-    const size_t bytes = MCA_RING_STORAGE_SIZE(sizeof(mca_dds_snapshot_t), cfg->ring_capacity);
-    b->storage = aligned_alloc(64, (bytes + 63u) & ~(size_t)63u);
-    if (b->storage == NULL) {
-        free(b);
-        return MCA_ENOMEM;
-    }
-    int rc = mca_ring_init(&b->ring, b->storage, bytes, sizeof(mca_dds_snapshot_t), cfg->ring_capacity);
-    if (rc != MCA_OK) {
-        free(b->storage);
-        free(b);
-        return rc;
-    }
-
-    const dds_entity_t p = mca_dds_open_participant(cfg->domain_id, cfg->config_path, &b->domain);
+/* Participant, topics, writers (and the ROS 2 ones) from shm->cfg. Reasons on stderr. */
+static int publisher_open(publisher_t *b) {
+    const mca_dds_shm_config_t *cfg = &b->shm->cfg;
+    const dds_entity_t p =
+        mca_dds_open_participant(cfg->domain_id, cfg->has_config_path ? cfg->config_path : NULL, &b->domain);
     if (p < 0) {
-        free(b->storage);
-        free(b);
         return (int)p;
     }
     b->participant = p;
-
     const dds_topic_descriptor_t *const descs[W_COUNT] = {&mca_dds_JointState_desc,
                                                           &mca_dds_JointCommand_desc, &mca_dds_Distances_desc,
                                                           &mca_dds_ControllerStatus_desc};
     dds_qos_t *qs = mca_dds_qos_stream();
     dds_qos_t *qst = mca_dds_qos_status();
-    rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
+    int rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
     dds_entity_t pub = p; /* writers hang off the participant, or a publisher with a partition */
-    if (rc == MCA_OK && b->cfg.partition != NULL) {
-        pub = mca_dds_create_publisher(p, b->cfg.partition);
+    if (rc == MCA_OK && cfg->has_partition) {
+        pub = mca_dds_create_publisher(p, cfg->partition);
         if (pub < 0) {
             rc = MCA_EIO;
         }
@@ -423,74 +462,382 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
     }
     dds_delete_qos(qs);
     dds_delete_qos(qst);
-    if (rc == MCA_OK && cfg->ros2 != NULL && cfg->ros2->enabled) {
+    if (rc == MCA_OK && cfg->has_ros2) {
         char err[256];
-        rc = mca_ros2_pub_create(&b->ros2, p, cfg->ros2, err, sizeof err);
+        rc = mca_ros2_pub_create(&b->ros2, p, &cfg->ros2, b->shm->box, err, sizeof err);
         if (rc != MCA_OK) {
             fprintf(stderr, "mca dds: %s\n", err);
         }
     }
-    b->cfg.ros2 = NULL; /* copied into b->ros2 */
-    if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_main, b) != 0) {
-        rc = MCA_ENOMEM;
-    }
     if (rc != MCA_OK) {
-        mca_ros2_pub_destroy(b->ros2, 0);
-        delete_entities(b);
-        free(b->storage);
-        free(b);
+        publisher_delete_entities(b);
+    }
+    return rc;
+}
+
+/* After the last snapshot: the final status (with the final drop count), acks, entities gone. */
+static void publisher_close(publisher_t *b) {
+    if (b->have_status) {
+        write_status(b);
+    }
+    for (int w = 0; w < W_COUNT; ++w) {
+        if (b->writer[w] > 0) {
+            dds_wait_for_acks(b->writer[w], DDS_SECS(1));
+        }
+    }
+    mca_ros2_pub_destroy(b->ros2, DDS_SECS(1));
+    b->ros2 = NULL;
+    publisher_delete_entities(b);
+}
+
+/* ---------------------------------------------------------------- the shared region */
+
+static size_t storage_off(void) {
+    return (sizeof(mca_dds_shm_t) + 63u) & ~(size_t)63u;
+}
+
+size_t mca_dds_shm_size(uint32_t ring_capacity) {
+    const size_t bytes = storage_off() + MCA_RING_STORAGE_SIZE(sizeof(mca_dds_snapshot_t), ring_capacity);
+    const size_t page = 4096;
+    return (bytes + page - 1u) & ~(page - 1u);
+}
+
+static void copy_str(char *dst, size_t len, const char *src) {
+    snprintf(dst, len, "%s", src != NULL ? src : "");
+}
+
+int mca_dds_shm_init(mca_dds_shm_t *shm, size_t size, const mca_dds_config_t *cfg) {
+    if (shm == NULL || cfg == NULL || size < mca_dds_shm_size(cfg->ring_capacity)) {
+        return MCA_EINVAL;
+    }
+    shm->magic = MCA_DDS_SHM_MAGIC;
+    shm->version = MCA_DDS_SHM_VERSION;
+    shm->size = size;
+    mca_dds_shm_config_t *c = &shm->cfg;
+    c->domain_id = cfg->domain_id;
+    c->ring_capacity = cfg->ring_capacity;
+    c->status_divisor = cfg->status_divisor;
+    c->controller_id = cfg->controller_id;
+    c->has_config_path = cfg->config_path != NULL;
+    copy_str(c->config_path, sizeof c->config_path, cfg->config_path);
+    copy_str(c->frame_id, sizeof c->frame_id, cfg->frame_id != NULL ? cfg->frame_id : "world");
+    c->has_partition = cfg->partition != NULL;
+    copy_str(c->partition, sizeof c->partition, cfg->partition);
+    c->wake_period_ns = cfg->wake_period_ns;
+    c->wake_offset_ns = cfg->wake_offset_ns;
+    c->has_ros2 = cfg->ros2 != NULL && cfg->ros2->enabled;
+    if (c->has_ros2) {
+        c->ros2 = *cfg->ros2;
+    }
+    shm->ring_storage_off = storage_off();
+    return mca_ring_init(&shm->ring, (unsigned char *)shm + shm->ring_storage_off,
+                         size - shm->ring_storage_off, sizeof(mca_dds_snapshot_t), cfg->ring_capacity);
+}
+
+int mca_dds_shm_check(const mca_dds_shm_t *shm, size_t size) {
+    if (shm == NULL || size < sizeof *shm || shm->magic != MCA_DDS_SHM_MAGIC ||
+        shm->version != MCA_DDS_SHM_VERSION || shm->size != size || !is_pow2(shm->cfg.ring_capacity) ||
+        shm->cfg.ring_capacity > MCA_RING_MAX_CAPACITY || shm->cfg.status_divisor == 0 ||
+        size < mca_dds_shm_size(shm->cfg.ring_capacity) || shm->ring_storage_off != storage_off() ||
+        shm->ring.elem_size != sizeof(mca_dds_snapshot_t) || shm->ring.mask + 1u != shm->cfg.ring_capacity ||
+        shm->ring.slots_off != (int64_t)(storage_off() - offsetof(mca_dds_shm_t, ring))) {
+        return MCA_EINVAL;
+    }
+    return MCA_OK;
+}
+
+int mca_dds_publisher_process(mca_dds_shm_t *shm) {
+    publisher_t *b = calloc(1, sizeof *b);
+    if (b == NULL) {
+        atomic_store_explicit(&shm->open_rc, MCA_ENOMEM, memory_order_release);
+        return MCA_ENOMEM;
+    }
+    b->shm = shm;
+    b->process = 1;
+    const int rc = publisher_open(b);
+    atomic_store_explicit(&shm->open_rc, rc, memory_order_release);
+    atomic_store_explicit(&shm->ready_gen, atomic_load_explicit(&shm->start_gen, memory_order_acquire),
+                          memory_order_release);
+    if (rc == MCA_OK) {
+        publisher_run(b);
+        publisher_close(b);
+    }
+    free(b);
+    return rc;
+}
+
+/* ---------------------------------------------------------------- the owner's side */
+
+static int config_ok(const mca_dds_config_t *cfg) {
+    if (cfg->status_divisor == 0 || !is_pow2(cfg->ring_capacity) ||
+        cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN ||
+        cfg->wake_period_ns > 10000000000ULL || cfg->wake_offset_ns > 10000000000ULL) {
+        return MCA_EINVAL;
+    }
+    const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
+    if (strlen(frame) > MCA_DDS_FRAME_ID_MAX) {
+        fprintf(stderr, "mca dds: frame id '%s' longer than %d bytes\n", frame, MCA_DDS_FRAME_ID_MAX);
+        return MCA_EINVAL;
+    }
+    if (cfg->partition != NULL && strlen(cfg->partition) > MCA_DDS_PARTITION_MAX) {
+        fprintf(stderr, "mca dds: partition '%s' longer than %d bytes\n", cfg->partition,
+                MCA_DDS_PARTITION_MAX);
+        return MCA_EINVAL;
+    }
+    if (cfg->config_path != NULL && strlen(cfg->config_path) > MCA_DDS_CONFIG_PATH_MAX) {
+        fprintf(stderr, "mca dds: config path longer than %d bytes\n", MCA_DDS_CONFIG_PATH_MAX);
+        return MCA_EINVAL;
+    }
+    if (cfg->process_exe != NULL && (cfg->process_exe[0] == '\0' || strlen(cfg->process_exe) >= PATH_MAX)) {
+        return MCA_EINVAL;
+    }
+    return MCA_OK;
+}
+
+/* Start one publisher process over the region: the memfd as fd 3, every other descriptor of the owner closed
+ * (its CAN sockets, CSV, cpu_dma_latency), default signal mask and dispositions (the owner blocks its
+ * signals in every thread). posix_spawn runs the child on the caller's stack until exec (CLONE_VFORK): no
+ * copy of the owner's locked memory is made and the loop's pages are never write-protected. */
+static int spawn_publisher(mca_dds_bridge_t *b) {
+    char fd_arg[16], owner_arg[24];
+    snprintf(fd_arg, sizeof fd_arg, "%d", 3);
+    snprintf(owner_arg, sizeof owner_arg, "%ld", (long)getpid());
+    char *const argv[] = {b->exe, "--shm-fd", fd_arg, "--owner", owner_arg, NULL};
+    posix_spawn_file_actions_t fa;
+    posix_spawnattr_t at;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawnattr_init(&at);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_adddup2(&fa, b->memfd, 3); /* memfd >= 10: dup2 clears its close-on-exec */
+    posix_spawn_file_actions_addclosefrom_np(&fa, 4);
+    sigset_t none, all;
+    sigemptyset(&none);
+    sigfillset(&all);
+    sigdelset(&all, SIGKILL);
+    sigdelset(&all, SIGSTOP);
+    posix_spawnattr_setsigmask(&at, &none);
+    posix_spawnattr_setsigdefault(&at, &all);
+    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+    atomic_fetch_add_explicit(&b->shm->start_gen, 1u, memory_order_release);
+    pid_t pid = 0;
+    const int e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    posix_spawnattr_destroy(&at);
+    if (e != 0) {
+        fprintf(stderr, "mca dds: cannot start the bridge program %s: %s\n", b->exe, strerror(e));
+        return e == ENOENT ? MCA_ENOENT : MCA_EIO;
+    }
+    b->pid = pid;
+    b->started_s = mono_s();
+    b->progress_s = 0.0; /* the hang watch starts afresh */
+    return MCA_OK;
+}
+
+/* Wait for the running publisher to exit, up to timeout_s; then SIGKILL. Returns its wait status. */
+static int reap(mca_dds_bridge_t *b, double timeout_s) {
+    int status = 0;
+    const double end = mono_s() + timeout_s;
+    while (b->pid > 0) {
+        const pid_t r = waitpid(b->pid, &status, WNOHANG);
+        if (r == b->pid || (r < 0 && errno != EINTR)) {
+            b->pid = 0;
+            break;
+        }
+        if (mono_s() >= end) {
+            kill(b->pid, SIGKILL);
+            waitpid(b->pid, &status, 0);
+            b->pid = 0;
+            break;
+        }
+        const struct timespec nap = {0, 5 * 1000 * 1000};
+        nanosleep(&nap, NULL);
+    }
+    return status;
+}
+
+static void free_bridge(mca_dds_bridge_t *b) {
+    if (b->process) {
+        if (b->shm != NULL) {
+            munmap(b->shm, b->shm_size);
+        }
+        if (b->memfd >= 0) {
+            close(b->memfd);
+        }
+    } else {
+        free(b->shm);
+        free(b->pub);
+    }
+    free(b);
+}
+
+static int create_process(mca_dds_bridge_t *b) {
+    int fd = memfd_create("mca-dds-bridge", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    if (fd < 0) {
+        return MCA_EIO;
+    }
+    b->memfd = fcntl(fd, F_DUPFD_CLOEXEC, 10); /* never 3, the number the child gets it under */
+    close(fd);
+    if (b->memfd < 0 || ftruncate(b->memfd, (off_t)b->shm_size) != 0) {
+        return MCA_EIO;
+    }
+    /* the size is fixed for good: a publisher cannot shrink it under the loop (SIGBUS) */
+    fcntl(b->memfd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL);
+    void *p = mmap(NULL, b->shm_size, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, b->memfd, 0);
+    if (p == MAP_FAILED) {
+        return MCA_ENOMEM;
+    }
+    b->shm = p;
+    return MCA_OK;
+}
+
+/* The first publisher process: up within 20 s, or its set-up error. */
+static int first_start(mca_dds_bridge_t *b) {
+    int rc = spawn_publisher(b);
+    if (rc != MCA_OK) {
         return rc;
     }
-    b->thread_started = 1;
-    pthread_setname_np(b->thread, "mca-dds-pub");
+    const uint32_t gen = atomic_load_explicit(&b->shm->start_gen, memory_order_acquire);
+    const double end = mono_s() + 20.0;
+    for (;;) {
+        if (atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
+            rc = atomic_load_explicit(&b->shm->open_rc, memory_order_acquire);
+            if (rc != MCA_OK) {
+                reap(b, 5.0);
+            }
+            b->announced = gen;
+            return rc;
+        }
+        int status;
+        if (waitpid(b->pid, &status, WNOHANG) == b->pid) {
+            b->pid = 0;
+            fprintf(stderr, "mca dds: the bridge program %s ended at start-up (%s %d)\n", b->exe,
+                    WIFSIGNALED(status) ? "signal" : "status",
+                    WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
+            return MCA_EIO;
+        }
+        if (mono_s() >= end) {
+            fprintf(stderr, "mca dds: the bridge program %s did not come up within 20 s\n", b->exe);
+            reap(b, 0.0);
+            return MCA_ETIMEDOUT;
+        }
+        const struct timespec nap = {0, 2 * 1000 * 1000};
+        nanosleep(&nap, NULL);
+    }
+}
+
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
+    if (out == NULL || cfg == NULL || config_ok(cfg) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    mca_dds_bridge_t *b = calloc(1, sizeof *b);
+    if (b == NULL) {
+        return MCA_ENOMEM;
+    }
+    b->memfd = -1;
+    b->process = cfg->process_exe != NULL;
+    b->shm_size = mca_dds_shm_size(cfg->ring_capacity);
+    int rc = MCA_OK;
+    if (b->process) {
+        snprintf(b->exe, sizeof b->exe, "%s", cfg->process_exe);
+        rc = create_process(b);
+    } else {
+        b->shm = aligned_alloc(4096, b->shm_size);
+        b->pub = calloc(1, sizeof *b->pub);
+        rc = b->shm != NULL && b->pub != NULL ? MCA_OK : MCA_ENOMEM;
+        if (rc == MCA_OK) {
+            memset(b->shm, 0, b->shm_size);
+        }
+    }
+    if (rc == MCA_OK) {
+        rc = mca_dds_shm_init(b->shm, b->shm_size, cfg);
+    }
+    if (rc == MCA_OK) {
+        mca_ring_producer_init(&b->producer, &b->shm->ring);
+    }
+    if (rc == MCA_OK && b->shm->cfg.has_ros2) {
+        b->n_stream_arms = (int)(cfg->ros2->n_arms <= MCA_MAX_ARMS ? cfg->ros2->n_arms : MCA_MAX_ARMS);
+        for (int a = 0; a < b->n_stream_arms; a++) {
+            b->stream_kind[a] = cfg->ros2->stream[a];
+        }
+    }
+    if (rc == MCA_OK && b->process) {
+        rc = first_start(b);
+    } else if (rc == MCA_OK) {
+        b->pub->shm = b->shm;
+        b->pub->fault_text = cfg->fault_text;
+        b->pub->fault_text_arg = cfg->fault_text_arg;
+        rc = publisher_open(b->pub);
+        if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_thread, b->pub) != 0) {
+            publisher_close(b->pub);
+            rc = MCA_ENOMEM;
+        }
+        if (rc == MCA_OK) {
+            b->thread_started = 1;
+            pthread_setname_np(b->thread, "mca-dds-pub");
+        }
+    }
+    if (rc != MCA_OK) {
+        free_bridge(b);
+        return rc;
+    }
     *out = b;
     return MCA_OK;
 }
 
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
-    bump(&bridge->offered);
-    mca_ring_push(&bridge->ring, snap);
+    mca_dds_shm_t *shm = bridge->shm;
+    bump(&shm->offered);
+    mca_ring_producer_push(&bridge->producer, snap);
     /* pairs with the fence in park(): the publisher sees the record or we see it parked */
     atomic_thread_fence(memory_order_seq_cst);
-    if (atomic_load_explicit(&bridge->parked, memory_order_relaxed) &&
-        atomic_exchange_explicit(&bridge->parked, 0, memory_order_relaxed)) {
-        bump(&bridge->wakes);
-        wake(bridge); /* one non-blocking system call */
+    if (atomic_load_explicit(&shm->parked, memory_order_relaxed) &&
+        atomic_exchange_explicit(&shm->parked, 0, memory_order_relaxed)) {
+        bump(&shm->wakes);
+        wake(shm); /* one non-blocking system call */
     }
 }
 
 int mca_dds_bridge_stream_target(mca_dds_bridge_t *bridge, int arm, mca_ros2_target_t *out) {
-    if (bridge == NULL || bridge->ros2 == NULL) {
+    if (bridge == NULL || out == NULL || arm < 0 || arm >= bridge->n_stream_arms ||
+        bridge->stream_kind[arm] == MCA_ROS2_STREAM_NONE) {
         return MCA_EINVAL;
     }
-    return mca_ros2_pub_target(bridge->ros2, arm, out);
+    return mca_dds_mailbox_read(&bridge->shm->box[arm], bridge->stream_kind[arm], out);
 }
 
 int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     if (bridge == NULL || out == NULL) {
         return MCA_EINVAL;
     }
+    const mca_dds_shm_t *shm = bridge->shm;
     mca_ring_stats_t rs;
-    mca_ring_stats(&bridge->ring, &rs);
-    out->offered = atomic_load_explicit(&bridge->offered, memory_order_relaxed);
+    mca_ring_stats(&shm->ring, &rs);
+    memset(out, 0, sizeof *out);
+    out->offered = atomic_load_explicit(&shm->offered, memory_order_relaxed);
     out->queued = rs.pushed;
     out->dropped = rs.dropped;
     out->pending = rs.pending;
-    out->published = atomic_load_explicit(&bridge->published, memory_order_relaxed);
-    out->samples = atomic_load_explicit(&bridge->samples, memory_order_relaxed);
-    out->write_errors = atomic_load_explicit(&bridge->write_errors, memory_order_relaxed);
-    out->invalid = atomic_load_explicit(&bridge->invalid, memory_order_relaxed);
-    out->max_pending = atomic_load_explicit(&bridge->max_pending, memory_order_relaxed);
-    out->max_publish_ns = atomic_load_explicit(&bridge->max_publish_ns, memory_order_relaxed);
-    out->wakes = atomic_load_explicit(&bridge->wakes, memory_order_relaxed);
-    out->parks = atomic_load_explicit(&bridge->parks, memory_order_relaxed);
-    out->grid_sleeps = atomic_load_explicit(&bridge->grid_sleeps, memory_order_relaxed);
+    out->published = atomic_load_explicit(&shm->published, memory_order_relaxed);
+    out->samples = atomic_load_explicit(&shm->samples, memory_order_relaxed);
+    out->write_errors = atomic_load_explicit(&shm->write_errors, memory_order_relaxed);
+    out->invalid = atomic_load_explicit(&shm->invalid, memory_order_relaxed);
+    out->max_pending = atomic_load_explicit(&shm->max_pending, memory_order_relaxed);
+    out->max_publish_ns = atomic_load_explicit(&shm->max_publish_ns, memory_order_relaxed);
+    out->wakes = atomic_load_explicit(&shm->wakes, memory_order_relaxed);
+    out->parks = atomic_load_explicit(&shm->parks, memory_order_relaxed);
+    out->grid_sleeps = atomic_load_explicit(&shm->grid_sleeps, memory_order_relaxed);
+    out->stale = atomic_load_explicit(&shm->stale, memory_order_relaxed);
+    out->restarts = atomic_load_explicit(&shm->restarts, memory_order_relaxed);
+    out->deaths = bridge->deaths;
+    out->hung = bridge->hung;
+    out->pid = bridge->process ? (int32_t)bridge->pid : 0;
+    out->down = bridge->process && bridge->down;
     return MCA_OK;
 }
 
 int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n,
                                 uint32_t timeout_ms) {
-    if (bridge == NULL) {
+    if (bridge == NULL || bridge->process) {
         return MCA_EINVAL;
     }
     int first = 0, last = W_COUNT - 1;
@@ -512,7 +859,7 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
         int ok = 0;
         for (int w = first; w <= last; ++w) {
             dds_publication_matched_status_t st;
-            if (dds_get_publication_matched_status(bridge->writer[w], &st) == DDS_RETCODE_OK &&
+            if (dds_get_publication_matched_status(bridge->pub->writer[w], &st) == DDS_RETCODE_OK &&
                 st.current_count >= n) {
                 ok++;
             }
@@ -529,28 +876,170 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
     }
 }
 
+int mca_dds_bridge_fault_text(mca_dds_bridge_t *bridge, int32_t fault_code, const char *text) {
+    if (bridge == NULL || text == NULL || fault_code == 0) {
+        return MCA_EINVAL;
+    }
+    mca_dds_shm_t *shm = bridge->shm;
+    if (atomic_load_explicit(&shm->fault_code, memory_order_acquire) != 0) {
+        return MCA_EINVAL; /* written once */
+    }
+    snprintf(shm->fault_text, sizeof shm->fault_text, "%s", text);
+    atomic_store_explicit(&shm->fault_code, fault_code, memory_order_release);
+    return MCA_OK;
+}
+
+/* A dead publisher may have been writing a stream target: its seqlock would stay odd, and the loop would keep
+ * the last velocity for good (it skips a mailbox being written). Close it as a target received long ago: the
+ * loop's brake_after then stops the arms, as for any stream that went quiet. Only with no publisher alive. */
+static void repair_mailboxes(mca_dds_bridge_t *b) {
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        mca_dds_mailbox_t *m = &b->shm->box[a];
+        const uint32_t s = atomic_load_explicit(&m->seq, memory_order_relaxed);
+        if (s & 1u) {
+            atomic_store_explicit(&m->recv_ns, 1, memory_order_relaxed);
+            atomic_store_explicit(&m->seq, s + 1u, memory_order_release);
+        }
+    }
+}
+
+static void describe_status(int status, char *buf, size_t len) {
+    if (WIFSIGNALED(status)) {
+        const int sig = WTERMSIG(status);
+        const char *abbrev = sigabbrev_np(sig);
+        snprintf(buf, len, "signal %d (SIG%s)%s", sig, abbrev != NULL ? abbrev : "?",
+                 WCOREDUMP(status) ? ", core dumped" : "");
+    } else if (WIFEXITED(status)) {
+        snprintf(buf, len, "exit status %d", WEXITSTATUS(status));
+    } else {
+        snprintf(buf, len, "wait status 0x%x", (unsigned)status);
+    }
+}
+
+int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *prefix) {
+    if (bridge == NULL || !bridge->process || bridge->down ||
+        atomic_load_explicit(&bridge->shm->stop, memory_order_relaxed)) {
+        return 0;
+    }
+    mca_dds_bridge_t *b = bridge;
+    const char *pre = prefix != NULL ? prefix : "";
+    const double now = mono_s();
+    int lines = 0;
+    if (b->pid > 0) {
+        int status = 0;
+        const pid_t r = waitpid(b->pid, &status, WNOHANG);
+        if (r != b->pid) {
+            const uint32_t gen = atomic_load_explicit(&b->shm->start_gen, memory_order_acquire);
+            if (b->announced != gen &&
+                atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
+                b->announced = gen;
+                if (log != NULL) {
+                    fprintf(log, "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s\n",
+                            pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
+                            atomic_load(&b->shm->open_rc) != MCA_OK ? " (NOT: its DDS set-up failed)" : "");
+                }
+                lines++;
+            }
+            /* alive and up: one that publishes nothing for MCA_DDS_BRIDGE_HUNG_S while snapshots wait is hung
+             * (a deadlock inside Cyclone, a stopped process): killed, then restarted as after any death */
+            if (atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
+                const uint64_t progress = atomic_load_explicit(&b->shm->published, memory_order_relaxed) +
+                                          atomic_load_explicit(&b->shm->invalid, memory_order_relaxed) +
+                                          atomic_load_explicit(&b->shm->stale, memory_order_relaxed);
+                mca_ring_stats_t rs;
+                mca_ring_stats(&b->shm->ring, &rs);
+                if (b->progress_s == 0.0 || progress != b->seen_progress || rs.pending == 0) {
+                    b->seen_progress = progress;
+                    b->progress_s = now;
+                } else if (now - b->progress_s > MCA_DDS_BRIDGE_HUNG_S) {
+                    if (log != NULL) {
+                        fprintf(
+                            log,
+                            "<3>%sdds bridge (pid %d) hung: nothing published for %.1f s with %llu snapshots "
+                            "waiting: killing it\n",
+                            pre, (int)b->pid, now - b->progress_s, (unsigned long long)rs.pending);
+                    }
+                    kill(b->pid, SIGKILL); /* reaped and restarted by the next calls */
+                    b->hung++;
+                    b->progress_s = now;
+                    lines++;
+                }
+            }
+            return lines;
+        }
+        const pid_t dead = b->pid;
+        b->pid = 0;
+        b->deaths++;
+        repair_mailboxes(b);
+        b->quick_deaths = now - b->started_s < MCA_DDS_BRIDGE_STABLE_S ? b->quick_deaths + 1 : 1;
+        char why[96];
+        describe_status(status, why, sizeof why);
+        if (b->quick_deaths > MCA_DDS_BRIDGE_MAX_RESTARTS) {
+            b->down = 1;
+            if (log != NULL) {
+                fprintf(
+                    log,
+                    "<3>%sdds bridge (pid %d) died: %s; %d deaths in a row, each within %.0f s of its start: "
+                    "it stays down, nothing is published until mcad restarts (the loop and the arms are not "
+                    "affected)\n",
+                    pre, (int)dead, why, b->quick_deaths, MCA_DDS_BRIDGE_STABLE_S);
+            }
+            return lines + 1;
+        }
+        double delay = MCA_DDS_BRIDGE_BACKOFF_S;
+        for (int k = 1; k < b->quick_deaths && delay < MCA_DDS_BRIDGE_BACKOFF_MAX_S; k++) {
+            delay *= 2.0;
+        }
+        if (delay > MCA_DDS_BRIDGE_BACKOFF_MAX_S) {
+            delay = MCA_DDS_BRIDGE_BACKOFF_MAX_S;
+        }
+        b->next_start_s = now + delay;
+        if (log != NULL) {
+            fprintf(
+                log,
+                "<3>%sdds bridge (pid %d) died: %s; restart %llu in %.1f s (the loop and the arms are not "
+                "affected)\n",
+                pre, (int)dead, why, (unsigned long long)atomic_load(&b->shm->restarts) + 1u, delay);
+        }
+        return lines + 1;
+    }
+    if (now < b->next_start_s) {
+        return lines;
+    }
+    /* the count first: the new publisher publishes it with its first status */
+    atomic_store_explicit(&b->shm->restarts, atomic_load(&b->shm->restarts) + 1u, memory_order_release);
+    if (spawn_publisher(b) != MCA_OK) {
+        b->started_s = now; /* counts as a quick death */
+        b->quick_deaths++;
+        b->next_start_s = now + MCA_DDS_BRIDGE_BACKOFF_MAX_S;
+        if (b->quick_deaths > MCA_DDS_BRIDGE_MAX_RESTARTS) {
+            b->down = 1;
+        }
+        if (log != NULL) {
+            fprintf(log, "<3>%sdds bridge: cannot restart %s%s\n", pre, b->exe,
+                    b->down ? ": it stays down (the loop and the arms are not affected)" : "");
+        }
+        lines++;
+    }
+    return lines;
+}
+
 void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_stats) {
     if (bridge == NULL) {
         return;
     }
+    atomic_store_explicit(&bridge->shm->stop, 1, memory_order_seq_cst);
+    wake(bridge->shm); /* a parked publisher sees stop, drains what is left and ends */
     if (bridge->thread_started) {
-        atomic_store_explicit(&bridge->stop, 1, memory_order_seq_cst);
-        wake(bridge); /* a parked publisher sees stop, drains what is left and ends */
         pthread_join(bridge->thread, NULL);
+        publisher_close(bridge->pub);
     }
-    if (bridge->have_status) {
-        write_status(bridge); /* final status, with the final drop count */
+    if (bridge->process && bridge->pid > 0) {
+        /* it publishes what is queued, the final status, waits up to 1 s for acks (each writer) */
+        reap(bridge, 10.0);
     }
-    for (int w = 0; w < W_COUNT; ++w) {
-        if (bridge->writer[w] > 0) {
-            dds_wait_for_acks(bridge->writer[w], DDS_SECS(1));
-        }
-    }
-    mca_ros2_pub_destroy(bridge->ros2, DDS_SECS(1));
     if (final_stats != NULL) {
         mca_dds_bridge_stats(bridge, final_stats);
     }
-    delete_entities(bridge);
-    free(bridge->storage);
-    free(bridge);
+    free_bridge(bridge);
 }

@@ -30,15 +30,6 @@ typedef visualization_msgs_msg_dds__Marker_ Marker;
 typedef visualization_msgs_msg_dds__MarkerArray_ MarkerArray;
 typedef diagnostic_msgs_msg_dds__KeyValue_ KeyValue;
 
-/* One arm's latest accepted target: a seqlock (the listener writes, the loop reads; odd seq = being
- * written). Fields are relaxed atomics so that the reader's copy of a torn write is no data race. */
-typedef struct mailbox {
-    _Atomic uint32_t seq;
-    _Atomic double x[3];
-    _Atomic int64_t recv_ns;
-    _Atomic uint64_t accepted;
-} mailbox_t;
-
 struct mca_ros2_pub;
 typedef struct stream_in {
     struct mca_ros2_pub *r;
@@ -48,7 +39,7 @@ typedef struct stream_in {
 
 struct mca_ros2_pub {
     mca_ros2_config_t cfg;
-    mailbox_t box[MCA_MAX_ARMS];
+    mca_dds_mailbox_t *box; /* MCA_MAX_ARMS, the bridge's (shared with the loop, outlives a publisher) */
     stream_in_t in[MCA_MAX_ARMS];
     /* rejections: counted and described by the listener, read by the publisher thread (both non-rt) */
     pthread_mutex_t reject_lock;
@@ -305,7 +296,7 @@ static void reject(mca_ros2_pub_t *r, int arm, const char *fmt, ...) {
 }
 
 static void accept_target(mca_ros2_pub_t *r, int arm, const double x[3]) {
-    mailbox_t *b = &r->box[arm];
+    mca_dds_mailbox_t *b = &r->box[arm];
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     const uint32_t s0 = atomic_load_explicit(&b->seq, memory_order_relaxed);
@@ -445,12 +436,7 @@ static void delete_readers(mca_ros2_pub_t *r) {
     }
 }
 
-int mca_ros2_pub_target(mca_ros2_pub_t *r, int arm, mca_ros2_target_t *out) {
-    if (r == NULL || out == NULL || arm < 0 || arm >= (int)r->cfg.n_arms ||
-        r->cfg.stream[arm] == MCA_ROS2_STREAM_NONE) {
-        return MCA_EINVAL;
-    }
-    const mailbox_t *b = &r->box[arm];
+int mca_dds_mailbox_read(const mca_dds_mailbox_t *b, int kind, mca_ros2_target_t *out) {
     for (int tries = 0; tries < 4; tries++) {
         const uint32_t s0 = atomic_load_explicit(&b->seq, memory_order_acquire);
         if (s0 & 1u) {
@@ -463,21 +449,21 @@ int mca_ros2_pub_target(mca_ros2_pub_t *r, int arm, mca_ros2_target_t *out) {
         out->accepted = atomic_load_explicit(&b->accepted, memory_order_relaxed);
         atomic_thread_fence(memory_order_acquire); /* the fields read before seq is read again */
         if (atomic_load_explicit(&b->seq, memory_order_relaxed) == s0) {
-            out->kind = r->cfg.stream[arm];
+            out->kind = kind;
             return MCA_OK;
         }
     }
     return MCA_EAGAIN;
 }
 
-int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg, char *err,
-                        size_t errlen) {
+int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg,
+                        mca_dds_mailbox_t *box, char *err, size_t errlen) {
     char dummy[8];
     if (err == NULL) {
         err = dummy;
         errlen = sizeof dummy;
     }
-    if (out == NULL) {
+    if (out == NULL || box == NULL) {
         return MCA_EINVAL;
     }
     int rc = mca_ros2_config_check(cfg, err, errlen);
@@ -490,6 +476,7 @@ int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_co
     }
     pthread_mutex_init(&r->reject_lock, NULL);
     r->cfg = *cfg;
+    r->box = box; /* not cleared: a restarted publisher keeps the last target and its age */
     const mca_ros2_config_t *c = &r->cfg;
     r->realtime_offset_ns = clock_ns(CLOCK_REALTIME) - clock_ns(CLOCK_MONOTONIC);
     for (uint32_t a = 0; a < c->n_arms; a++) {
@@ -689,7 +676,8 @@ static const char *state_name(int32_t s) {
     return s >= 0 && s <= 5 ? names[s] : "unknown";
 }
 
-int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t *errors) {
+int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t bridge_restarts,
+                        uint64_t *errors) {
     if (!r->cfg.diagnostics) {
         return 0;
     }
@@ -721,6 +709,7 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, u
     const builtin_interfaces_msg_dds__Time_ t_min = ros_time(r, st->min_distance_stamp_ns);
     KV("min_distance_stamp", "%d.%09u", t_min.sec, t_min.nanosec);
     KV("snapshots_dropped", "%llu", (unsigned long long)st->snapshots_dropped);
+    KV("dds_bridge_restarts", "%llu", (unsigned long long)bridge_restarts);
     int streams = 0;
     uint64_t accepted = 0;
     for (uint32_t a = 0; a < r->cfg.n_arms; a++) {

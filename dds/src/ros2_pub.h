@@ -8,26 +8,24 @@
 
 #include "mca/dds_bridge.h"
 #include "mca/ros2.h"
+#include "dds_shm.h" /* mca_dds_mailbox_t */
 #include "mca_dds.h" /* mca_dds_ControllerStatus */
 
 typedef struct mca_ros2_pub mca_ros2_pub_t;
 
 /** Writers on participant pp (default partition, as ROS 2 uses); robot_description and /tf_static are
- *  written here, once. @retval MCA_OK, MCA_EINVAL (bad config: err says which field), MCA_ENOENT (URDF
- *  unreadable), MCA_EIO (Cyclone refused), MCA_ENOMEM */
-int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg, char *err,
-                        size_t errlen);
+ *  written here, once. Accepted stream targets go to box[arm] (the bridge's, MCA_MAX_ARMS of them; not
+ *  cleared here: a restarted publisher continues them). @retval MCA_OK, MCA_EINVAL (bad config: err says
+ * which field), MCA_ENOENT (URDF unreadable), MCA_EIO (Cyclone refused), MCA_ENOMEM */
+int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg,
+                        mca_dds_mailbox_t *box, char *err, size_t errlen);
 
 /** Joint states and markers of one snapshot. Returns the samples written; *errors counts failures. */
 int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64_t *errors);
 
-/** /diagnostics from the status just written on mca/controller_status. */
-int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t *errors);
-
-/** The latest accepted target of arm's stream (seqlock read: never waits). Context: rt.
- *  @retval MCA_OK @retval MCA_EINVAL (no stream for that arm) @retval MCA_EAGAIN (being written: try next
- *  tick) */
-int mca_ros2_pub_target(mca_ros2_pub_t *r, int arm, mca_ros2_target_t *out);
+/** /diagnostics from the status just written on mca/controller_status, with the bridge's restart count. */
+int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t bridge_restarts,
+                        uint64_t *errors);
 
 /** Writers matched to at least n readers each (for tests). */
 int mca_ros2_pub_matched(const mca_ros2_pub_t *r, uint32_t n);

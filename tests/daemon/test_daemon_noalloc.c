@@ -9,7 +9,8 @@
  * every library count, libc's own and C++ operator new included; it counts only on the thread that steps and
  * only while mca_daemon_step runs (the DDS publisher and Cyclone's threads allocate on their own). It checks
  * itself first (a malloc while armed must count). Not under the sanitizers (they replace malloc too): nosan.
- * argv[1] = source dir, argv[2] = DDS domain. FAILS on any allocation. */
+ * argv[1] = source dir, argv[2] = DDS domain, argv[3] = mca-dds-bridge (the DDS publisher process, as mcad
+ * runs it). FAILS on any allocation. */
 #include <limits.h> /* realpath */
 #include <malloc.h>
 #include <math.h>
@@ -78,6 +79,7 @@ void *pvalloc(size_t n) {
 
 static const char *src;
 static unsigned domain;
+static const char *bridge_exe;
 static int failures;
 
 /* one step, counted */
@@ -99,7 +101,12 @@ static mca_daemon_t *open_cell(const char *path, int dds, char *csv) {
     cell.dds.domain = domain;
     snprintf(cell.dds.config, sizeof cell.dds.config, "%s/config/dds/loopback.xml", src); /* traffic on lo */
     cell.dds.publish_divisor = 1;
-    mca_daemon_opts_t o = {.no_rt = 1, .no_dds = !dds, .log = stderr, .csv_path = csv, .virtual_time = 1};
+    mca_daemon_opts_t o = {.no_rt = 1,
+                           .no_dds = !dds,
+                           .log = stderr,
+                           .csv_path = csv,
+                           .virtual_time = 1,
+                           .dds_bridge_exe = bridge_exe};
     mca_daemon_t *d = NULL;
     if (mca_daemon_open(&d, &cell, &o, err, sizeof err) != MCA_OK) {
         fprintf(stderr, "open: %s\n", err);
@@ -182,13 +189,14 @@ static void injected(const char *what, const char *cell, int pre, int arm, mca_s
 }
 
 int main(int argc, char **argv) {
-    if (argc < 3) {
-        fprintf(stderr, "usage: %s SOURCE_DIR DDS_DOMAIN\n", argv[0]);
+    if (argc < 4) {
+        fprintf(stderr, "usage: %s SOURCE_DIR DDS_DOMAIN MCA_DDS_BRIDGE\n", argv[0]);
         return 2;
     }
     static char src_abs[4096];
     src = realpath(argv[1], src_abs) ? src_abs : argv[1];
     domain = (unsigned)atoi(argv[2]);
+    bridge_exe = argv[3];
     /* the counter must be live: an allocation while armed counts */
     armed = 1;
     void *volatile p = malloc(32);

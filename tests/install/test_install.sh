@@ -22,6 +22,7 @@ cmake --install "$B" --prefix "$P" >"$T/install.log" 2>&1 || { cat "$T/install.l
 echo "installed $(find "$P" -type f | wc -l) files under $P"
 check "sbin/mcad" test -x "$P/sbin/mcad"
 check "bin/mca-sim, bin/mca-monitor, bin/mca-geom" test -x "$P/bin/mca-sim" -a -x "$P/bin/mca-monitor" -a -x "$P/bin/mca-geom"
+check "libexec/mca/mca-dds-bridge (mcad's DDS publisher process)" test -x "$P/libexec/mca/mca-dds-bridge"
 check "no test build installed (mcad-test)" test ! -e "$P/sbin/mcad-test" -a ! -e "$P/bin/mcad-test"
 check "include/mca/controller.h, dds_bridge.h, ros2.h" test -f "$P/include/mca/controller.h" -a -f "$P/include/mca/dds_bridge.h" -a -f "$P/include/mca/ros2.h"
 check "no test-only header (daemon_test.h)" test ! -e "$P/include/mca/daemon_test.h"

@@ -282,6 +282,59 @@ static void run_stress(size_t capacity, uint64_t n) {
     free(c);
 }
 
+/* A ring and its storage in one block moved elsewhere (as two processes map one memfd at different
+ * addresses): the copy works; a producer with its own geometry (mca_ring_producer_t) never writes outside the
+ * storage even when the ring's fields are scribbled over (issue 16: the consumer may be another process). */
+static void test_position_independent_and_producer_copy(void **state) {
+    (void)state;
+    enum { CAP = 8 };
+    typedef struct block {
+        mca_ring_t ring;
+        _Alignas(64) unsigned char storage[MCA_RING_STORAGE_SIZE(sizeof(rec16_t), CAP)];
+        unsigned char guard[64];
+    } block_t;
+    static block_t a, b;
+    memset(&a, 0, sizeof a);
+    memset(a.guard, 0x5a, sizeof a.guard);
+    assert_int_equal(mca_ring_init(&a.ring, a.storage, sizeof a.storage, sizeof(rec16_t), CAP), MCA_OK);
+    for (uint64_t k = 0; k < 3; ++k) {
+        const rec16_t in = {.seq = k, .val = 100 + k};
+        mca_ring_push(&a.ring, &in);
+    }
+    memcpy(&b, &a, sizeof b); /* the same bytes at another address */
+    rec16_t out;
+    for (uint64_t k = 0; k < 3; ++k) {
+        assert_int_equal(mca_ring_pop(&b.ring, &out), MCA_OK);
+        assert_int_equal(out.seq, k);
+        assert_int_equal(out.val, 100 + k);
+    }
+    assert_int_equal(mca_ring_pop(&b.ring, &out), MCA_EAGAIN);
+
+    mca_ring_producer_t p;
+    mca_ring_producer_init(&p, &a.ring);
+    for (uint64_t k = 3; k < 6; ++k) {
+        const rec16_t in = {.seq = k, .val = 100 + k};
+        mca_ring_producer_push(&p, &in);
+    }
+    for (uint64_t k = 0; k < 6; ++k) {
+        assert_int_equal(mca_ring_pop(&a.ring, &out), MCA_OK);
+        assert_int_equal(out.seq, k);
+    }
+    /* a consumer scribbles over the ring's geometry and head: the producer's pushes stay in the storage */
+    a.ring.mask = ~(uint64_t)0;
+    a.ring.slot_size = 1u << 20;
+    a.ring.elem_size = 1u << 20;
+    a.ring.slots_off = 1 << 30;
+    atomic_store(&a.ring.head, 0x123456789abcdefULL);
+    for (uint64_t k = 0; k < 2 * CAP; ++k) {
+        const rec16_t in = {.seq = k, .val = k};
+        mca_ring_producer_push(&p, &in);
+    }
+    for (size_t i = 0; i < sizeof a.guard; ++i) {
+        assert_int_equal(a.guard[i], 0x5a);
+    }
+}
+
 static void test_stress_two_threads_small_ring(void **state) {
     (void)state;
     run_stress(4, 500000); /* constant lapping and torn reads */
@@ -298,6 +351,7 @@ int main(void) {
         cmocka_unit_test(test_fifo_order_and_empty),
         cmocka_unit_test(test_full_ring_drops_oldest),
         cmocka_unit_test(test_odd_element_size),
+        cmocka_unit_test(test_position_independent_and_producer_copy),
         cmocka_unit_test(test_stress_two_threads_small_ring),
         cmocka_unit_test(test_stress_two_threads_large_ring),
     };

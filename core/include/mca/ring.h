@@ -47,6 +47,12 @@
  *
  * Threading: exactly one producer thread and one consumer thread (they may be the same). Counters may
  * be read from any thread. 64-bit counters do not wrap in practice (5.8e8 years at 1 kHz).
+ *
+ * Between processes: the ring holds no pointer (its storage is an offset from the ring itself) and no
+ * lock, so a ring and its storage in one MAP_SHARED mapping (memfd) work in two processes mapping it at
+ * different addresses, as long as storage and ring lie in the same mapping. The lock-free 64-bit
+ * atomics used here are address-free on the platforms mca supports (x86-64, aarch64). The DDS bridge's
+ * publisher process (mca/dds_bridge.h) uses it so.
  */
 #ifndef MCA_RING_H
 #define MCA_RING_H
@@ -80,7 +86,10 @@ typedef struct mca_ring {
     _Alignas(64) _Atomic uint64_t tail; /**< consumer: next record to read */
     _Atomic uint64_t popped;
     _Atomic uint64_t dropped;
-    _Alignas(64) unsigned char *slots; /**< caller storage, read-only after init */
+    /** Caller storage as an offset from this struct's own address (read-only after init): a ring and its
+     *  storage placed in one shared mapping work at whatever address each process maps it (no pointer
+     *  inside). */
+    _Alignas(64) int64_t slots_off;
     size_t elem_size;
     size_t slot_size;
     uint64_t mask;
@@ -117,6 +126,24 @@ int mca_ring_pop(mca_ring_t *ring, void *out);
 /** Snapshot of the counters. Context: any thread. The fields are read one after the other, so they
  *  are exactly consistent only when producer and consumer are quiet. */
 void mca_ring_stats(const mca_ring_t *ring, mca_ring_stats_t *out);
+
+/** The producer's own copy of a ring's geometry (storage address, record and slot size, mask), for a ring in
+ *  memory its consumer can write (another process, mca/dds_bridge.h): a push through it reads nothing from
+ *  the ring but `head`, which it alone writes and only uses masked, so a consumer that scribbles over the
+ *  ring's fields cannot make the producer write outside the storage. */
+typedef struct mca_ring_producer {
+    mca_ring_t *ring;
+    unsigned char *slots;
+    size_t elem_size;
+    size_t slot_size;
+    uint64_t mask;
+} mca_ring_producer_t;
+
+/** Take the geometry of a ring this process initialised (mca_ring_init). Context: init. */
+void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring);
+
+/** mca_ring_push() through the producer's copy of the geometry. Context: rt (the single producer). */
+void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec);
 
 /** Capacity in records. */
 static inline size_t mca_ring_capacity(const mca_ring_t *ring) {

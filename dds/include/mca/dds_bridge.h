@@ -3,14 +3,22 @@
  * DDS bridge: publishes the controller's state on Cyclone DDS without ever making the 1 kHz loop
  * wait. On a tick that publishes (the CALLER decides which: the bridge queues every snapshot it is
  * given), the loop fills a plain C snapshot and calls mca_dds_bridge_push() (wait-free copy into a
- * lock-free drop-oldest ring, see mca/ring.h); a normal-priority publisher thread owned by the bridge
- * drains the ring and writes the DDS samples. The publisher never polls. With wake_period_ns set it
+ * lock-free drop-oldest ring, see mca/ring.h); a normal-priority publisher drains the ring and writes
+ * the DDS samples. The publisher never polls. With wake_period_ns set it
  * wakes on the caller's own grid (absolute clock_nanosleep until the last snapshot's stamp_ns +
  * wake_period_ns + wake_offset_ns, i.e. just after the next publishing tick has pushed) and the push
  * costs the loop no system call; whenever it finds the ring empty (a late or skipped tick, or without
  * wake_period_ns) it parks on a futex, and a push wakes it only if it is parked (one FUTEX_WAKE, a
- * non-blocking system call, at most once per push). If the thread falls behind, the oldest snapshots are
+ * non-blocking system call, at most once per push). If the publisher falls behind, the oldest snapshots are
  * dropped and counted, never the loop delayed.
+ *
+ * The publisher is either a thread of the caller (in-process: mca-dds-synth, tests) or, with
+ * cfg.process_exe set, a separate program (mca-dds-bridge, issue 16) that owns the DDS participant: ring,
+ * futex word, counters and the stream-target mailboxes are then in a memfd both processes map (MAP_SHARED,
+ * shared futex operations), and a crash inside Cyclone (a peer on the network can cause one, docs/dds.md)
+ * kills only that process. The owner's non-rt supervisor calls mca_dds_bridge_supervise() to notice its
+ * death, log it and restart it with a back-off; the loop's calls (push, stream_target) are the same in both
+ * modes and never learn whether a publisher is alive.
  *
  * Topics (types in dds/mca_dds.idl, QoS in docs/dds.md), one sample per published snapshot:
  *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id = index in arm[])
@@ -27,6 +35,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h> /* FILE */
 
 #include "mca/armdist.h" /* mca_arm_distances_t */
 #include "mca/limits.h"
@@ -133,6 +142,10 @@ typedef struct mca_dds_config {
     /** ROS 2 topics (mca/ros2.h), written from the same snapshots; NULL or !enabled: none. Copied. They are
      *  in the default partition whatever `partition` says (ROS 2 uses none). */
     const mca_ros2_config_t *ros2;
+    /** Path of the publisher program (mca-dds-bridge): the publisher runs as that separate process, which
+     *  alone talks DDS; NULL (default): a thread of the caller. In process mode fault_text is not called
+     *  (the owner hands the text over with mca_dds_bridge_fault_text()) and wait_readers is not available. */
+    const char *process_exe;
 } mca_dds_config_t;
 
 /** Bridge counters. */
@@ -150,7 +163,25 @@ typedef struct mca_dds_stats {
     uint64_t wakes;         /**< pushes that woke the parked publisher (FUTEX_WAKE calls of the rt side) */
     uint64_t parks;         /**< times the publisher parked (slept on the futex with the ring empty) */
     uint64_t grid_sleeps;   /**< wake_period_ns: sleeps until the next publishing tick (no futex) */
+    uint64_t stale;         /**< snapshots a restarted publisher skipped (older than the newest it found) */
+    uint64_t restarts;      /**< process mode: publisher processes started after a death */
+    uint64_t deaths;        /**< process mode: publisher processes that died (not at destroy) */
+    uint64_t hung;          /**< process mode: of those, killed by the supervisor as hung */
+    int32_t pid;            /**< process mode: the running publisher's pid, 0: none (down or restarting) */
+    int down;               /**< process mode: 1 = it died too often and is not restarted any more */
 } mca_dds_stats_t;
+
+/** Process mode: the first restart comes this long after a death [s], each further one twice as long after
+ *  the last, at most MCA_DDS_BRIDGE_BACKOFF_MAX_S. */
+#define MCA_DDS_BRIDGE_BACKOFF_S 0.5
+#define MCA_DDS_BRIDGE_BACKOFF_MAX_S 8.0
+/** A publisher that lived this long [s] was stable: the next death starts the back-off afresh. */
+#define MCA_DDS_BRIDGE_STABLE_S 30.0
+/** A publisher process that publishes nothing this long [s] while snapshots wait is hung: killed (SIGKILL),
+ *  then restarted as after a death. */
+#define MCA_DDS_BRIDGE_HUNG_S 5.0
+/** Deaths in a row (each within MCA_DDS_BRIDGE_STABLE_S of its start) after which it is not restarted. */
+#define MCA_DDS_BRIDGE_MAX_RESTARTS 5
 
 typedef struct mca_dds_bridge mca_dds_bridge_t;
 
@@ -158,8 +189,10 @@ typedef struct mca_dds_bridge mca_dds_bridge_t;
 void mca_dds_config_default(mca_dds_config_t *cfg);
 
 /**
- * Create participant, topics and writers, allocate the ring and start the publisher thread.
- * Context: init.
+ * Create participant, topics and writers, allocate the ring and start the publisher thread, or (process_exe)
+ * map the shared region and start the publisher program, waiting until it has made its DDS entities (its
+ * set-up error is this function's). The program is started with posix_spawn (no fork of the caller's
+ * memory), the region as its fd 3, every other descriptor closed, default signal mask. Context: init.
  * @param[out] out  new bridge (unchanged on error)
  * @param[in]  cfg  settings (copied)
  * @retval MCA_OK
@@ -167,7 +200,9 @@ void mca_dds_config_default(mca_dds_config_t *cfg);
  *                     frame id or partition too long
  * @retval MCA_ENOENT  config_path names a file that cannot be read
  * @retval MCA_EIO     Cyclone DDS refused (bad XML, no usable network interface, ...); reason on stderr
- * @retval MCA_ENOENT  ros2: a URDF for robot_description cannot be read (reason on stderr)
+ * @retval MCA_ENOENT  ros2: a URDF for robot_description cannot be read (reason on stderr); process_exe
+ *                     cannot be started
+ * @retval MCA_ETIMEDOUT the publisher program was not up within 20 s
  * @retval MCA_ENOMEM
  */
 int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);
@@ -179,6 +214,28 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);
  */
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
 
+/**
+ * Process mode: notice a dead publisher (waitpid, WNOHANG: never blocks) or a hung one (nothing published for
+ * MCA_DDS_BRIDGE_HUNG_S while snapshots wait: logged and killed), log a death with its cause on log
+ * (`<3>PREFIXdds bridge (pid N) died: signal 11 (SIGSEGV); restart 1 in 0.5 s ...`), restart it when its
+ * back-off has passed (the restarted one publishes the newest snapshot and the current status at once, and
+ * the restart count on /diagnostics), log that it is up again, and give up after MCA_DDS_BRIDGE_MAX_RESTARTS
+ * quick deaths in a row (logged; the loop is not affected: pushes go on into the ring, nobody reads them).
+ * A mailbox the dead publisher was writing is closed as a target received long ago (task.stream brakes).
+ * Call it every few ms from ONE non-rt thread, the one that created the bridge (the publisher process
+ * ends with that thread: PR_SET_PDEATHSIG). In-process mode: does nothing. Context: non-rt.
+ * @return lines written to log
+ */
+int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *prefix);
+
+/**
+ * The text of the fault whose code the snapshots carry (written once per bridge): the publisher uses it for
+ * ControllerStatus.fault_text when a snapshot has a fault code and no text (so the loop never formats).
+ * Context: non-rt (the owner's supervisor, after the fault reached it).
+ * @retval MCA_OK @retval MCA_EINVAL (NULL, code 0, or a text was already given)
+ */
+int mca_dds_bridge_fault_text(mca_dds_bridge_t *bridge, int32_t fault_code, const char *text);
+
 /** Counters. Context: non-rt (any thread). @retval MCA_OK @retval MCA_EINVAL */
 int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out);
 
@@ -186,14 +243,16 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out);
  * Wait until the writer of topic (one of the MCA_DDS_TOPIC_* names; NULL = every topic) has at least
  * n matched readers, or timeout_ms passes. For tests and tools that must not lose the first samples.
  * Context: non-rt.
- * @retval MCA_OK @retval MCA_ETIMEDOUT @retval MCA_EINVAL NULL bridge or unknown topic
+ * @retval MCA_OK @retval MCA_ETIMEDOUT @retval MCA_EINVAL NULL bridge, unknown topic, or process mode
  */
 int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uint32_t n, uint32_t timeout_ms);
 
 /**
- * Stop the publisher thread after it has written every queued snapshot, publish the final status
+ * Stop the publisher after it has written every queued snapshot, publish the final status
  * (with the final drop count), wait up to 1 s for reliable readers to acknowledge, delete the DDS
- * entities and free the bridge. NULL is ignored. The loop must no longer call push. Context: init.
+ * entities and free the bridge. Process mode: the publisher process does that and exits (waited for up to
+ * 10 s, then SIGKILL); one that is down at that moment publishes nothing more. NULL is ignored. The loop
+ * must no longer call push. Context: init.
  * @param[out] final_stats  if not NULL, the counters after the last write (published + dropped +
  *                          invalid == queued)
  */
