@@ -178,7 +178,8 @@ def ftrace_calls(path, names):
             text = f"clock_nanosleep({'CLOCK_MONOTONIC' if args[0] == 1 else args[0]}, " \
                    f"{'TIMER_ABSTIME' if args[1] == 1 else args[1]}, ...)"
         elif name == "futex":
-            text = f"futex({args[0]:#x}, {'FUTEX_WAKE_PRIVATE' if args[1] == 129 else args[1]}, {args[2]})"
+            op = {1: "FUTEX_WAKE", 129: "FUTEX_WAKE_PRIVATE"}.get(args[1], hex(args[1]))
+            text = f"futex({args[0]:#x}, {op}, {args[2]})"
         else:
             text = f"{name}({', '.join(hex(a) for a in args)})"
         calls.append((name, text))
