@@ -10,6 +10,14 @@
  *   st <fw_cycle> <counter> <state> <fault_code> <missed> <n_joints> <rx_errors>
  *   ft <fw_cycle> <counter> <state> <fault_code> <flags0..7>
  * (recorded in a buffer allocated at start-up; nothing is written on the cycle path).
+ * --lie KIND@CYCLE[:JOINT] (issue 16, tests of the controller's plausibility checks): from firmware cycle
+ * CYCLE on, the feedback on the wire lies, while the arm itself runs on truthfully:
+ *   position  joint JOINT reported 0.3 rad beyond its upper limit
+ *   velocity  joint JOINT reported at 2 x its velocity limit (at most what the int16 field holds)
+ *   jump      joint JOINT reported 0.5 rad away from where it is, from one frame to the next
+ *   backwards the frame id answered runs 100 behind the command's
+ *   ahead     the frame id answered runs 100 ahead of the command's
+ *   joints    the heartbeat (state frame) says one joint more than the arm has
  * Exits cleanly on SIGTERM/SIGINT, printing its counters. Bad arguments: message, exit 2. */
 #include <errno.h>
 #include <getopt.h>
@@ -66,7 +74,74 @@ typedef struct armsim {
     txrec_t *log; /* --log: sent state/fault frames */
     size_t nlog, caplog;
     uint64_t log_lost;
+    int lie;            /* --lie: lie_kind_t, LIE_NONE = none */
+    uint64_t lie_cycle; /* from this firmware cycle on */
+    int lie_joint;
 } armsim_t;
+
+typedef enum lie_kind {
+    LIE_NONE,
+    LIE_POSITION,
+    LIE_VELOCITY,
+    LIE_JUMP,
+    LIE_BACKWARDS,
+    LIE_AHEAD,
+    LIE_JOINTS
+} lie_kind_t;
+static const char *const lie_names[] = {"none",      "position", "velocity", "jump",
+                                        "backwards", "ahead",    "joints"};
+
+/* --lie KIND@CYCLE[:JOINT] @return 0 ok, -1 bad */
+static int parse_lie(armsim_t *s, const char *t, int n) {
+    char kind[16];
+    unsigned long long at = 0;
+    int joint = 0, used = 0;
+    if (sscanf(t, "%15[a-z]@%llu%n", kind, &at, &used) != 2) {
+        return -1;
+    }
+    if (t[used] == ':' && (sscanf(t + used + 1, "%d", &joint) != 1 || joint < 0 || joint >= n)) {
+        return -1;
+    }
+    for (int k = LIE_POSITION; k <= LIE_JOINTS; k++) {
+        if (strcmp(kind, lie_names[k]) == 0) {
+            s->lie = k;
+            s->lie_cycle = at;
+            s->lie_joint = joint;
+            return 0;
+        }
+    }
+    return -1;
+}
+
+/* The feedback as it goes on the wire: true until --lie's cycle, then the lie (the arm runs on truthfully).
+ */
+static void lie_feedback(const armsim_t *s, mca_arm_feedback_t *fb) {
+    const mca_sim_arm_t *a = &s->arm;
+    if (s->lie == LIE_NONE || a->cycle < s->lie_cycle) {
+        return;
+    }
+    const int j = s->lie_joint;
+    const double vmax = 32767 * MCA_CAN_FB_VEL_SCALE;
+    switch (s->lie) {
+    case LIE_POSITION:
+        fb->position[j] = a->cfg.upper[j] + 0.3;
+        break;
+    case LIE_VELOCITY:
+        fb->velocity[j] = fmin(2.0 * a->cfg.vel_limit[j], vmax);
+        break;
+    case LIE_JUMP:
+        fb->position[j] += a->cycle % 2 ? 0.5 : -0.5;
+        break;
+    case LIE_BACKWARDS:
+        fb->frame_id -= 100;
+        break;
+    case LIE_AHEAD:
+        fb->frame_id += 100;
+        break;
+    default:
+        break;
+    }
+}
 
 static void log_tx(armsim_t *s, char kind, uint8_t counter, const mca_can_state_msg_t *st,
                    const mca_can_fault_msg_t *ft) {
@@ -119,7 +194,8 @@ static void usage(FILE *f) {
         "                  [--period-us 1000] [--acc-limit A] [--dec-limit D] [--q0 a,b,...]\n"
         "                  [--lockstep] [--duration S] [--stats FILE] [--log FILE]\n"
         "                  [--lag-ms T] [--latency-cycles N] [--noise-pos S] [--noise-vel S] [--seed N]\n"
-        "                  [--inject KIND@CYCLE[+CYCLES][:JOINT] ...] [--print-config]\n"
+        "                  [--inject KIND@CYCLE[+CYCLES][:JOINT] ...] [--lie KIND@CYCLE[:JOINT]] "
+        "[--print-config]\n"
         "  the in-process sim backend's model options (mca/sim_arm.h); KIND: actuator, freeze, silent,\n"
         "  drop-rx; --print-config prints the arm configuration and exits (no bus needed)\n");
 }
@@ -205,6 +281,7 @@ static void cycle(armsim_t *s, double dt) {
     int rc = mca_sim_arm_cycle(&s->arm, mca_armsim_rx_take(&s->rx, &cmd), dt, &fb);
     if (rc == MCA_OK) {
         uint8_t buf[MCA_CAN_LEN_FEEDBACK];
+        lie_feedback(s, &fb);
         if (mca_can_encode_feedback(&fb, s->ctr_fb, buf) == MCA_OK) {
             send_frame(s, MCA_CAN_OFF_FEEDBACK, buf, sizeof(buf), &s->c.tx_feedback, &s->ctr_fb);
         }
@@ -220,7 +297,7 @@ static void cycle(armsim_t *s, double dt) {
     if (beat || (int)a->state != s->sent_state) {
         mca_can_state_msg_t m = {
             .state = (uint8_t)a->state,
-            .n = (uint8_t)n,
+            .n = (uint8_t)(s->lie == LIE_JOINTS && a->cycle >= s->lie_cycle ? n + 1 : n),
             .fault_code = a->fault_code,
             .missed = (uint16_t)(a->missed > 65535 ? 65535 : a->missed),
             .rx_errors = (uint8_t)(s->rx.c.rx_bad_length + s->rx.c.rx_bad_counter + s->rx.c.rx_unknown_id +
@@ -286,6 +363,7 @@ int main(int argc, char **argv) {
     double lag_ms = 0, noise_pos = 0, noise_vel = 0;
     long latency = 0, seed = 1;
     const char *inject_s[MCA_SIM_MAX_INJECT];
+    const char *lie_s = NULL;
     int n_inject = 0, lockstep = 0, print_cfg = 0;
     static const struct option opts[] = {
         {"iface", required_argument, 0, 'i'},
@@ -307,6 +385,7 @@ int main(int argc, char **argv) {
         {"noise-vel", required_argument, 0, 'V'},
         {"seed", required_argument, 0, 'S'},
         {"inject", required_argument, 0, 'j'},
+        {"lie", required_argument, 0, 'X'},
         {"print-config", no_argument, 0, 'c'},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0},
@@ -377,6 +456,9 @@ int main(int argc, char **argv) {
                 inject_s[n_inject++] = optarg;
             }
             break;
+        case 'X':
+            lie_s = optarg;
+            break;
         case 'c':
             print_cfg = 1;
             break;
@@ -432,6 +514,13 @@ int main(int argc, char **argv) {
         }
     }
     cfg.n_inject = n_inject;
+    if (lie_s && parse_lie(&s, lie_s, cfg.n) != 0) {
+        fprintf(stderr,
+                "mca-armsim: --lie '%s': expected KIND@CYCLE[:JOINT], KIND position, velocity, jump, "
+                "backwards, ahead or joints, JOINT 0..%d\n",
+                lie_s, cfg.n - 1);
+        return 2;
+    }
     for (int j = 0; j < cfg.n; j++) {
         if (acc > 0) {
             cfg.acc_limit[j] = acc;
