@@ -357,6 +357,7 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
         for (int j = 0; j < d->dof[a]; j++) {
             co.pos_lo[j] = d->fb_lo[a][j];
             co.pos_hi[j] = d->fb_hi[a][j];
+            co.vel_max[j] = d->fb_vmax[a][j]; /* jumps: no faster than the velocity check allows */
         }
         rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], &co, berr, sizeof berr);
     }

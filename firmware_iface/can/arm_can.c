@@ -22,7 +22,24 @@ int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n) {
     mca_can_seq_reset(&l->seq_fb);
     mca_can_seq_reset(&l->seq_state);
     mca_can_seq_reset(&l->seq_fault);
-    return mca_can_link_set_bounds(l, NULL, NULL);
+    const int rc = mca_can_link_set_bounds(l, NULL, NULL);
+    return rc == MCA_OK ? mca_can_link_set_rate(l, NULL) : rc;
+}
+
+int mca_can_link_set_rate(mca_can_link_t *l, const double *vel_max) {
+    if (!l) {
+        return MCA_EINVAL;
+    }
+    double v[MCA_MAX_DOF];
+    for (int j = 0; j < MCA_MAX_DOF; j++) {
+        v[j] = vel_max && j < l->n ? vel_max[j] : MCA_CAN_FB_JUMP_RATE;
+        if (isnan(v[j])) {
+            return MCA_EINVAL;
+        }
+        v[j] = v[j] > 0.0 && v[j] < MCA_CAN_FB_JUMP_RATE ? v[j] : MCA_CAN_FB_JUMP_RATE;
+    }
+    memcpy(l->vel_max, v, sizeof v);
+    return MCA_OK;
 }
 
 int mca_can_link_set_bounds(mca_can_link_t *l, const double *lo, const double *hi) {
@@ -106,9 +123,9 @@ static int feedback_check(const mca_can_link_t *l, const mca_arm_feedback_t *fb)
     }
     int64_t dt = fb->stamp_ns - l->fb.stamp_ns;
     dt = dt > MCA_CAN_FB_JUMP_MIN_DT_NS ? dt : MCA_CAN_FB_JUMP_MIN_DT_NS;
-    const double bound = MCA_CAN_FB_JUMP_RATE * (double)dt * 1e-9 + MCA_CAN_FB_JUMP_MARGIN;
     for (int j = 0; j < fb->n; j++) {
-        if (fabs(fb->position[j] - l->fb.position[j]) > bound) {
+        if (fabs(fb->position[j] - l->fb.position[j]) >
+            l->vel_max[j] * (double)dt * 1e-9 + MCA_CAN_FB_JUMP_MARGIN) {
             return MCA_CAN_FB_JUMP;
         }
     }
@@ -257,6 +274,7 @@ void mca_can_options_default(mca_can_options_t *opt) {
         for (int j = 0; j < MCA_MAX_DOF; j++) {
             opt->pos_lo[j] = -MCA_CAN_FB_POS_ABS_MAX;
             opt->pos_hi[j] = MCA_CAN_FB_POS_ABS_MAX;
+            opt->vel_max[j] = MCA_CAN_FB_JUMP_RATE;
         }
     }
 }
@@ -353,6 +371,7 @@ int mca_can_backend_open(mca_arm_t **arm, const char *iface, uint32_t id_base, i
     int rc = mca_can_link_init(&b->link, id_base, n_joints);
     if (rc == MCA_OK) {
         rc = mca_can_link_set_bounds(&b->link, b->opt.pos_lo, b->opt.pos_hi);
+        rc = rc == MCA_OK ? mca_can_link_set_rate(&b->link, b->opt.vel_max) : rc;
     }
     if (rc != MCA_OK) {
         if (err && errlen) {

@@ -477,6 +477,24 @@ static void test_link_feedback_implausible(void **state) {
     /* bad bounds */
     lo[2] = 4.0;
     assert_int_equal(mca_can_link_set_bounds(&l, lo, hi), MCA_EINVAL);
+    /* the joint's own rate (1.5 rad/s): -1 -> -0.5 rad after 0.1 s passes the default 6.55 rad/s x 0.1 s but
+     * not 1.5 x 0.1 + 0.01, and stays refused frame after frame until 0.33 s have gone by (seen in the guest:
+     * a persistent 0.5 rad lie passed after 75 ms of refused frames with the default rate) */
+    const double vmax[6] = {1.5, 1.5, 1.5, 1.5, 1.5, 1.5};
+    assert_int_equal(mca_can_link_set_rate(&l, vmax), MCA_OK);
+    f = fb_frame(0x100, 6, 100, -0.5, 6);
+    f.stamp_ns = 1600000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    assert_int_equal(l.st.implausible_kind, MCA_CAN_FB_JUMP);
+    f = fb_frame(0x100, 7, 100, -0.5, 6);
+    f.stamp_ns = 1800000000;
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_EAGAIN);
+    f = fb_frame(0x100, 8, 100, -0.5, 6);
+    f.stamp_ns = 1840000000; /* 0.34 s after the last applied: 1.5 x 0.34 + 0.01 = 0.52 > 0.5 */
+    assert_int_equal(mca_can_link_rx(&l, &f), MCA_OK);
+    const double nan_rate[6] = {NAN, 1, 1, 1, 1, 1};
+    assert_int_equal(mca_can_link_set_rate(&l, nan_rate), MCA_EINVAL);
+    assert_int_equal(mca_can_link_set_rate(NULL, vmax), MCA_EINVAL);
 }
 
 /* Issue 16: the feedback's frame id is compared with the last command sent (ahead: refused) and with the

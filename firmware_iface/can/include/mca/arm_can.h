@@ -62,9 +62,12 @@ typedef struct mca_can_options {
     int brs;           /**< 1: send with the CAN FD bit-rate switch (default 1) */
     uint32_t err_mask; /**< CAN_ERR_* classes received as error frames (default: all, CAN_ERR_MASK) */
     int rx_burst;      /**< most frames drained per read (default 64) */
-    double pos_lo[MCA_MAX_DOF]; /**< feedback positions below are refused (default -MCA_CAN_FB_POS_ABS_MAX;
-                                     values below that, -inf included, mean the default) */
-    double pos_hi[MCA_MAX_DOF]; /**< ... above (default +MCA_CAN_FB_POS_ABS_MAX) */
+    double pos_lo[MCA_MAX_DOF];  /**< feedback positions below are refused (default -MCA_CAN_FB_POS_ABS_MAX;
+                                      values below that, -inf included, mean the default) */
+    double pos_hi[MCA_MAX_DOF];  /**< ... above (default +MCA_CAN_FB_POS_ABS_MAX) */
+    double vel_max[MCA_MAX_DOF]; /**< fastest plausible motion of each joint between two feedbacks [rad/s]
+                                      (default MCA_CAN_FB_JUMP_RATE; the daemon passes 1.5 x the joint's
+                                      limit): a position moved further than vel_max x dt + margin is a JUMP */
 } mca_can_options_t;
 
 /** Defaults (see the fields). Start every mca_can_options_t from these: a zeroed struct has position
@@ -124,6 +127,7 @@ typedef struct mca_can_link {
     int implausible;       /**< a refused feedback since the last applied one */
     int bad_joints;        /**< the newest heartbeat names another joint count */
     double pos_lo[MCA_MAX_DOF], pos_hi[MCA_MAX_DOF]; /**< position bounds of the plausibility check */
+    double vel_max[MCA_MAX_DOF];                     /**< jump check rate per joint [rad/s] */
     uint16_t fault_flags[MCA_MAX_DOF];
     mca_can_state_msg_t state; /**< newest heartbeat */
     int have_state;
@@ -139,6 +143,12 @@ int mca_can_link_init(mca_can_link_t *l, uint32_t id_base, int n);
  *  +-MCA_CAN_FB_POS_ABS_MAX (so -inf / +inf, a continuous joint, mean the default). @retval MCA_OK,
  *  MCA_EINVAL (NULL link, NaN, lo > hi) */
 int mca_can_link_set_bounds(mca_can_link_t *l, const double *lo, const double *hi);
+
+/** Rate of the jump check, per joint [rad/s] (NULL or a value <= 0 or above MCA_CAN_FB_JUMP_RATE: that
+ *  default). The bound grows with the time since the last applied feedback, so a lie that is refused
+ *  frame after frame would pass once enough time went by: with the joint's own rate it passes only after
+ *  the lost-feedback limit has long faulted the arm. @retval MCA_OK, MCA_EINVAL (NULL link, NaN) */
+int mca_can_link_set_rate(mca_can_link_t *l, const double *vel_max);
 
 /** Apply one received frame. @retval MCA_OK applied, MCA_EAGAIN ignored (and counted), MCA_EINVAL NULL */
 int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f);
