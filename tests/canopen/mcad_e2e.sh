@@ -13,8 +13,9 @@
 #      velocity within dec_limit * dt, all reach 0; both emulators end with every drive at rest.
 #   C: an EMCY (0x4210) from the JACO2's node 4 at its SYNC 3000: mcad names the fault with arm, node and
 #      code, brakes both arms (the JACO2's drives by their quick stop; every commanded velocity within
-#      dec_limit * dt per tick, no distance at or below d1), exits 3 at --stop-after 6; every drive of both
-#      buses at rest at the end.
+#      dec_limit * dt per tick, no distance at or below d1), exits 3 at --stop-after 4.5; every drive of both
+#      buses at rest at the end. (Each fault phase stops about 1.5 s of task time after its fault: the
+#      emulated guest runs the task about 10 times slower than real time.)
 #   D: the MICO2's node 6 aborts the SDO write of 0x60C2 at start-up: mcad does not start, and says which
 #      arm, node, object and abort code (0x08000022) and why.
 #   E, F, G: as C, the MICO2's node 2 in an actuator fault (FAULT, EMCY 0xFF00), the JACO2's node 5 stops its
@@ -267,11 +268,11 @@ fault_phase() {
     [ $f = 0 ] || fail=1
 }
 # C: an EMCY 0x4210 of the JACO2's node 4 (no state change)
-echo "$PHASES" | grep -q C && fault_phase C 0 emcy@3000:4 6 "$CELL" \
+echo "$PHASES" | grep -q C && fault_phase C 0 emcy@3000:4 4.5 "$CELL" \
     "arm jaco2 .*EMCY \(node 4: EMCY 0x4210 \(temperature\)\)" "EMCY of node 4"
 # E: an actuator fault of the MICO2's node 2: the drive brakes itself, goes to FAULT and sends EMCY 0xFF00;
 # whichever the master sees first (the EMCY or the statusword) is the named fault
-echo "$PHASES" | grep -q E && fault_phase E 1 fault@2000:2 6 "$CELL" \
+echo "$PHASES" | grep -q E && fault_phase E 1 fault@2000:2 3.5 "$CELL" \
     "arm mico2 .*\(node 2: (DRIVE_FAULT \(statusword|EMCY 0xFF00)" "drive fault of node 2"
 # F, G: each timeout needs a cell with a real value (the other phases keep the TCG-wide ones): F a heartbeat
 # consumer time of 3 s (the drives produce every 100 ms; 3 s rides out the guest's stalls); G TPDO1 missing for
@@ -287,9 +288,9 @@ sed -e 's/^\(      pdo_timeout_syncs:\).*/\1 5   # mcad_e2e.sh phase G: the ship
 for c in "$CELL_F" "$CELL_G"; do
     echo "$PHASES" | grep -Eq "F|G" && { "$MCAD" --check "$c" >/dev/null 2>&1 || { echo "CO-E2E FAIL: mcad --check $c"; fail=1; }; }
 done
-echo "$PHASES" | grep -q F && fault_phase F 0 hbloss@1500:5 8 "$CELL_F" \
+echo "$PHASES" | grep -q F && fault_phase F 0 hbloss@1500:5 5 "$CELL_F" \
     "arm jaco2 .*\(node 5: HEARTBEAT lost\)" "heartbeat loss of node 5"
-echo "$PHASES" | grep -q G && fault_phase G 1 pdoloss@1500:3 6 "$CELL_G" \
+echo "$PHASES" | grep -q G && fault_phase G 1 pdoloss@1500:3 3 "$CELL_G" \
     "arm mico2 .*\(node 3: PDO_TIMEOUT \(TPDO1 not refreshed" "TPDO loss of node 3"
 if echo "$PHASES" | grep -q D; then
     $RTA $PIN "$DS" --iface vcan0 --robot "$URDF0" --q0 "$Q00" 2>"$OUT/ds0D.err" &
