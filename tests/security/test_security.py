@@ -102,6 +102,16 @@ class Mcad:
         self.th.join(timeout=5)
         with open(self.csv) as f:
             self.rows = list(csv.DictReader(f))
+        # each tick's wall-clock (monotonic) time: 'running' plus the sum of the gaps between the ticks'
+        # commands. Not t_running + t: the task time does not advance while the loop stalls (a loaded machine
+        # saw 0.1-1 s of stalls in a run), so task time falls behind the wall clock the attempts are timed on
+        w = self.t_running or 0.0
+        for r in self.rows:
+            w += float(r["cmd_gap_us"]) * 1e-6
+            r["wall"] = w
+        stalls = [l for _, l in self.lines if "loop stall" in l or "summary: loop stalls" in l]
+        if stalls:
+            print(f"     mcad ({os.path.basename(self.cell)}): {len(stalls)} stall line(s): {stalls[-1]}")
         return self.p.returncode
 
     def log_between(self, t0, t1):
@@ -149,7 +159,9 @@ def split_by_mcad(rows, m):
 
 
 def rd0(rows, arm=0):
-    return [(float(r["t"]), float(r[f"rd{arm}_x"]), float(r[f"rd{arm}_y"]), float(r[f"rd{arm}_z"])) for r in rows]
+    """[(wall-clock time of the tick, reference x, y, z, task time)] of an arm."""
+    return [(r["wall"], float(r[f"rd{arm}_x"]), float(r[f"rd{arm}_y"]), float(r[f"rd{arm}_z"]), float(r["t"]))
+            for r in rows]
 
 
 def right_moved(m):
@@ -159,10 +171,8 @@ def right_moved(m):
 
 
 def moved_in(m, t0, t1):
-    """Largest change of left's reference (m) over the CSV ticks between monotonic t0 and t1 (the CSV's t is
-    task time from the first tick, which is when mcad printed 'running', to a few ms)."""
-    a, b = t0 - m.t_running, t1 - m.t_running
-    pts = [p for p in rd0(m.rows) if a <= p[0] <= b]
+    """Largest change of left's reference (m) over the ticks between monotonic t0 and t1."""
+    pts = [p for p in rd0(m.rows) if t0 <= p[0] <= t1]
     if not pts:
         return None, 0
     x0 = pts[0]
@@ -172,19 +182,20 @@ def moved_in(m, t0, t1):
 def first_move(m):
     pts = rd0(m.rows)
     for p in pts:
-        if p[1:] != pts[0][1:]:
-            return p[0] + m.t_running
+        if p[1:4] != pts[0][1:4]:
+            return p[0]
     return None
 
 
 def commanded_speed(m, t0, t1):
-    """Speed of left's reference (m/s, along x) between the first and the last tick it moved in [t0, t1]."""
-    pts = [p for p in rd0(m.rows) if t0 - m.t_running <= p[0] <= t1 - m.t_running]
-    mv = [i for i in range(1, len(pts)) if pts[i][1:] != pts[i - 1][1:]]
+    """Speed of left's reference (m/s of task time, along x: the reference integrates the twist tick by tick)
+    between the first and the last tick it moved in the wall-clock window [t0, t1], and that span (s)."""
+    pts = [p for p in rd0(m.rows) if t0 <= p[0] <= t1]
+    mv = [i for i in range(1, len(pts)) if pts[i][1:4] != pts[i - 1][1:4]]
     if len(mv) < 2:
         return 0.0, 0.0
     a, b = pts[mv[0] - 1], pts[mv[-1]]
-    return (b[1] - a[1]) / (b[0] - a[0]), b[0] - a[0]
+    return (b[1] - a[1]) / (b[4] - a[4]), b[4] - a[4]
 
 
 def main():
@@ -338,8 +349,8 @@ def main():
           f"e: left's reference moved at {v:.4f} m/s for {span:.2f} s (commanded {V} m/s, within 10 %)")
 
     rc, out, err, t0, t1 = cases["f"]
-    pts = [p for p in rd0(m.rows) if t0 - m.t_running <= p[0] <= t1 - m.t_running]
-    mv = [pts[i][0] + m.t_running for i in range(1, len(pts)) if pts[i][1] > pts[i - 1][1]]  # +x: f's, not e's
+    pts = [p for p in rd0(m.rows) if t0 <= p[0] <= t1]
+    mv = [pts[i][0] for i in range(1, len(pts)) if pts[i][1] > pts[i - 1][1]]  # +x: f's, not e's
     sent = re.search(r"sent (\d+) samples in ([\d.]+) s", out)
     last = mv[-1] - na_mono if mv else None
     print(f"     f (commander, certificate runs out at {na}): exit {rc}; stdout: {' | '.join(out.split(chr(10))).strip()}")
