@@ -26,7 +26,7 @@ def check(ok, what):
 
 
 def read_candump(path):
-    """[(t, can_id, fd, bytes)] in bus order."""
+    """[(t, can_id, fd, bytes)] in bus order, without candump_stop's end marker (0x7FF, no data)."""
     out = []
     with open(path) as f:
         for line in f:
@@ -35,6 +35,8 @@ def read_candump(path):
                 continue
             t = float(p[0].strip('()'))
             ident, _, rest = p[2].partition('#')
+            if int(ident, 16) == 0x7FF:
+                continue
             fd = rest.startswith('#')
             data = bytes.fromhex(rest[2:] if fd else rest)
             out.append((t, int(ident, 16), fd, data))

@@ -62,11 +62,11 @@ def ctl(name):
 
 
 def candump(name):
-    """[(t, id, bytes)] of a candump -L capture (classic frames)."""
+    """[(t, id, bytes)] of a candump -L capture (classic frames), without candump_stop's end marker (0x7FF)."""
     out = []
     for ln in read(name).splitlines():
         m = re.match(r"\((\d+\.\d+)\) \S+ ([0-9A-Fa-f]+)#([0-9A-Fa-f]*)$", ln)
-        if m:
+        if m and int(m.group(2), 16) != 0x7FF:
             out.append((float(m.group(1)), int(m.group(2), 16), bytes.fromhex(m.group(3))))
     return out
 
@@ -101,7 +101,8 @@ bad = [r["check"] + ": " + r["detail"] for r in res if not r["ok"]]
 verdict(f"a: python-canopen NMT master + SDO client drives mca-drivesim through the EDS ({len(res)} checks: "
         "OD read-back, aborts, heartbeat, PDO remap, BaseNode402 to OPERATION ENABLED, CSV steps, quick stop, "
         "EMCY fault + reset)", rc("A_RC") == 0 and len(res) >= 20 and not bad,
-        f"rc {rc('A_RC')}; failing: {bad}" if bad or rc("A_RC") != 0 else f"{len(res)} ok")
+        f"rc {rc('A_RC')}; failing: {bad}; py_master's last lines: {read('a.out').strip().splitlines()[-4:]}"
+        if bad or rc("A_RC") != 0 else f"{len(res)} ok")
 
 
 
@@ -223,7 +224,8 @@ for n in range(1, 7):
 verdict("b: our master configures six python-canopen LocalNode drives over SDO (PDO maps, types, mode 9, "
         "0x60C2 = 40 ms, heartbeat), walks them 0 -> 6 -> 7 -> F, moves them, quick-stops (2); final "
         "positions agree", rc("B_RC") == 0 and not problems and "name1=mca-drivesim" in txt,
-        f"ctl rc {rc('B_RC')}; {problems[:6]}")
+        f"ctl rc {rc('B_RC')}; {problems[:6]}" + ("" if rc("B_RC") == 0 else
+                                                   f"; mca-co-ctl's last lines: {txt.strip().splitlines()[-8:]}"))
 
 fr = candump("b.candump")
 prob = []

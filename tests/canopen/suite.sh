@@ -45,9 +45,9 @@ note "CANOPEN-SUITE kernel $(uname -r), $IF, $(nproc) cpu"
 RT=""
 chrt -f 50 true 2>/dev/null && RT="chrt -f 50"
 TMPD=$(mktemp -d /dev/shm/mca-co.XXXXXX 2>/dev/null || mktemp -d)
-dump_start() { candump -L "$IF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
+dump_start() { candump -r 33554432 -L "$IF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
 . "$S/tests/can/candump_stop.sh"
-dump_stop() { candump_stop "$TMPD/dump" "$DUMP" 120; cp "$TMPD/dump" "$1"; }
+dump_stop() { candump_stop "$TMPD/dump" "$DUMP" 120 "$IF"; cp "$TMPD/dump" "$1"; }
 # wait for a file to appear (python start-up under TCG is slow), at most 120 s
 wait_file() { i=0; while [ ! -e "$1" ] && [ $i -lt 1200 ]; do sleep 0.1; i=$((i + 1)); done; }
 T="timeout 300"
@@ -85,7 +85,7 @@ rm -f "$OUT/b.json" "$OUT/b.json.ready"
 "$PY" "$S/tests/canopen/py_drives.py" "$IF" "$EDS" 1 6 "$OUT/b.json" >"$OUT/b.py.out" 2>&1 &
 P=$!
 wait_file "$OUT/b.json.ready"
-$T $RT "$CTL" --iface "$IF" --nodes 6 --read-name --period-us 40000 --cycles 60 --stop-cycles 60 --pdo-timeout 25 \
+$T $RT "$CTL" --iface "$IF" --nodes 6 --read-name --period-us 40000 --cycles 60 --stop-cycles 200 --pdo-timeout 25 \
     --hb-timeout-ms 1500 --sdo-timeout-ms 1000 --boot-timeout-ms 5000 >"$OUT/b.out" 2>&1
 echo "B_RC=$?" >>"$ST"
 kill "$P"; wait "$P"; echo "B_PY_RC=$?" >>"$ST"

@@ -271,7 +271,7 @@ stop_armsims() {
 # task time of the newest row of a CSV being written (a partly flushed last line only reads lower)
 csv_t() { tail -n 1 "$1" 2>/dev/null | cut -d, -f1; }
 
-# candump_stop FILE PID: let candump drain (at most 30 s), then stop it (shared with tests/can/suite.sh)
+# candump_stop FILE PID MAX IFACE...: candump drained up to end markers (at most 30 s), then stopped
 . "$S/tests/can/candump_stop.sh"
 # The end of an arm's feedback on vcan$2 in the candump capture $1, for an arm of $3 joints (payload hex:
 # byte 1 = fault << 4 | state, bytes 4.. positions int32 x N, bytes 36.. velocities int16 x N). Prints:
@@ -422,7 +422,7 @@ if echo "$PHASES" | grep -q B; then
     # start in the emulated guest and the lockstep emulators fall silent once mcad has stopped: wait until
     # its capture has frames (1 kHz on each bus) before the signal can be sent (seen: an empty capture when
     # it was started 0.3 s of task time before the signal).
-    $PIN2 candump -r 33554432 -L vcan0,101:7FF vcan1,101:7FF > "$TMPD/b.candump" 2>/dev/null &
+    $PIN2 candump -r 33554432 -L vcan0,101:7FF,7FF:7FF vcan1,101:7FF,7FF:7FF > "$TMPD/b.candump" 2>/dev/null &
     CD=$!
     k=0
     while [ ! -s "$TMPD/b.candump" ] && [ $k -lt 600 ]; do
@@ -435,7 +435,7 @@ if echo "$PHASES" | grep -q B; then
     kill -TERM $M
     wait $M
     rc=$?
-    candump_stop "$TMPD/b.candump" $CD
+    candump_stop "$TMPD/b.candump" $CD 60 vcan0 vcan1
     stop_armsims B
     cat "$OUT/mcadB.log"
     fB=0
@@ -536,7 +536,7 @@ if echo "$PHASES" | grep -q D; then
     D_GAP_MS=$(awk -v p="$D_PERIOD_US" 'BEGIN { print 2 * p / 1000 }')
     skipD=0
     for attempt in 1 2 3; do
-        $PIN2 candump -r 33554432 -L vcan0,100:7F0 vcan1,100:7F0 > "$TMPD/d.candump" 2>/dev/null &
+        $PIN2 candump -r 33554432 -L vcan0,100:7F0,7FF:7FF vcan1,100:7F0,7FF:7FF > "$TMPD/d.candump" 2>/dev/null &
         CD=$!
         sleep 0.3
         armsims D clocked
@@ -546,7 +546,7 @@ if echo "$PHASES" | grep -q D; then
         # the watchdog, the ramp (<= 0.1 s at 5 rad/s^2 from <= 0.5 rad/s) and a few WATCHDOG heartbeats
         sleep 2
         stop_armsims D
-        candump_stop "$TMPD/d.candump" $CD
+        candump_stop "$TMPD/d.candump" $CD 60 vcan0 vcan1
         cat "$OUT/mcadD.log"
         fD=0
         [ $rc -eq 137 ] || { echo "E2E FAIL: phase D: mcad exit status $rc, want 137 (SIGKILL)"; fD=1; }
@@ -614,13 +614,13 @@ pa10_phase() {
     URDF1=$S/config/scenarios/$(arm_field 2 urdf "$3") Q01=$(arm_field 2 q0 "$3")
     # the emulators' feedback frames on both buses, from before the start (the lockstep emulators answer
     # every tick until mcad exits)
-    $PIN2 candump -r 33554432 -L vcan0,101:7FF vcan1,101:7FF > "$TMPD/$tag.candump" 2>/dev/null &
+    $PIN2 candump -r 33554432 -L vcan0,101:7FF,7FF:7FF vcan1,101:7FF,7FF:7FF > "$TMPD/$tag.candump" 2>/dev/null &
     CD=$!
     sleep 0.3
     armsims "$tag"
     $PIN2 "$MCAD" --no-dds --csv "$TMPD/mcad$tag.csv" "$cell" 2> "$OUT/mcad$tag.log"
     rc=$?
-    candump_stop "$TMPD/$tag.candump" $CD
+    candump_stop "$TMPD/$tag.candump" $CD 60 vcan0 vcan1
     stop_armsims "$tag"
     cat "$OUT/mcad$tag.log"
     if [ "$want" = fault ]; then
