@@ -4,14 +4,16 @@
 discovery: two network namespaces joined by a veth pair, each end named eth1 with the addresses that
 config/dds/network-example.xml names (192.168.10.2 controller, .3 operator), so the shipped example works
 as it is. mcad runs the cross circles task (sim backend, publishing every tick) in the controller namespace;
-mca-monitor in the other. All traffic stays inside the two namespaces.
+mca-monitor and a Python subscriber (PyPI cyclonedds: another DDS implementation's build, tests/dds/py_watch.py)
+in the other. All traffic stays inside the two namespaces.
 
 mcad publishes at the shipped cells' 100 Hz (about 1.9 Mbit/s). Phases of one mcad run (seconds from its
 start): 0-5 no peer; 5-10 the monitor subscribed, clean link;
 10-15 5 % of the controller's packets dropped (nftables numgen); 15-20 the link rate-limited to 100 kbit/s
 (tbf), below what the monitor's 100 Hz Distances need (about 300 kbit/s); 20-25 the link down; 25-32 up again; a second monitor starts at
 27 s. Checks: mcad ends its task without a fault; no snapshot lost in mcad's ring (the publisher never
-waited on the network); the first monitor receives again within 5 s after the link comes back, by itself;
+waited on the network); the first monitor and the Python subscriber receive again within 5 s after the link
+comes back, by themselves, and every distance the Python subscriber got equals mcad's CSV at its tick;
 the late monitor has the controller's current status (transient-local) before its first Distances sample.
 Printed, not asserted (timing on this VM is noise): the loop's compute time and command gaps per phase,
 as ratios to the phase without a peer.
@@ -24,6 +26,7 @@ import tempfile
 import time
 
 MCAD, MON, SRC, DOMAIN = sys.argv[1:5]
+HERE = os.path.dirname(os.path.abspath(__file__))
 XML = os.path.join(SRC, "config", "dds", "network-example.xml")
 TAG = f"mca{os.getpid() % 100000}"
 NS_C, NS_M = f"{TAG}-ctl", f"{TAG}-mon"
@@ -109,6 +112,10 @@ def main():
 
         at(5)
         mon1 = monitor("mon1", RUN_S - 5 + 4)
+        pyw = subprocess.Popen(["ip", "netns", "exec", NS_M, sys.executable, os.path.join(HERE, "py_watch.py"), XML,
+                                str(DOMAIN), str(RUN_S - 5 + 4), os.path.join(tmp, "py.csv")],
+                               stdout=open(os.path.join(tmp, "py.out"), "w"), stderr=subprocess.STDOUT)
+        procs.append(pyw)
         at(10)
         sh("nft", "add", "table", "inet", "mca", ns=NS_C)
         sh("nft", "add", "chain", "inet", "mca", "out", "{ type filter hook output priority 0 ; }", ns=NS_C)
@@ -132,6 +139,7 @@ def main():
         err = err_f.read()
         mon1.wait(timeout=60)
         mon2.wait(timeout=60)
+        pyw.wait(timeout=60)
     finally:
         for p in procs:
             if p.poll() is None:
@@ -163,6 +171,26 @@ def main():
     print("monitor samples per phase:", phase_rx)
     with open(os.path.join(tmp, "mon2.out")) as f:
         out2 = f.read()
+    py = rows("py")
+    py_rx = [int(r["rx_ns"]) / 1e9 for r in py]
+    py_after = [t for t in py_rx if t >= t_up]
+    py_gap = (py_after[0] - t_up) if py_after else float("inf")
+    py_clean = sum(1 for t in py_rx if t0 + 5 <= t < t0 + 10)
+    with open(os.path.join(tmp, "py.out")) as f:
+        py_out = f.read().strip()
+    check(py_clean > 0 and py_after and py_gap <= 5.0,
+          f"the Python subscriber receives on the clean link ({py_clean} samples in 5-10 s) and again "
+          f"{py_gap:.2f} s after the link came back (<= 5 s; {len(py_after)} samples after): {py_out[-200:]}")
+    print("Python subscriber samples per phase:", {name: sum(1 for t in py_rx if t0 + a <= t < t0 + b)
+                                                    for name, a, b in PHASES})
+    with open(os.path.join(tmp, "mcad.csv")) as f:
+        mc_d = [r["min_d"] for r in csv.DictReader(f)]
+    # the CSV's row k is tick k; the last sample (tick = ticks run, published when mcad stops) repeats the
+    # last tick's distances
+    bad = [r for r in py if int(r["tick"]) > len(mc_d)
+           or float(r["min_distance"]) != float(mc_d[min(int(r["tick"]), len(mc_d) - 1)])]
+    check(py and not bad, f"every one of the {len(py)} distances the Python subscriber got equals mcad's CSV at its "
+                          f"tick (bit for bit; {len(bad)} differ{': ' + str(bad[:2]) if bad else ''})")
     m2 = rows("mon2")
     check(len(m2) > 0, f"the late monitor (started 2 s after the link came back) receives ({len(m2)} samples)")
     # each Distances row carries the controller state the monitor knew then. The status is published once a
