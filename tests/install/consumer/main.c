@@ -10,6 +10,7 @@
 #include "mca/err.h"
 #include "mca/scheme.h"
 #include "mca/segdist.h"
+#include "mca/urdf.h"
 
 int main(int argc, char **argv) {
     static mca_chain_t chain;
