@@ -69,7 +69,7 @@ bench: build
 sweep: build
 	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
 
-SOURCES_CMD = find core firmware_iface dds sim_backend daemon tools bench tests fuzz \
+SOURCES_CMD = find core model firmware_iface dds sim_backend daemon tools bench tests fuzz \
 	  \( -name '*.c' -o -name '*.h' -o -name '*.cpp' \) -print0
 
 format:

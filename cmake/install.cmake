@@ -5,7 +5,8 @@
 #   bin/mca-*                              tools: mca-sim, mca-monitor, mca-geom, mca-armsim, mca-stopcheck, ...
 #   include/mca/*.h                        the public headers of the exported libraries
 #   lib/libmca_*.a, lib/cmake/mca/         static libraries and the CMake package: find_package(mca) gives
-#                                          mca::core, mca::arm, mca::sim_arm, mca::sim, mca::arm_can, mca::dds
+#                                          mca::core (real time), mca::model (URDF, scenarios), mca::arm,
+#                                          mca::sim_arm, mca::sim, mca::arm_can, mca::dds
 #   etc/mca/cells, etc/mca/dds             what an operator edits (cells, Cyclone DDS configurations)
 #   share/mca/{robots,scenarios,can,ros2}  models, tasks, the DBC, the RViz view; share/doc/mca the docs
 #   share/mca/security                     make_security.sh and the DDS Security templates (docs/security.md)
@@ -15,7 +16,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(MCA_EXPORTED core arm sim_arm sim arm_can canopen dds)
+set(MCA_EXPORTED core model arm sim_arm sim arm_can canopen dds)
 foreach(lib ${MCA_EXPORTED})
   set(t mca_${lib})
   if(NOT TARGET ${t})

@@ -9,6 +9,7 @@
 #include "fuzz_file.h"
 #include "mca/chain.h"
 #include "mca/err.h"
+#include "mca/urdf.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 

@@ -9,6 +9,7 @@
 
 #include "mca/chain.h"
 #include "mca/err.h"
+#include "mca/urdf.h"
 
 #define BATCH 2000
 #define N_BATCH 51

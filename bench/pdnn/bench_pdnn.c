@@ -23,6 +23,7 @@
 
 #include "mca/err.h"
 #include "mca/pdnn.h"
+#include "mca/qp_dump.h"
 #include "qpgen.h"
 
 typedef struct opts {

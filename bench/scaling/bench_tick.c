@@ -29,8 +29,10 @@
 #include "mca/controller.h"
 #include "mca/err.h"
 #include "mca/pdnn.h"
+#include "mca/qp_dump.h"
 #include "mca/scenario.h"
 #include "mca/scheme.h"
+#include "mca/urdf.h"
 
 enum { ST_TICK, ST_FK, ST_DIST, ST_ASM, ST_PDNN, ST_N };
 static const char *const st_name[ST_N] = {"tick", "fk", "distances", "assembly", "pdnn"};

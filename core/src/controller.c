@@ -82,48 +82,6 @@ static int uses_rows(mca_scheme_kind_t scheme) {
     return scheme == MCA_SCHEME_MCA || scheme == MCA_SCHEME_MCA_TS;
 }
 
-int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
-                                        mca_scheme_kind_t scheme, char *err, size_t errlen) {
-    if (!cfg || !scn || scn->n_arms < 1 || scn->n_arms > MCA_MAX_ARMS) {
-        if (err && errlen) {
-            snprintf(err, errlen, "controller: bad scenario");
-        }
-        return MCA_EINVAL;
-    }
-    mca_controller_default_config(cfg);
-    cfg->n_arms = scn->n_arms;
-    cfg->scheme = scheme;
-    for (int a = 0; a < scn->n_arms; a++) {
-        const mca_scenario_arm_t *sa = &scn->arm[a];
-        int rc =
-            mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err, errlen);
-        if (rc != MCA_OK) {
-            return rc;
-        }
-        if (sa->n_q0 != cfg->chain[a].dof) {
-            if (err && errlen) {
-                snprintf(err, errlen, "%s: arms[%d].q0 has %d values but %s has %d joints", scn->source, a,
-                         sa->n_q0, sa->urdf, cfg->chain[a].dof);
-            }
-            return MCA_EINVAL;
-        }
-        mca_chain_set_base(&cfg->chain[a], sa->base_xyz, sa->base_rpy);
-        cfg->path[a] = sa->path;
-    }
-    cfg->sp.collision = uses_rows(scheme);
-    cfg->sp.form = (mca_collision_form_t)scn->params.form;
-    cfg->sp.d1 = scn->params.d1;
-    cfg->sp.d2 = scn->params.d2;
-    cfg->sp.K = scn->params.K;
-    cfg->sp.epsilon = scn->params.epsilon;
-    cfg->sp.v_normal = scn->params.v_normal;
-    cfg->sp.v_floor = scn->params.v_floor;
-    cfg->dt = scn->params.dt;
-    /* The baselines are run to show what happens without the scheme: no distance fault for them. */
-    cfg->fault_distance = uses_rows(scheme);
-    return MCA_OK;
-}
-
 int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg) {
     if (!ctrl || !cfg || cfg->n_arms < 1 || cfg->n_arms > MCA_MAX_ARMS || !(cfg->dt > 0.0) ||
         !(cfg->sp.d1 >= 0.0) || !(cfg->sp.d1 < cfg->sp.d2) || !(cfg->sp.epsilon > 0.0) ||

@@ -16,8 +16,10 @@
 #include "mca/can_proto.h"
 #include "mca/chain.h"
 #include "mca/err.h"
+#include "mca/scenario.h"
 #include "mca/scheme.h"
 #include "mca/ros2.h" /* mca_ros2_name_ok */
+#include "mca/urdf.h"
 #include "mca/vec3.h"
 
 /* ---------------------------------------------------------------- schema */

@@ -22,6 +22,7 @@
 #include "mca/dds_bridge.h"
 #include "mca/dds_qos.h"
 #include "mca/err.h"
+#include "mca/scenario.h"
 #include "mca/sim_backend.h"
 #include "mca/canopen.h" /* mca_canopen_backend_open, mca_canopen_backend_fault (issue 15) */
 #ifdef MCA_TEST_HOOKS

@@ -22,6 +22,7 @@
 #include "mca/err.h"
 #ifdef MCA_TEST_HOOKS
 #include "mca/daemon_test.h"
+#include "mca/scenario.h"
 #define MCAD_NAME "mcad-test"
 #else
 #define MCAD_NAME "mcad"

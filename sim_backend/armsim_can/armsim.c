@@ -40,6 +40,7 @@
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/sim_arm.h"
+#include "mca/urdf.h"
 
 static volatile sig_atomic_t g_stop;
 

@@ -42,6 +42,7 @@
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/sim_arm.h"
+#include "mca/urdf.h"
 
 #define MAX_OD 64
 #define MAX_INJ 16

@@ -34,6 +34,7 @@
 #include "mca/err.h"
 #include "mca/sim_arm.h"
 #include "mca/sim_backend.h"
+#include "mca/urdf.h"
 
 typedef struct rec {
     int rx;

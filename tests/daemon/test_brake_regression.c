@@ -19,6 +19,7 @@
 #include "mca/cell.h"
 #include "mca/daemon.h"
 #include "mca/err.h"
+#include "mca/scenario.h"
 #include "mca/sim_backend.h"
 
 typedef struct {

@@ -26,7 +26,16 @@ check "libexec/mca/mca-dds-bridge (mcad's DDS publisher process)" test -x "$P/li
 check "no test build installed (mcad-test)" test ! -e "$P/sbin/mcad-test" -a ! -e "$P/bin/mcad-test"
 check "include/mca/controller.h, dds_bridge.h, ros2.h" test -f "$P/include/mca/controller.h" -a -f "$P/include/mca/dds_bridge.h" -a -f "$P/include/mca/ros2.h"
 check "no test-only header (daemon_test.h)" test ! -e "$P/include/mca/daemon_test.h"
-check "lib*/libmca_core.a and the CMake package" sh -c "ls $P/lib*/libmca_core.a $P/lib*/cmake/mca/mcaConfig.cmake"
+check "lib*/libmca_core.a, libmca_model.a and the CMake package" sh -c "ls $P/lib*/libmca_core.a $P/lib*/libmca_model.a $P/lib*/cmake/mca/mcaConfig.cmake"
+check "include/mca/path.h (core), scenario.h, urdf.h, qp_dump.h (model)" test -f "$P/include/mca/path.h" -a -f "$P/include/mca/scenario.h" -a -f "$P/include/mca/urdf.h" -a -f "$P/include/mca/qp_dump.h"
+# the exported real-time core carries none of the loaders' dependencies (issue 12); mca::model brings them
+core_links() {
+    b=$(sed -n '/^set_target_properties(mca::core /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
+    m=$(sed -n '/^set_target_properties(mca::model /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
+    echo "$b" | grep -q 'INTERFACE_LINK_LIBRARIES.*ccd' && ! echo "$b" | grep -qi 'cyaml\|urdf\|Threads' &&
+        echo "$m" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*CYAML.*urdfdom'
+}
+check "mca::core links no libcyaml, urdfdom or Threads; mca::model links mca::core, libcyaml, urdfdom" core_links
 check "etc/mca/cells, etc/mca/dds" test -f "$P/etc/mca/cells/cup_stacking_sim.yaml" -a -f "$P/etc/mca/dds/loopback.xml"
 check "share/mca/robots, scenarios, ros2" test -f "$P/share/mca/robots/jaco2.urdf" -a -f "$P/share/mca/scenarios/cup_stacking.yaml" -a -f "$P/share/mca/ros2/mca.rviz"
 check "share/doc/mca" test -f "$P/share/doc/mca/daemon.md"
@@ -48,8 +57,10 @@ fi
 # an outside project
 if cmake -S "$S/tests/install/consumer" -B "$T/consumer" -DCMAKE_PREFIX_PATH="$P" >"$T/consumer.log" 2>&1 &&
     cmake --build "$T/consumer" >>"$T/consumer.log" 2>&1 &&
-    "$T/consumer/consumer" "$P/share/mca/robots/jaco2.urdf" >>"$T/consumer.log" 2>&1; then
-    echo "ok   outside project: find_package(mca), mca::core + mca::dds, built and ran: $(tail -1 "$T/consumer.log")"
+    "$T/consumer/consumer" "$P/share/mca/robots/jaco2.urdf" "$P/share/mca/scenarios/cup_stacking.yaml" \
+        >>"$T/consumer.log" 2>&1 &&
+    tail -1 "$T/consumer.log" | grep -q "^consumer: ok: .* 20 ticks of 2 arms"; then
+    echo "ok   outside project: find_package(mca), mca::model (URDF, scenario) + mca::core (ticks) + mca::dds, built and ran: $(tail -1 "$T/consumer.log")"
 else
     tail -30 "$T/consumer.log"
     echo "FAIL outside project with find_package(mca)"

@@ -13,6 +13,7 @@
 
 #include "mca/chain.h"
 #include "mca/err.h"
+#include "mca/urdf.h"
 
 #ifndef MCA_ROBOTS_DIR
 #error "MCA_ROBOTS_DIR must be set by CMake"

@@ -13,6 +13,7 @@
 
 #include "mca/err.h"
 #include "mca/pdnn.h"
+#include "mca/qp_dump.h"
 #include "qpgen.h"
 
 static mca_pdnn_t solver; /* large: keep off the stack */

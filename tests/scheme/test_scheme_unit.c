@@ -19,6 +19,7 @@
 #include "mca/err.h"
 #include "mca/scenario.h"
 #include "mca/scheme.h"
+#include "mca/urdf.h"
 #include "mca/vec3.h"
 
 #ifndef MCA_SOURCE_DIR

@@ -14,6 +14,7 @@
 #include "mca/err.h"
 #include "mca/obstacle.h"
 #include "mca/segdist.h"
+#include "mca/urdf.h"
 
 static uint64_t rng_state = 0x1234567887654321ULL;
 static double urand(void) {

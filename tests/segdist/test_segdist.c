@@ -16,6 +16,7 @@
 #include "mca/armdist.h"
 #include "mca/err.h"
 #include "mca/segdist.h"
+#include "mca/urdf.h"
 
 /* ---- tiny deterministic RNG (xorshift64*) so runs are repeatable ---- */
 static uint64_t rng_state = 0x9e3779b97f4a7c15ULL;

@@ -10,6 +10,7 @@
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/segdist.h"
+#include "mca/urdf.h"
 
 #define EXIT_BAD_INPUT 2
 

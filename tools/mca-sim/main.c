@@ -14,6 +14,8 @@
 
 #include "mca/daemon.h"
 #include "mca/err.h"
+#include "mca/qp_dump.h"
+#include "mca/scenario.h"
 #include "simrun.h"
 
 static void usage(FILE *f) {

@@ -12,6 +12,8 @@
 #include "mca/cell.h"
 #include "mca/daemon.h"
 #include "mca/err.h"
+#include "mca/qp_dump.h"
+#include "mca/scenario.h"
 #include "mca/sim_backend.h"
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o) {

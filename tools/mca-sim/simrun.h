@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "mca/controller.h"
+#include "mca/qp_dump.h"
 #include "mca/scenario.h"
 
 #ifdef __cplusplus

@@ -5,7 +5,7 @@
 usage: osqp_check.py [--min-count N] [--tol T] [--eps E] [--no-row-scale] [--verbose] DIR [DIR ...]
 
 Loads every *.json file under each DIR (recursively) written by mca_qp_dump_json (format in
-core/include/mca/qp.h: n, n_eq, n_ineq, G, alpha, U, beta, lb, ub with null for infinities, and the
+model/include/mca/qp_dump.h: n, n_eq, n_ineq, G, alpha, U, beta, lb, ub with null for infinities, and the
 PDNN answer phi, steps, residual, tag), solves
     minimize 1/2 phi^T phi  s.t.  G phi = alpha,  U phi <= beta,  lb <= phi <= ub
 with OSQP (eps_abs = eps_rel = 1e-10, polishing on, max_iter 1e6) and asserts

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /** @file mca/chain.h
- * Serial robot arm model (from URDF, parsed once at start-up) and its kinematics:
- * forward kinematics of every joint frame, the link segments, the end-effector position and
+ * Serial robot arm model (filled from a URDF at start-up by the model library, mca/urdf.h) and its
+ * kinematics: forward kinematics of every joint frame, the link segments, the end-effector position and
  * the 3 x n positional Jacobian of any point on any link (the paper's J_P).
  *
  * Geometry convention
@@ -12,7 +12,7 @@
  *    A link may have zero length (coincident joint origins); it is then a sphere.
  *  - Everything is expressed in the world frame: world <- chain->base <- root link.
  *
- * Context: mca_chain_load_urdf() is start-up only (it allocates inside urdfdom).
+ * Context: loading (mca_chain_load_urdf(), mca/urdf.h, mca_model) is start-up only: it allocates in urdfdom.
  * mca_fk() and mca_jacobian_point() are real-time safe: no allocation, no I/O, bounded time.
  */
 #ifndef MCA_CHAIN_H
@@ -66,29 +66,6 @@ typedef struct mca_kin {
     mca_pose_t frame[MCA_MAX_DOF];   /**< world <- joint frame */
     double ee[3];                    /**< tool tip = point[dof + 1] */
 } mca_kin_t;
-
-/**
- * Load a serial chain from a URDF file (start-up only).
- * The chain runs from the URDF root link to @p tip_link (NULL: the single leaf link).
- * Revolute and continuous joints become joints; fixed joints are folded into the next origin
- * or into the tool pose. The capsule radius of each link is the radius of the <cylinder> (or
- * <sphere>) in the <collision> of the URDF link that the segment belongs to (the child link of
- * the segment's first joint); 0 when it has none.
- * @param[out] chain   filled on success, unchanged on error
- * @param[in]  path    URDF file
- * @param[in]  tip_link end-effector link name or NULL
- * @param[out] err     message naming the file and the element at fault (may be NULL)
- * @retval MCA_OK      loaded
- * @retval MCA_ENOENT  file missing or tip link not found
- * @retval MCA_EPARSE  not valid URDF, or a joint lacks limits / has a prismatic or planar type
- * @retval MCA_ERANGE  more than MCA_MAX_DOF joints
- * @retval MCA_EIO     file exists but cannot be read
- * @retval MCA_EINVAL  NULL chain or path
- * @retval MCA_ENOMEM  allocation failed inside the parser
- * Messages start with the path, then the line and element when known (docs/robots.md).
- * Not thread-safe: urdfdom's console output is captured through a process-wide handler.
- */
-int mca_chain_load_urdf(mca_chain_t *chain, const char *path, const char *tip_link, char *err, size_t errlen);
 
 /** Set the world <- root pose of an arm (its base placement). */
 void mca_chain_set_base(mca_chain_t *chain, const double xyz[3], const double rpy[3]);

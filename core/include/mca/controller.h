@@ -7,6 +7,7 @@
  * Use (start-up, then every tick):
  *     mca_controller_config_t cfg;
  *     mca_controller_config_from_scenario(&cfg, &scenario, MCA_SCHEME_MCA, err, sizeof err); // or fill
+ *     (mca_controller_config_from_scenario is the model library's, mca/scenario.h)
  *     mca_controller_t *ctrl = malloc(sizeof *ctrl);      // ~160 kB: not on a stack
  *     mca_controller_init(ctrl, &cfg);
  *     loop: mca_controller_tick(ctrl, t, q, qdot, &info);  // q[a], qdot[a]: arm a's joints
@@ -22,7 +23,7 @@
  * every later tick commands zero (and reports the same fault) until mca_controller_clear_fault(). The braking
  * profile itself is the arm's / daemon's job.
  *
- * Context: mca_controller_config_from_scenario() and mca_controller_init() are start-up only
+ * Context: mca_controller_config_from_scenario() (mca_model) and mca_controller_init() are start-up only
  * (URDF parsing allocates). mca_controller_tick(), _reset() and _clear_fault() are real-time safe:
  * no allocation, no I/O, no locks; compute time is measured with CLOCK_MONOTONIC.
  */
@@ -36,9 +37,9 @@
 #include "mca/armdist.h"
 #include "mca/chain.h"
 #include "mca/limits.h"
+#include "mca/path.h"
 #include "mca/pdnn.h"
 #include "mca/qp.h"
-#include "mca/scenario.h"
 #include "mca/scheme.h"
 
 #ifdef __cplusplus
@@ -153,15 +154,6 @@ typedef struct mca_controller_config {
 
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
 void mca_controller_default_config(mca_controller_config_t *cfg);
-
-/**
- * Fill a config from a loaded scenario: loads each arm's URDF (start-up only), sets base placements,
- * copies paths and the scenario's parameters.
- * @retval MCA_OK, MCA_ENOENT/MCA_EPARSE/MCA_ERANGE from the URDF (err names the file), MCA_EINVAL
- *         (q0 count differs from the chain's dof)
- */
-int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
-                                        mca_scheme_kind_t scheme, char *err, size_t errlen);
 
 /** Report of one tick. */
 typedef struct mca_tick_info {

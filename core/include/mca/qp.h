@@ -3,7 +3,7 @@
  * The standard QP of the paper (25)-(28), fixed-size:
  *     minimize 1/2 phi^T phi
  *     subject to G phi = alpha,  U phi <= beta,  lb <= phi <= ub
- * and its JSON dump (one file per QP) for the independent OSQP check.
+ * Its JSON dump for the independent OSQP check is in the model library (mca/qp_dump.h).
  */
 #ifndef MCA_QP_H
 #define MCA_QP_H
@@ -29,15 +29,6 @@ typedef struct mca_qp {
 /** Set the QP's sizes and zero what they use (rows past n_eq / n_ineq are left as they are).
  *  @retval MCA_OK, MCA_ERANGE (size above the maximums) */
 int mca_qp_reset(mca_qp_t *qp, int n, int n_eq, int n_ineq);
-
-/**
- * Write the QP (and, when phi != NULL, the solver's answer with its steps and residual) as JSON:
- * {"n":..,"n_eq":..,"n_ineq":..,"G":[[..]],"alpha":[..],"U":[[..]],"beta":[..],"lb":[..],"ub":[..],
- *  "phi":[..],"steps":..,"residual":..,"tag":".."}; infinities are written as null. Non-real-time (file I/O).
- * @retval MCA_OK, MCA_EIO
- */
-int mca_qp_dump_json(const mca_qp_t *qp, const double *phi, int steps, double residual, const char *tag,
-                     const char *path);
 
 #ifdef __cplusplus
 }

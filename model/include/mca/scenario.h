@@ -1,77 +1,25 @@
 /* SPDX-License-Identifier: MIT */
 /** @file mca/scenario.h
- * Task (scenario) files and desired end-effector paths.
+ * Task (scenario) files (mca_model, start-up only) and the controller config made from one.
  *
- * A scenario names the arms (URDF, tip link, base placement, initial joints), one desired path per arm,
- * the duration and the scheme parameters (d1, d2, K, epsilon, ...). It is a YAML file parsed with libcyaml
- * (start-up only); see the files in config/scenarios/ and docs/scheme.md for the format.
- *
- * Paths are evaluated on the 1 kHz path: mca_path_eval() is real-time safe (no allocation, bounded time).
- * A path may be anchored at the arm's end-effector position at start (frame "start"): its points are then
- * offsets from that position, fixed by mca_path_anchor() when the task starts.
+ * A scenario names the arms (URDF, tip link, base placement, initial joints), one desired path per arm
+ * (mca_path_t, mca/path.h: evaluated by the real-time core), the duration and the scheme parameters
+ * (d1, d2, K, epsilon, ...). It is a YAML file parsed with libcyaml; see the files in config/scenarios/ and
+ * docs/scheme.md for the format. mca_controller_config_from_scenario() turns a loaded scenario into the
+ * core's mca_controller_config_t (loading each arm's URDF through mca/urdf.h).
  */
 #ifndef MCA_SCENARIO_H
 #define MCA_SCENARIO_H
 
 #include <stddef.h>
 
+#include "mca/controller.h"
 #include "mca/limits.h"
+#include "mca/path.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/** Most waypoints of one path. */
-#define MCA_PATH_MAX_POINTS 64
-
-typedef enum mca_path_kind {
-    MCA_PATH_HOLD = 0,      /**< stay at the start position */
-    MCA_PATH_CIRCLE = 1,    /**< circle through the start position, phase 2 pi sin^2(pi t / 2T) */
-    MCA_PATH_WAYPOINTS = 2, /**< straight segments between waypoints, quintic timing per segment */
-    MCA_PATH_STREAM = 3,    /**< a streamed target (mcad's task kind `stream`): the reference starts at the
-                                 anchor and moves with the velocity set each tick (mca_controller_stream), at
-                                 the arm's path rate; it never ends */
-} mca_path_kind_t;
-
-typedef struct mca_path {
-    mca_path_kind_t kind;
-    int relative;     /**< 1: points/centre are offsets from the anchor (end effector at start) */
-    double anchor[3]; /**< set by mca_path_anchor() (zero until then) */
-    double t0;        /**< path time offset: the path starts at task time t0 (holds before) */
-    /* circle: r(s) = anchor - R u + R (cos phi u + sin phi v), phi = turns * 2 pi sin^2(pi s / 2T) */
-    double radius;
-    double u[3];   /**< unit, in-plane: anchor sits at centre + R u */
-    double v[3];   /**< unit, in-plane, orthogonal to u */
-    double period; /**< T [s] */
-    double turns;  /**< full turns in T (1) */
-    /* waypoints: p[0] is the start (the anchor, set by mca_path_anchor: offset 0 when relative), then the
-     * file's points p[1..n_points-1]; segment i from p[i] to p[i+1] lasts dur[i]; a segment back to the
-     * same point is a dwell */
-    int n_points;
-    double p[MCA_PATH_MAX_POINTS][3];
-    double dur[MCA_PATH_MAX_POINTS]; /**< dur[i]: duration of segment i -> i+1 [s] (> 0) */
-    /* stream: reference position and velocity; the reference stays inside [box_lo, box_hi] (a component at a
-     * wall stops there while the velocity pushes outwards) */
-    double stream_r[3], stream_v[3];
-    double box_lo[3], box_hi[3];
-} mca_path_t;
-
-/** Fix a path's anchor (the end effector's position at task start). Start-up/rt safe. */
-void mca_path_anchor(mca_path_t *path, const double ee_start[3]);
-
-/**
- * Desired position and velocity at task time t (real-time safe). Before t0 and after the end the path
- * holds its first/last point with zero velocity.
- * @retval MCA_OK, MCA_EINVAL (NULL or non-finite t)
- */
-int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3]);
-
-/** Task time at which the path ends (+INFINITY for a stream). */
-double mca_path_end_time(const mca_path_t *path);
-
-/** Stream: move the reference by rate * stream_v * dt, kept inside the box (real-time safe; other kinds:
- *  nothing). */
-void mca_path_stream_advance(mca_path_t *path, double rate, double dt);
 
 /** One arm of a scenario. */
 typedef struct mca_scenario_arm {
@@ -160,6 +108,15 @@ void mca_scenario_defaults(mca_scenario_t *scn);
  *         MCA_ERANGE (value out of range: too many arms/points, d1 >= d2, non-positive duration, ...)
  */
 int mca_scenario_load(const char *path, mca_scenario_t *scn, char *err, size_t errlen);
+
+/**
+ * Fill a config from a loaded scenario: loads each arm's URDF (start-up only), sets base placements,
+ * copies paths and the scenario's parameters.
+ * @retval MCA_OK, MCA_ENOENT/MCA_EPARSE/MCA_ERANGE from the URDF (err names the file), MCA_EINVAL
+ *         (q0 count differs from the chain's dof)
+ */
+int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
+                                        mca_scheme_kind_t scheme, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* Scenario (task) files and desired end-effector paths; see mca/scenario.h and docs/scheme.md. */
+/* Scenario (task) files and the controller config made from one; see mca/scenario.h and docs/scheme.md. */
 #include "mca/scenario.h"
 
 #include <cyaml/cyaml.h>
@@ -13,136 +13,8 @@
 
 #include "mca/err.h"
 #include "mca/scheme.h"
+#include "mca/urdf.h"
 #include "mca/vec3.h"
-
-/* ---------------------------------------------------------------- paths (real-time safe) */
-
-void mca_path_anchor(mca_path_t *path, const double ee_start[3]) {
-    mca_v3_set(path->anchor, ee_start);
-    if (path->kind == MCA_PATH_STREAM) {
-        mca_v3_set(path->stream_r, ee_start);
-        path->stream_v[0] = path->stream_v[1] = path->stream_v[2] = 0.0;
-    }
-    if (path->kind == MCA_PATH_WAYPOINTS && path->n_points > 0) {
-        /* p[0] is the start: the anchor itself (offset 0 for relative paths) */
-        if (path->relative) {
-            path->p[0][0] = path->p[0][1] = path->p[0][2] = 0.0;
-        } else {
-            mca_v3_set(path->p[0], ee_start);
-        }
-    }
-}
-
-static void path_point(const mca_path_t *path, int i, double out[3]) {
-    if (path->relative) {
-        mca_v3_add(out, path->anchor, path->p[i]);
-    } else {
-        mca_v3_set(out, path->p[i]);
-    }
-}
-
-void mca_path_stream_advance(mca_path_t *path, double rate, double dt) {
-    if (path->kind != MCA_PATH_STREAM) {
-        return;
-    }
-    for (int i = 0; i < 3; i++) {
-        const double x = path->stream_r[i] + rate * path->stream_v[i] * dt;
-        /* a wall stops only the motion through it (a reference that started outside may move back in) */
-        if ((x > path->box_hi[i] && x > path->stream_r[i]) ||
-            (x < path->box_lo[i] && x < path->stream_r[i])) {
-            continue;
-        }
-        path->stream_r[i] = x;
-    }
-}
-
-double mca_path_end_time(const mca_path_t *path) {
-    switch (path->kind) {
-    case MCA_PATH_STREAM:
-        return INFINITY;
-    case MCA_PATH_CIRCLE:
-        return path->t0 + path->period;
-    case MCA_PATH_WAYPOINTS: {
-        double t = path->t0;
-        for (int i = 0; i + 1 < path->n_points; i++) {
-            t += path->dur[i];
-        }
-        return t;
-    }
-    default:
-        return path->t0;
-    }
-}
-
-int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3]) {
-    if (!path || !r || !rdot || !isfinite(t)) {
-        return MCA_EINVAL;
-    }
-    double s = t - path->t0;
-    rdot[0] = rdot[1] = rdot[2] = 0.0;
-    switch (path->kind) {
-    case MCA_PATH_STREAM:
-        mca_v3_set(r, path->stream_r);
-        mca_v3_set(rdot, path->stream_v);
-        return MCA_OK;
-    case MCA_PATH_CIRCLE: {
-        const double T = path->period;
-        if (s < 0.0) {
-            s = 0.0;
-        }
-        if (s > T) {
-            s = T;
-        }
-        /* phi = 2 pi turns sin^2(pi s / 2T): starts and ends at rest (as in the Zhang-group papers). */
-        const double w = M_PI / (2.0 * T);
-        const double sw = sin(w * s), cw = cos(w * s);
-        const double k = 2.0 * M_PI * path->turns;
-        const double phi = k * sw * sw;
-        const double phidot = k * 2.0 * sw * cw * w;
-        const double R = path->radius;
-        for (int i = 0; i < 3; i++) {
-            const double c = path->anchor[i] - R * path->u[i];
-            r[i] = c + R * (cos(phi) * path->u[i] + sin(phi) * path->v[i]);
-            rdot[i] = R * phidot * (-sin(phi) * path->u[i] + cos(phi) * path->v[i]);
-        }
-        return MCA_OK;
-    }
-    case MCA_PATH_WAYPOINTS: {
-        if (path->n_points < 1) {
-            mca_v3_set(r, path->anchor);
-            return MCA_OK;
-        }
-        if (s <= 0.0 || path->n_points == 1) {
-            path_point(path, 0, r);
-            return MCA_OK;
-        }
-        for (int i = 0; i + 1 < path->n_points; i++) {
-            const double T = path->dur[i];
-            if (s < T) {
-                /* quintic 10u^3 - 15u^4 + 6u^5: rest to rest, zero acceleration at both ends */
-                const double u = s / T;
-                const double u2 = u * u, u3 = u2 * u;
-                const double h = u3 * (10.0 - 15.0 * u + 6.0 * u2);
-                const double hd = 30.0 * u2 * (1.0 - 2.0 * u + u2) / T;
-                double a[3], b[3];
-                path_point(path, i, a);
-                path_point(path, i + 1, b);
-                for (int k = 0; k < 3; k++) {
-                    r[k] = a[k] + h * (b[k] - a[k]);
-                    rdot[k] = hd * (b[k] - a[k]);
-                }
-                return MCA_OK;
-            }
-            s -= T;
-        }
-        path_point(path, path->n_points - 1, r);
-        return MCA_OK;
-    }
-    default:
-        mca_v3_set(r, path->anchor);
-        return MCA_OK;
-    }
-}
 
 /* ---------------------------------------------------------------- YAML (start-up only) */
 
@@ -701,4 +573,53 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
 out:
     cyaml_free(&cfg, &scn_schema, raw, 0);
     return rc;
+}
+
+/* ---------------------------------------------------------------- scenario -> controller config */
+
+/* Schemes with collision rows (and the distance fault); as in controller.c. */
+static int uses_rows(mca_scheme_kind_t scheme) {
+    return scheme == MCA_SCHEME_MCA || scheme == MCA_SCHEME_MCA_TS;
+}
+
+int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_scenario_t *scn,
+                                        mca_scheme_kind_t scheme, char *err, size_t errlen) {
+    if (!cfg || !scn || scn->n_arms < 1 || scn->n_arms > MCA_MAX_ARMS) {
+        if (err && errlen) {
+            snprintf(err, errlen, "controller: bad scenario");
+        }
+        return MCA_EINVAL;
+    }
+    mca_controller_default_config(cfg);
+    cfg->n_arms = scn->n_arms;
+    cfg->scheme = scheme;
+    for (int a = 0; a < scn->n_arms; a++) {
+        const mca_scenario_arm_t *sa = &scn->arm[a];
+        int rc =
+            mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err, errlen);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        if (sa->n_q0 != cfg->chain[a].dof) {
+            if (err && errlen) {
+                snprintf(err, errlen, "%s: arms[%d].q0 has %d values but %s has %d joints", scn->source, a,
+                         sa->n_q0, sa->urdf, cfg->chain[a].dof);
+            }
+            return MCA_EINVAL;
+        }
+        mca_chain_set_base(&cfg->chain[a], sa->base_xyz, sa->base_rpy);
+        cfg->path[a] = sa->path;
+    }
+    cfg->sp.collision = uses_rows(scheme);
+    cfg->sp.form = (mca_collision_form_t)scn->params.form;
+    cfg->sp.d1 = scn->params.d1;
+    cfg->sp.d2 = scn->params.d2;
+    cfg->sp.K = scn->params.K;
+    cfg->sp.epsilon = scn->params.epsilon;
+    cfg->sp.v_normal = scn->params.v_normal;
+    cfg->sp.v_floor = scn->params.v_floor;
+    cfg->dt = scn->params.dt;
+    /* The baselines are run to show what happens without the scheme: no distance fault for them. */
+    cfg->fault_distance = uses_rows(scheme);
+    return MCA_OK;
 }
