@@ -25,7 +25,7 @@ check() { # check DESCRIPTION COMMAND...
     if "$@" >/dev/null 2>&1; then ok "$d"; else bad "$d"; fi
 }
 t0=$(date +%s)
-DEB=$(sh "$S/tools/deb/build_deb.sh" "$S" "$B/deb-build" | tail -1) || { echo "$DEB"; echo "FAIL building the package"; exit 1; }
+DEB=$(sh "$S/tools/deb/build_deb.sh" "$S" "$B/deb-build") || { echo "$DEB"; echo "FAIL building the package"; exit 1; }
 [ -f "$DEB" ] || { echo "$DEB"; echo "FAIL no .deb"; exit 1; }
 echo "built $(basename "$DEB") ($(du -k "$DEB" | cut -f1) kB) in $(($(date +%s) - t0)) s"
 
@@ -101,6 +101,19 @@ run_ns() { # run_ns COMMAND: in the namespace with the package's /usr and /etc l
 }
 t1=$(date +%s)
 if run_ns "test -x /usr/sbin/mcad -a -f /etc/mca/cells/cross_circles_sim.yaml" 2>/dev/null; then
+    # systemd's own check of the instance: the unit's syntax and that its ExecStart is executable (outside
+    # the namespace it is not: /usr/sbin/mcad exists only in the package)
+    if command -v systemd-analyze >/dev/null; then
+        if run_ns "env SYSTEMD_UNIT_PATH=$R/lib/systemd/system: systemd-analyze verify mcad@cross_circles_sim.service" \
+            >"$T/verify.log" 2>&1 && ! grep -q . "$T/verify.log"; then
+            ok "systemd-analyze verify mcad@cross_circles_sim.service over the unpacked package: no complaint"
+        else
+            cat "$T/verify.log"
+            bad "systemd-analyze verify mcad@cross_circles_sim.service"
+        fi
+    else
+        echo "note: no systemd-analyze here: the unit is not verified by systemd"
+    fi
     run_ns "$cmd" >"$T/run.log" 2>&1 && rc=0 || rc=$?
     how="as the unit: $cmd, in a mount+network namespace over the unpacked package (DDS on its loopback)"
     grep -q "dds bridge: pid [0-9]* (/usr/libexec/mca/mca-dds-bridge)" "$T/run.log" ||
