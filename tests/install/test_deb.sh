@@ -2,13 +2,14 @@
 # SPDX-License-Identifier: MIT
 # The Debian package (issue 12): build it from the tree (tools/deb/build_deb.sh: its own configure with the
 # prefix /usr, in BUILD_DIR/deb-build), check its control data and contents, unpack it into a scratch root
-# (dpkg -x), run the unpacked mcad --check on every unpacked cell, and run one whole sim cell from the
-# unpacked tree the way the packaged unit does: its ExecStart line, with %i = cross_circles_sim.
+# (dpkg -x), run the unpacked mcad --check on every unpacked cell, have systemd-analyze verify the unit's
+# instance mcad@cross_circles_sim, and run one whole sim cell from the unpacked tree the way the packaged unit
+# does: its ExecStart line, with %i = cross_circles_sim.
 # The whole run happens in a private mount and network namespace (unshare) where the package's /usr and
 # /etc are laid over the real ones (read-only overlayfs): the unit's /usr/sbin/mcad and
 # /etc/mca/cells/cross_circles_sim.yaml are then the package's files, mcad finds the scenario and the robots
 # through its compiled-in search path and its DDS publisher in its compiled-in libexec folder, and DDS stays
-# on the namespace's own loopback. Nothing outside the scratch root is written.
+# on the namespace's own loopback. Nothing outside the scratch root and BUILD_DIR/deb-build is written.
 # usage: test_deb.sh BUILD_DIR SOURCE_DIR
 set -eu
 B=$(cd "$1" && pwd)
