@@ -14,7 +14,7 @@ DEB_PKGS  := $(shell grep -v '^\#' tools/deps/debian-packages.txt)
 STAMP_DEB := .deps-debian.stamp
 STAMP_PY  := $(VENV)/.deps-python.stamp
 
-.PHONY: all deps build test asan-test fuzz demo bench sweep format format-check clean
+.PHONY: all deps build test asan-test fuzz demo bench sweep deb format format-check clean
 
 all: build
 
@@ -68,6 +68,11 @@ bench: build
 # the random-task sweep of issue 11 alone (1000 two-arm + 200 three-arm tasks): out/bench/sweep.txt, sweep.json
 sweep: build
 	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
+
+# the Debian package mca (docs/install.md): its own build with the prefix /usr in $(BUILD)/deb-build;
+# the .deb lands in $(BUILD)/deb-build/deb/ (sudo apt install ./$(BUILD)/deb-build/deb/mca_*.deb)
+deb: deps
+	sh tools/deb/build_deb.sh . $(BUILD)/deb-build $(JOBS)
 
 SOURCES_CMD = find core model firmware_iface dds sim_backend daemon tools bench tests fuzz \
 	  \( -name '*.c' -o -name '*.h' -o -name '*.cpp' \) -print0

@@ -11,6 +11,8 @@
 #   share/mca/{robots,scenarios,can,ros2}  models, tasks, the DBC, the RViz view; share/doc/mca the docs
 #   share/mca/security                     make_security.sh and the DDS Security templates (docs/security.md)
 #   lib/systemd/system/mcad@.service       the unit, with this prefix's paths
+# With the prefix /usr (the Debian package, cmake/package.cmake) etc is /etc and the unit goes to
+# /lib/systemd/system: absolute, so install with DESTDIR (cpack does) rather than --prefix.
 # A cell's relative paths find share/mca through the search path (docs/daemon.md): the daemon is built
 # with this prefix's etc/mca and share/mca in it.
 include(GNUInstallDirs)
@@ -52,14 +54,22 @@ install(FILES "${CMAKE_BINARY_DIR}/mcaConfig.cmake" "${CMAKE_BINARY_DIR}/mcaConf
 install(TARGETS mcad RUNTIME DESTINATION ${CMAKE_INSTALL_SBINDIR})
 # mcad's DDS publisher process (issue 16): found by mcad in libexec/mca (MCA_LIBEXECDIR, daemon/CMakeLists.txt)
 install(TARGETS mca-dds-bridge RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/mca)
-foreach(tool mca-sim mca-monitor mca-geom mca-armsim mca-drivesim mca-stopcheck mca-simarm-trace mca-dds-synth)
+set(MCA_INSTALLED_TOOLS mca-sim mca-monitor mca-geom mca-armsim mca-drivesim mca-stopcheck mca-simarm-trace
+                        mca-dds-synth)
+foreach(tool ${MCA_INSTALLED_TOOLS})
   if(TARGET ${tool})
     install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()
 endforeach()
 
-install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/cells" "${CMAKE_SOURCE_DIR}/config/dds"
-        DESTINATION ${CMAKE_INSTALL_SYSCONFDIR}/mca)
+# etc: relative to the prefix (so `cmake --install --prefix P` moves it) except where GNUInstallDirs puts it
+# outside the prefix: /etc for the prefix /usr (the Debian package, cmake/package.cmake), /etc/opt for /opt
+if(CMAKE_INSTALL_FULL_SYSCONFDIR STREQUAL "${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_SYSCONFDIR}")
+  set(MCA_ETC_DEST ${CMAKE_INSTALL_SYSCONFDIR}/mca)
+else()
+  set(MCA_ETC_DEST ${CMAKE_INSTALL_FULL_SYSCONFDIR}/mca)
+endif()
+install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/cells" "${CMAKE_SOURCE_DIR}/config/dds" DESTINATION ${MCA_ETC_DEST})
 install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/robots" DESTINATION ${CMAKE_INSTALL_DATADIR}/mca
         FILES_MATCHING PATTERN "*.urdf")
 install(DIRECTORY "${CMAKE_SOURCE_DIR}/config/scenarios" "${CMAKE_SOURCE_DIR}/config/can"
@@ -83,4 +93,26 @@ string(REPLACE "/usr/local/sbin/mcad" "${CMAKE_INSTALL_FULL_SBINDIR}/mcad" unit 
 string(REPLACE "/etc/mca/" "${CMAKE_INSTALL_FULL_SYSCONFDIR}/mca/" unit "${unit}")
 string(REPLACE "/usr/local/share/doc/mca" "${CMAKE_INSTALL_FULL_DOCDIR}" unit "${unit}")
 file(WRITE "${CMAKE_BINARY_DIR}/mcad@.service" "${unit}")
-install(FILES "${CMAKE_BINARY_DIR}/mcad@.service" DESTINATION lib/systemd/system)
+# prefix/lib/systemd/system (systemd also reads /usr/local/lib/systemd/system), but for the prefix /usr
+# Debian 12's unit folder /lib/systemd/system (`pkg-config --variable=systemdsystemunitdir systemd`): bookworm
+# packages ship their units there, not in /usr/lib (the usrmerge moratorium)
+if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
+  set(MCA_UNIT_DEST /lib/systemd/system)
+else()
+  set(MCA_UNIT_DEST lib/systemd/system)
+endif()
+install(FILES "${CMAKE_BINARY_DIR}/mcad@.service" DESTINATION ${MCA_UNIT_DEST})
+
+# every target the rules above install: `cmake --build B --target mca-installed` builds just what
+# `cmake --install` and cpack need (tools/deb/build_deb.sh; no tests, benches or fuzzers)
+add_custom_target(mca-installed)
+foreach(t mcad mca-dds-bridge ${MCA_INSTALLED_TOOLS})
+  if(TARGET ${t})
+    add_dependencies(mca-installed ${t})
+  endif()
+endforeach()
+foreach(lib ${MCA_EXPORTED})
+  if(TARGET mca_${lib})
+    add_dependencies(mca-installed mca_${lib})
+  endif()
+endforeach()
