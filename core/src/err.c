@@ -31,6 +31,8 @@ const char *mca_strerror(int rc) {
         return "try again";
     case MCA_EFAULT:
         return "fault";
+    case MCA_ECONFIG:
+        return "invalid configuration value";
     default:
         return "unknown error";
     }

@@ -586,7 +586,7 @@ static void fail_at(char *err, size_t errlen, const char *file, int line, const 
         char f_[64], why_[160];                                                                              \
         if (mca_range_check((range), (v), why_, sizeof why_) != MCA_OK) {                                    \
             snprintf(f_, sizeof f_, __VA_ARGS__);                                                            \
-            FAIL(MCA_ERANGE, w, key, "%s: %s", f_, why_);                                                    \
+            FAIL(MCA_ECONFIG, w, key, "%s: %s", f_, why_);                                                   \
         }                                                                                                    \
     } while (0)
 
@@ -880,14 +880,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         for (size_t k = 0; k < sizeof nums / sizeof nums[0]; k++) {
             if (nums[k].v) {
                 if (!(*nums[k].v >= nums[k].lo && *nums[k].v <= nums[k].hi)) {
-                    FAIL(MCA_ERANGE, wtask, nums[k].key, "task.stream.%s: %g outside %g..%g", nums[k].key,
+                    FAIL(MCA_ECONFIG, wtask, nums[k].key, "task.stream.%s: %g outside %g..%g", nums[k].key,
                          *nums[k].v, nums[k].lo, nums[k].hi);
                 }
                 *nums[k].dst = *nums[k].v;
             }
         }
         if (cs->hold_after > cs->brake_after) {
-            FAIL(MCA_ERANGE, wtask, "hold_after", "task.stream.hold_after: %g s after brake_after %g s",
+            FAIL(MCA_ECONFIG, wtask, "hold_after", "task.stream.hold_after: %g s after brake_after %g s",
                  cs->hold_after, cs->brake_after);
         }
         for (int i = 0; i < 3; i++) {
@@ -896,7 +896,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             CHECK(wtask, "workspace_max", mca_scenario_range("base_xyz"), rs->box_max[i],
                   "task.stream.workspace_max[%d]", i);
             if (!(rs->box_min[i] < rs->box_max[i])) {
-                FAIL(MCA_ERANGE, wtask, "workspace_max",
+                FAIL(MCA_ECONFIG, wtask, "workspace_max",
                      "task.stream.workspace_max[%d]: %g not above workspace_min %g", i, rs->box_max[i],
                      rs->box_min[i]);
             }
@@ -907,7 +907,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
 
     cell->scheme = MCA_SCHEME_MCA_TS; /* the default for cells (issue 11) */
     if (raw->scheme && mca_scheme_from_name(raw->scheme, &cell->scheme) != MCA_OK) {
-        FAIL(MCA_ERANGE, top, "scheme", "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
+        FAIL(MCA_ECONFIG, top, "scheme", "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
              raw->scheme);
     }
     if (raw->d1) {
@@ -920,7 +920,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     if (!(isfinite(scn->params.d1) && isfinite(scn->params.d2) && scn->params.d1 >= 0.0 &&
           scn->params.d1 < scn->params.d2)) {
-        FAIL(MCA_ERANGE, top, raw->d1 ? "d1" : "d2", "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)",
+        FAIL(MCA_ECONFIG, top, raw->d1 ? "d1" : "d2", "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)",
              scn->params.d1, scn->params.d2);
     }
 
@@ -980,7 +980,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
      * and any model field given in the cell overrides it */
     if (raw->task.scenario && raw->arms_count != (unsigned)scn->n_arms) {
         const struct where wa = {path, "arms", -1};
-        FAIL(MCA_ERANGE, wa, NULL, "arms: %u arms but scenario '%s' has %d", raw->arms_count, scn->source,
+        FAIL(MCA_ECONFIG, wa, NULL, "arms: %u arms but scenario '%s' has %d", raw->arms_count, scn->source,
              scn->n_arms);
     }
     mca_scenario_arm_t sarm[MCA_MAX_ARMS];
@@ -993,7 +993,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         mca_scenario_arm_t *sa = &scn->arm[a];
         for (unsigned b = 0; b < a; b++) {
             if (strcmp(raw->arms[b].name, ra->name) == 0) {
-                FAIL(MCA_ERANGE, wa, "name", "arms[%d].name: '%s' used twice", ai, ra->name);
+                FAIL(MCA_ECONFIG, wa, "name", "arms[%d].name: '%s' used twice", ai, ra->name);
             }
         }
         if (raw->task.scenario) {
@@ -1009,7 +1009,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                 strncat(names, sarm[s].name, sizeof names - strlen(names) - 1);
             }
             if (found < 0) {
-                FAIL(MCA_ERANGE, wa, "name", "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai,
+                FAIL(MCA_ECONFIG, wa, "name", "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai,
                      ra->name, scn->source, names);
             }
             *sa = sarm[found];
@@ -1040,7 +1040,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                 FAIL(MCA_EPARSE, wa, "backend", "arms[%d].interface: required with backend canopen", ai);
             }
         } else {
-            FAIL(MCA_ERANGE, wa, "backend",
+            FAIL(MCA_ECONFIG, wa, "backend",
                  "arms[%d].backend: unknown backend '%s' (known: sim, socketcan, canopen)", ai, ra->backend);
         }
         ca->co_first_node = 1;
@@ -1056,20 +1056,20 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                 FAIL(MCA_EPARSE, wa, "canopen", "arms[%d].canopen: only with backend canopen", ai);
             }
             if (rco->first_node && (*rco->first_node < 1 || *rco->first_node > 127)) {
-                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen.first_node: 1..127 (got %d)", ai,
+                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen.first_node: 1..127 (got %d)", ai,
                      *rco->first_node);
             }
             if (rco->sync_us && *rco->sync_us < 100) {
-                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen.sync_us: >= 100 (got %d)", ai,
+                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen.sync_us: >= 100 (got %d)", ai,
                      *rco->sync_us);
             }
             if (rco->mode && strcmp(rco->mode, "csv") != 0 && strcmp(rco->mode, "csp") != 0) {
-                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen.mode: csv or csp (got '%s')", ai,
+                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen.mode: csv or csp (got '%s')", ai,
                      rco->mode);
             }
             if ((rco->pos_scale && !(*rco->pos_scale > 0 && isfinite(*rco->pos_scale))) ||
                 (rco->vel_scale && !(*rco->vel_scale > 0 && isfinite(*rco->vel_scale)))) {
-                FAIL(MCA_ERANGE, wa, "canopen", "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
+                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
             }
             ca->co_first_node = rco->first_node ? *rco->first_node : 1;
             ca->co_sync_us = rco->sync_us ? (uint32_t)*rco->sync_us : 4000;
@@ -1080,7 +1080,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                  (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000)) ||
                 (rco->pdo_timeout_syncs &&
                  (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
-                FAIL(MCA_ERANGE, wa, "canopen",
+                FAIL(MCA_ECONFIG, wa, "canopen",
                      "arms[%d].canopen: heartbeat_timeout_ms 101..60000 (the drives beat every 100 ms), "
                      "pdo_timeout_syncs 1..100000",
                      ai);
@@ -1094,7 +1094,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->id_base) {
             if (*ra->id_base < 0 || *ra->id_base > (long long)MCA_CAN_ID_BASE_MAX ||
                 *ra->id_base % MCA_CAN_ID_BLOCK != 0) {
-                FAIL(MCA_ERANGE, wa, "id_base",
+                FAIL(MCA_ECONFIG, wa, "id_base",
                      "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)", ai,
                      MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
             }
@@ -1103,7 +1103,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         /* a CANopen bus has one SYNC producer and NMT master: one canopen arm per bus */
         for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_CANOPEN; b++) {
             if (strcmp(cell->arm[b].interface, ca->interface) == 0) {
-                FAIL(MCA_ERANGE, wa, "interface",
+                FAIL(MCA_ECONFIG, wa, "interface",
                      "arms[%d].interface: %s is already arms[%u]'s (one bus per canopen arm)", ai,
                      ca->interface, b);
             }
@@ -1113,7 +1113,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             const mca_cell_arm_t *cb = &cell->arm[b];
             if (cb->backend == MCA_CELL_BACKEND_SOCKETCAN && strcmp(cb->interface, ca->interface) == 0 &&
                 cb->id_base == ca->id_base) {
-                FAIL(MCA_ERANGE, wa, "id_base",
+                FAIL(MCA_ECONFIG, wa, "id_base",
                      "arms[%d].id_base: 0x%x on %s is already arms[%u]'s (one id block per arm and bus)", ai,
                      ca->id_base, ca->interface, b);
             }
@@ -1151,7 +1151,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->path) {
             char why[256];
             if (inline_path(&sa->path, ra->path, why, sizeof why) != 0) {
-                FAIL(MCA_ERANGE, wa, "path", "arms[%d].path.%s", ai, why);
+                FAIL(MCA_ECONFIG, wa, "path", "arms[%d].path.%s", ai, why);
             }
         }
         if (ra->stream && !raw->task.stream) {
@@ -1163,7 +1163,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             if (ra->stream && strcmp(ra->stream, "pose") == 0) {
                 ca->stream = MCA_CELL_STREAM_POSE;
             } else if (ra->stream && strcmp(ra->stream, "twist") != 0) {
-                FAIL(MCA_ERANGE, wa, "stream", "arms[%d].stream: '%s' (known: twist, pose)", ai, ra->stream);
+                FAIL(MCA_ECONFIG, wa, "stream", "arms[%d].stream: '%s' (known: twist, pose)", ai, ra->stream);
             }
             memset(&sa->path, 0, sizeof sa->path);
             sa->path.kind = MCA_PATH_STREAM;
@@ -1179,14 +1179,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             FAIL(crc, wa, "urdf", "arms[%d].urdf: %s", ai, cerrbuf);
         }
         if (sa->n_q0 != chain.dof) {
-            FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai,
+            FAIL(MCA_ECONFIG, wa, "q0", "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai,
                  sa->n_q0, sa->urdf, chain.dof);
         }
         for (int j = 0; j < chain.dof; j++) {
             const mca_joint_model_t *jm = &chain.joint[j];
             if (!isfinite(sa->q0[j]) ||
                 (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
-                FAIL(MCA_ERANGE, wa, "q0", "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j,
+                FAIL(MCA_ECONFIG, wa, "q0", "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j,
                      sa->q0[j], jm->name, jm->lower, jm->upper);
             }
         }
@@ -1196,7 +1196,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             /* a stop has a bounded duration: from the joint's velocity limit to rest */
             const double stop_s = chain.joint[j].vel_limit / dec;
             if (!(stop_s <= CELL_MAX_STOP_S)) {
-                FAIL(MCA_ERANGE, wa, "dec_limit",
+                FAIL(MCA_ECONFIG, wa, "dec_limit",
                      "arms[%d].dec_limit: %g rad/s^2 brakes joint '%s' from its velocity limit %g rad/s in "
                      "%.3g s, "
                      "more than %g s",
@@ -1259,7 +1259,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     if (cell->stream.enabled &&
         !(cell->dds.enabled &&
           (!raw->dds || !raw->dds->ros2 || !raw->dds->ros2->enabled || *raw->dds->ros2->enabled))) {
-        FAIL(MCA_ERANGE, wtask, "stream",
+        FAIL(MCA_ECONFIG, wtask, "stream",
              "task.stream: the targets come over ROS 2: needs dds.enabled and dds.ros2.enabled");
     }
     /* ROS 2 topics: on with DDS unless switched off; every topic on unless switched off */
@@ -1282,7 +1282,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
         if (rr->ns) {
             if (!mca_ros2_name_ok(rr->ns)) {
-                FAIL(MCA_ERANGE, wr2, "namespace",
+                FAIL(MCA_ECONFIG, wr2, "namespace",
                      "dds.ros2.namespace: '%s' is not a ROS 2 name (a letter, then letters, digits and "
                      "single '_')",
                      rr->ns);
@@ -1291,7 +1291,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
         if (rr->world_frame) {
             if (!mca_ros2_name_ok(rr->world_frame)) {
-                FAIL(MCA_ERANGE, wr2, "world_frame",
+                FAIL(MCA_ECONFIG, wr2, "world_frame",
                      "dds.ros2.world_frame: '%s' is not a frame name (a letter, then letters, digits and "
                      "single '_')",
                      rr->world_frame);
@@ -1327,7 +1327,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (r->cpu) {
             const long ncpu = sysconf(_SC_NPROCESSORS_CONF);
             if (*r->cpu < -1 || (ncpu > 0 && *r->cpu >= ncpu)) {
-                FAIL(MCA_ERANGE, wr, "cpu", "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1,
+                FAIL(MCA_ECONFIG, wr, "cpu", "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1,
                      *r->cpu);
             }
             rt->cpu = *r->cpu;
@@ -1336,7 +1336,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (r->overrun_limit) {
             CHECK(wr, "overrun_limit", &r_overrun_limit, *r->overrun_limit, "rt.overrun_limit");
             if (*r->overrun_limit * period_s > CELL_MAX_OVERRUN_S) {
-                FAIL(MCA_ERANGE, wr, "overrun_limit",
+                FAIL(MCA_ECONFIG, wr, "overrun_limit",
                      "rt.overrun_limit: %d periods of %g s are %g s of overruns, more than %g s",
                      *r->overrun_limit, period_s, *r->overrun_limit * period_s, CELL_MAX_OVERRUN_S);
             }
@@ -1350,7 +1350,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             CHECK(wr, "lost_feedback_cycles", &r_lost_feedback_cycles, *r->lost_feedback_cycles,
                   "rt.lost_feedback_cycles");
             if (*r->lost_feedback_cycles * period_s > CELL_MAX_LOST_FEEDBACK_S + 1e-12) {
-                FAIL(MCA_ERANGE, wr, "lost_feedback_cycles",
+                FAIL(MCA_ECONFIG, wr, "lost_feedback_cycles",
                      "rt.lost_feedback_cycles: %d cycles of %g s are %g s without feedback, more than %g s",
                      *r->lost_feedback_cycles, period_s, *r->lost_feedback_cycles * period_s,
                      CELL_MAX_LOST_FEEDBACK_S);
@@ -1373,7 +1373,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         /* the task's tick count at this period (the scenario checked it at its own dt) */
         char why[160];
         if (mca_scenario_check_duration(scn->duration, scn->params.dt, why, sizeof why) != MCA_OK) {
-            FAIL(MCA_ERANGE, wtask, raw->task.duration ? "duration" : "scenario", "task.duration: %s", why);
+            FAIL(MCA_ECONFIG, wtask, raw->task.duration ? "duration" : "scenario", "task.duration: %s", why);
         }
     }
 
@@ -1384,13 +1384,13 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
 #ifdef MCA_TEST_HOOKS
     if (raw->debug_stall_after_ticks) {
         if (*raw->debug_stall_after_ticks < 0) {
-            FAIL(MCA_ERANGE, top, "debug_stall_after_ticks", "debug_stall_after_ticks: must be >= 0");
+            FAIL(MCA_ECONFIG, top, "debug_stall_after_ticks", "debug_stall_after_ticks: must be >= 0");
         }
         cell->debug_stall_after_ticks = (uint64_t)*raw->debug_stall_after_ticks;
     }
     if (raw->debug_kill_after_ticks) {
         if (*raw->debug_kill_after_ticks < 0) {
-            FAIL(MCA_ERANGE, top, "debug_kill_after_ticks", "debug_kill_after_ticks: must be >= 0");
+            FAIL(MCA_ECONFIG, top, "debug_kill_after_ticks", "debug_kill_after_ticks: must be >= 0");
         }
         cell->debug_kill_after_ticks = (uint64_t)*raw->debug_kill_after_ticks;
     }

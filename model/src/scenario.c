@@ -243,7 +243,7 @@ static int entry_line(const char *path, const char *key, int nth, unsigned idx) 
         char m_[256];                                                                                        \
         snprintf(m_, sizeof m_, __VA_ARGS__);                                                                \
         set_err(err, errlen, "%s:%d: %s", path, key_line(path, key, nth), m_);                               \
-        rc = MCA_ERANGE;                                                                                     \
+        rc = MCA_ECONFIG;                                                                                    \
         goto out;                                                                                            \
     } while (0)
 
@@ -286,7 +286,7 @@ int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
         set_err(why, whylen, "must be in %c%.6g, %.6g]%s%s (got %.15g)", r->lo_open ? '(' : '[', r->lo, r->hi,
                 sp, r->unit, v);
     }
-    return MCA_ERANGE;
+    return MCA_ECONFIG;
 }
 
 const mca_range_t *mca_scenario_range(const char *key) {
@@ -306,7 +306,7 @@ int mca_scenario_check_duration(double duration, double dt, char *why, size_t wh
     if (!(dt > 0.0) || !(duration / dt <= (double)MCA_SCENARIO_MAX_TICKS)) {
         set_err(why, whylen, "%.15g s at a tick of %g s is %.0f ticks, more than %d", duration, dt,
                 duration / dt, MCA_SCENARIO_MAX_TICKS);
-        return MCA_ERANGE;
+        return MCA_ECONFIG;
     }
     return MCA_OK;
 }
@@ -320,7 +320,7 @@ static int check_at(const char *path, const char *key, int nth, const char *fiel
         return MCA_OK;
     }
     set_err(err, errlen, "%s:%d: %s: %s", path, key_line(path, key, nth), field, why);
-    return MCA_ERANGE;
+    return MCA_ECONFIG;
 }
 
 #define CHECK_AT(key, nth, field, v)                                                                         \
@@ -552,7 +552,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
                         MCA_OK) {
                         set_err(err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
                                 entry_line(path, "points", n_points, i), ai, i, k, why);
-                        rc = MCA_ERANGE;
+                        rc = MCA_ECONFIG;
                         goto out;
                     }
                 }

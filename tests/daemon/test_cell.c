@@ -226,7 +226,7 @@ static void test_missing_required(void **state) {
 static void test_d1_ge_d2(void **state) {
     (void)state;
     const char *p = write_variant("d1d2", "d1: 0.04", "d1: 0.15");
-    expect_error(p, MCA_ERANGE, line_of(p, "d1: 0.15"), "d1/d2", "d1 < d2", "d1 = 0.15, d2 = 0.15", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "d1: 0.15"), "d1/d2", "d1 < d2", "d1 = 0.15, d2 = 0.15", NULL);
 }
 
 static void test_missing_urdf(void **state) {
@@ -241,7 +241,7 @@ static void test_missing_urdf(void **state) {
 static void test_unknown_backend(void **state) {
     (void)state;
     const char *p = write_variant("backend", "backend: socketcan", "backend: ethercat");
-    expect_error(p, MCA_ERANGE, line_of(p, "ethercat"), "arms[1].backend", "unknown backend 'ethercat'",
+    expect_error(p, MCA_ECONFIG, line_of(p, "ethercat"), "arms[1].backend", "unknown backend 'ethercat'",
                  NULL);
 }
 
@@ -249,14 +249,14 @@ static void test_dof_mismatch(void **state) {
     (void)state;
     const char *p =
         write_variant("dof", "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]", "q0: [0.0, 0.3, 0.0]");
-    expect_error(p, MCA_ERANGE, line_of(p, "q0: [0.0, 0.3, 0.0]"), "arms[0].q0", "3 values", "has 8 joints",
+    expect_error(p, MCA_ECONFIG, line_of(p, "q0: [0.0, 0.3, 0.0]"), "arms[0].q0", "3 values", "has 8 joints",
                  "DOF mismatch", NULL);
 }
 
 static void test_q0_outside_limits(void **state) {
     (void)state;
     const char *p = write_variant("q0lim", "q0: [0.1, 0.3,", "q0: [9.0, 0.3,");
-    expect_error(p, MCA_ERANGE, line_of(p, "q0: [9.0"), "arms[1].q0[0] = 9", "outside joint", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "q0: [9.0"), "arms[1].q0[0] = 9", "outside joint", NULL);
 }
 
 #ifdef MCA_TEST_HOOKS
@@ -271,7 +271,7 @@ static void test_debug_kill_hook(void **state) {
     }
     assert_true(cell.debug_kill_after_ticks == 1500);
     p = write_variant("kill_hook_neg", "stop_after: 1.5", "stop_after: 1.5\ndebug_kill_after_ticks: -1");
-    expect_error(p, MCA_ERANGE, line_of(p, "debug_kill_after_ticks"), "debug_kill_after_ticks",
+    expect_error(p, MCA_ECONFIG, line_of(p, "debug_kill_after_ticks"), "debug_kill_after_ticks",
                  "must be >= 0", NULL);
     p = write_variant("fault_hook", "stop_after: 1.5", "stop_after: 1.5\ndebug_start_in_fault: true");
     if (mca_cell_load(p, &cell, err, sizeof err) != MCA_OK) {
@@ -301,13 +301,13 @@ static void test_debug_kill_hook(void **state) {
 static void test_negative_period(void **state) {
     (void)state;
     const char *p = write_variant("period", "period_us: 2000", "period_us: -1000");
-    expect_error(p, MCA_ERANGE, line_of(p, "period_us"), "rt.period_us", "got -1000", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "period_us"), "rt.period_us", "got -1000", NULL);
 }
 
 static void test_bad_priority(void **state) {
     (void)state;
     const char *p = write_variant("prio", "priority: 70", "priority: 150");
-    expect_error(p, MCA_ERANGE, line_of(p, "priority: 150"), "rt.priority", "0..99", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "priority: 150"), "rt.priority", "0..99", NULL);
 }
 
 static void test_scenario_missing(void **state) {
@@ -332,7 +332,7 @@ static void test_dds_config_missing(void **state) {
 static void test_unknown_scheme(void **state) {
     (void)state;
     const char *p = write_variant("scheme", "scheme: mvn", "scheme: magic");
-    expect_error(p, MCA_ERANGE, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
 }
 
 /* ROS 2 (issue 14): dds.ros2 and task.stream keys; bad values name file, line and field. */
@@ -340,7 +340,7 @@ static void test_ros2_keys(void **state) {
     (void)state;
     const char *p = write_variant("r2ns", "  publish_divisor: 4\n",
                                   "  publish_divisor: 4\n  ros2: {namespace: bad-name}\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "namespace: bad-name"), "dds.ros2.namespace", "not a ROS 2 name",
+    expect_error(p, MCA_ECONFIG, line_of(p, "namespace: bad-name"), "dds.ros2.namespace", "not a ROS 2 name",
                  NULL);
     p = write_variant("r2ok", "  publish_divisor: 4\n", "  publish_divisor: 4\n  ros2: {markers: false}\n");
     char err[512] = "";
@@ -353,14 +353,14 @@ static void test_ros2_keys(void **state) {
     char text[256];
     snprintf(text, sizeof text, stream, "5.0", "1");
     p = write_variant("stspeed", "  duration: 3.5\n", text);
-    expect_error(p, MCA_ERANGE, line_of(p, "max_speed"), "task.stream.max_speed", "5 outside", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "max_speed"), "task.stream.max_speed", "5 outside", NULL);
     snprintf(text, sizeof text, stream, "0.2", "-1");
     p = write_variant("stbox", "  duration: 3.5\n", text);
-    expect_error(p, MCA_ERANGE, line_of(p, "workspace_max"), "task.stream.workspace_max[2]", "not above",
+    expect_error(p, MCA_ECONFIG, line_of(p, "workspace_max"), "task.stream.workspace_max[2]", "not above",
                  NULL);
     snprintf(text, sizeof text, stream, "0.2", "1");
     p = write_variant("stdds", "  duration: 3.5\n", text); /* the good cell has DDS off */
-    expect_error(p, MCA_ERANGE, line_of(p, "stream:"), "task.stream", "needs dds.enabled", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "stream:"), "task.stream", "needs dds.enabled", NULL);
     p = write_variant("starm", "    path: {kind: circle", "    stream: pose\n    path: {kind: circle");
     expect_error(p, MCA_EPARSE, line_of(p, "stream: pose"), "arms[1].stream", "only in a streamed task",
                  NULL);
@@ -420,20 +420,20 @@ static void test_mca_ts_keys(void **state) {
     assert_true(cfg.ts.priority[0] == 3.0 && cfg.ts.priority[1] == 1.0);
     assert_true(cfg.ts.dec_limit[0] == 4.0 && cfg.ts.dec_limit[1] == 10.0);
     p = write_variant("ts5", "    dec_limit: 4.0\n", "    dec_limit: 4.0\n    priority: 0\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "priority: 0"), "arms[0].priority", "must be in (0, 1000] (got 0)",
-                 NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "priority: 0"), "arms[0].priority",
+                 "must be in (0, 1000] (got 0)", NULL);
     p = write_variant("ts6", "  pdnn_max_steps: 321\n", "  pdnn_max_steps: 321\n  deadlock_time: -1\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "deadlock_time: -1"), "solver.deadlock_time",
+    expect_error(p, MCA_ECONFIG, line_of(p, "deadlock_time: -1"), "solver.deadlock_time",
                  "must be in (0, 60] s (got -1)", NULL);
     p = write_variant("ts7", "  pdnn_max_steps: 321\n", "  pdnn_max_steps: 321\n  back_off_time: 0\n");
-    expect_error(p, MCA_ERANGE, line_of(p, "back_off_time: 0"), "solver.back_off_time",
+    expect_error(p, MCA_ECONFIG, line_of(p, "back_off_time: 0"), "solver.back_off_time",
                  "must be in (0, 60] s (got 0)", NULL);
 }
 
 static void test_duplicate_arm(void **state) {
     (void)state;
     const char *p = write_variant("dup", "  - name: right", "  - name: left");
-    expect_error(p, MCA_ERANGE, line_of(p, "backend: socketcan") - 1, "arms[1].name", "used twice", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "backend: socketcan") - 1, "arms[1].name", "used twice", NULL);
 }
 
 /* Every shipped cell file loads (they reference the scheme's scenario files and the URDFs). */

@@ -476,7 +476,7 @@ static void test_scenario_files(void **state) {
     /* semantic error: d1 >= d2, message names file, line and field */
     snprintf(buf, sizeof buf, "d1: 0.2\nd2: 0.1\n%s", base);
     p = write_tmp("d1d2", buf);
-    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ECONFIG);
     char want[300];
     snprintf(want, sizeof want, "%s:2:", p);
     assert_non_null(strstr(err, want));
@@ -489,7 +489,7 @@ static void test_scenario_files(void **state) {
         "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n        - [1, 0, 0]\n"
         "      durations: [1]\n");
     p = write_tmp("dur", buf);
-    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ECONFIG);
     assert_non_null(strstr(err, "durations"));
     assert_non_null(strstr(err, ":10:")); /* the line of "points:" */
     remove(p);
@@ -498,7 +498,7 @@ static void test_scenario_files(void **state) {
     k = strstr(buf, "kind: hold");
     snprintf(k, sizeof buf - (size_t)(k - buf), "kind: circle\n      period: 1\n");
     p = write_tmp("circle", buf);
-    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ERANGE);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ECONFIG);
     assert_non_null(strstr(err, "radius"));
     remove(p);
     /* q0 count must match the URDF at config time */

@@ -26,6 +26,7 @@ enum mca_retcode {
     MCA_ENOTSUP = -11,    /**< not supported by this backend or build */
     MCA_EAGAIN = -12,     /**< nothing available now; try again (non-blocking I/O, empty ring) */
     MCA_EFAULT = -13,     /**< the arm or the controller is in fault */
+    MCA_ECONFIG = -14,    /**< a cell or scenario value not allowed (the message names file:line: field) */
 };
 
 /** Short constant text for a return code ("invalid argument", ...); never NULL. */
