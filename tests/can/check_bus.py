@@ -15,7 +15,10 @@ import cantools
 BASE = 0x100
 CAN_ERR_FLAG = 0x20000000
 HEARTBEAT = 10  # MCA_CAN_HEARTBEAT_CYCLES
-DELIVERY_LAG = 3  # reads an error frame may be counted late when the kernel delivers it late (check_e)
+# reads an error frame may be counted late when the kernel delivers it late (case_e): seen 2 in CI, 4 on a host
+# running builds beside CI; the bug the check catches holds the bus-off frame until the emulator's next
+# feedback, about 50 reads later (it is stopped for 50 ms)
+DELIVERY_LAG = 12
 FAILS = []
 
 
