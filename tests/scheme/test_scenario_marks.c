@@ -239,6 +239,15 @@ static const char *const good_arms[] = {
 #define CIRCLE_TAIL "      radius: 0.1\n      period: 2\n      u: [0, 1, 0]\n      v: [1, 0, 0]\n"
 
 static const struct scase arm_cases[] = {
+    /* flow mappings: the field on the line of "path:" (a text scan for "t0:" at a line's start missed it) */
+    {"t0_flow",
+     ARM_HEAD(
+         "bad") "    path: {kind: circle, t0: -1, radius: 0.1, period: 2, u: [0, 1, 0], v: [1, 0, 0]} #@\n",
+     "arms[*].path.t0"},
+    {"turns_flow",
+     ARM_HEAD("bad") "    path: {kind: circle, radius: 0.1, period: 2,\n"
+                     "           turns: -1, u: [0, 1, 0], v: [1, 0, 0]} #@\n",
+     "arms[*].path.turns"},
     {"base_xyz",
      "  - name: bad\n    urdf: /x.urdf\n    base_xyz: [0, 0, 200] #@\n    q0: [0]\n"
      "    path:\n      kind: hold\n",
