@@ -15,6 +15,7 @@
 #include "mca/scheme.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
+#include "mca/yaml_marks.h"
 
 /* ---------------------------------------------------------------- YAML (start-up only) */
 
@@ -167,82 +168,25 @@ static void set_err(char *err, size_t errlen, const char *fmt, ...) {
     va_end(ap);
 }
 
-/* Line of the (nth, 0-based) occurrence of "key:" in the file, for messages about values that parsed but
- * are out of range (libcyaml keeps no positions after loading). 0 when not found. */
-static int key_line(const char *path, const char *key, int nth) {
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        return 0;
-    }
-    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
-    size_t cap = 0;
-    int line = 0, found = 0, seen = 0;
-    const size_t kl = strlen(key);
-    while (getline(&buf, &cap, f) != -1) {
-        line++;
-        const char *c = buf;
-        while (*c == ' ' || *c == '-') {
-            c++;
-        }
-        if (strncmp(c, key, kl) == 0 && c[kl] == ':') {
-            if (seen++ == nth) {
-                found = line;
-                break;
-            }
-        }
-    }
-    free(buf);
-    fclose(f);
-    return found;
+/* Line of the node at the printf-formatted path ("arms[1].path.t0"), or for a missing field of its nearest
+ * enclosing node that is present ("arms[1].path"): libcyaml keeps no positions after loading, the marks
+ * (mca/yaml_marks.h) do. 0 when the marks could not be read. */
+__attribute__((format(printf, 2, 3))) static int line_of(const mca_yaml_marks_t *marks, const char *fmt,
+                                                         ...) {
+    char node[MCA_YAML_MARKS_PATH_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(node, sizeof node, fmt, ap);
+    va_end(ap);
+    return mca_yaml_marks_line_or_parent(marks, node);
 }
 
-/* Line of entry idx of the block sequence under the nth "key:" (one "- " item per line); the key's own line
- * for a flow sequence ("key: [...]") or when the entry is not found. */
-static int entry_line(const char *path, const char *key, int nth, unsigned idx) {
-    const int kl = key_line(path, key, nth);
-    FILE *f = kl ? fopen(path, "r") : NULL;
-    if (!f) {
-        return kl;
-    }
-    char *buf = NULL;
-    size_t cap = 0;
-    int line = 0, found = kl, key_indent = 0;
-    unsigned seen = 0;
-    while (getline(&buf, &cap, f) != -1) {
-        line++;
-        int ind = 0;
-        while (buf[ind] == ' ') {
-            ind++;
-        }
-        if (line == kl) {
-            key_indent = ind;
-            const char *colon = strchr(buf, ':');
-            if (colon && strchr(colon, '[')) {
-                break; /* flow sequence on the key's line */
-            }
-            continue;
-        }
-        if (line < kl || buf[ind] == '#' || buf[ind] == '\n' || buf[ind] == 0) {
-            continue;
-        }
-        if (buf[ind] != '-' || ind < key_indent) {
-            break; /* past the sequence */
-        }
-        if (seen++ == idx) {
-            found = line;
-            break;
-        }
-    }
-    free(buf);
-    fclose(f);
-    return found;
-}
-
-#define FAIL_AT(key, nth, ...)                                                                               \
+/* "FILE:LINE: message" and MCA_ECONFIG */
+#define FAIL_AT(line, ...)                                                                                   \
     do {                                                                                                     \
         char m_[256];                                                                                        \
         snprintf(m_, sizeof m_, __VA_ARGS__);                                                                \
-        set_err(err, errlen, "%s:%d: %s", path, key_line(path, key, nth), m_);                               \
+        set_err(err, errlen, "%s:%d: %s", path, (line), m_);                                                 \
         rc = MCA_ECONFIG;                                                                                    \
         goto out;                                                                                            \
     } while (0)
@@ -311,21 +255,21 @@ int mca_scenario_check_duration(double duration, double dt, char *why, size_t wh
     return MCA_OK;
 }
 
-/* Range check of one value read from the file: "FILE:LINE: FIELD: must be in ..." on error (LINE: the nth
- * occurrence of key). */
-static int check_at(const char *path, const char *key, int nth, const char *field, double v, char *err,
-                    size_t errlen) {
+/* Range check of one value read from the file (range of key): "FILE:LINE: FIELD: must be in ..." on error,
+ * LINE that of the node FIELD ("arms[1].base_xyz[2]"). */
+static int check_at(const char *path, const mca_yaml_marks_t *marks, const char *key, const char *field,
+                    double v, char *err, size_t errlen) {
     char why[160];
     if (mca_range_check(mca_scenario_range(key), v, why, sizeof why) == MCA_OK) {
         return MCA_OK;
     }
-    set_err(err, errlen, "%s:%d: %s: %s", path, key_line(path, key, nth), field, why);
+    set_err(err, errlen, "%s:%d: %s: %s", path, line_of(marks, "%s", field), field, why);
     return MCA_ECONFIG;
 }
 
-#define CHECK_AT(key, nth, field, v)                                                                         \
+#define CHECK_AT(key, field, v)                                                                              \
     do {                                                                                                     \
-        if ((rc = check_at(path, key, nth, field, v, err, errlen)) != MCA_OK) {                              \
+        if ((rc = check_at(path, &marks, key, field, v, err, errlen)) != MCA_OK) {                           \
             goto out;                                                                                        \
         }                                                                                                    \
     } while (0)
@@ -388,6 +332,11 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         return MCA_EPARSE;
     }
 
+    /* where each field is, for the messages below (the same file parsed once more, by libyaml); without
+     * them (cannot happen once libcyaml has read the file, but for a file changed since) the lines are 0 */
+    mca_yaml_marks_t marks = {.mark = NULL};
+    (void)mca_yaml_marks_load(path, &marks, NULL, 0);
+
     mca_scenario_t scn;
     int rc = MCA_OK;
     mca_scenario_defaults(&scn);
@@ -396,40 +345,41 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     scn.duration = raw->duration;
     mca_scenario_params_t *p = &scn.params;
     if (raw->dt) {
-        CHECK_AT("dt", 0, "dt", *raw->dt);
+        CHECK_AT("dt", "dt", *raw->dt);
         p->dt = *raw->dt;
     }
     {
         char why[160];
         if (mca_scenario_check_duration(scn.duration, p->dt, why, sizeof why) != MCA_OK) {
-            FAIL_AT("duration", 0, "duration: %s", why);
+            FAIL_AT(line_of(&marks, "duration"), "duration: %s", why);
         }
     }
     if (raw->d1) {
-        CHECK_AT("d1", 0, "d1", *raw->d1);
+        CHECK_AT("d1", "d1", *raw->d1);
         p->d1 = *raw->d1;
     }
     if (raw->d2) {
-        CHECK_AT("d2", 0, "d2", *raw->d2);
+        CHECK_AT("d2", "d2", *raw->d2);
         p->d2 = *raw->d2;
     }
     if (!(p->d1 < p->d2)) {
-        FAIL_AT("d2", 0, "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
+        FAIL_AT(raw->d1 ? line_of(&marks, "d1") : line_of(&marks, "d2"),
+                "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
     }
     if (raw->K) {
-        CHECK_AT("K", 0, "K", *raw->K);
+        CHECK_AT("K", "K", *raw->K);
         p->K = *raw->K;
     }
     if (raw->epsilon) {
-        CHECK_AT("epsilon", 0, "epsilon", *raw->epsilon);
+        CHECK_AT("epsilon", "epsilon", *raw->epsilon);
         p->epsilon = *raw->epsilon;
     }
     if (raw->v_normal) {
-        CHECK_AT("v_normal", 0, "v_normal", *raw->v_normal);
+        CHECK_AT("v_normal", "v_normal", *raw->v_normal);
         p->v_normal = *raw->v_normal;
     }
     if (raw->v_floor) {
-        CHECK_AT("v_floor", 0, "v_floor", *raw->v_floor);
+        CHECK_AT("v_floor", "v_floor", *raw->v_floor);
         p->v_floor = *raw->v_floor;
     }
     if (raw->form) {
@@ -440,13 +390,11 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     for (unsigned i = 0; i < raw->sample_times_count; i++) {
         char field[32];
         snprintf(field, sizeof field, "sample_times[%u]", i);
-        CHECK_AT("sample_times", 0, field, raw->sample_times[i]);
+        CHECK_AT("sample_times", field, raw->sample_times[i]);
         scn.sample_times[i] = raw->sample_times[i];
     }
 
     scn.n_arms = (int)raw->arms_count;
-    /* how many earlier arms wrote each optional key: the nth occurrence in the file is this arm's */
-    int n_rpy = 0, n_t0 = 0, n_radius = 0, n_period = 0, n_turns = 0, n_points = 0, n_durations = 0;
     for (unsigned a = 0; a < raw->arms_count; a++) {
         const struct raw_arm *ra = &raw->arms[a];
         mca_scenario_arm_t *sa = &scn.arm[a];
@@ -464,15 +412,14 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link ? ra->tip_link : "");
         for (int i = 0; i < 3; i++) {
             snprintf(field, sizeof field, "arms[%d].base_xyz[%d]", ai, i);
-            CHECK_AT("base_xyz", ai, field, ra->base_xyz[i]);
+            CHECK_AT("base_xyz", field, ra->base_xyz[i]);
             sa->base_xyz[i] = ra->base_xyz[i];
             if (ra->base_rpy) {
                 snprintf(field, sizeof field, "arms[%d].base_rpy[%d]", ai, i);
-                CHECK_AT("base_rpy", n_rpy, field, ra->base_rpy[i]);
+                CHECK_AT("base_rpy", field, ra->base_rpy[i]);
             }
             sa->base_rpy[i] = ra->base_rpy ? ra->base_rpy[i] : 0.0;
         }
-        n_rpy += ra->base_rpy != NULL;
         sa->n_q0 = (int)ra->q0_count;
         for (unsigned j = 0; j < ra->q0_count; j++) {
             sa->q0[j] = ra->q0[j];
@@ -484,7 +431,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         pp->t0 = rp->t0 ? *rp->t0 : 0.0;
         if (rp->t0) {
             snprintf(field, sizeof field, "arms[%d].path.t0", ai);
-            CHECK_AT("t0", n_t0, field, pp->t0);
+            CHECK_AT("t0", field, pp->t0);
         }
         switch (rp->kind) {
         case RAW_HOLD:
@@ -495,34 +442,37 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             pp->kind = MCA_PATH_CIRCLE;
             pp->relative = 1;
             if (!rp->radius) {
-                FAIL_AT("kind", ai, "arms[%d].path.radius: circle needs radius > 0", ai);
+                FAIL_AT(line_of(&marks, "arms[%d].path.radius", ai),
+                        "arms[%d].path.radius: circle needs radius > 0", ai);
             }
             if (!rp->period) {
-                FAIL_AT("kind", ai, "arms[%d].path.period: circle needs period > 0", ai);
+                FAIL_AT(line_of(&marks, "arms[%d].path.period", ai),
+                        "arms[%d].path.period: circle needs period > 0", ai);
             }
             if (!rp->u || !rp->v) {
-                FAIL_AT("kind", ai, "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
+                FAIL_AT(line_of(&marks, "arms[%d].path.%s", ai, rp->u ? "v" : "u"),
+                        "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
             }
             snprintf(field, sizeof field, "arms[%d].path.radius", ai);
-            CHECK_AT("radius", n_radius, field, *rp->radius);
+            CHECK_AT("radius", field, *rp->radius);
             snprintf(field, sizeof field, "arms[%d].path.period", ai);
-            CHECK_AT("period", n_period, field, *rp->period);
+            CHECK_AT("period", field, *rp->period);
             pp->radius = *rp->radius;
             pp->period = *rp->period;
             pp->turns = rp->turns ? *rp->turns : 1.0;
             if (rp->turns) {
                 snprintf(field, sizeof field, "arms[%d].path.turns", ai);
-                CHECK_AT("turns", n_turns, field, pp->turns);
+                CHECK_AT("turns", field, pp->turns);
             }
             {
                 double u[3], v[3];
                 if (unit3(u, rp->u) != 0) {
-                    FAIL_AT("u", ai, "arms[%d].path.u: zero vector", ai);
+                    FAIL_AT(line_of(&marks, "arms[%d].path.u", ai), "arms[%d].path.u: zero vector", ai);
                 }
                 /* Gram-Schmidt: v orthogonal to u */
                 mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u);
                 if (unit3(pp->v, v) != 0) {
-                    FAIL_AT("v", ai, "arms[%d].path.v: parallel to u", ai);
+                    FAIL_AT(line_of(&marks, "arms[%d].path.v", ai), "arms[%d].path.v: parallel to u", ai);
                 }
                 mca_v3_set(pp->u, u);
             }
@@ -532,14 +482,15 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             /* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then
              * visits the file's points; one duration per point. */
             if (!rp->points || rp->points_count < 1) {
-                FAIL_AT("kind", ai, "arms[%d].path.points: waypoints need points", ai);
+                FAIL_AT(line_of(&marks, "arms[%d].path.points", ai),
+                        "arms[%d].path.points: waypoints need points", ai);
             }
             if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
-                FAIL_AT("points", n_points, "arms[%d].path.points: at most %d points", ai,
-                        MCA_PATH_MAX_POINTS - 1);
+                FAIL_AT(line_of(&marks, "arms[%d].path.points", ai),
+                        "arms[%d].path.points: at most %d points", ai, MCA_PATH_MAX_POINTS - 1);
             }
             if (!rp->durations || rp->durations_count != rp->points_count) {
-                FAIL_AT("points", n_points,
+                FAIL_AT(line_of(&marks, "arms[%d].path.durations", ai),
                         "arms[%d].path.durations: need one duration per point (%u points, %u durations)", ai,
                         rp->points_count, rp->durations ? rp->durations_count : 0u);
             }
@@ -551,26 +502,21 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
                     if (mca_range_check(mca_scenario_range("points"), pp->p[i + 1][k], why, sizeof why) !=
                         MCA_OK) {
                         set_err(err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
-                                entry_line(path, "points", n_points, i), ai, i, k, why);
+                                line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai, i, k, why);
                         rc = MCA_ECONFIG;
                         goto out;
                     }
                 }
                 snprintf(field, sizeof field, "arms[%d].path.durations[%u]", ai, i);
-                CHECK_AT("durations", n_durations, field, rp->durations[i]);
+                CHECK_AT("durations", field, rp->durations[i]);
                 pp->dur[i] = rp->durations[i];
             }
             break;
         }
-        n_t0 += rp->t0 != NULL;
-        n_radius += rp->radius != NULL;
-        n_period += rp->period != NULL;
-        n_turns += rp->turns != NULL;
-        n_points += rp->points != NULL;
-        n_durations += rp->durations != NULL;
     }
     *scn_out = scn;
 out:
+    mca_yaml_marks_free(&marks);
     cyaml_free(&cfg, &scn_schema, raw, 0);
     return rc;
 }

@@ -74,7 +74,8 @@ def main():
         open(bad, "w").write("# a scenario\n\n  # to be written\n")
         expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
         # issue 16: a line over 1023 characters (fgets split it) shifted the line numbers of range errors
-        expect_at(bad, "# " + "x" * 3000 + "\n" + text.replace("d2: 0.12", "d2: 0.01"), "d2: 0.01", ["d1/d2"])
+        # (d1 >= d2 names the line of d1, issue 12)
+        expect_at(bad, "# " + "x" * 3000 + "\n" + text.replace("d2: 0.12", "d2: 0.01"), "d1: 0.05", ["d1/d2"])
         # issue 16: every number has a range (docs/scheme.md section 3), named with file, line and field
         for old_, new_, field, why in (
                 ("duration: 8.0", "duration: 1e7", "duration", "must be in (0, 3600] s (got 10000000)"),

@@ -1,0 +1,419 @@
+/* SPDX-License-Identifier: MIT */
+/* Issue 12: the YAML node locator (model/src/yaml_marks.c) and the exact "FILE:LINE: FIELD:" prefix of
+ * every scenario error that names a field (model/src/scenario.c), with the bad field in either arm. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "mca/err.h"
+#include "mca/path.h"
+#include "mca/scenario.h"
+#include "mca/yaml_marks.h"
+
+static const char *write_tmp(const char *name, const char *text) {
+    static char path[256];
+    snprintf(path, sizeof path, "/tmp/mca_marks_test_%d_%s.yaml", (int)getpid(), name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+    return path;
+}
+
+/* ------------------------------------------------------------------ yaml_marks */
+
+static const char doc[] = "name: demo\n"            /* 1 */
+                          "nested:\n"               /* 2 */
+                          "  a:\n"                  /* 3 */
+                          "    b: 1\n"              /* 4 */
+                          "  c: 2\n"                /* 5 */
+                          "list:\n"                 /* 6 */
+                          "  - x: 1\n"              /* 7 */
+                          "    y: [0, 0, 0]\n"      /* 8 */
+                          "  - x: 2\n"              /* 9 */
+                          "    # a comment\n"       /* 10 */
+                          "    y:\n"                /* 11 */
+                          "      - 1\n"             /* 12 */
+                          "      - 2\n"             /* 13 */
+                          "flow: [4,\n"             /* 14 */
+                          "  5, 6]\n"               /* 15 */
+                          "fm: {p: 1, q: [7, 8]}\n" /* 16 */
+                          "pts:\n"                  /* 17 */
+                          "  - [0, 0, 0]\n"         /* 18 */
+                          "  -\n"                   /* 19 */
+                          "    - 1\n"               /* 20 */
+                          "d1: 0.05\n";             /* 21 */
+
+static void check_doc(const mca_yaml_marks_t *m) {
+    static const struct {
+        const char *path;
+        int line;
+    } want[] = {
+        {"name", 1},    {"nested", 2},     {"nested.a", 3},   {"nested.a.b", 4},    {"nested.c", 5},
+        {"list", 6},    {"list[0]", 7},    {"list[0].x", 7},  {"list[0].y", 8},     {"list[0].y[2]", 8},
+        {"list[1]", 9}, {"list[1].x", 9},  {"list[1].y", 11}, {"list[1].y[0]", 12}, {"list[1].y[1]", 13},
+        {"flow", 14},   {"flow[0]", 14},   {"flow[1]", 15},   {"flow[2]", 15},      {"fm", 16},
+        {"fm.p", 16},   {"fm.q[1]", 16},   {"pts", 17},       {"pts[0]", 18},       {"pts[0][2]", 18},
+        {"pts[1]", 20}, {"pts[1][0]", 20}, {"d1", 21},
+    };
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        if (mca_yaml_marks_line(m, want[i].path) != want[i].line) {
+            print_error("%s: line %d, want %d\n", want[i].path, mca_yaml_marks_line(m, want[i].path),
+                        want[i].line);
+        }
+        assert_int_equal(mca_yaml_marks_line(m, want[i].path), want[i].line);
+    }
+    /* absent nodes: 0, or the nearest present parent */
+    assert_int_equal(mca_yaml_marks_line(m, "list[2]"), 0);
+    assert_int_equal(mca_yaml_marks_line(m, "nested.z"), 0);
+    assert_int_equal(mca_yaml_marks_line(m, ""), 0);
+    assert_int_equal(mca_yaml_marks_line(m, "list[1].y[7]"), 0);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "list[1].y[7]"), 11);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "list[1].z.w"), 9);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "nested.a.q"), 3);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "list[5].x"), 6);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "d1"), 21);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "zz"), 0);
+    assert_int_equal(mca_yaml_marks_line_or_parent(m, "zz.y[1]"), 0);
+    /* the scalars that are values are not nodes of their own */
+    assert_int_equal(mca_yaml_marks_line(m, "demo"), 0);
+    assert_int_equal(mca_yaml_marks_line(m, "name.demo"), 0);
+}
+
+static void test_marks_doc(void **state) {
+    (void)state;
+    char err[256];
+    mca_yaml_marks_t m;
+    const char *p = write_tmp("doc", doc);
+    assert_int_equal(mca_yaml_marks_load(p, &m, err, sizeof err), MCA_OK);
+    assert_int_equal(m.n, 34); /* every key and every entry of doc, once */
+    check_doc(&m);
+    mca_yaml_marks_free(&m);
+    assert_null(m.mark);
+    assert_int_equal(m.n, 0);
+    mca_yaml_marks_free(&m); /* twice is fine */
+    mca_yaml_marks_free(NULL);
+    remove(p);
+
+    assert_int_equal(mca_yaml_marks_parse(doc, strlen(doc), &m, err, sizeof err), MCA_OK);
+    check_doc(&m);
+    mca_yaml_marks_free(&m);
+    /* the first document only (libcyaml loads one) */
+    const char two[] = "a: 1\n---\nb: 2\n";
+    assert_int_equal(mca_yaml_marks_parse(two, strlen(two), &m, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_yaml_marks_line(&m, "a"), 1);
+    assert_int_equal(mca_yaml_marks_line(&m, "b"), 0);
+    mca_yaml_marks_free(&m);
+    /* empty and scalar documents: no marks */
+    assert_int_equal(mca_yaml_marks_parse("", 0, &m, err, sizeof err), MCA_OK);
+    assert_int_equal(m.n, 0);
+    mca_yaml_marks_free(&m);
+    assert_int_equal(mca_yaml_marks_parse("# only\n42\n", 10, &m, err, sizeof err), MCA_OK);
+    assert_int_equal(m.n, 0);
+    mca_yaml_marks_free(&m);
+}
+
+static void test_marks_errors(void **state) {
+    (void)state;
+    char err[256];
+    mca_yaml_marks_t m;
+    assert_int_equal(mca_yaml_marks_load("/nonexistent/x.yaml", &m, err, sizeof err), MCA_ENOENT);
+    assert_non_null(strstr(err, "/nonexistent/x.yaml"));
+    assert_int_equal(m.n, 0);
+    assert_int_equal(mca_yaml_marks_load(NULL, &m, err, sizeof err), MCA_EINVAL);
+    assert_int_equal(mca_yaml_marks_parse(NULL, 0, &m, NULL, 0), MCA_EINVAL);
+    /* not YAML: the message names the line */
+    const char bad[] = "a: 1\nb: [1, 2\nc: 3\n";
+    const char *p = write_tmp("bad", bad);
+    assert_int_equal(mca_yaml_marks_load(p, &m, err, sizeof err), MCA_EPARSE);
+    assert_null(m.mark);
+    char want[300];
+    snprintf(want, sizeof want, "%s:", p);
+    assert_memory_equal(err, want, strlen(want));
+    remove(p);
+    const char tab[] = "a:\n\tb: 1\n";
+    assert_int_equal(mca_yaml_marks_parse(tab, strlen(tab), &m, err, sizeof err), MCA_EPARSE);
+    assert_non_null(strstr(err, "<string>:2:"));
+    /* lookups on empty marks */
+    mca_yaml_marks_t empty = {.mark = NULL};
+    assert_int_equal(mca_yaml_marks_line(&empty, "a"), 0);
+    assert_int_equal(mca_yaml_marks_line_or_parent(&empty, "a.b[1]"), 0);
+    assert_int_equal(mca_yaml_marks_line(NULL, "a"), 0);
+    assert_int_equal(mca_yaml_marks_line_or_parent(&empty, NULL), 0);
+}
+
+/* Hostile input: deep nesting and long keys are bounded, the rest is still right. */
+static void test_marks_bounds(void **state) {
+    (void)state;
+    char err[256];
+    mca_yaml_marks_t m;
+    /* 1000 nested flow sequences, then a key after them */
+    const int deep = 1000;
+    char *text = malloc((size_t)deep * 2 + 64);
+    assert_non_null(text);
+    size_t n = (size_t)snprintf(text, 16, "a: ");
+    for (int i = 0; i < deep; i++) {
+        text[n++] = '[';
+    }
+    for (int i = 0; i < deep; i++) {
+        text[n++] = ']';
+    }
+    n += (size_t)snprintf(text + n, 32, "\nb: [1]\n");
+    assert_int_equal(mca_yaml_marks_parse(text, n, &m, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_yaml_marks_line(&m, "a"), 1);
+    assert_int_equal(mca_yaml_marks_line(&m, "a[0][0]"), 1);
+    assert_int_equal(mca_yaml_marks_line(&m, "b[0]"), 2);
+    assert_true(m.n < 200);
+    for (size_t i = 0; i < m.n; i++) {
+        assert_true(strlen(m.mark[i].path) < MCA_YAML_MARKS_PATH_MAX);
+    }
+    mca_yaml_marks_free(&m);
+    /* a key longer than a path: not recorded, nor anything below it; its siblings are */
+    char key[300];
+    memset(key, 'k', sizeof key - 1);
+    key[sizeof key - 1] = 0;
+    free(text);
+    text = malloc(1024);
+    assert_non_null(text);
+    n = (size_t)snprintf(text, 1024, "top:\n  %s:\n    x: [1, 2]\n  after: {y: 3}\nend: 1\n", key);
+    assert_int_equal(mca_yaml_marks_parse(text, n, &m, err, sizeof err), MCA_OK);
+    assert_int_equal(m.n, 4); /* top, top.after, top.after.y, end + nothing from the long key */
+    assert_int_equal(mca_yaml_marks_line(&m, "top"), 1);
+    assert_int_equal(mca_yaml_marks_line(&m, "top.after"), 4);
+    assert_int_equal(mca_yaml_marks_line(&m, "top.after.y"), 4);
+    assert_int_equal(mca_yaml_marks_line(&m, "end"), 5);
+    mca_yaml_marks_free(&m);
+    free(text);
+    /* more nodes than MCA_YAML_MARKS_MAX: an error, and nothing kept */
+    const size_t many = MCA_YAML_MARKS_MAX + 10;
+    text = malloc(many * 2 + 16);
+    assert_non_null(text);
+    n = 0;
+    text[n++] = '[';
+    for (size_t i = 0; i < many; i++) {
+        text[n++] = '0';
+        text[n++] = ',';
+    }
+    text[n - 1] = ']';
+    assert_int_equal(mca_yaml_marks_parse(text, n, &m, err, sizeof err), MCA_ERANGE);
+    assert_non_null(strstr(err, "more than"));
+    assert_null(m.mark);
+    assert_int_equal(m.n, 0);
+    free(text);
+    /* a complex key (a mapping as a key): it and its value are not recorded */
+    const char cx[] = "? {a: 1}\n: {b: 2}\nc: 3\n";
+    assert_int_equal(mca_yaml_marks_parse(cx, strlen(cx), &m, err, sizeof err), MCA_OK);
+    assert_int_equal(m.n, 1);
+    assert_int_equal(mca_yaml_marks_line(&m, "c"), 3);
+    mca_yaml_marks_free(&m);
+}
+
+/* ------------------------------------------------------------------ scenario error lines */
+
+/* "#@" ends the line the error must name; '*' in a field is the bad arm's index. */
+struct scase {
+    const char *name;
+    const char *text; /* an arm (arm cases) or the top-level keys (top cases) */
+    const char *field;
+};
+
+#define ARM_HEAD(n) "  - name: " n "\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
+
+/* Valid arms with every optional key, so a locator that counts occurrences would be misled. */
+static const char *const good_arms[] = {
+    ARM_HEAD("circle") "    base_rpy: [0, 0, 0]\n    path:\n      kind: circle\n      t0: 0.5\n"
+                       "      radius: 0.1\n      period: 2\n      turns: 2\n      u: [0, 1, 0]\n"
+                       "      v: [1, 0, 0]\n",
+    ARM_HEAD("hold") "    path:\n      kind: hold\n",
+    ARM_HEAD("wp") "    path:\n      kind: waypoints\n      t0: 1\n      points:\n        - [0, 0, 0]\n"
+                   "        - [0.1, 0, 0]\n      durations: [1, 1]\n",
+};
+
+#define CIRCLE_TAIL "      radius: 0.1\n      period: 2\n      u: [0, 1, 0]\n      v: [1, 0, 0]\n"
+
+static const struct scase arm_cases[] = {
+    /* flow mappings: the field on the line of "path:" (a text scan for "t0:" at a line's start missed it) */
+    {"t0_flow",
+     ARM_HEAD(
+         "bad") "    path: {kind: circle, t0: -1, radius: 0.1, period: 2, u: [0, 1, 0], v: [1, 0, 0]} #@\n",
+     "arms[*].path.t0"},
+    {"turns_flow",
+     ARM_HEAD("bad") "    path: {kind: circle, radius: 0.1, period: 2,\n"
+                     "           turns: -1, u: [0, 1, 0], v: [1, 0, 0]} #@\n",
+     "arms[*].path.turns"},
+    {"base_xyz",
+     "  - name: bad\n    urdf: /x.urdf\n    base_xyz: [0, 0, 200] #@\n    q0: [0]\n"
+     "    path:\n      kind: hold\n",
+     "arms[*].base_xyz[2]"},
+    {"base_rpy", ARM_HEAD("bad") "    base_rpy: [0, 7, 0] #@\n    path:\n      kind: hold\n",
+     "arms[*].base_rpy[1]"},
+    {"t0", ARM_HEAD("bad") "    path:\n      kind: circle\n      t0: -1 #@\n" CIRCLE_TAIL, "arms[*].path.t0"},
+    {"radius_missing",
+     ARM_HEAD(
+         "bad") "    path: #@\n      kind: circle\n      period: 2\n      u: [0, 1, 0]\n      v: [1, 0, 0]\n",
+     "arms[*].path.radius"},
+    {"period_missing",
+     ARM_HEAD("bad") "    path: #@\n      kind: circle\n      radius: 0.1\n      u: [0, 1, 0]\n      v: [1, "
+                     "0, 0]\n",
+     "arms[*].path.period"},
+    {"u_missing",
+     ARM_HEAD("bad") "    path: #@\n      kind: circle\n      radius: 0.1\n      period: 2\n"
+                     "      v: [1, 0, 0]\n",
+     "arms[*].path.u/v"},
+    {"v_missing",
+     ARM_HEAD("bad") "    path: #@\n      kind: circle\n      radius: 0.1\n      period: 2\n"
+                     "      u: [1, 0, 0]\n",
+     "arms[*].path.u/v"},
+    {"radius",
+     ARM_HEAD("bad") "    path:\n      kind: circle\n      radius: 0 #@\n      period: 2\n"
+                     "      u: [0, 1, 0]\n      v: [1, 0, 0]\n",
+     "arms[*].path.radius"},
+    {"period",
+     ARM_HEAD("bad") "    path:\n      kind: circle\n      radius: 0.1\n      period: -2 #@\n"
+                     "      u: [0, 1, 0]\n      v: [1, 0, 0]\n",
+     "arms[*].path.period"},
+    {"turns", ARM_HEAD("bad") "    path:\n      kind: circle\n" CIRCLE_TAIL "      turns: 0 #@\n",
+     "arms[*].path.turns"},
+    {"u_zero",
+     ARM_HEAD("bad") "    path:\n      kind: circle\n      radius: 0.1\n      period: 2\n"
+                     "      u: [0, 0, 0] #@\n      v: [1, 0, 0]\n",
+     "arms[*].path.u"},
+    {"v_parallel",
+     ARM_HEAD("bad") "    path:\n      kind: circle\n      radius: 0.1\n      period: 2\n"
+                     "      u: [0, 1, 0]\n      v: [0, -3, 0] #@\n",
+     "arms[*].path.v"},
+    {"points_missing", ARM_HEAD("bad") "    path: #@\n      kind: waypoints\n      durations: [1]\n",
+     "arms[*].path.points"},
+    {"durations_count",
+     ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n"
+                     "        - [1, 0, 0]\n      durations: [1] #@\n",
+     "arms[*].path.durations"},
+    {"durations_missing",
+     ARM_HEAD("bad") "    path: #@\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n",
+     "arms[*].path.durations"},
+    {"points_value",
+     ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n"
+                     "        - [0, 500, 0] #@\n      durations: [1, 1]\n",
+     "arms[*].path.points[1][1]"},
+    {"points_flow_value",
+     ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points: [[0, 0, 0],\n"
+                     "               [0, 0, -500]] #@\n      durations: [1, 1]\n",
+     "arms[*].path.points[1][2]"},
+    {"durations_value",
+     ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n"
+                     "        - [1, 0, 0]\n      durations: [1, 0] #@\n",
+     "arms[*].path.durations[1]"},
+};
+
+static const struct scase top_cases[] = {
+    {"dt", "duration: 1\ndt: 1 #@\n", "dt"},
+    {"duration", "duration: 7200 #@\n", "duration"},
+    {"duration_ticks", "dt: 0.0001\nduration: 3600 #@\n", "duration"},
+    {"d1", "duration: 1\nd1: 2 #@\n", "d1"},
+    {"d2", "duration: 1\nd2: 5 #@\n", "d2"},
+    {"d1d2", "duration: 1\nd1: 0.2 #@\nd2: 0.1\n", "d1/d2"},
+    {"d1d2_no_d1", "duration: 1\nd2: 0.01 #@\n", "d1/d2"},
+    {"K", "duration: 1\nK: -1 #@\n", "K"},
+    {"epsilon", "duration: 1\nepsilon: 0 #@\n", "epsilon"},
+    {"v_normal", "duration: 1\nv_normal: 0 #@\n", "v_normal"},
+    {"v_floor", "duration: 1\nv_floor: -1 #@\n", "v_floor"},
+    {"sample_times", "duration: 1\nsample_times: [0, 1, 9999] #@\n", "sample_times[2]"},
+};
+
+/* Load text (which holds one "#@") and require the error to start with "FILE:LINE: FIELD: ". */
+static void expect(const char *name, const char *text, const char *field, int arm) {
+    const char *mark = strstr(text, "#@");
+    assert_non_null(mark);
+    assert_null(strstr(mark + 2, "#@"));
+    int line = 1;
+    for (const char *c = text; c < mark; c++) {
+        line += *c == '\n';
+    }
+    char f[96];
+    snprintf(f, sizeof f, "%s", field);
+    char *star = strchr(f, '*');
+    if (star) {
+        *star = (char)('0' + arm);
+    }
+    static mca_scenario_t s;
+    char err[1024] = "";
+    const char *p = write_tmp(name, text);
+    const int rc = mca_scenario_load(p, &s, err, sizeof err);
+    char want[512];
+    snprintf(want, sizeof want, "%s:%d: %s: ", p, line, f);
+    if (rc != MCA_ECONFIG || strncmp(err, want, strlen(want)) != 0) {
+        print_error("case %s (bad arm %d): rc %d\n  got  %s\n  want %s...\n--\n%s--\n", name, arm, rc, err,
+                    want, text);
+    }
+    assert_int_equal(rc, MCA_ECONFIG);
+    assert_memory_equal(err, want, strlen(want));
+    remove(p);
+}
+
+static void test_scenario_arm_errors(void **state) {
+    (void)state;
+    static char text[16384];
+    for (size_t c = 0; c < sizeof arm_cases / sizeof arm_cases[0]; c++) {
+        for (size_t g = 0; g < sizeof good_arms / sizeof good_arms[0]; g++) {
+            for (int bad = 0; bad < 2; bad++) {
+                snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%s",
+                         bad == 0 ? arm_cases[c].text : good_arms[g],
+                         bad == 0 ? good_arms[g] : arm_cases[c].text);
+                expect(arm_cases[c].name, text, arm_cases[c].field, bad);
+            }
+        }
+    }
+}
+
+/* More points than a path takes (MCA_PATH_MAX_POINTS - 1): the line of "points:", in either arm. */
+static void test_scenario_too_many_points(void **state) {
+    (void)state;
+    static char arm[8192], text[16384];
+    size_t n = (size_t)snprintf(arm, sizeof arm,
+                                ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points: #@\n");
+    for (int i = 0; i < MCA_PATH_MAX_POINTS; i++) {
+        n += (size_t)snprintf(arm + n, sizeof arm - n, "        - [0, 0, %d]\n", i);
+    }
+    snprintf(arm + n, sizeof arm - n, "      durations: [1]\n");
+    for (size_t g = 0; g < sizeof good_arms / sizeof good_arms[0]; g++) {
+        for (int bad = 0; bad < 2; bad++) {
+            snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%s", bad == 0 ? arm : good_arms[g],
+                     bad == 0 ? good_arms[g] : arm);
+            expect("too_many_points", text, "arms[*].path.points", bad);
+        }
+    }
+}
+
+static void test_scenario_top_errors(void **state) {
+    (void)state;
+    static char text[8192];
+    for (size_t c = 0; c < sizeof top_cases / sizeof top_cases[0]; c++) {
+        snprintf(text, sizeof text, "name: t\n%sarms:\n%s%s", top_cases[c].text, good_arms[0], good_arms[1]);
+        expect(top_cases[c].name, text, top_cases[c].field, 0);
+    }
+    /* and the valid arms load */
+    snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%s%s", good_arms[0], good_arms[1],
+             good_arms[2]);
+    static mca_scenario_t s;
+    char err[512];
+    const char *p = write_tmp("good", text);
+    assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_OK);
+    assert_int_equal(s.n_arms, 3);
+    remove(p);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_marks_doc),           cmocka_unit_test(test_marks_errors),
+        cmocka_unit_test(test_marks_bounds),        cmocka_unit_test(test_scenario_top_errors),
+        cmocka_unit_test(test_scenario_arm_errors), cmocka_unit_test(test_scenario_too_many_points),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
