@@ -320,7 +320,8 @@ static void test_scenario_missing(void **state) {
 static void test_socketcan_needs_interface(void **state) {
     (void)state;
     const char *p = write_variant("noif", "    interface: vcan1\n", "");
-    expect_error(p, MCA_EPARSE, line_of(p, "backend: socketcan"), "arms[1].interface", "required", NULL);
+    /* a missing field names its enclosing mapping's line: the arm's entry (issue 12) */
+    expect_error(p, MCA_EPARSE, line_of(p, "- name: right"), "arms[1].interface", "required", NULL);
 }
 
 static void test_dds_config_missing(void **state) {
