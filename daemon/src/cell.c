@@ -21,6 +21,7 @@
 #include "mca/ros2.h" /* mca_ros2_name_ok */
 #include "mca/urdf.h"
 #include "mca/vec3.h"
+#include "mca/yaml_marks.h"
 
 /* ---------------------------------------------------------------- schema */
 
@@ -363,34 +364,6 @@ static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list a
     s->n++;
 }
 
-/* First line >= from whose key (after indentation and "- ") is `key`; 0 if none. */
-static int find_key_from(const char *path, int from, const char *key) {
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        return 0;
-    }
-    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
-    size_t cap = 0;
-    int line = 0, found = 0;
-    const size_t kl = strlen(key);
-    while (getline(&buf, &cap, f) != -1) {
-        if (++line < from) {
-            continue;
-        }
-        const char *c = buf;
-        while (*c == ' ' || *c == '-') {
-            c++;
-        }
-        if (strncmp(c, key, kl) == 0 && c[kl] == ':') {
-            found = line;
-            break;
-        }
-    }
-    free(buf);
-    fclose(f);
-    return found;
-}
-
 /* Message for a libcyaml load failure. */
 static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t cerr, char *err,
                              size_t errlen) {
@@ -412,11 +385,6 @@ static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t
             first = 1;
         }
         snprintf(extra, sizeof extra, "%s", ls->what + strlen(unexpected));
-        const int l = find_key_from(path, line, extra);
-        if (l) {
-            line = l;
-            col = 0;
-        }
     }
     char field[256] = "";
     for (int i = ls->n - 1; i >= first; i--) {
@@ -430,6 +398,18 @@ static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t
     if (extra[0]) {
         const size_t fl = strlen(field);
         snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", extra);
+    }
+    if (strncmp(ls->what, unexpected, strlen(unexpected)) == 0) {
+        /* the key's own line (the file is YAML, only the key is not in the schema) */
+        mca_yaml_marks_t marks = {.mark = NULL};
+        if (mca_yaml_marks_load(path, &marks, NULL, 0) == MCA_OK) {
+            const int l = mca_yaml_marks_line(&marks, field);
+            if (l > 0) {
+                line = l;
+                col = 0;
+            }
+        }
+        mca_yaml_marks_free(&marks);
     }
     char pos[32];
     if (col > 0) {
@@ -453,110 +433,6 @@ static void set_err(char *err, size_t errlen, const char *fmt, ...) {
     va_end(ap);
 }
 
-static int indent_of(const char *s) {
-    int i = 0;
-    while (s[i] == ' ') {
-        i++;
-    }
-    return i;
-}
-
-/* Does line s (after indentation and "- ") start with "key:"? Flow mappings on one line also match
- * ("rt: {period_us: 5}" for key period_us). */
-static int line_has_key(const char *s, const char *key) {
-    const size_t kl = strlen(key);
-    const char *c = s;
-    while (*c == ' ' || *c == '-') {
-        c++;
-    }
-    if (strncmp(c, key, kl) == 0 && (c[kl] == ':')) {
-        return 1;
-    }
-    for (const char *f = strchr(s, '{'); f; f = strchr(f + 1, ',')) {
-        const char *k = f + 1;
-        while (*k == ' ') {
-            k++;
-        }
-        if (strncmp(k, key, kl) == 0 && k[kl] == ':') {
-            return 1;
-        }
-    }
-    return 0;
-}
-
-/* Line of a field after loading (libcyaml keeps no positions once loaded): top-level `key`
- * (sec NULL), `sec.key`, or `arms[idx].key` (sec "arms"). Falls back to the enclosing element's line;
- * 0 when nothing matches. Comments and blank lines are skipped. */
-static int locate(const char *path, const char *sec, int idx, const char *key) {
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        return 0;
-    }
-    char *buf = NULL; /* whole lines, however long (fgets into 1024 bytes split them: issue 16) */
-    size_t cap = 0;
-    int line = 0, found = 0, in_sec = 0, sec_line = 0, item = -1, item_indent = -1, item_line = 0;
-    while (getline(&buf, &cap, f) != -1) {
-        line++;
-        const int ind = indent_of(buf);
-        if (buf[ind] == '#' || buf[ind] == '\n' || buf[ind] == 0) {
-            continue;
-        }
-        if (!sec) {
-            if (ind == 0 && line_has_key(buf, key)) {
-                found = line;
-                break;
-            }
-            continue;
-        }
-        if (ind == 0) {
-            if (in_sec) {
-                break; /* left the section */
-            }
-            if (line_has_key(buf, sec)) {
-                in_sec = 1;
-                sec_line = line;
-                if (idx < 0 && key && strchr(buf, '{') && line_has_key(buf, key)) {
-                    found = line;
-                    break;
-                }
-            }
-            continue;
-        }
-        if (!in_sec) {
-            continue;
-        }
-        if (idx >= 0) {
-            if (buf[ind] == '-' && (item_indent < 0 || ind == item_indent)) {
-                item_indent = ind;
-                item++;
-                if (item == idx) {
-                    item_line = line;
-                }
-            }
-            if (item != idx) {
-                continue;
-            }
-        }
-        if (key && line_has_key(buf, key)) {
-            found = line;
-            break;
-        }
-    }
-    free(buf);
-    fclose(f);
-    if (found) {
-        return found;
-    }
-    return item_line ? item_line : sec_line;
-}
-
-/* Where to report errors about one loaded field. */
-struct where {
-    const char *file;
-    const char *sec; /* NULL, "arms", "rt", ... */
-    int idx;         /* arm index or -1 */
-};
-
 /* "FILE:LINE: message" into err (vsnprintf: messages are cut at errlen, never overflow). */
 static void fail_at(char *err, size_t errlen, const char *file, int line, const char *fmt, ...) {
     if (!err || !errlen) {
@@ -572,21 +448,35 @@ static void fail_at(char *err, size_t errlen, const char *file, int line, const 
     va_end(ap);
 }
 
-#define FAIL(code, w, key, ...)                                                                              \
+/* Line of the node at the printf-formatted path ("arms[1].canopen.sync_us"), or of its nearest enclosing
+ * node when it is absent (a missing field); 0 when the marks could not be read. */
+__attribute__((format(printf, 2, 3))) static int mark_line(const mca_yaml_marks_t *marks, const char *fmt,
+                                                           ...) {
+    char node[MCA_YAML_MARKS_PATH_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(node, sizeof node, fmt, ap);
+    va_end(ap);
+    return mca_yaml_marks_line_or_parent(marks, node);
+}
+
+/* Fail with "FILE:LINE: message"; LINE(...) is the line of a field path (mark_line of the cell's marks). */
+#define LINE(...) mark_line(&marks, __VA_ARGS__)
+#define FAIL(code, line, ...)                                                                                \
     do {                                                                                                     \
-        fail_at(err, errlen, (w).file, locate((w).file, (w).sec, (w).idx, key), __VA_ARGS__);                \
+        fail_at(err, errlen, path, (line), __VA_ARGS__);                                                     \
         rc = (code);                                                                                         \
         goto out;                                                                                            \
     } while (0)
 
-/* Range check of one loaded value (ranges: mca_range_t, issue 16); the field is printf-formatted:
- * "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
-#define CHECK(w, key, range, v, ...)                                                                         \
+/* Range check of one loaded value (ranges: mca_range_t, issue 16); the field is printf-formatted and is
+ * also the node whose line is reported: "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
+#define CHECK(range, v, ...)                                                                                 \
     do {                                                                                                     \
-        char f_[64], why_[160];                                                                              \
+        char f_[MCA_YAML_MARKS_PATH_MAX], why_[160];                                                         \
         if (mca_range_check((range), (v), why_, sizeof why_) != MCA_OK) {                                    \
             snprintf(f_, sizeof f_, __VA_ARGS__);                                                            \
-            FAIL(MCA_ECONFIG, w, key, "%s: %s", f_, why_);                                                   \
+            FAIL(MCA_ECONFIG, LINE("%s", f_), "%s: %s", f_, why_);                                           \
         }                                                                                                    \
     } while (0)
 
@@ -804,9 +694,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         return MCA_EPARSE;
     }
 
+    /* where each field is (libcyaml keeps no positions): lines are 0 if the file cannot be read again */
+    mca_yaml_marks_t marks = {.mark = NULL};
+    (void)mca_yaml_marks_load(path, &marks, NULL, 0);
     mca_cell_t *cell = calloc(1, sizeof *cell);
     int rc = MCA_OK;
-    const struct where top = {path, NULL, -1};
     if (!cell) {
         rc = MCA_ENOMEM;
         set_err(err, errlen, "%s:0: out of memory", path);
@@ -823,7 +715,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                            : raw->debug_start_in_fault   ? "debug_start_in_fault"
                                                          : NULL;
         if (hook) {
-            FAIL(MCA_ENOTSUP, top, hook,
+            FAIL(MCA_ENOTSUP, LINE("%s", hook),
                  "%s: test hook: this mcad is the production build, which takes no debug_* keys (only the "
                  "test build mcad-test does); remove the line",
                  hook);
@@ -833,18 +725,17 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
 
     /* task: a scenario file, or inline (arms carry urdf/base/q0/path themselves) */
     mca_scenario_t *scn = &cell->scn;
-    const struct where wtask = {path, "task", -1};
     if (raw->task.scenario) {
         char sp[512];
         resolve(sp, sizeof sp, path, raw->task.scenario);
         if (!readable(sp)) {
-            FAIL(MCA_ENOENT, wtask, "scenario",
+            FAIL(MCA_ENOENT, LINE("task.scenario"),
                  "task.scenario: file '%s' not found (nor in the search path %s)", sp, search_path());
         }
         char serr[512];
         int src = mca_scenario_load(sp, scn, serr, sizeof serr);
         if (src != MCA_OK) {
-            FAIL(src, wtask, "scenario", "task.scenario: %s", serr);
+            FAIL(src, LINE("task.scenario"), "task.scenario: %s", serr);
         }
     } else {
         mca_scenario_defaults(scn);
@@ -852,11 +743,12 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         snprintf(scn->source, sizeof scn->source, "%s", path);
         scn->n_arms = 0;
         if (!raw->task.duration) {
-            FAIL(MCA_EPARSE, wtask, "task", "task: an inline task needs 'duration' (or give 'scenario')");
+            FAIL(MCA_EPARSE, LINE("task.duration"),
+                 "task: an inline task needs 'duration' (or give 'scenario')");
         }
     }
     if (raw->task.duration) {
-        CHECK(wtask, "duration", mca_scenario_range("duration"), *raw->task.duration, "task.duration");
+        CHECK(mca_scenario_range("duration"), *raw->task.duration, "task.duration");
         scn->duration = *raw->task.duration;
     }
     if (raw->task.stream) {
@@ -880,23 +772,22 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         for (size_t k = 0; k < sizeof nums / sizeof nums[0]; k++) {
             if (nums[k].v) {
                 if (!(*nums[k].v >= nums[k].lo && *nums[k].v <= nums[k].hi)) {
-                    FAIL(MCA_ECONFIG, wtask, nums[k].key, "task.stream.%s: %g outside %g..%g", nums[k].key,
-                         *nums[k].v, nums[k].lo, nums[k].hi);
+                    FAIL(MCA_ECONFIG, LINE("task.stream.%s", nums[k].key),
+                         "task.stream.%s: %g outside %g..%g", nums[k].key, *nums[k].v, nums[k].lo,
+                         nums[k].hi);
                 }
                 *nums[k].dst = *nums[k].v;
             }
         }
         if (cs->hold_after > cs->brake_after) {
-            FAIL(MCA_ECONFIG, wtask, "hold_after", "task.stream.hold_after: %g s after brake_after %g s",
-                 cs->hold_after, cs->brake_after);
+            FAIL(MCA_ECONFIG, LINE("task.stream.hold_after"),
+                 "task.stream.hold_after: %g s after brake_after %g s", cs->hold_after, cs->brake_after);
         }
         for (int i = 0; i < 3; i++) {
-            CHECK(wtask, "workspace_min", mca_scenario_range("base_xyz"), rs->box_min[i],
-                  "task.stream.workspace_min[%d]", i);
-            CHECK(wtask, "workspace_max", mca_scenario_range("base_xyz"), rs->box_max[i],
-                  "task.stream.workspace_max[%d]", i);
+            CHECK(mca_scenario_range("base_xyz"), rs->box_min[i], "task.stream.workspace_min[%d]", i);
+            CHECK(mca_scenario_range("base_xyz"), rs->box_max[i], "task.stream.workspace_max[%d]", i);
             if (!(rs->box_min[i] < rs->box_max[i])) {
-                FAIL(MCA_ECONFIG, wtask, "workspace_max",
+                FAIL(MCA_ECONFIG, LINE("task.stream.workspace_max[%d]", i),
                      "task.stream.workspace_max[%d]: %g not above workspace_min %g", i, rs->box_max[i],
                      rs->box_min[i]);
             }
@@ -907,21 +798,21 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
 
     cell->scheme = MCA_SCHEME_MCA_TS; /* the default for cells (issue 11) */
     if (raw->scheme && mca_scheme_from_name(raw->scheme, &cell->scheme) != MCA_OK) {
-        FAIL(MCA_ECONFIG, top, "scheme", "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
+        FAIL(MCA_ECONFIG, LINE("scheme"), "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
              raw->scheme);
     }
     if (raw->d1) {
-        CHECK(top, "d1", mca_scenario_range("d1"), *raw->d1, "d1");
+        CHECK(mca_scenario_range("d1"), *raw->d1, "d1");
         scn->params.d1 = *raw->d1;
     }
     if (raw->d2) {
-        CHECK(top, "d2", mca_scenario_range("d2"), *raw->d2, "d2");
+        CHECK(mca_scenario_range("d2"), *raw->d2, "d2");
         scn->params.d2 = *raw->d2;
     }
     if (!(isfinite(scn->params.d1) && isfinite(scn->params.d2) && scn->params.d1 >= 0.0 &&
           scn->params.d1 < scn->params.d2)) {
-        FAIL(MCA_ECONFIG, top, raw->d1 ? "d1" : "d2", "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)",
-             scn->params.d1, scn->params.d2);
+        FAIL(MCA_ECONFIG, LINE("%s", raw->d1 ? "d1" : "d2"),
+             "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)", scn->params.d1, scn->params.d2);
     }
 
     cell->pdnn_max_steps = 0;
@@ -929,29 +820,28 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     cell->deadlock_time = cell->back_off_time = -1.0;
     if (raw->solver) {
         const struct raw_solver *s = raw->solver;
-        const struct where ws = {path, "solver", -1};
         if (s->deadlock_time) {
-            CHECK(ws, "deadlock_time", &r_deadlock_time, *s->deadlock_time, "solver.deadlock_time");
+            CHECK(&r_deadlock_time, *s->deadlock_time, "solver.deadlock_time");
             cell->deadlock_time = *s->deadlock_time;
         }
         if (s->back_off_time) {
-            CHECK(ws, "back_off_time", &r_back_off_time, *s->back_off_time, "solver.back_off_time");
+            CHECK(&r_back_off_time, *s->back_off_time, "solver.back_off_time");
             cell->back_off_time = *s->back_off_time;
         }
         if (s->K) {
-            CHECK(ws, "K", mca_scenario_range("K"), *s->K, "solver.K");
+            CHECK(mca_scenario_range("K"), *s->K, "solver.K");
             scn->params.K = *s->K;
         }
         if (s->epsilon) {
-            CHECK(ws, "epsilon", mca_scenario_range("epsilon"), *s->epsilon, "solver.epsilon");
+            CHECK(mca_scenario_range("epsilon"), *s->epsilon, "solver.epsilon");
             scn->params.epsilon = *s->epsilon;
         }
         if (s->v_normal) {
-            CHECK(ws, "v_normal", mca_scenario_range("v_normal"), *s->v_normal, "solver.v_normal");
+            CHECK(mca_scenario_range("v_normal"), *s->v_normal, "solver.v_normal");
             scn->params.v_normal = *s->v_normal;
         }
         if (s->v_floor) {
-            CHECK(ws, "v_floor", mca_scenario_range("v_floor"), *s->v_floor, "solver.v_floor");
+            CHECK(mca_scenario_range("v_floor"), *s->v_floor, "solver.v_floor");
             scn->params.v_floor = *s->v_floor;
         }
         if (s->form) {
@@ -959,19 +849,19 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             scn->params.form = *s->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
         }
         if (s->pdnn_max_steps) {
-            CHECK(ws, "pdnn_max_steps", &r_pdnn_max_steps, *s->pdnn_max_steps, "solver.pdnn_max_steps");
+            CHECK(&r_pdnn_max_steps, *s->pdnn_max_steps, "solver.pdnn_max_steps");
             cell->pdnn_max_steps = *s->pdnn_max_steps;
         }
         if (s->pdnn_tol) {
-            CHECK(ws, "pdnn_tol", &r_pdnn_tol, *s->pdnn_tol, "solver.pdnn_tol");
+            CHECK(&r_pdnn_tol, *s->pdnn_tol, "solver.pdnn_tol");
             cell->pdnn_tol = *s->pdnn_tol;
         }
         if (s->eq_tol) {
-            CHECK(ws, "eq_tol", &r_eq_tol, *s->eq_tol, "solver.eq_tol");
+            CHECK(&r_eq_tol, *s->eq_tol, "solver.eq_tol");
             cell->eq_tol = *s->eq_tol;
         }
         if (s->fault_residual) {
-            CHECK(ws, "fault_residual", &r_fault_residual, *s->fault_residual, "solver.fault_residual");
+            CHECK(&r_fault_residual, *s->fault_residual, "solver.fault_residual");
             cell->fault_residual = *s->fault_residual;
         }
     }
@@ -979,21 +869,19 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     /* arms: the cell names the hardware; model and path come from the scenario arm of the same name,
      * and any model field given in the cell overrides it */
     if (raw->task.scenario && raw->arms_count != (unsigned)scn->n_arms) {
-        const struct where wa = {path, "arms", -1};
-        FAIL(MCA_ECONFIG, wa, NULL, "arms: %u arms but scenario '%s' has %d", raw->arms_count, scn->source,
-             scn->n_arms);
+        FAIL(MCA_ECONFIG, LINE("arms"), "arms: %u arms but scenario '%s' has %d", raw->arms_count,
+             scn->source, scn->n_arms);
     }
     mca_scenario_arm_t sarm[MCA_MAX_ARMS];
     memcpy(sarm, scn->arm, sizeof sarm);
     for (unsigned a = 0; a < raw->arms_count; a++) {
         const struct raw_arm *ra = &raw->arms[a];
         const int ai = (int)a;
-        const struct where wa = {path, "arms", ai};
         mca_cell_arm_t *ca = &cell->arm[a];
         mca_scenario_arm_t *sa = &scn->arm[a];
         for (unsigned b = 0; b < a; b++) {
             if (strcmp(raw->arms[b].name, ra->name) == 0) {
-                FAIL(MCA_ECONFIG, wa, "name", "arms[%d].name: '%s' used twice", ai, ra->name);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].name", ai), "arms[%d].name: '%s' used twice", ai, ra->name);
             }
         }
         if (raw->task.scenario) {
@@ -1009,15 +897,16 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                 strncat(names, sarm[s].name, sizeof names - strlen(names) - 1);
             }
             if (found < 0) {
-                FAIL(MCA_ECONFIG, wa, "name", "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai,
-                     ra->name, scn->source, names);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].name", ai),
+                     "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai, ra->name, scn->source,
+                     names);
             }
             *sa = sarm[found];
         } else {
             memset(sa, 0, sizeof *sa);
             snprintf(sa->name, sizeof sa->name, "%s", ra->name);
             if (!ra->urdf || !ra->base_xyz || !ra->q0) {
-                FAIL(MCA_EPARSE, wa, NULL,
+                FAIL(MCA_EPARSE, LINE("arms[%d]", ai),
                      "arms[%d]: an inline task needs urdf, base_xyz and q0 for every arm", ai);
             }
             sa->path.kind = MCA_PATH_HOLD;
@@ -1029,18 +918,21 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         } else if (strcmp(ra->backend, "socketcan") == 0) {
             ca->backend = MCA_CELL_BACKEND_SOCKETCAN;
             if (!ra->interface) {
-                FAIL(MCA_EPARSE, wa, "backend", "arms[%d].interface: required with backend socketcan", ai);
+                FAIL(MCA_EPARSE, LINE("arms[%d].interface", ai),
+                     "arms[%d].interface: required with backend socketcan", ai);
             }
             if (!ra->id_base) {
-                FAIL(MCA_EPARSE, wa, "backend", "arms[%d].id_base: required with backend socketcan", ai);
+                FAIL(MCA_EPARSE, LINE("arms[%d].id_base", ai),
+                     "arms[%d].id_base: required with backend socketcan", ai);
             }
         } else if (strcmp(ra->backend, "canopen") == 0) {
             ca->backend = MCA_CELL_BACKEND_CANOPEN;
             if (!ra->interface) {
-                FAIL(MCA_EPARSE, wa, "backend", "arms[%d].interface: required with backend canopen", ai);
+                FAIL(MCA_EPARSE, LINE("arms[%d].interface", ai),
+                     "arms[%d].interface: required with backend canopen", ai);
             }
         } else {
-            FAIL(MCA_ECONFIG, wa, "backend",
+            FAIL(MCA_ECONFIG, LINE("arms[%d].backend", ai),
                  "arms[%d].backend: unknown backend '%s' (known: sim, socketcan, canopen)", ai, ra->backend);
         }
         ca->co_first_node = 1;
@@ -1053,34 +945,37 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->canopen) {
             const struct raw_canopen *rco = ra->canopen;
             if (ca->backend != MCA_CELL_BACKEND_CANOPEN) {
-                FAIL(MCA_EPARSE, wa, "canopen", "arms[%d].canopen: only with backend canopen", ai);
+                FAIL(MCA_EPARSE, LINE("arms[%d].canopen", ai), "arms[%d].canopen: only with backend canopen",
+                     ai);
             }
             if (rco->first_node && (*rco->first_node < 1 || *rco->first_node > 127)) {
-                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen.first_node: 1..127 (got %d)", ai,
-                     *rco->first_node);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.first_node", ai),
+                     "arms[%d].canopen.first_node: 1..127 (got %d)", ai, *rco->first_node);
             }
             if (rco->sync_us && *rco->sync_us < 100) {
-                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen.sync_us: >= 100 (got %d)", ai,
-                     *rco->sync_us);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.sync_us", ai),
+                     "arms[%d].canopen.sync_us: >= 100 (got %d)", ai, *rco->sync_us);
             }
             if (rco->mode && strcmp(rco->mode, "csv") != 0 && strcmp(rco->mode, "csp") != 0) {
-                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen.mode: csv or csp (got '%s')", ai,
-                     rco->mode);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.mode", ai),
+                     "arms[%d].canopen.mode: csv or csp (got '%s')", ai, rco->mode);
             }
-            if ((rco->pos_scale && !(*rco->pos_scale > 0 && isfinite(*rco->pos_scale))) ||
-                (rco->vel_scale && !(*rco->vel_scale > 0 && isfinite(*rco->vel_scale)))) {
-                FAIL(MCA_ECONFIG, wa, "canopen", "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
+            const int pos_bad = rco->pos_scale && !(*rco->pos_scale > 0 && isfinite(*rco->pos_scale));
+            if (pos_bad || (rco->vel_scale && !(*rco->vel_scale > 0 && isfinite(*rco->vel_scale)))) {
+                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.%s", ai, pos_bad ? "pos_scale" : "vel_scale"),
+                     "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
             }
             ca->co_first_node = rco->first_node ? *rco->first_node : 1;
             ca->co_sync_us = rco->sync_us ? (uint32_t)*rco->sync_us : 4000;
             ca->co_mode = rco->mode && strcmp(rco->mode, "csp") == 0 ? 8 : 9;
             ca->co_pos_scale = rco->pos_scale ? *rco->pos_scale : 1e6;
             ca->co_vel_scale = rco->vel_scale ? *rco->vel_scale : 1e6;
-            if ((rco->heartbeat_timeout_ms &&
-                 (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000)) ||
-                (rco->pdo_timeout_syncs &&
-                 (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
-                FAIL(MCA_ECONFIG, wa, "canopen",
+            const int hb_bad = rco->heartbeat_timeout_ms &&
+                               (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000);
+            if (hb_bad || (rco->pdo_timeout_syncs &&
+                           (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
+                FAIL(MCA_ECONFIG,
+                     LINE("arms[%d].canopen.%s", ai, hb_bad ? "heartbeat_timeout_ms" : "pdo_timeout_syncs"),
                      "arms[%d].canopen: heartbeat_timeout_ms 101..60000 (the drives beat every 100 ms), "
                      "pdo_timeout_syncs 1..100000",
                      ai);
@@ -1094,7 +989,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->id_base) {
             if (*ra->id_base < 0 || *ra->id_base > (long long)MCA_CAN_ID_BASE_MAX ||
                 *ra->id_base % MCA_CAN_ID_BLOCK != 0) {
-                FAIL(MCA_ECONFIG, wa, "id_base",
+                FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", ai),
                      "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)", ai,
                      MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
             }
@@ -1103,7 +998,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         /* a CANopen bus has one SYNC producer and NMT master: one canopen arm per bus */
         for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_CANOPEN; b++) {
             if (strcmp(cell->arm[b].interface, ca->interface) == 0) {
-                FAIL(MCA_ECONFIG, wa, "interface",
+                FAIL(MCA_ECONFIG, LINE("arms[%d].interface", ai),
                      "arms[%d].interface: %s is already arms[%u]'s (one bus per canopen arm)", ai,
                      ca->interface, b);
             }
@@ -1113,7 +1008,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             const mca_cell_arm_t *cb = &cell->arm[b];
             if (cb->backend == MCA_CELL_BACKEND_SOCKETCAN && strcmp(cb->interface, ca->interface) == 0 &&
                 cb->id_base == ca->id_base) {
-                FAIL(MCA_ECONFIG, wa, "id_base",
+                FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", ai),
                      "arms[%d].id_base: 0x%x on %s is already arms[%u]'s (one id block per arm and bus)", ai,
                      ca->id_base, ca->interface, b);
             }
@@ -1123,8 +1018,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             resolve(sa->urdf, sizeof sa->urdf, path, ra->urdf);
         }
         if (!readable(sa->urdf)) {
-            FAIL(MCA_ENOENT, wa, "urdf", "arms[%d].urdf: file '%s' not found (nor in the search path %s)", ai,
-                 sa->urdf, search_path());
+            FAIL(MCA_ENOENT, LINE("arms[%d].urdf", ai),
+                 "arms[%d].urdf: file '%s' not found (nor in the search path %s)", ai, sa->urdf,
+                 search_path());
         }
         if (ra->tip_link) {
             snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
@@ -1132,13 +1028,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         /* the scenario's placement was checked when it loaded; the cell's overrides here, same ranges */
         for (int i = 0; i < 3; i++) {
             if (ra->base_xyz) {
-                CHECK(wa, "base_xyz", mca_scenario_range("base_xyz"), ra->base_xyz[i],
-                      "arms[%d].base_xyz[%d]", ai, i);
+                CHECK(mca_scenario_range("base_xyz"), ra->base_xyz[i], "arms[%d].base_xyz[%d]", ai, i);
                 sa->base_xyz[i] = ra->base_xyz[i];
             }
             if (ra->base_rpy) {
-                CHECK(wa, "base_rpy", mca_scenario_range("base_rpy"), ra->base_rpy[i],
-                      "arms[%d].base_rpy[%d]", ai, i);
+                CHECK(mca_scenario_range("base_rpy"), ra->base_rpy[i], "arms[%d].base_rpy[%d]", ai, i);
                 sa->base_rpy[i] = ra->base_rpy[i];
             }
         }
@@ -1151,11 +1045,15 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->path) {
             char why[256];
             if (inline_path(&sa->path, ra->path, why, sizeof why) != 0) {
-                FAIL(MCA_ECONFIG, wa, "path", "arms[%d].path.%s", ai, why);
+                /* why starts with the bad key ("radius: ..."), or "circle: ..." for the path itself */
+                const int bad_key = strncmp(why, "circle:", 7) == 0 ? 0 : (int)strcspn(why, ":");
+                FAIL(MCA_ECONFIG, LINE("arms[%d].path%s%.*s", ai, bad_key ? "." : "", bad_key, why),
+                     "arms[%d].path.%s", ai, why);
             }
         }
         if (ra->stream && !raw->task.stream) {
-            FAIL(MCA_EPARSE, wa, "stream", "arms[%d].stream: only in a streamed task (task.stream)", ai);
+            FAIL(MCA_EPARSE, LINE("arms[%d].stream", ai),
+                 "arms[%d].stream: only in a streamed task (task.stream)", ai);
         }
         if (raw->task.stream) {
             /* the arm follows its ROS 2 topic: the path from the scenario or the cell is replaced */
@@ -1163,7 +1061,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             if (ra->stream && strcmp(ra->stream, "pose") == 0) {
                 ca->stream = MCA_CELL_STREAM_POSE;
             } else if (ra->stream && strcmp(ra->stream, "twist") != 0) {
-                FAIL(MCA_ECONFIG, wa, "stream", "arms[%d].stream: '%s' (known: twist, pose)", ai, ra->stream);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].stream", ai), "arms[%d].stream: '%s' (known: twist, pose)",
+                     ai, ra->stream);
             }
             memset(&sa->path, 0, sizeof sa->path);
             sa->path.kind = MCA_PATH_STREAM;
@@ -1176,27 +1075,29 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         int crc = mca_chain_load_urdf(&chain, sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, cerrbuf,
                                       sizeof cerrbuf);
         if (crc != MCA_OK) {
-            FAIL(crc, wa, "urdf", "arms[%d].urdf: %s", ai, cerrbuf);
+            FAIL(crc, LINE("arms[%d].urdf", ai), "arms[%d].urdf: %s", ai, cerrbuf);
         }
         if (sa->n_q0 != chain.dof) {
-            FAIL(MCA_ECONFIG, wa, "q0", "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai,
-                 sa->n_q0, sa->urdf, chain.dof);
+            FAIL(MCA_ECONFIG, LINE("arms[%d].q0", ai),
+                 "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai, sa->n_q0, sa->urdf,
+                 chain.dof);
         }
         for (int j = 0; j < chain.dof; j++) {
             const mca_joint_model_t *jm = &chain.joint[j];
             if (!isfinite(sa->q0[j]) ||
                 (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
-                FAIL(MCA_ECONFIG, wa, "q0", "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j,
-                     sa->q0[j], jm->name, jm->lower, jm->upper);
+                FAIL(MCA_ECONFIG, LINE("arms[%d].q0[%d]", ai, j),
+                     "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j, sa->q0[j], jm->name,
+                     jm->lower, jm->upper);
             }
         }
         const double dec = ra->dec_limit ? *ra->dec_limit : 10.0;
-        CHECK(wa, "dec_limit", &r_dec_limit, dec, "arms[%d].dec_limit", ai);
+        CHECK(&r_dec_limit, dec, "arms[%d].dec_limit", ai);
         for (int j = 0; j < chain.dof; j++) {
             /* a stop has a bounded duration: from the joint's velocity limit to rest */
             const double stop_s = chain.joint[j].vel_limit / dec;
             if (!(stop_s <= CELL_MAX_STOP_S)) {
-                FAIL(MCA_ECONFIG, wa, "dec_limit",
+                FAIL(MCA_ECONFIG, LINE("arms[%d].dec_limit", ai),
                      "arms[%d].dec_limit: %g rad/s^2 brakes joint '%s' from its velocity limit %g rad/s in "
                      "%.3g s, "
                      "more than %g s",
@@ -1208,21 +1109,20 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
         ca->priority = 0.0;
         if (ra->priority) {
-            CHECK(wa, "priority", &r_arm_priority, *ra->priority, "arms[%d].priority", ai);
+            CHECK(&r_arm_priority, *ra->priority, "arms[%d].priority", ai);
             ca->priority = *ra->priority;
         }
         if (ra->sim) {
             if (ra->sim->lag_tau) {
-                CHECK(wa, "lag_tau", &r_lag_tau, *ra->sim->lag_tau, "arms[%d].sim.lag_tau", ai);
+                CHECK(&r_lag_tau, *ra->sim->lag_tau, "arms[%d].sim.lag_tau", ai);
                 ca->sim_lag_tau = *ra->sim->lag_tau;
             }
             if (ra->sim->latency_cycles) {
-                CHECK(wa, "latency_cycles", &r_latency_cycles, *ra->sim->latency_cycles,
-                      "arms[%d].sim.latency_cycles", ai);
+                CHECK(&r_latency_cycles, *ra->sim->latency_cycles, "arms[%d].sim.latency_cycles", ai);
                 ca->sim_latency_cycles = *ra->sim->latency_cycles;
             }
             if (ra->sim->noise_pos) {
-                CHECK(wa, "noise_pos", &r_noise_pos, *ra->sim->noise_pos, "arms[%d].sim.noise_pos", ai);
+                CHECK(&r_noise_pos, *ra->sim->noise_pos, "arms[%d].sim.noise_pos", ai);
                 ca->sim_noise_pos = *ra->sim->noise_pos;
             }
         }
@@ -1235,31 +1135,30 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     cell->dds.publish_divisor = 1;
     if (raw->dds) {
         const struct raw_dds *d = raw->dds;
-        const struct where wd = {path, "dds", -1};
         if (d->enabled) {
             cell->dds.enabled = *d->enabled;
         }
         if (d->domain) {
-            CHECK(wd, "domain", &r_dds_domain, (double)*d->domain, "dds.domain");
+            CHECK(&r_dds_domain, (double)*d->domain, "dds.domain");
             cell->dds.domain = (uint32_t)*d->domain;
         }
         if (d->config && d->config[0]) {
             resolve(cell->dds.config, sizeof cell->dds.config, path, d->config);
             if (!readable(cell->dds.config)) {
-                FAIL(MCA_ENOENT, wd, "config", "dds.config: file '%s' not found (nor in the search path %s)",
-                     cell->dds.config, search_path());
+                FAIL(MCA_ENOENT, LINE("dds.config"),
+                     "dds.config: file '%s' not found (nor in the search path %s)", cell->dds.config,
+                     search_path());
             }
         }
         if (d->publish_divisor) {
-            CHECK(wd, "publish_divisor", &r_publish_divisor, (double)*d->publish_divisor,
-                  "dds.publish_divisor");
+            CHECK(&r_publish_divisor, (double)*d->publish_divisor, "dds.publish_divisor");
             cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
         }
     }
     if (cell->stream.enabled &&
         !(cell->dds.enabled &&
           (!raw->dds || !raw->dds->ros2 || !raw->dds->ros2->enabled || *raw->dds->ros2->enabled))) {
-        FAIL(MCA_ECONFIG, wtask, "stream",
+        FAIL(MCA_ECONFIG, LINE("task.stream"),
              "task.stream: the targets come over ROS 2: needs dds.enabled and dds.ros2.enabled");
     }
     /* ROS 2 topics: on with DDS unless switched off; every topic on unless switched off */
@@ -1270,7 +1169,6 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     snprintf(r2->world_frame, sizeof r2->world_frame, "world");
     if (raw->dds && raw->dds->ros2) {
         const struct raw_ros2 *rr = raw->dds->ros2;
-        const struct where wr2 = {path, "dds", -1};
         bool *const flag_src[] = {rr->enabled,   rr->joint_states, rr->robot_description,
                                   rr->tf_static, rr->markers,      rr->diagnostics};
         int *const flag_dst[] = {&r2->enabled,   &r2->joint_states, &r2->robot_description,
@@ -1282,7 +1180,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
         if (rr->ns) {
             if (!mca_ros2_name_ok(rr->ns)) {
-                FAIL(MCA_ECONFIG, wr2, "namespace",
+                FAIL(MCA_ECONFIG, LINE("dds.ros2.namespace"),
                      "dds.ros2.namespace: '%s' is not a ROS 2 name (a letter, then letters, digits and "
                      "single '_')",
                      rr->ns);
@@ -1291,7 +1189,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
         if (rr->world_frame) {
             if (!mca_ros2_name_ok(rr->world_frame)) {
-                FAIL(MCA_ECONFIG, wr2, "world_frame",
+                FAIL(MCA_ECONFIG, LINE("dds.ros2.world_frame"),
                      "dds.ros2.world_frame: '%s' is not a frame name (a letter, then letters, digits and "
                      "single '_')",
                      rr->world_frame);
@@ -1311,46 +1209,44 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     rt->dma_latency = 1;
     if (raw->rt) {
         const struct raw_rt *r = raw->rt;
-        const struct where wr = {path, "rt", -1};
         if (r->period_us) {
             /* the loop period is the controller's dt: the scenario's dt range, in us */
             const mca_range_t *dt = mca_scenario_range("dt");
             const mca_range_t r_period_us = {"period_us", llround(dt->lo * 1e6), llround(dt->hi * 1e6), 0, 1,
                                              "us"};
-            CHECK(wr, "period_us", &r_period_us, (double)*r->period_us, "rt.period_us");
+            CHECK(&r_period_us, (double)*r->period_us, "rt.period_us");
             rt->period_ns = *r->period_us * 1000;
         }
         if (r->priority) {
-            CHECK(wr, "priority", &r_rt_priority, *r->priority, "rt.priority");
+            CHECK(&r_rt_priority, *r->priority, "rt.priority");
             rt->priority = *r->priority;
         }
         if (r->cpu) {
             const long ncpu = sysconf(_SC_NPROCESSORS_CONF);
             if (*r->cpu < -1 || (ncpu > 0 && *r->cpu >= ncpu)) {
-                FAIL(MCA_ECONFIG, wr, "cpu", "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1,
+                FAIL(MCA_ECONFIG, LINE("rt.cpu"), "rt.cpu: must be -1 (none) or 0..%ld (got %d)", ncpu - 1,
                      *r->cpu);
             }
             rt->cpu = *r->cpu;
         }
         const double period_s = (double)rt->period_ns * 1e-9;
         if (r->overrun_limit) {
-            CHECK(wr, "overrun_limit", &r_overrun_limit, *r->overrun_limit, "rt.overrun_limit");
+            CHECK(&r_overrun_limit, *r->overrun_limit, "rt.overrun_limit");
             if (*r->overrun_limit * period_s > CELL_MAX_OVERRUN_S) {
-                FAIL(MCA_ECONFIG, wr, "overrun_limit",
+                FAIL(MCA_ECONFIG, LINE("rt.overrun_limit"),
                      "rt.overrun_limit: %d periods of %g s are %g s of overruns, more than %g s",
                      *r->overrun_limit, period_s, *r->overrun_limit * period_s, CELL_MAX_OVERRUN_S);
             }
             rt->overrun_limit = *r->overrun_limit;
         }
         if (r->pdnn_budget_us) {
-            CHECK(wr, "pdnn_budget_us", &r_pdnn_budget_us, (double)*r->pdnn_budget_us, "rt.pdnn_budget_us");
+            CHECK(&r_pdnn_budget_us, (double)*r->pdnn_budget_us, "rt.pdnn_budget_us");
             rt->pdnn_budget_ns = *r->pdnn_budget_us * 1000;
         }
         if (r->lost_feedback_cycles) {
-            CHECK(wr, "lost_feedback_cycles", &r_lost_feedback_cycles, *r->lost_feedback_cycles,
-                  "rt.lost_feedback_cycles");
+            CHECK(&r_lost_feedback_cycles, *r->lost_feedback_cycles, "rt.lost_feedback_cycles");
             if (*r->lost_feedback_cycles * period_s > CELL_MAX_LOST_FEEDBACK_S + 1e-12) {
-                FAIL(MCA_ECONFIG, wr, "lost_feedback_cycles",
+                FAIL(MCA_ECONFIG, LINE("rt.lost_feedback_cycles"),
                      "rt.lost_feedback_cycles: %d cycles of %g s are %g s without feedback, more than %g s",
                      *r->lost_feedback_cycles, period_s, *r->lost_feedback_cycles * period_s,
                      CELL_MAX_LOST_FEEDBACK_S);
@@ -1373,24 +1269,25 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         /* the task's tick count at this period (the scenario checked it at its own dt) */
         char why[160];
         if (mca_scenario_check_duration(scn->duration, scn->params.dt, why, sizeof why) != MCA_OK) {
-            FAIL(MCA_ECONFIG, wtask, raw->task.duration ? "duration" : "scenario", "task.duration: %s", why);
+            FAIL(MCA_ECONFIG, LINE("%s", raw->task.duration ? "task.duration" : "task.scenario"),
+                 "task.duration: %s", why);
         }
     }
 
     if (raw->stop_after) {
-        CHECK(top, "stop_after", &r_stop_after, *raw->stop_after, "stop_after");
+        CHECK(&r_stop_after, *raw->stop_after, "stop_after");
         cell->stop_after = *raw->stop_after;
     }
 #ifdef MCA_TEST_HOOKS
     if (raw->debug_stall_after_ticks) {
         if (*raw->debug_stall_after_ticks < 0) {
-            FAIL(MCA_ECONFIG, top, "debug_stall_after_ticks", "debug_stall_after_ticks: must be >= 0");
+            FAIL(MCA_ECONFIG, LINE("debug_stall_after_ticks"), "debug_stall_after_ticks: must be >= 0");
         }
         cell->debug_stall_after_ticks = (uint64_t)*raw->debug_stall_after_ticks;
     }
     if (raw->debug_kill_after_ticks) {
         if (*raw->debug_kill_after_ticks < 0) {
-            FAIL(MCA_ECONFIG, top, "debug_kill_after_ticks", "debug_kill_after_ticks: must be >= 0");
+            FAIL(MCA_ECONFIG, LINE("debug_kill_after_ticks"), "debug_kill_after_ticks: must be >= 0");
         }
         cell->debug_kill_after_ticks = (uint64_t)*raw->debug_kill_after_ticks;
     }
@@ -1399,6 +1296,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     *out = *cell;
 out:
     free(cell);
+    mca_yaml_marks_free(&marks);
     cyaml_free(&ccfg, &cell_schema, raw, 0);
     return rc;
 }

@@ -132,7 +132,8 @@ expect zero_period "period_us: 2000" "period_us: 0" "period_us" "rt.period_us" "
 expect bad_priority "priority: 70" "priority: 150" "priority: 150" "rt.priority" "must be in 0..99"
 expect scenario_missing "  duration: 3.5$NL" "  scenario: gone/cross.yaml$NL" "scenario: gone" "task.scenario" \
     "gone/cross.yaml' not found"
-expect socketcan_no_interface "    interface: vcan1$NL" "" "backend: socketcan" "arms[1].interface" \
+# a missing field names its enclosing mapping's line: the arm's entry (issue 12)
+expect socketcan_no_interface "    interface: vcan1$NL" "" "- name: right" "arms[1].interface" \
     "required with backend socketcan"
 expect dds_config_missing "  domain: 7$NL" "  domain: 7$NL  config: nowhere/cyclone.xml$NL" "config: nowhere" \
     "dds.config" "nowhere/cyclone.xml' not found"

@@ -320,7 +320,8 @@ static void test_scenario_missing(void **state) {
 static void test_socketcan_needs_interface(void **state) {
     (void)state;
     const char *p = write_variant("noif", "    interface: vcan1\n", "");
-    expect_error(p, MCA_EPARSE, line_of(p, "backend: socketcan"), "arms[1].interface", "required", NULL);
+    /* a missing field names its enclosing mapping's line: the arm's entry (issue 12) */
+    expect_error(p, MCA_EPARSE, line_of(p, "- name: right"), "arms[1].interface", "required", NULL);
 }
 
 static void test_dds_config_missing(void **state) {
@@ -436,6 +437,349 @@ static void test_duplicate_arm(void **state) {
     expect_error(p, MCA_ECONFIG, line_of(p, "backend: socketcan") - 1, "arms[1].name", "used twice", NULL);
 }
 
+/* ---- issue 12: every error kind names its exact line and field ---- */
+
+/* Write `text` as tmpdir/NAME.yaml; returns the file name (static). */
+static const char *write_text(const char *name, const char *text) {
+    static char path[512];
+    snprintf(path, sizeof path, "%s/%s.yaml", tmpdir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+    return path;
+}
+
+/* Replace the first `from` in buf (size cap) by `to`; from must occur. */
+static void replace_in(char *buf, size_t cap, const char *from, const char *to) {
+    char *at = strstr(buf, from);
+    if (!at) {
+        fail_msg("test bug: '%s' not in '%s'", from, buf);
+    }
+    char tail[8192];
+    snprintf(tail, sizeof tail, "%s", at + strlen(from));
+    snprintf(at, cap - (size_t)(at - buf), "%s%s", to, tail);
+}
+
+/* Line of the first `needle` at or after the start of arm k (the k-th "  - " entry under arms:); the
+ * entry's own line when needle is NULL. */
+static int line_in_arm(const char *path, int k, const char *needle) {
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    char buf[1024];
+    int line = 0, arm = -1, found = 0;
+    while (fgets(buf, sizeof buf, f)) {
+        line++;
+        if (strncmp(buf, "  - ", 4) == 0) {
+            arm++;
+        }
+        if (arm == k && (!needle || strstr(buf, needle))) {
+            found = line;
+            break;
+        }
+    }
+    fclose(f);
+    assert_true(found > 0);
+    return found;
+}
+
+/* Cells tested through every single value: one change of the good cell, the line holding NEEDLE. */
+struct cell_case {
+    const char *name, *from, *to, *from2, *to2, *needle;
+    int rc;
+    const char *field, *reason;
+};
+
+static void run_cell_cases(const struct cell_case *c, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        char text[8192];
+        snprintf(text, sizeof text, "%s", good_cell());
+        replace_in(text, sizeof text, c[i].from, c[i].to);
+        if (c[i].from2) {
+            replace_in(text, sizeof text, c[i].from2, c[i].to2);
+        }
+        const char *p = write_text(c[i].name, text);
+        print_message("%s (line of '%s'):\n", c[i].name, c[i].needle);
+        expect_error(p, c[i].rc, line_of(p, c[i].needle), c[i].field, c[i].reason, NULL);
+    }
+}
+
+#define STREAM_OK "  duration: 3.5\n  stream:\n    workspace_min: [-1, -1, 0]\n    workspace_max: [1, 1, 1]\n"
+
+static void test_cell_error_lines(void **state) {
+    (void)state;
+    /* a scenario file that loads to nothing: the scenario's own error, at task.scenario */
+    write_text("empty_scn", "# nothing yet\n");
+    static const struct cell_case cases[] = {
+        {"c_task_nodur", "task:\n  duration: 3.5\n", "task: {}\n", NULL, NULL, "task: {}", MCA_EPARSE,
+         "task: ", "an inline task needs 'duration'"},
+        {"c_scn_empty", "  duration: 3.5\n", "  scenario: empty_scn.yaml\n", NULL, NULL,
+         "scenario: empty_scn", MCA_EPARSE, "task.scenario", "empty document"},
+        {"c_duration", "duration: 3.5", "duration: 1e7", NULL, NULL, "duration: 1e7", MCA_ECONFIG,
+         "task.duration", "(got 10000000)"},
+        {"c_ticks", "duration: 3.5", "duration: 3000", "period_us: 2000", "period_us: 100", "duration: 3000",
+         MCA_ECONFIG, "task.duration", "30000000 ticks"},
+        {"c_st_gain", "  duration: 3.5\n", STREAM_OK "    pose_gain: 100\n", NULL, NULL, "pose_gain",
+         MCA_ECONFIG, "task.stream.pose_gain", "100 outside"},
+        {"c_st_hold", "  duration: 3.5\n", STREAM_OK "    hold_after: 2\n    brake_after: 1\n", NULL, NULL,
+         "hold_after", MCA_ECONFIG, "task.stream.hold_after", "after brake_after"},
+        {"c_st_min", "  duration: 3.5\n",
+         "  duration: 3.5\n  stream:\n    workspace_min: [-1, 1e308, 0]\n    workspace_max: [1, 1, 1]\n",
+         NULL, NULL, "workspace_min", MCA_ECONFIG, "task.stream.workspace_min[1]", "must be in"},
+        {"c_st_max", "  duration: 3.5\n",
+         "  duration: 3.5\n  stream:\n    workspace_min: [-1, -1, 0]\n    workspace_max: [1, 1, 1e308]\n",
+         NULL, NULL, "workspace_max", MCA_ECONFIG, "task.stream.workspace_max[2]", "must be in"},
+        {"c_d1", "d1: 0.04", "d1: -1", NULL, NULL, "d1: -1", MCA_ECONFIG, "d1: ", "(got -1)"},
+        {"c_d2", "d2: 0.15", "d2: 1e308", NULL, NULL, "d2: 1e308", MCA_ECONFIG, "d2: ", "(got 1e+308)"},
+        {"c_K", "K: 12", "K: 1e308", NULL, NULL, "K: 1e308", MCA_ECONFIG, "solver.K", "must be in"},
+        {"c_eps", "  K: 12\n", "  K: 12\n  epsilon: 1e308\n", NULL, NULL, "epsilon", MCA_ECONFIG,
+         "solver.epsilon", "must be in"},
+        {"c_vn", "  K: 12\n", "  K: 12\n  v_normal: 1e308\n", NULL, NULL, "v_normal", MCA_ECONFIG,
+         "solver.v_normal", "must be in"},
+        {"c_vf", "  K: 12\n", "  K: 12\n  v_floor: -5\n", NULL, NULL, "v_floor", MCA_ECONFIG,
+         "solver.v_floor", "must be in"},
+        {"c_steps", "pdnn_max_steps: 321", "pdnn_max_steps: 0", NULL, NULL, "pdnn_max_steps", MCA_ECONFIG,
+         "solver.pdnn_max_steps", "(got 0)"},
+        {"c_ptol", "  K: 12\n", "  K: 12\n  pdnn_tol: 5\n", NULL, NULL, "pdnn_tol", MCA_ECONFIG,
+         "solver.pdnn_tol", "(got 5)"},
+        {"c_eqtol", "  K: 12\n", "  K: 12\n  eq_tol: 5\n", NULL, NULL, "eq_tol", MCA_ECONFIG, "solver.eq_tol",
+         "(got 5)"},
+        {"c_fres", "  K: 12\n", "  K: 12\n  fault_residual: 5\n", NULL, NULL, "fault_residual", MCA_ECONFIG,
+         "solver.fault_residual", "(got 5)"},
+        {"c_domain", "domain: 7", "domain: 231", NULL, NULL, "domain: 231", MCA_ECONFIG, "dds.domain",
+         "(got 231)"},
+        {"c_pubdiv", "publish_divisor: 4", "publish_divisor: 0", NULL, NULL, "publish_divisor", MCA_ECONFIG,
+         "dds.publish_divisor", "(got 0)"},
+        {"c_frame", "  publish_divisor: 4\n", "  publish_divisor: 4\n  ros2:\n    world_frame: 9-lives\n",
+         NULL, NULL, "world_frame", MCA_ECONFIG, "dds.ros2.world_frame", "not a frame name"},
+        {"c_cpu", "  priority: 70\n", "  priority: 70\n  cpu: 99999\n", NULL, NULL, "cpu: 99999", MCA_ECONFIG,
+         "rt.cpu", "(got 99999)"},
+        {"c_overrun", "overrun_limit: 3", "overrun_limit: 0", NULL, NULL, "overrun_limit", MCA_ECONFIG,
+         "rt.overrun_limit", "(got 0)"},
+        {"c_overrun_s", "overrun_limit: 3", "overrun_limit: 2000000", NULL, NULL, "overrun_limit",
+         MCA_ECONFIG, "rt.overrun_limit", "more than 3600 s"},
+        {"c_budget", "overrun_limit: 3", "overrun_limit: 3\n  pdnn_budget_us: 0", NULL, NULL,
+         "pdnn_budget_us", MCA_ECONFIG, "rt.pdnn_budget_us", "(got 0)"},
+        {"c_lost", "lost_feedback_cycles: 6", "lost_feedback_cycles: 0", NULL, NULL, "lost_feedback_cycles",
+         MCA_ECONFIG, "rt.lost_feedback_cycles", "(got 0)"},
+        {"c_lost_s", "lost_feedback_cycles: 6", "lost_feedback_cycles: 600", NULL, NULL,
+         "lost_feedback_cycles", MCA_ECONFIG, "rt.lost_feedback_cycles", "more than 1 s"},
+        {"c_stop", "stop_after: 1.5", "stop_after: 1e9", NULL, NULL, "stop_after", MCA_ECONFIG,
+         "stop_after: ", "(got 1000000000)"},
+#ifdef MCA_TEST_HOOKS
+        {"c_stall", "stop_after: 1.5", "stop_after: 1.5\ndebug_stall_after_ticks: -1", NULL, NULL,
+         "debug_stall_after_ticks", MCA_ECONFIG, "debug_stall_after_ticks", "must be >= 0"},
+#endif
+    };
+    run_cell_cases(cases, sizeof cases / sizeof cases[0]);
+}
+
+/* A two-arm cell whose arms are alike ('#' is the arm's index, @U@ its URDF); the bad arm takes one change.
+ */
+enum { B_SIM, B_SOCKETCAN, B_CANOPEN };
+static const char *const arm_backend[] = {
+    "    backend: sim\n",
+    "    backend: socketcan\n    interface: vcan#\n    id_base: 0x140\n",
+    "    backend: canopen\n    interface: can#\n    canopen:\n      first_node: 1\n      sync_us: 4000\n"
+    "      mode: csv\n      pos_scale: 1000\n      vel_scale: 1000\n      heartbeat_timeout_ms: 350\n"
+    "      pdo_timeout_syncs: 5\n",
+};
+
+struct arm_case {
+    const char *name;
+    int backend;
+    const char *from, *to;
+    const char *needle; /* in the bad arm; NULL: the arm's entry line (a missing field) */
+    int rc;
+    const char *field; /* "%d": the bad arm */
+    const char *reason;
+    int streamed;  /* task.stream (and DDS on) */
+    int fast_urdf; /* the bad arm's URDF has joints of 10 rad/s */
+    int only_arm1; /* a clash with an earlier arm */
+};
+
+static const char *pair_cell(const char *name, const struct arm_case *c, int bad) {
+    char text[8192];
+    snprintf(text, sizeof text,
+             "# two alike arms\nname: pair-cell\ntask:\n  duration: 3.5\n%sd1: 0.04\nd2: 0.15\narms:\n",
+             c && c->streamed ? "  stream:\n    workspace_min: [-1, -1, 0]\n    workspace_max: [1, 1, 1]\n"
+                              : "");
+    for (int k = 0; k < 2; k++) {
+        char arm[2048];
+        snprintf(
+            arm, sizeof arm,
+            "  - name: a#\n%s    urdf: @U@\n    base_xyz: [0.#, 0.6, 0.1]\n    base_rpy: [0.0, 0.0, 0.0]\n"
+            "    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]\n    dec_limit: 4.0\n",
+            arm_backend[c ? c->backend : B_SIM]);
+        if (c && k == bad) {
+            replace_in(arm, sizeof arm, c->from, c->to);
+        }
+        char urdf[400];
+        if (c && k == bad && c->fast_urdf) {
+            snprintf(urdf, sizeof urdf, "%s/fast.urdf", tmpdir);
+        } else {
+            snprintf(urdf, sizeof urdf, "%s/config/robots/pa10plus.urdf", MCA_SOURCE_DIR);
+        }
+        while (strstr(arm, "@U@")) {
+            replace_in(arm, sizeof arm, "@U@", urdf);
+        }
+        for (char *h = strchr(arm, '#'); h; h = strchr(h + 1, '#')) {
+            *h = (char)('0' + k);
+        }
+        strncat(text, arm, sizeof text - strlen(text) - 1);
+    }
+    strncat(text, c && c->streamed ? "dds:\n  enabled: true\n" : "dds:\n  enabled: false\n",
+            sizeof text - strlen(text) - 1);
+    return write_text(name, text);
+}
+
+/* pa10plus with every joint's velocity limit 10 rad/s: dec_limit 0.05 brakes in 200 s */
+static void write_fast_urdf(void) {
+    char src[512], dst[512];
+    snprintf(src, sizeof src, "%s/config/robots/pa10plus.urdf", MCA_SOURCE_DIR);
+    snprintf(dst, sizeof dst, "%s/fast.urdf", tmpdir);
+    FILE *in = fopen(src, "r"), *out = fopen(dst, "w");
+    assert_non_null(in);
+    assert_non_null(out);
+    char line[2048];
+    while (fgets(line, sizeof line, in)) {
+        char *v = strstr(line, "velocity=\"");
+        if (v) {
+            char *end = strchr(v + 10, '"');
+            assert_non_null(end);
+            fprintf(out, "%.*svelocity=\"10\"%s", (int)(v - line), line, end + 1);
+        } else {
+            fputs(line, out);
+        }
+    }
+    fclose(in);
+    fclose(out);
+}
+
+#define PATH_CIRCLE(r, per, u, v)                                                                            \
+    "    dec_limit: 4.0\n    path:\n      kind: circle\n      radius: " r "\n" per "      u: " u             \
+    "\n      v: " v "\n"
+#define ARM_TAIL "    dec_limit: 4.0\n"
+
+static void test_arm_error_lines(void **state) {
+    (void)state;
+    write_fast_urdf();
+    static const struct arm_case cases[] = {
+        {"a_backend", B_SIM, "backend: sim", "backend: ethercat", "backend:", MCA_ECONFIG, "arms[%d].backend",
+         "unknown backend 'ethercat'", 0, 0, 0},
+        {"a_sc_noif", B_SOCKETCAN, "    interface: vcan#\n", "", NULL, MCA_EPARSE, "arms[%d].interface",
+         "required with backend socketcan", 0, 0, 0},
+        {"a_sc_noid", B_SOCKETCAN, "    id_base: 0x140\n", "", NULL, MCA_EPARSE, "arms[%d].id_base",
+         "required with backend socketcan", 0, 0, 0},
+        {"a_co_noif", B_CANOPEN, "    interface: can#\n", "", NULL, MCA_EPARSE, "arms[%d].interface",
+         "required with backend canopen", 0, 0, 0},
+        {"a_co_only", B_SIM, ARM_TAIL, ARM_TAIL "    canopen:\n      sync_us: 4000\n", "canopen:", MCA_EPARSE,
+         "arms[%d].canopen", "only with backend canopen", 0, 0, 0},
+        {"a_co_node", B_CANOPEN, "first_node: 1", "first_node: 128", "first_node", MCA_ECONFIG,
+         "arms[%d].canopen.first_node", "1..127 (got 128)", 0, 0, 0},
+        {"a_co_sync", B_CANOPEN, "sync_us: 4000", "sync_us: 50", "sync_us", MCA_ECONFIG,
+         "arms[%d].canopen.sync_us", ">= 100 (got 50)", 0, 0, 0},
+        {"a_co_mode", B_CANOPEN, "mode: csv", "mode: cst", "mode:", MCA_ECONFIG, "arms[%d].canopen.mode",
+         "csv or csp (got 'cst')", 0, 0, 0},
+        {"a_co_pos", B_CANOPEN, "pos_scale: 1000", "pos_scale: -1", "pos_scale", MCA_ECONFIG,
+         "arms[%d].canopen: ", "pos_scale and vel_scale must be > 0", 0, 0, 0},
+        {"a_co_vel", B_CANOPEN, "vel_scale: 1000", "vel_scale: 0", "vel_scale", MCA_ECONFIG,
+         "arms[%d].canopen: ", "pos_scale and vel_scale must be > 0", 0, 0, 0},
+        {"a_co_hb", B_CANOPEN, "heartbeat_timeout_ms: 350", "heartbeat_timeout_ms: 100",
+         "heartbeat_timeout_ms", MCA_ECONFIG, "arms[%d].canopen: ", "heartbeat_timeout_ms 101..60000", 0, 0,
+         0},
+        {"a_co_pdo", B_CANOPEN, "pdo_timeout_syncs: 5", "pdo_timeout_syncs: 0", "pdo_timeout_syncs",
+         MCA_ECONFIG, "arms[%d].canopen: ", "pdo_timeout_syncs 1..100000", 0, 0, 0},
+        {"a_co_bus", B_CANOPEN, "interface: can#", "interface: can0", "interface:", MCA_ECONFIG,
+         "arms[%d].interface", "can0 is already arms[0]'s", 0, 0, 1},
+        {"a_id_base", B_SOCKETCAN, "id_base: 0x140", "id_base: 0x141", "id_base", MCA_ECONFIG,
+         "arms[%d].id_base", "must be a multiple of", 0, 0, 0},
+        {"a_id_clash", B_SOCKETCAN, "interface: vcan#", "interface: vcan0", "id_base", MCA_ECONFIG,
+         "arms[%d].id_base", "0x140 on vcan0 is already arms[0]'s", 0, 0, 1},
+        {"a_inline", B_SIM, "    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]\n", "", NULL, MCA_EPARSE,
+         "arms[%d]: ", "an inline task needs urdf, base_xyz and q0", 0, 0, 0},
+        {"a_urdf", B_SIM, "urdf: @U@", "urdf: /nonexistent/pa11.urdf", "urdf:", MCA_ENOENT, "arms[%d].urdf",
+         "'/nonexistent/pa11.urdf' not found", 0, 0, 0},
+        {"a_urdf_tip", B_SIM, ARM_TAIL, ARM_TAIL "    tip_link: no_such_link\n", "urdf:", MCA_ENOENT,
+         "arms[%d].urdf", "no_such_link", 0, 0, 0},
+        {"a_xyz", B_SIM, "base_xyz: [0.#, 0.6, 0.1]", "base_xyz: [0.#, 0.6, 1e308]", "base_xyz", MCA_ECONFIG,
+         "arms[%d].base_xyz[2]", "must be in [-100, 100] m", 0, 0, 0},
+        {"a_rpy", B_SIM, "base_rpy: [0.0, 0.0, 0.0]", "base_rpy: [0.0, 150, 0.0]", "base_rpy", MCA_ECONFIG,
+         "arms[%d].base_rpy[1]", "(got 150)", 0, 0, 0},
+        {"a_radius", B_SIM, ARM_TAIL, PATH_CIRCLE("1e308", "      period: 3.0\n", "[1, 0, 0]", "[0, 0, 1]"),
+         "radius:", MCA_ECONFIG, "arms[%d].path.radius", "must be in (0, 10] m", 0, 0, 0},
+        {"a_circle", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "", "[1, 0, 0]", "[0, 0, 1]"), "path:", MCA_ECONFIG,
+         "arms[%d].path.circle", "needs radius > 0, period > 0, u and v", 0, 0, 0},
+        {"a_u", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "      period: 3.0\n", "[0, 0, 0]", "[0, 0, 1]"),
+         "u:", MCA_ECONFIG, "arms[%d].path.u", "zero vector", 0, 0, 0},
+        {"a_v", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "      period: 3.0\n", "[1, 0, 0]", "[2, 0, 0]"),
+         "v:", MCA_ECONFIG, "arms[%d].path.v", "parallel to u", 0, 0, 0},
+        {"a_stream", B_SIM, ARM_TAIL, ARM_TAIL "    stream: pose\n", "stream:", MCA_EPARSE, "arms[%d].stream",
+         "only in a streamed task", 0, 0, 0},
+        {"a_stream_kind", B_SIM, ARM_TAIL, ARM_TAIL "    stream: spin\n", "stream:", MCA_ECONFIG,
+         "arms[%d].stream", "'spin' (known: twist, pose)", 1, 0, 0},
+        {"a_dof", B_SIM, "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]", "q0: [0.0, 0.3, 0.0]",
+         "q0:", MCA_ECONFIG, "arms[%d].q0", "3 values but", 0, 0, 0},
+        {"a_q0", B_SIM, "q0: [0.0, 0.3,", "q0: [0.0, 9.0,", "q0:", MCA_ECONFIG, "arms[%d].q0[1] = 9",
+         "outside joint", 0, 0, 0},
+        {"a_dec", B_SIM, "dec_limit: 4.0", "dec_limit: 1e-12", "dec_limit", MCA_ECONFIG, "arms[%d].dec_limit",
+         "must be in [0.05, 100] rad/s^2", 0, 0, 0},
+        {"a_dec_stop", B_SIM, "dec_limit: 4.0", "dec_limit: 0.05", "dec_limit", MCA_ECONFIG,
+         "arms[%d].dec_limit", "in 200 s, more than 60 s", 0, 1, 0},
+        {"a_prio", B_SIM, ARM_TAIL, ARM_TAIL "    priority: 0\n", "priority:", MCA_ECONFIG,
+         "arms[%d].priority", "(got 0)", 0, 0, 0},
+        {"a_lag", B_SIM, ARM_TAIL, ARM_TAIL "    sim:\n      lag_tau: 5\n", "lag_tau", MCA_ECONFIG,
+         "arms[%d].sim.lag_tau", "(got 5)", 0, 0, 0},
+        {"a_latency", B_SIM, ARM_TAIL, ARM_TAIL "    sim:\n      latency_cycles: 65\n", "latency_cycles",
+         MCA_ECONFIG, "arms[%d].sim.latency_cycles", "(got 65)", 0, 0, 0},
+        {"a_noise", B_SIM, ARM_TAIL, ARM_TAIL "    sim:\n      noise_pos: 5\n", "noise_pos", MCA_ECONFIG,
+         "arms[%d].sim.noise_pos", "(got 5)", 0, 0, 0},
+    };
+    char err[1024];
+    for (int b = B_SIM; b <= B_CANOPEN; b++) { /* the pair cell itself loads, on each backend */
+        struct arm_case good = {"good", b, "", "", NULL, 0, "", "", 0, 0, 0};
+        const char *p = pair_cell("pair_good", &good, -1);
+        if (mca_cell_load(p, &cell, err, sizeof err) != MCA_OK) {
+            fail_msg("good pair cell (backend %d): %s", b, err);
+        }
+    }
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const struct arm_case *c = &cases[i];
+        for (int bad = c->only_arm1; bad < 2; bad++) { /* arm 0 bad with arm 1 good, and the other way */
+            char name[64], field[96];
+            snprintf(name, sizeof name, "%s_%d", c->name, bad);
+            snprintf(field, sizeof field, c->field, bad);
+            const char *p = pair_cell(name, c, bad);
+            print_message("%s:\n", name);
+            expect_error(p, c->rc, line_in_arm(p, bad, c->needle), field, c->reason, NULL);
+        }
+    }
+}
+
+/* With a scenario file: the cell's arms name the scenario's arms, as many as it has. */
+static void test_scenario_arm_lines(void **state) {
+    (void)state;
+    for (int bad = 0; bad < 2; bad++) {
+        char text[1024];
+        snprintf(text, sizeof text,
+                 "name: scn-cell\ntask:\n  scenario: %s/config/scenarios/cross_circles.yaml\narms:\n"
+                 "  - name: %s\n    backend: sim\n  - name: %s\n    backend: sim\ndds: {enabled: false}\n",
+                 MCA_SOURCE_DIR, bad == 0 ? "lefty" : "left", bad == 1 ? "righty" : "right");
+        const char *p = write_text("scn_arm", text);
+        char field[32];
+        snprintf(field, sizeof field, "arms[%d].name", bad);
+        expect_error(p, MCA_ECONFIG, line_of(p, bad == 0 ? "name: lefty" : "name: righty"), field,
+                     bad == 0 ? "no arm 'lefty'" : "no arm 'righty'", NULL);
+    }
+    char text[1024];
+    snprintf(text, sizeof text,
+             "name: scn-cell\ntask:\n  scenario: %s/config/scenarios/cross_circles.yaml\narms:\n"
+             "  - name: left\n    backend: sim\ndds: {enabled: false}\n",
+             MCA_SOURCE_DIR);
+    const char *p = write_text("scn_count", text);
+    expect_error(p, MCA_ECONFIG, line_of(p, "arms:"), "arms: 1 arms but scenario", "has 2", NULL);
+}
+
 /* Every shipped cell file loads (they reference the scheme's scenario files and the URDFs). */
 static void test_shipped_cells(void **state) {
     (void)state;
@@ -499,7 +843,8 @@ int main(void) {
         cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
         cmocka_unit_test(test_ros2_keys),          cmocka_unit_test(test_search_path),
         cmocka_unit_test(test_duplicate_arm),      cmocka_unit_test(test_shipped_cells),
-        cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_mca_ts_keys),        cmocka_unit_test(test_cell_error_lines),
+        cmocka_unit_test(test_arm_error_lines),    cmocka_unit_test(test_scenario_arm_lines),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[300];
