@@ -68,18 +68,32 @@ def main():
     lim = limits(urdf_right)
     dec = float(re.search(r"dec_limit: *([0-9.]+)", text).group(1))
     step = dec * 1e-3
-    fails = 0
+    fails = skips = 0
     for name, lie, want in [("control", None, None)] + CASES:
-        emu = start_emulators(armsim, cell_src, tmp, {1: ["--lie", lie % LIE_CYCLE]} if lie else None, fifo=90,
-                              tag=name)
-        csvp = os.path.join(tmp, f"{name}.csv")
-        r = subprocess.run([mcad, "--no-dds", "--stop-after", str(STOP_AFTER), "--csv", csvp, cell],
-                           capture_output=True, text=True, timeout=600)
-        for e in emu:
-            e.terminate()
-            e.wait(timeout=30)
-        log = r.stderr
-        faults = [ln for ln in log.splitlines() if "fault at" in ln or "also at" in ln]
+        # A lost-feedback fault before the lie (or in the control run) is the guest starving the lockstep
+        # emulators' replies, not the product: the case runs again, at most 3 times, and is not judged (said
+        # so, exit 77 if nothing failed) when the guest starved it every time.
+        for attempt in (1, 2, 3):
+            emu = start_emulators(armsim, cell_src, tmp, {1: ["--lie", lie % LIE_CYCLE]} if lie else None, fifo=90,
+                                  tag=name)
+            csvp = os.path.join(tmp, f"{name}.csv")
+            r = subprocess.run([mcad, "--no-dds", "--stop-after", str(STOP_AFTER), "--csv", csvp, cell],
+                               capture_output=True, text=True, timeout=600)
+            for e in emu:
+                e.terminate()
+                e.wait(timeout=30)
+            log = r.stderr
+            faults = [ln for ln in log.splitlines() if "fault at" in ln or "also at" in ln]
+            early = [ln for ln in faults[:1] if "lost feedback" in ln
+                     and (lie is None or float(re.search(r"at t = ([0-9.]+) s", ln).group(1)) < LIE_CYCLE / 1000)]
+            if not early:
+                break
+            print(f"     {name}: attempt {attempt}: the guest starved the emulators' replies ({early[0]}): "
+                  f"{'again' if attempt < 3 else 'not judged'}", flush=True)
+        if early:
+            print(f"SKIP {name:9s} not judged: lost feedback before the lie on all 3 attempts (the guest was starved)")
+            skips += 1
+            continue
         rows = list(csv.DictReader(open(csvp))) if os.path.exists(csvp) else []
         bad = []
         if lie is None:
@@ -116,8 +130,9 @@ def main():
         for x in bad:
             print("     " + x)
         fails += bool(bad)
-    print(f"plausibility over CAN: {len(CASES) + 1 - fails} of {len(CASES) + 1} cases ok")
-    return 1 if fails else 0
+    print(f"plausibility over CAN: {len(CASES) + 1 - fails - skips} of {len(CASES) + 1} cases ok, {skips} not judged "
+          f"(guest starved)")
+    return 1 if fails else 77 if skips else 0
 
 
 if __name__ == "__main__":
