@@ -448,20 +448,9 @@ static void fail_at(char *err, size_t errlen, const char *file, int line, const 
     va_end(ap);
 }
 
-/* Line of the node at the printf-formatted path ("arms[1].canopen.sync_us"), or of its nearest enclosing
- * node when it is absent (a missing field); 0 when the marks could not be read. */
-__attribute__((format(printf, 2, 3))) static int mark_line(const mca_yaml_marks_t *marks, const char *fmt,
-                                                           ...) {
-    char node[MCA_YAML_MARKS_PATH_MAX];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(node, sizeof node, fmt, ap);
-    va_end(ap);
-    return mca_yaml_marks_line_or_parent(marks, node);
-}
-
-/* Fail with "FILE:LINE: message"; LINE(...) is the line of a field path (mark_line of the cell's marks). */
-#define LINE(...) mark_line(&marks, __VA_ARGS__)
+/* Fail with "FILE:LINE: message"; LINE(...) is the line of a printf-formatted field path in the cell's
+ * marks ("arms[1].canopen.sync_us"), or of its nearest enclosing node when it is absent (a missing field). */
+#define LINE(...) mca_yaml_marks_line_of(&marks, __VA_ARGS__)
 #define FAIL(code, line, ...)                                                                                \
     do {                                                                                                     \
         fail_at(err, errlen, path, (line), __VA_ARGS__);                                                     \

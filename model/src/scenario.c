@@ -168,19 +168,6 @@ static void set_err(char *err, size_t errlen, const char *fmt, ...) {
     va_end(ap);
 }
 
-/* Line of the node at the printf-formatted path ("arms[1].path.t0"), or for a missing field of its nearest
- * enclosing node that is present ("arms[1].path"): libcyaml keeps no positions after loading, the marks
- * (mca/yaml_marks.h) do. 0 when the marks could not be read. */
-__attribute__((format(printf, 2, 3))) static int line_of(const mca_yaml_marks_t *marks, const char *fmt,
-                                                         ...) {
-    char node[MCA_YAML_MARKS_PATH_MAX];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(node, sizeof node, fmt, ap);
-    va_end(ap);
-    return mca_yaml_marks_line_or_parent(marks, node);
-}
-
 /* "FILE:LINE: message" and MCA_ECONFIG */
 #define FAIL_AT(line, ...)                                                                                   \
     do {                                                                                                     \
@@ -263,7 +250,7 @@ static int check_at(const char *path, const mca_yaml_marks_t *marks, const char 
     if (mca_range_check(mca_scenario_range(key), v, why, sizeof why) == MCA_OK) {
         return MCA_OK;
     }
-    set_err(err, errlen, "%s:%d: %s: %s", path, line_of(marks, "%s", field), field, why);
+    set_err(err, errlen, "%s:%d: %s: %s", path, mca_yaml_marks_line_of(marks, "%s", field), field, why);
     return MCA_ECONFIG;
 }
 
@@ -351,7 +338,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     {
         char why[160];
         if (mca_scenario_check_duration(scn.duration, p->dt, why, sizeof why) != MCA_OK) {
-            FAIL_AT(line_of(&marks, "duration"), "duration: %s", why);
+            FAIL_AT(mca_yaml_marks_line_of(&marks, "duration"), "duration: %s", why);
         }
     }
     if (raw->d1) {
@@ -363,7 +350,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         p->d2 = *raw->d2;
     }
     if (!(p->d1 < p->d2)) {
-        FAIL_AT(raw->d1 ? line_of(&marks, "d1") : line_of(&marks, "d2"),
+        FAIL_AT(raw->d1 ? mca_yaml_marks_line_of(&marks, "d1") : mca_yaml_marks_line_of(&marks, "d2"),
                 "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
     }
     if (raw->K) {
@@ -442,15 +429,15 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             pp->kind = MCA_PATH_CIRCLE;
             pp->relative = 1;
             if (!rp->radius) {
-                FAIL_AT(line_of(&marks, "arms[%d].path.radius", ai),
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.radius", ai),
                         "arms[%d].path.radius: circle needs radius > 0", ai);
             }
             if (!rp->period) {
-                FAIL_AT(line_of(&marks, "arms[%d].path.period", ai),
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.period", ai),
                         "arms[%d].path.period: circle needs period > 0", ai);
             }
             if (!rp->u || !rp->v) {
-                FAIL_AT(line_of(&marks, "arms[%d].path.%s", ai, rp->u ? "v" : "u"),
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.%s", ai, rp->u ? "v" : "u"),
                         "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
             }
             snprintf(field, sizeof field, "arms[%d].path.radius", ai);
@@ -467,12 +454,14 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             {
                 double u[3], v[3];
                 if (unit3(u, rp->u) != 0) {
-                    FAIL_AT(line_of(&marks, "arms[%d].path.u", ai), "arms[%d].path.u: zero vector", ai);
+                    FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.u", ai),
+                            "arms[%d].path.u: zero vector", ai);
                 }
                 /* Gram-Schmidt: v orthogonal to u */
                 mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u);
                 if (unit3(pp->v, v) != 0) {
-                    FAIL_AT(line_of(&marks, "arms[%d].path.v", ai), "arms[%d].path.v: parallel to u", ai);
+                    FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.v", ai),
+                            "arms[%d].path.v: parallel to u", ai);
                 }
                 mca_v3_set(pp->u, u);
             }
@@ -482,15 +471,15 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             /* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then
              * visits the file's points; one duration per point. */
             if (!rp->points || rp->points_count < 1) {
-                FAIL_AT(line_of(&marks, "arms[%d].path.points", ai),
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.points", ai),
                         "arms[%d].path.points: waypoints need points", ai);
             }
             if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
-                FAIL_AT(line_of(&marks, "arms[%d].path.points", ai),
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.points", ai),
                         "arms[%d].path.points: at most %d points", ai, MCA_PATH_MAX_POINTS - 1);
             }
             if (!rp->durations || rp->durations_count != rp->points_count) {
-                FAIL_AT(line_of(&marks, "arms[%d].path.durations", ai),
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.durations", ai),
                         "arms[%d].path.durations: need one duration per point (%u points, %u durations)", ai,
                         rp->points_count, rp->durations ? rp->durations_count : 0u);
             }
@@ -502,7 +491,8 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
                     if (mca_range_check(mca_scenario_range("points"), pp->p[i + 1][k], why, sizeof why) !=
                         MCA_OK) {
                         set_err(err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
-                                line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai, i, k, why);
+                                mca_yaml_marks_line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai,
+                                i, k, why);
                         rc = MCA_ECONFIG;
                         goto out;
                     }

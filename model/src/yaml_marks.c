@@ -253,6 +253,15 @@ int mca_yaml_marks_line(const mca_yaml_marks_t *marks, const char *path) {
     return 0;
 }
 
+int mca_yaml_marks_line_of(const mca_yaml_marks_t *marks, const char *fmt, ...) {
+    char node[MCA_YAML_MARKS_PATH_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(node, sizeof node, fmt, ap);
+    va_end(ap);
+    return mca_yaml_marks_line_or_parent(marks, node);
+}
+
 int mca_yaml_marks_line_or_parent(const mca_yaml_marks_t *marks, const char *path) {
     if (!marks || !path) {
         return 0;

@@ -66,6 +66,11 @@ int mca_yaml_marks_line(const mca_yaml_marks_t *marks, const char *path);
  */
 int mca_yaml_marks_line_or_parent(const mca_yaml_marks_t *marks, const char *path);
 
+/** mca_yaml_marks_line_or_parent of a printf-formatted path ("arms[%d].canopen.sync_us"): what the cell and
+ *  scenario loaders call for the line of a field in error. */
+__attribute__((format(printf, 2, 3))) int mca_yaml_marks_line_of(const mca_yaml_marks_t *marks,
+                                                                 const char *fmt, ...);
+
 /** Free the marks (the struct is left empty and can be loaded again). NULL is allowed. */
 void mca_yaml_marks_free(mca_yaml_marks_t *marks);
 
