@@ -18,8 +18,9 @@ Asserted:
   - mcad logs the death with its signal and the restart, restarts the bridge once (restart 1 after 0.5 s),
     and its summary says "died 1 times, restarted 1 times";
   - the task completes: mcad exits 0 in state stopped, no fault, no loop stall (> 5 periods between two
-    ticks' commands) while the bridge died and came back (unless the rest of the run had a longer one: this
-    VM stalls the loop by itself now and then);
+    ticks' commands) while the bridge died and came back, unless cyclictest, running beside mcad on every CPU
+    at the loop's priority for the whole run, was held up at the same moment: this VM freezes its vCPUs for
+    1-15 ms a few times a minute, and such a stall is the machine's, said so, and not judged;
   - a mca-monitor started after the restart receives Distances up to the end of the run and knows the state
     (RUNNING) from its first samples; the first mca-monitor, if the peer spared it, receives again;
   - the Python reader gets a ControllerStatus from the restarted bridge at once (its first status: the
@@ -48,6 +49,8 @@ XML = os.path.join(SRC, "config", "dds", "loopback.xml")
 os.environ["CYCLONEDDS_URI"] = "file://" + XML
 PERIOD_NS = 1_000_000
 STALL_MS = 5.0  # MCA_DAEMON_STALL_PERIODS periods
+LOOP_PRIO = 80  # the cell's rt.priority
+SPIKE_US = 2000  # cyclictest wake-ups this late are recorded with their time
 STATES = ["INIT", "READY", "RUNNING", "BRAKING", "STOPPED", "FAULT"]
 
 failures = []
@@ -57,6 +60,15 @@ def check(cond, what):
     print(("ok   " if cond else "FAIL ") + what, flush=True)
     if not cond:
         failures.append(what)
+
+
+def monitor_rows(path):
+    """Whole rows of a mca-monitor CSV (a monitor killed by the peer may leave its last line cut short)."""
+    try:
+        with open(path) as f:
+            return [r for r in csv.DictReader(f) if None not in r.values() and r.get("state")]
+    except OSError:
+        return []
 
 
 def pct(xs, q):
@@ -140,6 +152,12 @@ def main():
         reader.start()
         time.sleep(1.0)
 
+        # the machine's own stalls, timed: cyclictest on every CPU at the loop's priority, spikes with their
+        # CLOCK_MONOTONIC stamps (us), for the whole run
+        ncpu = os.cpu_count() or 1
+        cyc = subprocess.Popen(["cyclictest", "-m", "-q", "-p", str(LOOP_PRIO), "-i", "1000", "-d", "0",
+                                "-t", str(ncpu), "-a", f"0-{ncpu - 1}", f"--spike={SPIKE_US}",
+                                "--spike-nodes=100000"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         t_start = time.monotonic()
         mcad = subprocess.Popen([MCAD, "--csv", mcad_csv, cell], stderr=subprocess.PIPE, text=True)
         log = Lines(mcad.stderr)
@@ -196,6 +214,18 @@ def main():
             mcad.wait()
         log.t.join(timeout=5)
         t_end = time.monotonic()
+        cyc.send_signal(signal.SIGINT)
+        try:
+            cyc_out = cyc.communicate(timeout=20)[0]
+        except subprocess.TimeoutExpired:
+            cyc.kill()
+            cyc_out = cyc.communicate()[0]
+        # "T: 1 Spike:    1082: TS:  11682978928": latency (us) and the wake-up's CLOCK_MONOTONIC time (us)
+        spikes = [(int(c), int(lat), int(ts)) for c, lat, ts in
+                  re.findall(r"T:\s*(\d+) Spike:\s*(\d+): TS:\s*(\d+)", cyc_out)]
+        check(cyc.returncode == 0 and "T: 0" in cyc_out,
+              f"cyclictest ran beside mcad (exit {cyc.returncode}): {len(spikes)} wake-ups later than "
+              f"{SPIKE_US} us on {ncpu} CPUs" + ("" if cyc.returncode == 0 else ": " + cyc_out.strip()[-300:]))
         time.sleep(1.5)  # the final status and the last samples reach the readers
         stop_reader.set()
         reader.join(timeout=5)
@@ -230,9 +260,7 @@ def main():
 
         # the loop, per phase, from mcad's CSV: task time t = tick * period, on the wall clock from the
         # monitor's samples (stamp_ns = CLOCK_MONOTONIC wake-up of the tick)
-        with open(mon_csv) as f:
-            # a monitor killed by the peer may leave its last line cut short: whole rows only
-            mon_rows = [r for r in csv.DictReader(f) if None not in r.values() and r.get("state")]
+        mon_rows, rows2 = monitor_rows(mon_csv), monitor_rows(mon2_csv)
         check(len(mon_rows) > 100, f"mca-monitor wrote {len(mon_rows)} rows")
         if not mon_rows:
             return 1
@@ -261,14 +289,51 @@ def main():
                   flush=True)
         win = phases["death + restart"]
         check(len(win) > 500, f"{len(win)} running ticks in the death + restart window")
-        # This VM (2 cores, shared with a QEMU guest) stalls a SCHED_FIFO loop by itself now and then (seen: 6 ms
-        # before any peer, 14 ms long after the restart). A stall of the bridge's making would show in the window
-        # alone: its longest gap must stay under 5 ms (MCA_DAEMON_STALL_PERIODS) or under the rest of the run's.
-        win_max = max((r[1] for r in win), default=0)
-        rest_max = max((r[1] for r in phases["before the peer"] + phases["after"]), default=0)
-        check(win_max < max(STALL_MS * 1000, rest_max),
-              f"no loop stall of the bridge's making: longest command gap while it died and restarted "
-              f"{win_max / 1e3:.2f} ms (< {STALL_MS} ms, or < the rest of the run's {rest_max / 1e3:.2f} ms)")
+        # This VM (2 cores, shared with a QEMU guest) freezes its vCPUs now and then (seen: 5-14 ms gaps before any
+        # peer and long after the restart, cyclictest held up as long). A gap of 5 periods or more
+        # (MCA_DAEMON_STALL_PERIODS) in the window is the bridge's unless cyclictest was held up at the same
+        # moment: its wall time is the nearest monitor sample's stamp (the tick's wake-up) moved by the command
+        # gaps between them, and a cyclictest wake-up at least half the gap's excess over a period late, within
+        # 20 ms of the stalled interval, makes it the machine's.
+        stamps = sorted({int(r["tick"]): int(r["stamp_ns"])
+                         for r in mon_rows + rows2}.items())
+        gap_of = {r[0]: r[1] for r in rows}
+
+        def wall_us(k):
+            if not stamps:
+                return None
+            j, st = min(stamps, key=lambda x: abs(x[0] - k))
+            lo, hi, sign = (j + 1, k, 1) if j < k else (k + 1, j, -1)
+            return st / 1e3 + sign * sum(gap_of.get(i, 1000.0) for i in range(lo, hi + 1))
+
+        def machine_stalls(rr):
+            """The gaps of 5 periods or more in rr: (tick, gap, cyclictest spikes at that moment)."""
+            out = []
+            for k, g, _, _ in rr:
+                if g >= STALL_MS * 1000:
+                    w = wall_us(k)
+                    out.append((k, g, [x for x in spikes if w is not None and w - g - 20000 <= x[2] <= w + 20000
+                                       and x[1] >= (g - 1000) / 2]))
+            return out
+
+        # outside the window: how often the machine's own stalls were matched (how well the timing holds)
+        rest = machine_stalls(phases["before the peer"] + phases["after"])
+        print(f"loop stalls >= {STALL_MS:.0f} ms outside the window: {len(rest)}, {sum(1 for x in rest if x[2])} of "
+              f"them with cyclictest held up at the same moment, longest "
+              f"{max((x[1] for x in rest), default=0) / 1e3:.2f} ms; cyclictest wake-ups > {SPIKE_US / 1e3:.0f} ms "
+              f"late in the run: {len(spikes)}, longest {max((x[1] for x in spikes), default=0) / 1e3:.2f} ms",
+              flush=True)
+        stalls = machine_stalls(win)
+        machines = [x for x in stalls if x[2]]
+        ours = [x for x in stalls if not x[2]]
+        for k, g, near in machines:
+            x = max(near, key=lambda y: y[1])
+            print(f"NOTE: the loop's {g / 1e3:.2f} ms gap at tick {k} is the machine's, not judged: cyclictest on "
+                  f"CPU {x[0]} woke {x[1] / 1e3:.2f} ms late {(x[2] - wall_us(k)) / 1e3:+.1f} ms from it", flush=True)
+        check(not ours, "no loop stall of the bridge's making while it died and restarted: "
+              + (", ".join(f"{g / 1e3:.2f} ms at tick {k} (cyclictest not held up then)" for k, g, _ in ours)
+                 if ours else f"longest command gap {max((r[1] for r in win), default=0) / 1e3:.2f} ms, "
+                 f"{len(machines)} of the machine's"))
 
         # the monitors: the first one before the crash (and after, if the peer spared it), the second after
         ticks = [int(r["tick"]) for r in mon_rows]
@@ -283,8 +348,6 @@ def main():
             if before and after:
                 print(f"monitor: last sample before the death tick {max(before)}, first after {min(after)}: "
                       f"gap {(min(after) - max(before)) / 1e3:.3f} s of task time", flush=True)
-        with open(mon2_csv) as f:
-            rows2 = [r for r in csv.DictReader(f) if None not in r.values() and r.get("state")]
         ticks2 = [int(r["tick"]) for r in rows2]
         check(len(ticks2) > 300 and max(ticks2, default=0) >= last_ref - 200,
               f"the monitor that joined after the restart received {len(ticks2)} samples, ticks "
