@@ -2,10 +2,14 @@
 /* mca-monitor: command-line DDS subscriber. One live line per pair of arms (minimum distance, margins
  * to d1 and d2, brake factor S(d), critical links, controller state, alarm word), optional CSV of every
  * Distances sample, and at exit the end-to-end latency (tick stamp -> receipt here, same host clock).
+ * Samples are taken in a data-available listener, i.e. on Cyclone's receiving thread as they arrive (as
+ * ddsperf's default subscriber does): a waitset would add the wake-up of a second thread to every
+ * sample's latency. The main thread only draws and keeps time.
  * Exit 0 on success or Ctrl-C, 1 on a run-time error, 2 on bad usage. */
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -50,6 +54,12 @@ typedef struct status_view {
 enum { PENDING_MAX = 32 };
 
 typedef struct monitor {
+    pthread_mutex_t lock; /* the listener (Cyclone's thread) and the main thread's drawing */
+    dds_entity_t rd, rs;  /* Distances, ControllerStatus readers */
+    int64_t last_rx;      /* when distances last came */
+    unsigned long long count;
+    int done;        /* --count reached */
+    int write_error; /* the CSV could not be written */
     int color, tty;
     int lines_drawn;
     pair_view_t pair[256];
@@ -176,6 +186,63 @@ static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx) {
     return n < 0 ? -1 : 0;
 }
 
+/* Take what arrived at rx: statuses first (each applied from its own tick on), then distances. Caller
+ * holds m->lock. */
+static void take_all(monitor_t *m, int64_t rx) {
+    enum { BATCH = 64 };
+    void *buf[BATCH];
+    dds_sample_info_t info[BATCH];
+    memset(buf, 0, sizeof buf);
+    int n = dds_take(m->rs, buf, info, BATCH, BATCH);
+    for (int i = 0; i < n; ++i) {
+        if (info[i].valid_data) {
+            push_status(m, buf[i]);
+        }
+    }
+    if (n > 0) {
+        dds_return_loan(m->rs, buf, n);
+    }
+    memset(buf, 0, sizeof buf);
+    n = dds_take(m->rd, buf, info, BATCH, BATCH);
+    for (int i = 0; i < n && !m->done; ++i) {
+        if (!info[i].valid_data) {
+            continue;
+        }
+        const mca_dds_Distances *d = buf[i];
+        apply_statuses(m, d->tick);
+        pair_view_t *pv = &m->pair[d->pair_id];
+        pv->seen = 1;
+        pv->last = *d;
+        pv->last.link_distance_a._buffer = NULL; /* loaned memory: do not keep pointers */
+        pv->last.link_distance_b._buffer = NULL;
+        if (csv_row(m, d, rx) != 0) {
+            m->write_error = 1;
+        }
+        if (m->n_lat < m->cap_lat) {
+            m->lat[m->n_lat++] = rx - d->stamp_ns;
+        }
+        m->samples++;
+        if (m->count > 0 && m->samples >= m->count) {
+            m->done = 1;
+        }
+    }
+    if (n > 0) {
+        dds_return_loan(m->rd, buf, n);
+        m->last_rx = rx;
+    }
+}
+
+static void on_data_available(dds_entity_t reader, void *arg) {
+    (void)reader;
+    monitor_t *m = arg;
+    const int64_t rx = now_ns(); /* before the lock: the receipt, not the wait for a redraw */
+    pthread_mutex_lock(&m->lock);
+    if (m->rd > 0 && m->rs > 0) { /* both readers exist (the first may deliver before the second is made) */
+        take_all(m, rx);
+    }
+    pthread_mutex_unlock(&m->lock);
+}
+
 static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
@@ -259,6 +326,8 @@ int main(int argc, char **argv) {
     }
 
     static monitor_t m;
+    pthread_mutex_init(&m.lock, NULL);
+    m.count = count;
     m.tty = isatty(STDOUT_FILENO);
     m.color = m.tty && !no_color;
     if (csv_path != NULL) {
@@ -307,8 +376,15 @@ int main(int argc, char **argv) {
     const dds_entity_t ts =
         dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
     const dds_entity_t sub = mca_dds_create_subscriber(pp, partition);
-    const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, NULL) : (td > 0 ? sub : td);
-    const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, NULL) : (ts > 0 ? sub : ts);
+    dds_listener_t *lst = dds_create_listener(&m);
+    dds_lset_data_available(lst, on_data_available);
+    pthread_mutex_lock(&m.lock);
+    const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, lst) : (td > 0 ? sub : td);
+    const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, lst) : (ts > 0 ? sub : ts);
+    m.rd = rd;
+    m.rs = rs;
+    pthread_mutex_unlock(&m.lock);
+    dds_delete_listener(lst);
     dds_delete_qos(qs);
     dds_delete_qos(qst);
     if (rd < 0 || rs < 0) {
@@ -316,74 +392,37 @@ int main(int argc, char **argv) {
         rc = 1;
         goto out;
     }
-    const dds_entity_t ws = dds_create_waitset(pp);
-    const dds_entity_t cd = dds_create_readcondition(rd, DDS_ANY_STATE);
-    const dds_entity_t cs = dds_create_readcondition(rs, DDS_ANY_STATE);
-    dds_waitset_attach(ws, cd, rd);
-    dds_waitset_attach(ws, cs, rs);
-
     const int64_t t_start = now_ns();
-    int64_t last_draw = 0, last_rx = 0;
-    enum { BATCH = 64 };
-    void *buf[BATCH];
-    dds_sample_info_t info[BATCH];
+    int64_t last_draw = 0;
     while (!g_stop) {
-        dds_waitset_wait(ws, NULL, 0, DDS_MSECS(100));
-        memset(buf, 0, sizeof buf);
-        int n = dds_take(rs, buf, info, BATCH, BATCH);
-        for (int i = 0; i < n; ++i) {
-            if (info[i].valid_data) {
-                push_status(&m, buf[i]);
-            }
-        }
-        if (n > 0) {
-            dds_return_loan(rs, buf, n);
-        }
-        memset(buf, 0, sizeof buf);
-        n = dds_take(rd, buf, info, BATCH, BATCH);
-        const int64_t rx = now_ns();
-        int done = 0;
-        for (int i = 0; i < n && !done; ++i) {
-            if (!info[i].valid_data) {
-                continue;
-            }
-            const mca_dds_Distances *d = buf[i];
-            apply_statuses(&m, d->tick);
-            pair_view_t *pv = &m.pair[d->pair_id];
-            pv->seen = 1;
-            pv->last = *d;
-            pv->last.link_distance_a._buffer = NULL; /* loaned memory: do not keep pointers */
-            pv->last.link_distance_b._buffer = NULL;
-            if (csv_row(&m, d, rx) != 0) {
-                fprintf(stderr, "mca-monitor: write error on '%s'\n", csv_path);
-                rc = 1;
-                g_stop = 1;
-            }
-            if (m.n_lat < m.cap_lat) {
-                m.lat[m.n_lat++] = rx - d->stamp_ns;
-            }
-            m.samples++;
-            if (count > 0 && m.samples >= count) {
-                done = 1;
-            }
-        }
-        if (n > 0) {
-            dds_return_loan(rd, buf, n);
-            last_rx = rx;
-        }
+        const struct timespec tick = {0, 10000000}; /* 10 ms: --count and --duration end within it */
+        nanosleep(&tick, NULL);
         const int64_t now = now_ns();
-        if (n == 0 && now - last_rx > 50000000LL) {
+        pthread_mutex_lock(&m.lock);
+        take_all(&m, now); /* what came before the listeners were set (none after: they take it at once) */
+        if (now - m.last_rx > 50000000LL) {
             apply_statuses(&m, UINT64_MAX); /* no distances for 50 ms: the newest status is current */
         }
         const int64_t redraw = m.tty ? 50000000LL : 1000000000LL; /* 20 Hz on a terminal, else 1 Hz */
+        const int done = m.done;
+        if (m.write_error) {
+            fprintf(stderr, "mca-monitor: write error on '%s'\n", csv_path);
+            rc = 1;
+            g_stop = 1;
+        }
         if (now - last_draw >= redraw || done) {
             draw(&m);
             last_draw = now;
         }
+        pthread_mutex_unlock(&m.lock);
         if (done || (duration > 0.0 && (double)(now - t_start) * 1e-9 >= duration)) {
             break;
         }
     }
+    /* no listener runs after this: the readers go before the rest is read */
+    dds_set_listener(rd, NULL);
+    dds_set_listener(rs, NULL);
+    pthread_mutex_lock(&m.lock);
 out:
     apply_statuses(&m, UINT64_MAX);
     if (m.csv != NULL && fclose(m.csv) != 0) {
