@@ -9,8 +9,12 @@ and gets SIGUSR1 six times, 0.3 s apart, while it runs. Checks:
   - between two signals the loop ticked at its period: ticks advanced by at least half the periods that
     passed on the wall clock (a stalled loop advances by 0);
   - the task ends by itself at stop_after (no SIGTERM needed): exit 0, "state stopped", no fault, no stall;
-  - the summary: ticks = 3000 + the braking ticks (3000..3600), skipped periods <= 10 % of the ticks, and
-    the run's wall time matches its ticks + skipped periods (within 1 s).
+  - the summary: ticks = 3000 + the braking ticks (3000..3600), skipped periods <= 10 % of the ticks (more
+    only if cyclictest, beside mcad on every CPU at the loop's priority, lost at least half as long to late
+    wake-ups: this VM freezes its vCPUs now and then, ~100 ms when busy; seen: 369 skipped periods under
+    load), and the run's wall time matches its ticks + skipped periods (within 1 s);
+  - every thread of mcad but the main one blocks SIGUSR1 (/proc/PID/task/*/status SigBlk): the main thread
+    takes it with sigtimedwait, no thread (the loop least of all) ever runs a handler for it.
 usage: test_sigusr1.py MCAD SOURCE_DIR [--no-rt]
 """
 import os
@@ -28,6 +32,11 @@ STOP_AFTER = 3.0
 N_SIG, GAP = 6, 0.3
 PERIOD = 1e-3
 
+PRIO = 80  # the cell's rt.priority
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+from cyclic_probe import CyclicProbe  # noqa: E402
+
 failures = []
 
 
@@ -38,6 +47,7 @@ def check(cond, what):
 
 
 lines = []  # (monotonic time, line)
+probe = CyclicProbe(PRIO)
 proc = subprocess.Popen([MCAD, "--no-dds", "--stop-after", str(STOP_AFTER)] + EXTRA + [CELL],
                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
@@ -57,6 +67,23 @@ t_ready = next((t for t, ln in lines if "mcad: ready" in ln), None)
 check(t_ready is not None, "mcad ready")
 sent = []
 if t_ready is not None:
+    # every other thread blocks SIGUSR1 (bit 10 of SigBlk): the main thread takes it with sigtimedwait (which
+    # opens the waited-for signals in its SigBlk while it waits), no handler runs, the loop never sees it
+    masks = {}
+    for tid in os.listdir(f"/proc/{proc.pid}/task"):
+        if int(tid) == proc.pid:
+            continue
+        try:
+            with open(f"/proc/{proc.pid}/task/{tid}/status") as f:
+                st = f.read()
+            name = re.search(r"^Name:\s*(.*)$", st, re.M).group(1)
+            masks[f"{name} ({tid})"] = int(re.search(r"^SigBlk:\s*([0-9a-f]+)$", st, re.M).group(1), 16)
+        except (OSError, AttributeError):
+            pass  # a thread that ended meanwhile
+    open_to = [t for t, mk in masks.items() if not mk & (1 << (signal.SIGUSR1 - 1))]
+    check(any(t.startswith("mcad-loop") for t in masks) and not open_to,
+          f"every thread of mcad but the main one (sigtimedwait) blocks SIGUSR1: {', '.join(sorted(masks))}"
+          + (f"; not: {', '.join(open_to)}" if open_to else ""))
     time.sleep(0.3)
     for i in range(N_SIG):
         if proc.poll() is not None:
@@ -77,6 +104,7 @@ except subprocess.TimeoutExpired:
     check(False, f"mcad did not end by itself within 30 s (stalled?); after SIGTERM exit {rc}")
 t_end = time.monotonic()
 th.join(timeout=5)
+check(probe.stop(), probe.describe())
 log = "\n".join(ln for _, ln in lines)
 
 check(len(sent) == N_SIG, f"{len(sent)} SIGUSR1 sent while mcad ran")
@@ -106,7 +134,13 @@ if m and t_ready is not None:
     ticks, overruns, skipped = map(int, m.groups())
     want = int(STOP_AFTER / PERIOD)
     check(want <= ticks <= want + 600, f"ticks {ticks} (want {want} + the braking ticks, <= {want + 600})")
-    check(skipped <= 0.1 * ticks, f"overruns {overruns}, skipped periods {skipped} <= 10 % of the ticks")
+    lost_ms = probe.stalled_us() / 1e3
+    if skipped > 0.1 * ticks and lost_ms >= 0.5 * skipped * PERIOD * 1e3:
+        print(f"NOTE: {skipped} skipped periods (> 10 % of the ticks) are the machine's, not judged: cyclictest "
+              f"lost {lost_ms:.0f} ms to late wake-ups on one CPU in the same run", flush=True)
+    check(skipped <= 0.1 * ticks or lost_ms >= 0.5 * skipped * PERIOD * 1e3,
+          f"overruns {overruns}, skipped periods {skipped} <= 10 % of the ticks (or the machine's: cyclictest "
+          f"lost {lost_ms:.0f} ms)")
     wall = t_end - t_ready
     loop = (ticks + skipped) * PERIOD
     check(abs(wall - loop) < 1.0,

@@ -44,13 +44,15 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import mca_types as m  # noqa: E402
 
+sys.path.insert(0, os.path.join(HERE, "..", "common"))
+from cyclic_probe import CyclicProbe  # noqa: E402
+
 MCAD, MONITOR, SRC, DOMAIN = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 XML = os.path.join(SRC, "config", "dds", "loopback.xml")
 os.environ["CYCLONEDDS_URI"] = "file://" + XML
 PERIOD_NS = 1_000_000
 STALL_MS = 5.0  # MCA_DAEMON_STALL_PERIODS periods
 LOOP_PRIO = 80  # the cell's rt.priority
-SPIKE_US = 2000  # cyclictest wake-ups this late are recorded with their time
 STATES = ["INIT", "READY", "RUNNING", "BRAKING", "STOPPED", "FAULT"]
 
 failures = []
@@ -152,12 +154,7 @@ def main():
         reader.start()
         time.sleep(1.0)
 
-        # the machine's own stalls, timed: cyclictest on every CPU at the loop's priority, spikes with their
-        # CLOCK_MONOTONIC stamps (us), for the whole run
-        ncpu = os.cpu_count() or 1
-        cyc = subprocess.Popen(["cyclictest", "-m", "-q", "-p", str(LOOP_PRIO), "-i", "1000", "-d", "0",
-                                "-t", str(ncpu), "-a", f"0-{ncpu - 1}", f"--spike={SPIKE_US}",
-                                "--spike-nodes=100000"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        probe = CyclicProbe(LOOP_PRIO)  # the machine's own stalls, timed, for the whole run
         t_start = time.monotonic()
         mcad = subprocess.Popen([MCAD, "--csv", mcad_csv, cell], stderr=subprocess.PIPE, text=True)
         log = Lines(mcad.stderr)
@@ -214,18 +211,7 @@ def main():
             mcad.wait()
         log.t.join(timeout=5)
         t_end = time.monotonic()
-        cyc.send_signal(signal.SIGINT)
-        try:
-            cyc_out = cyc.communicate(timeout=20)[0]
-        except subprocess.TimeoutExpired:
-            cyc.kill()
-            cyc_out = cyc.communicate()[0]
-        # "T: 1 Spike:    1082: TS:  11682978928": latency (us) and the wake-up's CLOCK_MONOTONIC time (us)
-        spikes = [(int(c), int(lat), int(ts)) for c, lat, ts in
-                  re.findall(r"T:\s*(\d+) Spike:\s*(\d+): TS:\s*(\d+)", cyc_out)]
-        check(cyc.returncode == 0 and "T: 0" in cyc_out,
-              f"cyclictest ran beside mcad (exit {cyc.returncode}): {len(spikes)} wake-ups later than "
-              f"{SPIKE_US} us on {ncpu} CPUs" + ("" if cyc.returncode == 0 else ": " + cyc_out.strip()[-300:]))
+        check(probe.stop(), probe.describe())
         time.sleep(1.5)  # the final status and the last samples reach the readers
         stop_reader.set()
         reader.join(timeout=5)
@@ -312,17 +298,14 @@ def main():
             for k, g, _, _ in rr:
                 if g >= STALL_MS * 1000:
                     w = wall_us(k)
-                    out.append((k, g, [x for x in spikes if w is not None and w - g - 20000 <= x[2] <= w + 20000
-                                       and x[1] >= (g - 1000) / 2]))
+                    out.append((k, g, probe.near(w, g) if w is not None else []))
             return out
 
         # outside the window: how often the machine's own stalls were matched (how well the timing holds)
         rest = machine_stalls(phases["before the peer"] + phases["after"])
         print(f"loop stalls >= {STALL_MS:.0f} ms outside the window: {len(rest)}, {sum(1 for x in rest if x[2])} of "
               f"them with cyclictest held up at the same moment, longest "
-              f"{max((x[1] for x in rest), default=0) / 1e3:.2f} ms; cyclictest wake-ups > {SPIKE_US / 1e3:.0f} ms "
-              f"late in the run: {len(spikes)}, longest {max((x[1] for x in spikes), default=0) / 1e3:.2f} ms",
-              flush=True)
+              f"{max((x[1] for x in rest), default=0) / 1e3:.2f} ms", flush=True)
         stalls = machine_stalls(win)
         machines = [x for x in stalls if x[2]]
         ours = [x for x in stalls if not x[2]]
