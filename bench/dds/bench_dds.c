@@ -148,9 +148,10 @@ int main(int argc, char **argv) {
     }
 
     mca_dds_bridge_t *bridge = NULL;
-    int rc = mca_dds_bridge_create(&bridge, &cfg);
+    char err[320] = "";
+    int rc = mca_dds_bridge_create(&bridge, &cfg, err, sizeof err);
     if (rc != MCA_OK) {
-        fprintf(stderr, "bench_dds: bridge: %s\n", mca_strerror(rc));
+        fprintf(stderr, "bench_dds: bridge: %s: %s\n", mca_strerror(rc), err);
         return 1;
     }
     pid_t mon_pid = 0;

@@ -603,14 +603,15 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             rc = MCA_ENOENT;
         }
         dc.process_exe = exe;
-        rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc) : rc;
+        char why[320] = "";
+        rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc, why, sizeof why) : rc;
         if (rc != MCA_OK) {
             /* Cyclone's reason (a security file missing, a certificate refused, ...) was captured: say it */
             mca_dds_log_drain(d->opts.log, "<3>mcad: dds: ");
             mca_dds_log_capture(0);
         }
         if (rc != MCA_OK && !(err && err[0])) {
-            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
+            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", why[0] ? why : mca_strerror(rc),
                     dc.config_path ? " (check dds.config)" : "");
         }
         if (rc == MCA_OK) {

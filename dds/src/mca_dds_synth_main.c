@@ -161,9 +161,10 @@ int main(int argc, char **argv) {
     sigaction(SIGTERM, &sa, NULL);
 
     mca_dds_bridge_t *bridge = NULL;
-    int rc = mca_dds_bridge_create(&bridge, &cfg);
+    char err[320] = "";
+    int rc = mca_dds_bridge_create(&bridge, &cfg, err, sizeof err);
     if (rc != MCA_OK) {
-        fprintf(stderr, "mca-dds-synth: bridge: %s\n", mca_strerror(rc));
+        fprintf(stderr, "mca-dds-synth: bridge: %s: %s\n", mca_strerror(rc), err);
         return 1;
     }
     if (wait_readers > 0) {

@@ -285,9 +285,10 @@ int main(int argc, char **argv) {
     sigaction(SIGTERM, &sa, NULL);
 
     int rc = 0;
-    dds_entity_t dom = 0;
-    const dds_entity_t pp = mca_dds_open_participant((uint32_t)domain, config, &dom);
-    if (pp < 0) {
+    dds_entity_t dom = 0, pp = 0;
+    char err[320] = "";
+    if (mca_dds_open_participant((uint32_t)domain, config, &pp, &dom, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, "mca-monitor: %s\n", err);
         free(m.lat);
         if (m.csv != NULL) {
             fclose(m.csv);
@@ -306,7 +307,10 @@ int main(int argc, char **argv) {
     const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
-    const dds_entity_t sub = mca_dds_create_subscriber(pp, partition);
+    dds_entity_t sub = DDS_RETCODE_ERROR; /* a DDS code: the reader creation below passes it on */
+    if (mca_dds_create_subscriber(pp, partition, &sub, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, "mca-monitor: %s\n", err);
+    }
     const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, NULL) : (td > 0 ? sub : td);
     const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, NULL) : (ts > 0 ? sub : ts);
     dds_delete_qos(qs);
