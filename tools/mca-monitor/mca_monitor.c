@@ -16,7 +16,8 @@
 #include "mca/dds_bridge.h" /* MCA_DDS_TOPIC_*, MCA_MAX_PAIRS */
 #include "mca/dds_qos.h"
 #include "mca/err.h"
-#include "mca_dds.h" /* mca_dds_Distances, mca_dds_ControllerStatus */
+#include "mca/prog.h" /* mca_prog_parse_u64, mca_prog_on_stop_signals, mca_prog_ns_summary */
+#include "mca_dds.h"  /* mca_dds_Distances, mca_dds_ControllerStatus */
 
 static volatile sig_atomic_t g_stop;
 
@@ -176,21 +177,9 @@ static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx) {
     return n < 0 ? -1 : 0;
 }
 
-static int cmp_i64(const void *a, const void *b) {
-    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-    return (x > y) - (x < y);
-}
-
+/* every integer option: 0..max, the error said */
 static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out) {
-    char *end = NULL;
-    errno = 0;
-    const unsigned long long v = strtoull(s, &end, 10);
-    if (errno != 0 || end == s || *end != '\0' || s[0] == '-' || v > max) {
-        fprintf(stderr, "mca-monitor: %s: '%s' is not an integer in 0..%llu\n", name, s, max);
-        return -1;
-    }
-    *out = v;
-    return 0;
+    return mca_prog_parse_u64("mca-monitor", name, s, max, out);
 }
 
 int main(int argc, char **argv) {
@@ -277,12 +266,7 @@ int main(int argc, char **argv) {
         return 1;
     }
 
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    mca_prog_on_stop_signals(on_signal);
 
     int rc = 0;
     dds_entity_t dom = 0, pp = 0;
@@ -396,11 +380,9 @@ out:
     }
     fprintf(stderr, "mca-monitor: %llu distance samples", (unsigned long long)m.samples);
     if (m.n_lat > 0) {
-        qsort(m.lat, m.n_lat, sizeof *m.lat, cmp_i64);
-        const size_t i50 = (m.n_lat - 1) / 2, i99 = (size_t)floor(0.99 * (double)(m.n_lat - 1));
-        fprintf(stderr, "; latency stamp->receipt p50 %.1f us p99 %.1f us max %.1f us (n=%zu)",
-                (double)m.lat[i50] * 1e-3, (double)m.lat[i99] * 1e-3, (double)m.lat[m.n_lat - 1] * 1e-3,
-                m.n_lat);
+        const mca_prog_ns_summary_t l = mca_prog_ns_summary(m.lat, m.n_lat);
+        fprintf(stderr, "; latency stamp->receipt p50 %.1f us p99 %.1f us max %.1f us (n=%zu)", l.p50, l.p99,
+                l.max, m.n_lat);
     }
     if (m.have_status) {
         fprintf(stderr, "; controller %s, bridge dropped %llu", state_name(m.state),
