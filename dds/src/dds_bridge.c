@@ -956,9 +956,12 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                 atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
                 b->announced = gen;
                 if (log != NULL) {
-                    fprintf(log, "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s\n",
+                    const int failed = atomic_load(&b->shm->open_rc) != MCA_OK;
+                    fprintf(log,
+                            "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s%.*s%s\n",
                             pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
-                            atomic_load(&b->shm->open_rc) != MCA_OK ? " (NOT: its DDS set-up failed)" : "");
+                            failed ? " (NOT: its DDS set-up failed: " : "",
+                            failed ? (int)sizeof b->shm->open_err : 0, b->shm->open_err, failed ? ")" : "");
                 }
                 lines++;
             }
