@@ -20,8 +20,10 @@
 #include <unistd.h>
 
 #include "mca/dds_bridge.h"
+#include "mca/dds_qos.h" /* MCA_DDS_MAX_DOMAIN */
 #include "mca/dds_synth.h"
 #include "mca/err.h"
+#include "mca/prog.h" /* mca_prog_parse_u64, mca_prog_ns_summary */
 
 extern char **environ;
 
@@ -43,32 +45,6 @@ static void workload(long iters) {
     g_sink = acc;
 }
 
-static int cmp_i64(const void *a, const void *b) {
-    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-    return (x > y) - (x < y);
-}
-
-typedef struct summary {
-    double p50, p99, max, mean;
-} summary_t;
-
-static summary_t summarize(int64_t *v, size_t n) {
-    summary_t s = {0, 0, 0, 0};
-    if (n == 0) {
-        return s;
-    }
-    qsort(v, n, sizeof *v, cmp_i64);
-    double sum = 0;
-    for (size_t i = 0; i < n; ++i) {
-        sum += (double)v[i];
-    }
-    s.p50 = (double)v[(n - 1) / 2] * 1e-3;
-    s.p99 = (double)v[(size_t)floor(0.99 * (double)(n - 1))] * 1e-3;
-    s.max = (double)v[n - 1] * 1e-3;
-    s.mean = sum / (double)n * 1e-3;
-    return s;
-}
-
 static void usage(FILE *f) {
     fprintf(f, "usage: bench_dds [--ticks N] [--work-us U] [--block B] [--domain D] [--config XML]\n"
                "                 [--monitor PATH] [--fifo PRIO]\n"
@@ -81,6 +57,7 @@ static void usage(FILE *f) {
 
 int main(int argc, char **argv) {
     long ticks = 5000, block = 500, fifo = 0;
+    unsigned long long v = 0;
     double work_us = 100.0;
     const char *monitor = NULL;
     mca_dds_config_t cfg;
@@ -101,16 +78,25 @@ int main(int argc, char **argv) {
     while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
         switch (c) {
         case 'n':
-            ticks = strtol(optarg, NULL, 10);
+            if (mca_prog_parse_u64("bench_dds", "--ticks", optarg, 1000000000ULL, &v) != 0) {
+                return 2;
+            }
+            ticks = (long)v;
             break;
         case 'w':
             work_us = strtod(optarg, NULL);
             break;
         case 'b':
-            block = strtol(optarg, NULL, 10);
+            if (mca_prog_parse_u64("bench_dds", "--block", optarg, 1000000000ULL, &v) != 0) {
+                return 2;
+            }
+            block = (long)v;
             break;
         case 'd':
-            cfg.domain_id = (uint32_t)strtoul(optarg, NULL, 10);
+            if (mca_prog_parse_u64("bench_dds", "--domain", optarg, MCA_DDS_MAX_DOMAIN, &v) != 0) {
+                return 2;
+            }
+            cfg.domain_id = (uint32_t)v;
             break;
         case 'c':
             cfg.config_path = optarg;
@@ -119,7 +105,10 @@ int main(int argc, char **argv) {
             monitor = optarg;
             break;
         case 'f':
-            fifo = strtol(optarg, NULL, 10);
+            if (mca_prog_parse_u64("bench_dds", "--fifo", optarg, 99, &v) != 0) {
+                return 2;
+            }
+            fifo = (long)v;
             break;
         case 'h':
             usage(stdout);
@@ -143,14 +132,15 @@ int main(int argc, char **argv) {
             workload(iters);
             t[i] = now_ns() - t0;
         }
-        qsort(t, 21, sizeof t[0], cmp_i64);
-        iters = (long)((double)iters * work_us * 1e3 / (double)(t[10] > 0 ? t[10] : 1));
+        const double med_ns = mca_prog_ns_summary(t, 21).p50 * 1e3;
+        iters = (long)((double)iters * work_us * 1e3 / (med_ns > 0 ? med_ns : 1));
     }
 
     mca_dds_bridge_t *bridge = NULL;
-    int rc = mca_dds_bridge_create(&bridge, &cfg);
+    char err[320] = "";
+    int rc = mca_dds_bridge_create(&bridge, &cfg, err, sizeof err);
     if (rc != MCA_OK) {
-        fprintf(stderr, "bench_dds: bridge: %s\n", mca_strerror(rc));
+        fprintf(stderr, "bench_dds: bridge: %s: %s\n", mca_strerror(rc), err);
         return 1;
     }
     pid_t mon_pid = 0;
@@ -244,9 +234,11 @@ int main(int argc, char **argv) {
         waitpid(mon_pid, NULL, 0);
     }
 
-    const summary_t off = summarize(comp[0], n[0]), on = summarize(comp[1], n[1]);
-    const summary_t joff = summarize(jit[0], n[0]), jon = summarize(jit[1], n[1]);
-    const summary_t ps = summarize(push_t, n[1]);
+    const mca_prog_ns_summary_t off = mca_prog_ns_summary(comp[0], n[0]),
+                                on = mca_prog_ns_summary(comp[1], n[1]);
+    const mca_prog_ns_summary_t joff = mca_prog_ns_summary(jit[0], n[0]),
+                                jon = mca_prog_ns_summary(jit[1], n[1]);
+    const mca_prog_ns_summary_t ps = mca_prog_ns_summary(push_t, n[1]);
     printf("bench_dds: %ld ticks per mode at 1 kHz, blocks of %ld, workload %.0f us, snapshot %zu B, %s%s\n",
            ticks, block, work_us, sizeof(mca_dds_snapshot_t), fifo > 0 ? "SCHED_FIFO" : "SCHED_OTHER",
            monitor != NULL ? ", mca-monitor subscribed" : ", no subscriber");

@@ -24,7 +24,8 @@
 #include "mca/err.h"
 #include "mca/scenario.h"
 #include "mca/sim_backend.h"
-#include "mca/canopen.h" /* mca_canopen_backend_open, mca_canopen_backend_fault (issue 15) */
+#include "mca/tick_csv.h" /* mca_tick_csv_header, mca_tick_csv_row */
+#include "mca/canopen.h"  /* mca_canopen_backend_open, mca_canopen_backend_fault (issue 15) */
 #ifdef MCA_TEST_HOOKS
 #include "mca/daemon_test.h"
 #endif
@@ -122,6 +123,7 @@ struct mca_daemon {
     FILE *csv;
     mca_daemon_csv_rec_t csv_rec; /* rt scratch */
     mca_daemon_csv_rec_t csv_out; /* writer scratch */
+    mca_tick_csv_layout_t csv_layout;
 
     /* figures: rt -> supervisor, once a second */
     mca_ring_t sum_ring;
@@ -601,14 +603,15 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             rc = MCA_ENOENT;
         }
         dc.process_exe = exe;
-        rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc) : rc;
+        char why[320] = "";
+        rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc, why, sizeof why) : rc;
         if (rc != MCA_OK) {
             /* Cyclone's reason (a security file missing, a certificate refused, ...) was captured: say it */
             mca_dds_log_drain(d->opts.log, "<3>mcad: dds: ");
             mca_dds_log_capture(0);
         }
         if (rc != MCA_OK && !(err && err[0])) {
-            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
+            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", why[0] ? why : mca_strerror(rc),
                     dc.config_path ? " (check dds.config)" : "");
         }
         if (rc == MCA_OK) {
@@ -628,30 +631,12 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             rc = mca_ring_init(&d->csv_ring, d->csv_storage, sz, sizeof(mca_daemon_csv_rec_t),
                                MCA_DAEMON_CSV_CAPACITY);
             memset(d->csv_storage, 0, sz); /* pre-fault */
-            /* header as mca-sim's, plus the daemon state and the commands */
-            fprintf(d->csv, "t");
+            /* mca-sim's columns, plus the daemon state and the commands, numbers exact */
+            d->csv_layout = (mca_tick_csv_layout_t){.n_arms = d->n_arms, .exact = 1, .daemon_cols = 1};
             for (int a = 0; a < d->n_arms; a++) {
-                for (int j = 0; j < d->dof[a]; j++) {
-                    fprintf(d->csv, ",q%d_%d", a, j);
-                }
+                d->csv_layout.dof[a] = d->dof[a];
             }
-            for (int a = 0; a < d->n_arms; a++) {
-                fprintf(d->csv, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a,
-                        a, a, a, a, a, a, a, a, a);
-            }
-            fprintf(d->csv, ",min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,active_rows,"
-                            "binding_rows,pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault,state");
-            for (int a = 0; a < d->n_arms; a++) {
-                for (int j = 0; j < d->dof[a]; j++) {
-                    fprintf(d->csv, ",qdot%d_%d", a, j);
-                }
-            }
-            /* mca-ts path clocks and deadlock state; braking fallback (appended: older readers unaffected) */
-            for (int a = 0; a < d->n_arms; a++) {
-                fprintf(d->csv, ",tau%d,sigma%d", a, a);
-            }
-            fprintf(d->csv, ",deadlock,deadlock_arm,deadlocks,brake_fallback,cmd_gap_us");
-            fprintf(d->csv, "\n");
+            mca_tick_csv_header(d->csv, &d->csv_layout);
         }
     }
     if (rc != MCA_OK) {
@@ -1478,36 +1463,13 @@ int mca_daemon_state(const mca_daemon_t *d) {
 }
 
 static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
-    FILE *f = d->csv;
-    const mca_tick_info_t *in = &r->info;
-    fprintf(f, "%.4f", r->t);
-    for (int a = 0; a < d->n_arms; a++) {
-        for (int j = 0; j < d->dof[a]; j++) {
-            fprintf(f, ",%.17g", r->q[a][j]); /* exact: subscribers compare samples with it */
-        }
-    }
-    for (int a = 0; a < d->n_arms; a++) {
-        fprintf(f, ",%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1],
-                in->ee[a][2], in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
-                in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
-                in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
-    }
-    fprintf(f, ",%.17g,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d,%d",
-            in->min_distance, in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0],
-            in->min_p[1], in->min_p[2], in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows,
-            in->binding_rows, in->pdnn_steps, in->pdnn_residual, in->eq_residual, (long long)in->compute_ns,
-            in->fault, r->state);
-    for (int a = 0; a < d->n_arms; a++) {
-        for (int j = 0; j < d->dof[a]; j++) {
-            fprintf(f, ",%.6g", r->qdot_cmd[a][j]);
-        }
-    }
-    for (int a = 0; a < d->n_arms; a++) {
-        fprintf(f, ",%.6f,%.6g", in->tau[a], in->sigma[a]);
-    }
-    fprintf(f, ",%d,%d,%d,%d,%.1f", in->deadlock, in->deadlock_arm, in->deadlocks, in->brake_fallback,
-            (double)r->cmd_gap_ns * 1e-3);
-    fputc('\n', f);
+    const mca_tick_csv_row_t row = {.t = r->t,
+                                    .q = r->q,
+                                    .info = &r->info,
+                                    .state = r->state,
+                                    .qdot_cmd = r->qdot_cmd,
+                                    .cmd_gap_ns = r->cmd_gap_ns};
+    mca_tick_csv_row(d->csv, &d->csv_layout, &row);
 }
 
 int mca_daemon_service(mca_daemon_t *d) {

@@ -14,6 +14,7 @@
 #include <pthread.h>
 #include <signal.h> /* kill */
 #include <spawn.h>  /* posix_spawn: vfork semantics, no copy-on-write of the owner's locked memory */
+#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -418,6 +419,17 @@ static int is_pow2(uint32_t x) {
     return x >= 2 && (x & (x - 1u)) == 0;
 }
 
+/* The reason of a failure, for the caller's error buffer (a library function never prints it). */
+static void set_err(char *err, size_t errlen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void set_err(char *err, size_t errlen, const char *fmt, ...) {
+    if (err != NULL && errlen > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+    }
+}
+
 static void publisher_delete_entities(publisher_t *b) {
     if (b->participant > 0) {
         dds_delete(b->participant); /* deletes topics and writers too */
@@ -428,13 +440,14 @@ static void publisher_delete_entities(publisher_t *b) {
     b->participant = b->domain = 0;
 }
 
-/* Participant, topics, writers (and the ROS 2 ones) from shm->cfg. Reasons on stderr. */
-static int publisher_open(publisher_t *b) {
+/* Participant, topics, writers (and the ROS 2 ones) from shm->cfg. The reason of a failure in err. */
+static int publisher_open(publisher_t *b, char *err, size_t errlen) {
     const mca_dds_shm_config_t *cfg = &b->shm->cfg;
-    const dds_entity_t p =
-        mca_dds_open_participant(cfg->domain_id, cfg->has_config_path ? cfg->config_path : NULL, &b->domain);
-    if (p < 0) {
-        return (int)p;
+    dds_entity_t p = 0;
+    const int prc = mca_dds_open_participant(cfg->domain_id, cfg->has_config_path ? cfg->config_path : NULL,
+                                             &p, &b->domain, err, errlen);
+    if (prc != MCA_OK) {
+        return prc;
     }
     b->participant = p;
     const dds_topic_descriptor_t *const descs[W_COUNT] = {&mca_dds_JointState_desc,
@@ -445,17 +458,14 @@ static int publisher_open(publisher_t *b) {
     int rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
     dds_entity_t pub = p; /* writers hang off the participant, or a publisher with a partition */
     if (rc == MCA_OK && cfg->has_partition) {
-        pub = mca_dds_create_publisher(p, cfg->partition);
-        if (pub < 0) {
-            rc = MCA_EIO;
-        }
+        rc = mca_dds_create_publisher(p, cfg->partition, &pub, err, errlen);
     }
     for (int w = 0; w < W_COUNT && rc == MCA_OK; ++w) {
         const dds_qos_t *q = w == W_STATUS ? qst : qs;
         b->topic[w] = dds_create_topic(p, descs[w], topic_names[w], q, NULL);
         b->writer[w] = b->topic[w] > 0 ? dds_create_writer(pub, b->topic[w], q, NULL) : b->topic[w];
         if (b->writer[w] < 0) {
-            fprintf(stderr, "mca dds: cannot create topic/writer '%s': %s\n", topic_names[w],
+            set_err(err, errlen, "cannot create topic/writer '%s': %s", topic_names[w],
                     dds_strretcode(b->writer[w]));
             rc = MCA_EIO;
         }
@@ -463,11 +473,7 @@ static int publisher_open(publisher_t *b) {
     dds_delete_qos(qs);
     dds_delete_qos(qst);
     if (rc == MCA_OK && cfg->has_ros2) {
-        char err[256];
-        rc = mca_ros2_pub_create(&b->ros2, p, &cfg->ros2, b->shm->box, err, sizeof err);
-        if (rc != MCA_OK) {
-            fprintf(stderr, "mca dds: %s\n", err);
-        }
+        rc = mca_ros2_pub_create(&b->ros2, p, &cfg->ros2, b->shm->box, err, errlen);
     }
     if (rc != MCA_OK) {
         publisher_delete_entities(b);
@@ -554,7 +560,8 @@ int mca_dds_publisher_process(mca_dds_shm_t *shm) {
     }
     b->shm = shm;
     b->process = 1;
-    const int rc = publisher_open(b);
+    shm->open_err[0] = '\0';
+    const int rc = publisher_open(b, shm->open_err, sizeof shm->open_err); /* the owner reports it */
     atomic_store_explicit(&shm->open_rc, rc, memory_order_release);
     atomic_store_explicit(&shm->ready_gen, atomic_load_explicit(&shm->start_gen, memory_order_acquire),
                           memory_order_release);
@@ -568,27 +575,31 @@ int mca_dds_publisher_process(mca_dds_shm_t *shm) {
 
 /* ---------------------------------------------------------------- the owner's side */
 
-static int config_ok(const mca_dds_config_t *cfg) {
+static int config_ok(const mca_dds_config_t *cfg, char *err, size_t errlen) {
     if (cfg->status_divisor == 0 || !is_pow2(cfg->ring_capacity) ||
         cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN ||
         cfg->wake_period_ns > 10000000000ULL || cfg->wake_offset_ns > 10000000000ULL) {
+        set_err(err, errlen,
+                "bad settings (status divisor %u, ring %u, domain %u, wake period %llu ns, offset %llu ns)",
+                cfg->status_divisor, cfg->ring_capacity, cfg->domain_id,
+                (unsigned long long)cfg->wake_period_ns, (unsigned long long)cfg->wake_offset_ns);
         return MCA_EINVAL;
     }
     const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
     if (strlen(frame) > MCA_DDS_FRAME_ID_MAX) {
-        fprintf(stderr, "mca dds: frame id '%s' longer than %d bytes\n", frame, MCA_DDS_FRAME_ID_MAX);
+        set_err(err, errlen, "frame id '%s' longer than %d bytes", frame, MCA_DDS_FRAME_ID_MAX);
         return MCA_EINVAL;
     }
     if (cfg->partition != NULL && strlen(cfg->partition) > MCA_DDS_PARTITION_MAX) {
-        fprintf(stderr, "mca dds: partition '%s' longer than %d bytes\n", cfg->partition,
-                MCA_DDS_PARTITION_MAX);
+        set_err(err, errlen, "partition '%s' longer than %d bytes", cfg->partition, MCA_DDS_PARTITION_MAX);
         return MCA_EINVAL;
     }
     if (cfg->config_path != NULL && strlen(cfg->config_path) > MCA_DDS_CONFIG_PATH_MAX) {
-        fprintf(stderr, "mca dds: config path longer than %d bytes\n", MCA_DDS_CONFIG_PATH_MAX);
+        set_err(err, errlen, "config path longer than %d bytes", MCA_DDS_CONFIG_PATH_MAX);
         return MCA_EINVAL;
     }
     if (cfg->process_exe != NULL && (cfg->process_exe[0] == '\0' || strlen(cfg->process_exe) >= PATH_MAX)) {
+        set_err(err, errlen, "bridge program path empty or longer than %d bytes", PATH_MAX - 1);
         return MCA_EINVAL;
     }
     return MCA_OK;
@@ -598,7 +609,7 @@ static int config_ok(const mca_dds_config_t *cfg) {
  * (its CAN sockets, CSV, cpu_dma_latency), default signal mask and dispositions (the owner blocks its
  * signals in every thread). posix_spawn runs the child on the caller's stack until exec (CLONE_VFORK): no
  * copy of the owner's locked memory is made and the loop's pages are never write-protected. */
-static int spawn_publisher(mca_dds_bridge_t *b) {
+static int spawn_publisher(mca_dds_bridge_t *b, char *err, size_t errlen) {
     char fd_arg[16], owner_arg[24];
     snprintf(fd_arg, sizeof fd_arg, "%d", 3);
     snprintf(owner_arg, sizeof owner_arg, "%ld", (long)getpid());
@@ -624,7 +635,7 @@ static int spawn_publisher(mca_dds_bridge_t *b) {
     posix_spawn_file_actions_destroy(&fa);
     posix_spawnattr_destroy(&at);
     if (e != 0) {
-        fprintf(stderr, "mca dds: cannot start the bridge program %s: %s\n", b->exe, strerror(e));
+        set_err(err, errlen, "cannot start the bridge program %s: %s", b->exe, strerror(e));
         return e == ENOENT ? MCA_ENOENT : MCA_EIO;
     }
     b->pid = pid;
@@ -691,8 +702,8 @@ static int create_process(mca_dds_bridge_t *b) {
 }
 
 /* The first publisher process: up within 20 s, or its set-up error. */
-static int first_start(mca_dds_bridge_t *b) {
-    int rc = spawn_publisher(b);
+static int first_start(mca_dds_bridge_t *b, char *err, size_t errlen) {
+    int rc = spawn_publisher(b, err, errlen);
     if (rc != MCA_OK) {
         return rc;
     }
@@ -703,6 +714,7 @@ static int first_start(mca_dds_bridge_t *b) {
             rc = atomic_load_explicit(&b->shm->open_rc, memory_order_acquire);
             if (rc != MCA_OK) {
                 reap(b, 5.0);
+                set_err(err, errlen, "%.*s", (int)sizeof b->shm->open_err, b->shm->open_err);
             }
             b->announced = gen;
             return rc;
@@ -710,13 +722,13 @@ static int first_start(mca_dds_bridge_t *b) {
         int status;
         if (waitpid(b->pid, &status, WNOHANG) == b->pid) {
             b->pid = 0;
-            fprintf(stderr, "mca dds: the bridge program %s ended at start-up (%s %d)\n", b->exe,
+            set_err(err, errlen, "the bridge program %s ended at start-up (%s %d)", b->exe,
                     WIFSIGNALED(status) ? "signal" : "status",
                     WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
             return MCA_EIO;
         }
         if (mono_s() >= end) {
-            fprintf(stderr, "mca dds: the bridge program %s did not come up within 20 s\n", b->exe);
+            set_err(err, errlen, "the bridge program %s did not come up within 20 s", b->exe);
             reap(b, 0.0);
             return MCA_ETIMEDOUT;
         }
@@ -725,8 +737,18 @@ static int first_start(mca_dds_bridge_t *b) {
     }
 }
 
-int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
-    if (out == NULL || cfg == NULL || config_ok(cfg) != MCA_OK) {
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, char *err, size_t errlen) {
+    char scratch[8]; /* no buffer given: the reasons go nowhere (ros2_pub writes them unconditionally) */
+    if (err == NULL || errlen == 0) {
+        err = scratch;
+        errlen = sizeof scratch;
+    }
+    set_err(err, errlen, "%s", "");
+    if (out == NULL || cfg == NULL) {
+        set_err(err, errlen, "NULL argument");
+        return MCA_EINVAL;
+    }
+    if (config_ok(cfg, err, errlen) != MCA_OK) {
         return MCA_EINVAL;
     }
     mca_dds_bridge_t *b = calloc(1, sizeof *b);
@@ -761,12 +783,12 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg) {
         }
     }
     if (rc == MCA_OK && b->process) {
-        rc = first_start(b);
+        rc = first_start(b, err, errlen);
     } else if (rc == MCA_OK) {
         b->pub->shm = b->shm;
         b->pub->fault_text = cfg->fault_text;
         b->pub->fault_text_arg = cfg->fault_text_arg;
-        rc = publisher_open(b->pub);
+        rc = publisher_open(b->pub, err, errlen);
         if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_thread, b->pub) != 0) {
             publisher_close(b->pub);
             rc = MCA_ENOMEM;
@@ -934,9 +956,12 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                 atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
                 b->announced = gen;
                 if (log != NULL) {
-                    fprintf(log, "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s\n",
+                    const int failed = atomic_load(&b->shm->open_rc) != MCA_OK;
+                    fprintf(log,
+                            "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s%.*s%s\n",
                             pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
-                            atomic_load(&b->shm->open_rc) != MCA_OK ? " (NOT: its DDS set-up failed)" : "");
+                            failed ? " (NOT: its DDS set-up failed: " : "",
+                            failed ? (int)sizeof b->shm->open_err : 0, b->shm->open_err, failed ? ")" : "");
                 }
                 lines++;
             }
@@ -1008,7 +1033,8 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
     }
     /* the count first: the new publisher publishes it with its first status */
     atomic_store_explicit(&b->shm->restarts, atomic_load(&b->shm->restarts) + 1u, memory_order_release);
-    if (spawn_publisher(b) != MCA_OK) {
+    char why[256] = "";
+    if (spawn_publisher(b, why, sizeof why) != MCA_OK) {
         b->started_s = now; /* counts as a quick death */
         b->quick_deaths++;
         b->next_start_s = now + MCA_DDS_BRIDGE_BACKOFF_MAX_S;
@@ -1016,7 +1042,7 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
             b->down = 1;
         }
         if (log != NULL) {
-            fprintf(log, "<3>%sdds bridge: cannot restart %s%s\n", pre, b->exe,
+            fprintf(log, "<3>%sdds bridge: %s%s\n", pre, why,
                     b->down ? ": it stays down (the loop and the arms are not affected)" : "");
         }
         lines++;

@@ -3,6 +3,7 @@
 #include "mca/dds_qos.h"
 
 #include <pthread.h>
+#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,16 +40,52 @@ dds_qos_t *mca_dds_qos_status(void) {
     return q;
 }
 
-dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain) {
-    if (domain == NULL || domain_id > MCA_DDS_MAX_DOMAIN) {
-        fprintf(stderr, "mca dds: domain id %u out of range 0..%d\n", domain_id, MCA_DDS_MAX_DOMAIN);
+int mca_dds_rc(dds_return_t rc) {
+    switch (rc) {
+    case DDS_RETCODE_OK:
+        return MCA_OK;
+    case DDS_RETCODE_BAD_PARAMETER:
+        return MCA_EINVAL;
+    case DDS_RETCODE_OUT_OF_RESOURCES:
+        return MCA_ENOMEM;
+    case DDS_RETCODE_TIMEOUT:
+        return MCA_ETIMEDOUT;
+    case DDS_RETCODE_UNSUPPORTED:
+        return MCA_ENOTSUP;
+    case DDS_RETCODE_PRECONDITION_NOT_MET:
+    case DDS_RETCODE_ILLEGAL_OPERATION:
+    case DDS_RETCODE_NOT_ENABLED:
+    case DDS_RETCODE_ALREADY_DELETED:
+        return MCA_ESTATE;
+    case DDS_RETCODE_NO_DATA:
+    case DDS_RETCODE_TRY_AGAIN:
+        return MCA_EAGAIN;
+    default:
+        return rc > 0 ? MCA_OK : MCA_EIO; /* > 0: a handle */
+    }
+}
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void set_err(char *err, size_t errlen, const char *fmt, ...) {
+    if (err != NULL && errlen > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+    }
+}
+
+int mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *participant,
+                             dds_entity_t *domain, char *err, size_t errlen) {
+    if (participant == NULL || domain == NULL || domain_id > MCA_DDS_MAX_DOMAIN) {
+        set_err(err, errlen, "domain id %u out of range 0..%d", domain_id, MCA_DDS_MAX_DOMAIN);
         return MCA_EINVAL;
     }
     *domain = 0;
     if (config_path != NULL) {
         FILE *f = fopen(config_path, "r");
         if (f == NULL) {
-            fprintf(stderr, "mca dds: cannot read config file '%s'\n", config_path);
+            set_err(err, errlen, "cannot read config file '%s'", config_path);
             return MCA_ENOENT;
         }
         fclose(f);
@@ -61,31 +98,37 @@ dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_pat
         const dds_entity_t d = dds_create_domain((dds_domainid_t)domain_id, uri);
         free(uri);
         if (d < 0) {
-            fprintf(stderr, "mca dds: config '%s' for domain %u rejected: %s\n", config_path, domain_id,
+            set_err(err, errlen, "config '%s' for domain %u rejected: %s", config_path, domain_id,
                     dds_strretcode(d));
-            return MCA_EIO;
+            return MCA_EIO; /* whatever Cyclone's code: the file or the network, not the caller's argument */
         }
         *domain = d;
     }
     const dds_entity_t p = dds_create_participant((dds_domainid_t)domain_id, NULL, NULL);
     if (p < 0) {
-        fprintf(stderr, "mca dds: cannot create participant on domain %u: %s\n", domain_id,
-                dds_strretcode(p));
+        set_err(err, errlen, "cannot create participant on domain %u: %s", domain_id, dds_strretcode(p));
         if (*domain > 0) {
             dds_delete(*domain);
             *domain = 0;
         }
         return MCA_EIO;
     }
-    return p;
+    *participant = p;
+    return MCA_OK;
 }
 
-static dds_entity_t create_in_partition(dds_entity_t pp, const char *partition, int publisher) {
+static int create_in_partition(dds_entity_t pp, const char *partition, int publisher, dds_entity_t *out,
+                               char *err, size_t errlen) {
+    const char *what = publisher ? "publisher" : "subscriber";
+    if (out == NULL) {
+        return MCA_EINVAL;
+    }
     dds_qos_t *q = NULL;
     if (partition != NULL) {
         q = dds_create_qos();
         if (q == NULL) {
-            return DDS_RETCODE_OUT_OF_RESOURCES;
+            set_err(err, errlen, "cannot create %s in partition '%s': out of memory", what, partition);
+            return MCA_ENOMEM;
         }
         dds_qset_partition1(q, partition);
     }
@@ -94,19 +137,22 @@ static dds_entity_t create_in_partition(dds_entity_t pp, const char *partition, 
         dds_delete_qos(q);
     }
     if (e < 0) {
-        fprintf(stderr, "mca dds: cannot create %s in partition '%s': %s\n",
-                publisher ? "publisher" : "subscriber", partition != NULL ? partition : "",
-                dds_strretcode(e));
+        set_err(err, errlen, "cannot create %s in partition '%s': %s", what,
+                partition != NULL ? partition : "", dds_strretcode(e));
+        return mca_dds_rc(e);
     }
-    return e;
+    *out = e;
+    return MCA_OK;
 }
 
-dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition) {
-    return create_in_partition(pp, partition, 1);
+int mca_dds_create_publisher(dds_entity_t pp, const char *partition, dds_entity_t *out, char *err,
+                             size_t errlen) {
+    return create_in_partition(pp, partition, 1, out, err, errlen);
 }
 
-dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition) {
-    return create_in_partition(pp, partition, 0);
+int mca_dds_create_subscriber(dds_entity_t pp, const char *partition, dds_entity_t *out, char *err,
+                              size_t errlen) {
+    return create_in_partition(pp, partition, 0, out, err, errlen);
 }
 
 /* ---- Cyclone's log messages, captured (mca_dds_log_capture) */

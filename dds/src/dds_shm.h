@@ -22,7 +22,7 @@
 #include "mca/ros2.h"
 
 #define MCA_DDS_SHM_MAGIC 0x316d73736464616dULL /* "mddssm1" */
-#define MCA_DDS_SHM_VERSION 1u
+#define MCA_DDS_SHM_VERSION 2u
 #define MCA_DDS_CONFIG_PATH_MAX 1023
 
 /** One arm's latest accepted stream target: a seqlock (the publisher's DDS listener writes, the loop reads;
@@ -68,6 +68,7 @@ typedef struct mca_dds_shm {
     _Atomic uint64_t published, samples, write_errors, invalid, max_pending, stale;
     _Atomic int64_t max_publish_ns;
     _Atomic int open_rc;        /* process mode: the publisher's set-up result (MCA_OK or an error) */
+    char open_err[256];         /* process mode: why its set-up failed (written before ready_gen) */
     _Atomic uint32_t ready_gen; /* process mode: = start_gen once its DDS entities exist */
     /* owner, non-rt */
     _Alignas(64) _Atomic int stop;

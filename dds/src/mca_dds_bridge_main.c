@@ -100,7 +100,8 @@ int main(int argc, char **argv) {
     }
     mca_dds_log_drain(stderr, rc == MCA_OK ? "<4>mcad: dds: " : "<3>mcad: dds: ");
     if (rc != MCA_OK) {
-        fprintf(stderr, "<3>" PREFIX "DDS set-up failed: %s\n", mca_strerror(rc));
+        fprintf(stderr, "<3>" PREFIX "DDS set-up failed: %s: %.*s\n", mca_strerror(rc),
+                (int)sizeof shm->open_err, shm->open_err);
         return 1;
     }
     return 0;

@@ -14,6 +14,7 @@
 #include "mca/dds_bridge.h"
 #include "mca/dds_synth.h"
 #include "mca/err.h"
+#include "mca/prog.h" /* mca_prog_parse_u64, mca_prog_on_stop_signals */
 
 static volatile sig_atomic_t g_stop;
 
@@ -38,16 +39,9 @@ static void usage(FILE *f) {
                "  --help\n");
 }
 
+/* every integer option: 0..max, the error said */
 static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out) {
-    char *end = NULL;
-    errno = 0;
-    const unsigned long long v = strtoull(s, &end, 10);
-    if (errno != 0 || end == s || *end != '\0' || s[0] == '-' || v > max) {
-        fprintf(stderr, "mca-dds-synth: %s: '%s' is not an integer in 0..%llu\n", name, s, max);
-        return -1;
-    }
-    *out = v;
-    return 0;
+    return mca_prog_parse_u64("mca-dds-synth", name, s, max, out);
 }
 
 static int64_t now_ns(void) {
@@ -153,17 +147,13 @@ int main(int argc, char **argv) {
         return 2;
     }
 
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    mca_prog_on_stop_signals(on_signal);
 
     mca_dds_bridge_t *bridge = NULL;
-    int rc = mca_dds_bridge_create(&bridge, &cfg);
+    char err[320] = "";
+    int rc = mca_dds_bridge_create(&bridge, &cfg, err, sizeof err);
     if (rc != MCA_OK) {
-        fprintf(stderr, "mca-dds-synth: bridge: %s\n", mca_strerror(rc));
+        fprintf(stderr, "mca-dds-synth: bridge: %s: %s\n", mca_strerror(rc), err);
         return 1;
     }
     if (wait_readers > 0) {

@@ -46,27 +46,30 @@ static void test_create_rejects_bad_arguments(void **state) {
     (void)state;
     mca_dds_config_t cfg;
     mca_dds_bridge_t *b = (mca_dds_bridge_t *)0x1;
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
     mca_dds_config_default(&cfg);
     cfg.domain_id = g_domain;
-    assert_int_equal(mca_dds_bridge_create(NULL, &cfg), MCA_EINVAL);
-    assert_int_equal(mca_dds_bridge_create(&b, NULL), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(NULL, &cfg, err, sizeof err), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, NULL, NULL, 0), MCA_EINVAL);
     cfg.status_divisor = 0;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
     cfg.status_divisor = 100;
     cfg.ring_capacity = 100;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
     cfg.ring_capacity = 16;
     cfg.domain_id = 231;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
     cfg.domain_id = g_domain;
     cfg.frame_id = "a_frame_name_that_is_longer_than_32_bytes";
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
+    assert_non_null(strstr(err, "frame id 'a_frame_name_that_is_longer_than_32_bytes' longer than"));
     cfg.frame_id = NULL;
     cfg.partition = "a_partition_name_that_is_much_longer_than_the_sixty_three_bytes_allowed";
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EINVAL);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
     cfg.partition = NULL;
     cfg.config_path = "/nonexistent/mca/cyclone.xml";
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_ENOENT);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_ENOENT);
+    assert_string_equal(err, "cannot read config file '/nonexistent/mca/cyclone.xml'");
     assert_ptr_equal(b, (mca_dds_bridge_t *)0x1); /* untouched on error */
     mca_dds_stats_t st;
     assert_int_equal(mca_dds_bridge_stats(NULL, &st), MCA_EINVAL);
@@ -88,13 +91,15 @@ static void test_create_rejects_bad_xml(void **state) {
     cfg.domain_id = g_domain;
     cfg.config_path = path;
     mca_dds_bridge_t *b = NULL;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_EIO);
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EIO);
+    assert_non_null(strstr(err, "rejected")); /* Cyclone's refusal in the buffer, not on stderr */
     assert_null(b);
     unlink(path);
 
     /* The shipped loopback config itself is accepted. */
     cfg.config_path = g_config;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
     mca_dds_stats_t st;
     mca_dds_bridge_destroy(b, &st);
     assert_int_equal(st.offered, 0);
@@ -107,7 +112,7 @@ typedef struct readers {
 
 static void open_readers_in(readers_t *r, const char *partition) {
     dds_entity_t dom = 0;
-    r->pp = mca_dds_open_participant(g_domain, NULL, &dom);
+    assert_int_equal(mca_dds_open_participant(g_domain, NULL, &r->pp, &dom, NULL, 0), MCA_OK);
     assert_true(r->pp > 0);
     dds_qos_t *qs = mca_dds_qos_stream();
     dds_qos_t *qst = mca_dds_qos_status();
@@ -120,7 +125,8 @@ static void open_readers_in(readers_t *r, const char *partition) {
         dds_create_topic(r->pp, &mca_dds_JointCommand_desc, MCA_DDS_TOPIC_JOINT_COMMAND, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(r->pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
-    const dds_entity_t sub = mca_dds_create_subscriber(r->pp, partition);
+    dds_entity_t sub = 0;
+    assert_int_equal(mca_dds_create_subscriber(r->pp, partition, &sub, NULL, 0), MCA_OK);
     assert_true(sub > 0);
     r->rd_dist = dds_create_reader(sub, td, qs, NULL);
     r->rd_js = dds_create_reader(sub, tj, qs, NULL);
@@ -143,7 +149,8 @@ static mca_dds_bridge_t *make_bridge(uint32_t capacity) {
     cfg.frame_id = "base_link";
     cfg.partition = g_partition;
     mca_dds_bridge_t *b = NULL;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
     assert_non_null(b);
     return b;
 }
@@ -410,7 +417,8 @@ static void test_publisher_wakes_on_grid(void **state) {
     cfg.wake_period_ns = 10000000; /* a push every 10 ms */
     cfg.wake_offset_ns = 3000000;  /* the publisher looks 3 ms after each */
     mca_dds_bridge_t *b = NULL;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
     readers_t r;
     open_readers(&r);
     assert_int_equal(mca_dds_bridge_wait_readers(b, MCA_DDS_TOPIC_DISTANCES, 1, 10000), MCA_OK);
@@ -602,11 +610,13 @@ static void test_process_mode_restart(void **state) {
     cfg.partition = g_partition;
     cfg.process_exe = "/nonexistent/mca-dds-bridge";
     mca_dds_bridge_t *b = (mca_dds_bridge_t *)0x1;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_ENOENT);
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_ENOENT);
+    assert_non_null(strstr(err, "cannot start the bridge program /nonexistent/mca-dds-bridge"));
     assert_ptr_equal(b, (mca_dds_bridge_t *)0x1);
     cfg.process_exe = g_bridge_exe;
     b = NULL;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
     mca_dds_stats_t st;
     mca_dds_bridge_stats(b, &st);
     const int pid0 = st.pid;
@@ -718,14 +728,15 @@ static void test_process_mode_stream_target_survives(void **state) {
     cfg.ros2 = &rc;
     cfg.process_exe = g_bridge_exe;
     mca_dds_bridge_t *b = NULL;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
     mca_ros2_target_t tg;
     assert_int_equal(mca_dds_bridge_stream_target(b, 1, &tg), MCA_EINVAL); /* no such arm */
     assert_int_equal(mca_dds_bridge_stream_target(b, 0, &tg), MCA_OK);
     assert_int_equal(tg.accepted, 0);
 
-    dds_entity_t dom = 0;
-    const dds_entity_t pp = mca_dds_open_participant(g_domain, NULL, &dom);
+    dds_entity_t dom = 0, pp = 0;
+    assert_int_equal(mca_dds_open_participant(g_domain, NULL, &pp, &dom, NULL, 0), MCA_OK);
     assert_true(pp > 0);
     char name[160];
     snprintf(name, sizeof name, "rt/%s/left/target_twist", rc.cell);
@@ -799,7 +810,8 @@ static void test_process_mode_hung_bridge_killed(void **state) {
     cfg.partition = g_partition;
     cfg.process_exe = g_bridge_exe;
     mca_dds_bridge_t *b = NULL;
-    assert_int_equal(mca_dds_bridge_create(&b, &cfg), MCA_OK);
+    char err[320] = ""; /* mca_dds_bridge_create's reason */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
     static mca_dds_snapshot_t snap;
     double mn = INFINITY;
     int64_t ms = 0;

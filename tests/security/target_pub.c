@@ -19,6 +19,7 @@
 #include <dds/dds.h>
 
 #include "mca/dds_qos.h" /* mca_dds_open_participant */
+#include "mca/err.h"     /* MCA_OK */
 #include "ros2_msgs.h"   /* geometry_msgs_msg_dds__TwistStamped_, ..PoseStamped_ */
 
 static double now_s(void) {
@@ -95,10 +96,10 @@ int main(int argc, char **argv) {
     }
     setvbuf(stdout, NULL, _IOLBF, 0);
 
-    dds_entity_t domain_h = 0;
-    const dds_entity_t pp = mca_dds_open_participant(domain, config, &domain_h);
-    if (pp < 0) {
-        printf("target_pub: participant refused\n");
+    dds_entity_t domain_h = 0, pp = 0;
+    char err[320] = "";
+    if (mca_dds_open_participant(domain, config, &pp, &domain_h, err, sizeof err) != MCA_OK) {
+        printf("target_pub: participant refused (%s)\n", err);
         dds_delete(DDS_CYCLONEDDS_HANDLE);
         return 3;
     }

@@ -20,7 +20,8 @@
 #include "mca/dds_bridge.h" /* MCA_DDS_TOPIC_*, MCA_MAX_PAIRS */
 #include "mca/dds_qos.h"
 #include "mca/err.h"
-#include "mca_dds.h" /* mca_dds_Distances, mca_dds_ControllerStatus */
+#include "mca/prog.h" /* mca_prog_parse_u64, mca_prog_on_stop_signals, mca_prog_ns_summary */
+#include "mca_dds.h"  /* mca_dds_Distances, mca_dds_ControllerStatus */
 
 static volatile sig_atomic_t g_stop;
 
@@ -243,21 +244,9 @@ static void on_data_available(dds_entity_t reader, void *arg) {
     pthread_mutex_unlock(&m->lock);
 }
 
-static int cmp_i64(const void *a, const void *b) {
-    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-    return (x > y) - (x < y);
-}
-
+/* every integer option: 0..max, the error said */
 static int parse_u64(const char *s, const char *name, unsigned long long max, unsigned long long *out) {
-    char *end = NULL;
-    errno = 0;
-    const unsigned long long v = strtoull(s, &end, 10);
-    if (errno != 0 || end == s || *end != '\0' || s[0] == '-' || v > max) {
-        fprintf(stderr, "mca-monitor: %s: '%s' is not an integer in 0..%llu\n", name, s, max);
-        return -1;
-    }
-    *out = v;
-    return 0;
+    return mca_prog_parse_u64("mca-monitor", name, s, max, out);
 }
 
 int main(int argc, char **argv) {
@@ -346,17 +335,13 @@ int main(int argc, char **argv) {
         return 1;
     }
 
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    mca_prog_on_stop_signals(on_signal);
 
     int rc = 0;
-    dds_entity_t dom = 0;
-    const dds_entity_t pp = mca_dds_open_participant((uint32_t)domain, config, &dom);
-    if (pp < 0) {
+    dds_entity_t dom = 0, pp = 0;
+    char err[320] = "";
+    if (mca_dds_open_participant((uint32_t)domain, config, &pp, &dom, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, "mca-monitor: %s\n", err);
         free(m.lat);
         if (m.csv != NULL) {
             fclose(m.csv);
@@ -375,7 +360,10 @@ int main(int argc, char **argv) {
     const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
-    const dds_entity_t sub = mca_dds_create_subscriber(pp, partition);
+    dds_entity_t sub = DDS_RETCODE_ERROR; /* a DDS code: the reader creation below passes it on */
+    if (mca_dds_create_subscriber(pp, partition, &sub, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, "mca-monitor: %s\n", err);
+    }
     dds_listener_t *lst = dds_create_listener(&m);
     dds_lset_data_available(lst, on_data_available);
     pthread_mutex_lock(&m.lock);
@@ -419,7 +407,7 @@ int main(int argc, char **argv) {
             break;
         }
     }
-    /* no listener runs after this: the readers go before the rest is read */
+    /* no listener runs after this (dds_set_listener waits for one that runs): then the rest is read */
     dds_set_listener(rd, NULL);
     dds_set_listener(rs, NULL);
     pthread_mutex_lock(&m.lock);
@@ -431,11 +419,9 @@ out:
     }
     fprintf(stderr, "mca-monitor: %llu distance samples", (unsigned long long)m.samples);
     if (m.n_lat > 0) {
-        qsort(m.lat, m.n_lat, sizeof *m.lat, cmp_i64);
-        const size_t i50 = (m.n_lat - 1) / 2, i99 = (size_t)floor(0.99 * (double)(m.n_lat - 1));
-        fprintf(stderr, "; latency stamp->receipt p50 %.1f us p99 %.1f us max %.1f us (n=%zu)",
-                (double)m.lat[i50] * 1e-3, (double)m.lat[i99] * 1e-3, (double)m.lat[m.n_lat - 1] * 1e-3,
-                m.n_lat);
+        const mca_prog_ns_summary_t l = mca_prog_ns_summary(m.lat, m.n_lat);
+        fprintf(stderr, "; latency stamp->receipt p50 %.1f us p99 %.1f us max %.1f us (n=%zu)", l.p50, l.p99,
+                l.max, m.n_lat);
     }
     if (m.have_status) {
         fprintf(stderr, "; controller %s, bridge dropped %llu", state_name(m.state),

@@ -15,6 +15,7 @@
 #include "mca/qp_dump.h"
 #include "mca/scenario.h"
 #include "mca/sim_backend.h"
+#include "mca/tick_csv.h"
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     memset(o, 0, sizeof *o);
@@ -32,55 +33,6 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o) {
 static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
-}
-
-static void csv_header(FILE *f, const mca_controller_config_t *cfg) {
-    fprintf(f, "t");
-    for (int a = 0; a < cfg->n_arms; a++) {
-        for (int j = 0; j < cfg->chain[a].dof; j++) {
-            fprintf(f, ",q%d_%d", a, j);
-        }
-    }
-    for (int a = 0; a < cfg->n_arms; a++) {
-        fprintf(f, ",ee%d_x,ee%d_y,ee%d_z,rd%d_x,rd%d_y,rd%d_z,err%d_x,err%d_y,err%d_z,err%d", a, a, a, a, a,
-                a, a, a, a, a);
-    }
-    fprintf(f, ",min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,active_rows,binding_rows,"
-               "pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault");
-    /* three or more arms: the distance of every pair too (min_d is only the smallest of them) */
-    for (int a = 0; cfg->n_arms >= 3 && a < cfg->n_arms; a++) {
-        for (int b = a + 1; b < cfg->n_arms; b++) {
-            fprintf(f, ",d_%d_%d", a, b);
-        }
-    }
-    fprintf(f, "\n");
-}
-
-static void csv_row(FILE *f, const mca_controller_config_t *cfg, const mca_controller_t *ctrl, double t,
-                    double q[][MCA_MAX_DOF], const mca_tick_info_t *in) {
-    fprintf(f, "%.4f", t);
-    for (int a = 0; a < cfg->n_arms; a++) {
-        for (int j = 0; j < cfg->chain[a].dof; j++) {
-            fprintf(f, ",%.9g", q[a][j]);
-        }
-    }
-    for (int a = 0; a < cfg->n_arms; a++) {
-        fprintf(f, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.4g,%.4g,%.4g,%.4g", in->ee[a][0], in->ee[a][1],
-                in->ee[a][2], in->ee_desired[a][0], in->ee_desired[a][1], in->ee_desired[a][2],
-                in->ee_desired[a][0] - in->ee[a][0], in->ee_desired[a][1] - in->ee[a][1],
-                in->ee_desired[a][2] - in->ee[a][2], in->ee_error[a]);
-    }
-    fprintf(f, ",%.9g,%d,%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,%.3g,%.3g,%lld,%d",
-            in->min_distance, in->min_arm_a, in->min_link_a, in->min_arm_b, in->min_link_b, in->min_p[0],
-            in->min_p[1], in->min_p[2], in->min_e[0], in->min_e[1], in->min_e[2], in->brake, in->active_rows,
-            in->binding_rows, in->pdnn_steps, in->pdnn_residual, in->eq_residual, (long long)in->compute_ns,
-            in->fault);
-    for (int a = 0; cfg->n_arms >= 3 && a < cfg->n_arms; a++) {
-        for (int b = a + 1; b < cfg->n_arms; b++) {
-            fprintf(f, ",%.9g", ctrl->dist[a][b].min.d);
-        }
-    }
-    fprintf(f, "\n");
 }
 
 /* mca-sim's solver overrides, applied to the controller config the daemon builds from its cell. */
@@ -124,6 +76,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     mca_daemon_t *d = NULL;
     int64_t *cns = NULL, *cpu = NULL;
     FILE *csv = NULL;
+    mca_tick_csv_layout_t csv_layout = {.pair_cols = 1}; /* mca-sim's digits; every pair's distance */
     int rc = MCA_OK;
     if (!cell) {
         rc = MCA_ENOMEM;
@@ -183,7 +136,11 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             rc = MCA_EIO;
             goto out;
         }
-        csv_header(csv, cfg);
+        csv_layout.n_arms = na;
+        for (int a = 0; a < na; a++) {
+            csv_layout.dof[a] = cfg->chain[a].dof;
+        }
+        mca_tick_csv_header(csv, &csv_layout);
     }
     r->min_distance = INFINITY;
     r->min_distance_after_fault = INFINITY;
@@ -284,7 +241,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             for (int a = 0; a < na; a++) {
                 memcpy(q[a], mca_daemon_positions(d, a), sizeof q[a]);
             }
-            csv_row(csv, cfg, ctrl, t, q, ip);
+            const mca_tick_csv_row_t row = {.t = t, .q = q, .info = ip, .dist = ctrl->dist};
+            mca_tick_csv_row(csv, &csv_layout, &row);
         }
         /* the ticks --dump-every picks: every Nth, and every N/5th with binding rows */
         const int every = o->dump_every > 0 ? o->dump_every : 1;

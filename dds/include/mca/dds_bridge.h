@@ -195,17 +195,18 @@ void mca_dds_config_default(mca_dds_config_t *cfg);
  * memory), the region as its fd 3, every other descriptor closed, default signal mask. Context: init.
  * @param[out] out  new bridge (unchanged on error)
  * @param[in]  cfg  settings (copied)
+ * @param[out] err  why it failed (Cyclone's or the publisher program's reason), errlen bytes; may be NULL.
+ *                  Nothing is printed (in process mode the publisher program prints its own reason too).
  * @retval MCA_OK
  * @retval MCA_EINVAL  NULL argument, divisor 0, capacity not a power of two, domain id out of range,
  *                     frame id or partition too long
  * @retval MCA_ENOENT  config_path names a file that cannot be read
- * @retval MCA_EIO     Cyclone DDS refused (bad XML, no usable network interface, ...); reason on stderr
- * @retval MCA_ENOENT  ros2: a URDF for robot_description cannot be read (reason on stderr); process_exe
- *                     cannot be started
+ * @retval MCA_EIO     Cyclone DDS refused (bad XML, no usable network interface, ...)
+ * @retval MCA_ENOENT  ros2: a URDF for robot_description cannot be read; process_exe cannot be started
  * @retval MCA_ETIMEDOUT the publisher program was not up within 20 s
  * @retval MCA_ENOMEM
  */
-int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg);
+int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, char *err, size_t errlen);
 
 /**
  * Hand one snapshot to the publisher: copies it into the ring (every call: decimation is the caller's,

@@ -6,6 +6,7 @@
 #ifndef MCA_DDS_QOS_H
 #define MCA_DDS_QOS_H
 
+#include <stddef.h>
 #include <stdio.h>
 
 #include <dds/dds.h>
@@ -26,18 +27,35 @@ dds_qos_t *mca_dds_qos_stream(void);
 dds_qos_t *mca_dds_qos_status(void);
 
 /**
+ * A Cyclone DDS return code as an MCA code: the boundary where DDS codes stop (no mca_dds function returns a
+ * dds_return_t mixed with MCA codes). BAD_PARAMETER -> MCA_EINVAL, OUT_OF_RESOURCES -> MCA_ENOMEM, TIMEOUT
+ * -> MCA_ETIMEDOUT, UNSUPPORTED -> MCA_ENOTSUP, PRECONDITION_NOT_MET, ILLEGAL_OPERATION, NOT_ENABLED,
+ * ALREADY_DELETED -> MCA_ESTATE, NO_DATA, TRY_AGAIN -> MCA_EAGAIN, any other error -> MCA_EIO; OK and a
+ * handle (> 0) -> MCA_OK. Context: any.
+ */
+int mca_dds_rc(dds_return_t rc);
+
+/**
  * Create a participant on domain_id. With config_path non-NULL the domain is first created from that
  * Cyclone XML file (its handle in *domain, to dds_delete() after the participant); otherwise
  * CYCLONEDDS_URI or the defaults apply and *domain is 0.
- * @return participant handle (> 0), or a negative MCA_E* code (MCA_ENOENT unreadable file,
- *         MCA_EINVAL bad domain id, MCA_EIO Cyclone error; reason printed on stderr)
+ * @param[out] participant  the participant's handle (unchanged on error)
+ * @param[out] err          why it failed (Cyclone's reason included), errlen bytes; may be NULL
+ * @retval MCA_OK
+ * @retval MCA_EINVAL  NULL argument, domain id out of range
+ * @retval MCA_ENOENT  config_path cannot be read
+ * @retval MCA_EIO     Cyclone refused the config or the participant
+ * @retval MCA_ENOMEM
  */
-dds_entity_t mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *domain);
+int mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *participant,
+                             dds_entity_t *domain, char *err, size_t errlen);
 
-/** Publisher / subscriber of participant pp in DDS partition name (NULL = default partition).
- *  @return handle (> 0) or a negative DDS return code. */
-dds_entity_t mca_dds_create_publisher(dds_entity_t pp, const char *partition);
-dds_entity_t mca_dds_create_subscriber(dds_entity_t pp, const char *partition);
+/** Publisher / subscriber of participant pp in DDS partition name (NULL = default partition), its handle in
+ *  *out. @retval MCA_OK, else Cyclone's refusal through mca_dds_rc (err says why; may be NULL). */
+int mca_dds_create_publisher(dds_entity_t pp, const char *partition, dds_entity_t *out, char *err,
+                             size_t errlen);
+int mca_dds_create_subscriber(dds_entity_t pp, const char *partition, dds_entity_t *out, char *err,
+                              size_t errlen);
 
 /**
  * Cyclone's warnings and errors (process-wide) into a bounded queue in memory instead of straight to stderr
