@@ -16,6 +16,7 @@
 #include "mca/can_proto.h"
 #include "mca/chain.h"
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
 #include "mca/scenario.h"
 #include "mca/scheme.h"
 #include "mca/ros2.h" /* mca_ros2_name_ok */
@@ -423,37 +424,12 @@ static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t
     }
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
-/* "FILE:LINE: message" into err (vsnprintf: messages are cut at errlen, never overflow). */
-static void fail_at(char *err, size_t errlen, const char *file, int line, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    int n = snprintf(err, errlen, "%s:%d: ", file, line);
-    if (n < 0 || (size_t)n >= errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err + n, errlen - (size_t)n, fmt, ap);
-    va_end(ap);
-}
-
 /* Fail with "FILE:LINE: message"; LINE(...) is the line of a printf-formatted field path in the cell's
  * marks ("arms[1].canopen.sync_us"), or of its nearest enclosing node when it is absent (a missing field). */
 #define LINE(...) mca_yaml_marks_line_of(&marks, __VA_ARGS__)
 #define FAIL(code, line, ...)                                                                                \
     do {                                                                                                     \
-        fail_at(err, errlen, path, (line), __VA_ARGS__);                                                     \
+        mca_errbuf_at(err, errlen, path, (line), __VA_ARGS__);                                               \
         rc = (code);                                                                                         \
         goto out;                                                                                            \
     } while (0)
@@ -649,12 +625,12 @@ static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, siz
 
 int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     if (!path || !out) {
-        set_err(err, errlen, "cell: NULL argument");
+        mca_errbuf_printf(err, errlen, "cell: NULL argument");
         return MCA_EINVAL;
     }
     FILE *fp = fopen(path, "r");
     if (!fp) {
-        set_err(err, errlen, "%s:0: cannot open cell file: %s", path, strerror(errno));
+        mca_errbuf_printf(err, errlen, "%s:0: cannot open cell file: %s", path, strerror(errno));
         return MCA_ENOENT;
     }
     fclose(fp);
@@ -677,9 +653,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     if (!raw) {
         /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
          * no data */
-        set_err(err, errlen,
-                "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)",
-                path);
+        mca_errbuf_printf(
+            err, errlen,
+            "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)", path);
         return MCA_EPARSE;
     }
 
@@ -690,7 +666,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     int rc = MCA_OK;
     if (!cell) {
         rc = MCA_ENOMEM;
-        set_err(err, errlen, "%s:0: out of memory", path);
+        mca_errbuf_printf(err, errlen, "%s:0: out of memory", path);
         goto out;
     }
     snprintf(cell->name, sizeof cell->name, "%s", raw->name);
@@ -1323,7 +1299,7 @@ int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_sche
 int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err,
                                size_t errlen) {
     if (!cell || !cfg) {
-        set_err(err, errlen, "cell: NULL argument");
+        mca_errbuf_printf(err, errlen, "cell: NULL argument");
         return MCA_EINVAL;
     }
     int rc = mca_controller_config_from_scenario(cfg, &cell->scn, cell->scheme, err, errlen);

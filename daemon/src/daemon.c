@@ -22,6 +22,7 @@
 #include "mca/dds_bridge.h"
 #include "mca/dds_qos.h"
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf */
 #include "mca/scenario.h"
 #include "mca/sim_backend.h"
 #include "mca/canopen.h" /* mca_canopen_backend_open, mca_canopen_backend_fault (issue 15) */
@@ -144,12 +145,6 @@ static int64_t now_ns(void) {
     return (int64_t)ts.tv_sec * NS_PER_S + ts.tv_nsec;
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, const char *a, const char *b) {
-    if (err && errlen) {
-        snprintf(err, errlen, fmt, a, b);
-    }
-}
-
 #define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
 /* codes of mca_rtlog_code() records (formatted by log_format, non-rt) */
 enum { LOGC_FAULT = 1, LOGC_ARM_FAULT_TOO = 2 };
@@ -196,8 +191,9 @@ static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err,
     }
     char why[200];
     if (mca_ros2_config_check(rc2, why, sizeof why) != MCA_OK) {
-        set_err(err, errlen, "%s: dds.ros2: %s (ROS 2 topics are named after the cell and its arms)",
-                cell->source, why);
+        mca_errbuf_printf(err, errlen,
+                          "%s: dds.ros2: %s (ROS 2 topics are named after the cell and its arms)",
+                          cell->source, why);
         return MCA_EINVAL;
     }
     return MCA_OK;
@@ -450,8 +446,8 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
             nanosleep(&ts, NULL);
         }
     }
-    set_err(err, errlen, "arm '%s' (%s): no answer within 2 s", d->cell.scn.arm[a].name,
-            mca_cell_backend_name(d->cell.arm[a].backend));
+    mca_errbuf_printf(err, errlen, "arm '%s' (%s): no answer within 2 s", d->cell.scn.arm[a].name,
+                      mca_cell_backend_name(d->cell.arm[a].backend));
     return MCA_ETIMEDOUT;
 }
 
@@ -541,7 +537,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (rc == MCA_OK) {
         rc = mca_controller_init(&d->ctrl, &d->ccfg);
         if (rc != MCA_OK) {
-            set_err(err, errlen, "%s: controller init failed: %s", cell->source, mca_strerror(rc));
+            mca_errbuf_printf(err, errlen, "%s: controller init failed: %s", cell->source, mca_strerror(rc));
         }
     }
     if (rc != MCA_OK) {
@@ -571,8 +567,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         pin_non_rt(d);
     }
     if (rc == MCA_OK && cell->stream.enabled && (!cell->dds.enabled || opts->no_dds)) {
-        set_err(err, errlen, "%s: task.stream: the targets come over ROS 2, but DDS is off%s", cell->source,
-                opts->no_dds ? " (--no-dds)" : "");
+        mca_errbuf_printf(err, errlen, "%s: task.stream: the targets come over ROS 2, but DDS is off%s",
+                          cell->source, opts->no_dds ? " (--no-dds)" : "");
         rc = MCA_EINVAL;
     }
     if (rc == MCA_OK && cell->dds.enabled && !opts->no_dds) {
@@ -594,10 +590,10 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
          * one */
         char exe[PATH_MAX];
         if (rc == MCA_OK && find_bridge_exe(opts, exe, sizeof exe) != MCA_OK) {
-            set_err(err, errlen,
-                    "DDS: the publisher program mca-dds-bridge is neither next to this program nor "
-                    "in %s%s (install it, or --no-dds)",
-                    MCA_LIBEXECDIR, "");
+            mca_errbuf_printf(err, errlen,
+                              "DDS: the publisher program mca-dds-bridge is neither next to this program nor "
+                              "in %s (install it, or --no-dds)",
+                              MCA_LIBEXECDIR);
             rc = MCA_ENOENT;
         }
         dc.process_exe = exe;
@@ -608,8 +604,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             mca_dds_log_capture(0);
         }
         if (rc != MCA_OK && !(err && err[0])) {
-            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
-                    dc.config_path ? " (check dds.config)" : "");
+            mca_errbuf_printf(err, errlen, "DDS: cannot create the bridge: %s%s", mca_strerror(rc),
+                              dc.config_path ? " (check dds.config)" : "");
         }
         if (rc == MCA_OK) {
             mca_dds_stats_t ds;
@@ -622,7 +618,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         const size_t sz = MCA_RING_STORAGE_SIZE(sizeof(mca_daemon_csv_rec_t), MCA_DAEMON_CSV_CAPACITY);
         d->csv_storage = aligned_alloc(64, sz);
         if (!d->csv || !d->csv_storage) {
-            set_err(err, errlen, "%s: cannot write the CSV file%s", opts->csv_path, "");
+            mca_errbuf_printf(err, errlen, "%s: cannot write the CSV file", opts->csv_path);
             rc = MCA_EIO;
         } else {
             rc = mca_ring_init(&d->csv_ring, d->csv_storage, sz, sizeof(mca_daemon_csv_rec_t),

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
 #include "mca/scheme.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
@@ -158,22 +159,10 @@ static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list a
     }
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 /* "FILE:LINE: message" and MCA_ECONFIG */
 #define FAIL_AT(line, ...)                                                                                   \
     do {                                                                                                     \
-        char m_[256];                                                                                        \
-        snprintf(m_, sizeof m_, __VA_ARGS__);                                                                \
-        set_err(err, errlen, "%s:%d: %s", path, (line), m_);                                                 \
+        mca_errbuf_at(err, errlen, path, (line), __VA_ARGS__);                                               \
         rc = MCA_ECONFIG;                                                                                    \
         goto out;                                                                                            \
     } while (0)
@@ -204,7 +193,7 @@ static const mca_range_t scn_ranges[] = {
 
 int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
     if (!r) {
-        set_err(why, whylen, "no range");
+        mca_errbuf_printf(why, whylen, "no range");
         return MCA_EINVAL;
     }
     if (isfinite(v) && (r->lo_open ? v > r->lo : v >= r->lo) && v <= r->hi) {
@@ -212,10 +201,10 @@ int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
     }
     const char *sp = r->unit[0] ? " " : "";
     if (r->integer) {
-        set_err(why, whylen, "must be in %.0f..%.0f%s%s (got %.15g)", r->lo, r->hi, sp, r->unit, v);
+        mca_errbuf_printf(why, whylen, "must be in %.0f..%.0f%s%s (got %.15g)", r->lo, r->hi, sp, r->unit, v);
     } else {
-        set_err(why, whylen, "must be in %c%.6g, %.6g]%s%s (got %.15g)", r->lo_open ? '(' : '[', r->lo, r->hi,
-                sp, r->unit, v);
+        mca_errbuf_printf(why, whylen, "must be in %c%.6g, %.6g]%s%s (got %.15g)", r->lo_open ? '(' : '[',
+                          r->lo, r->hi, sp, r->unit, v);
     }
     return MCA_ECONFIG;
 }
@@ -235,8 +224,8 @@ int mca_scenario_check_duration(double duration, double dt, char *why, size_t wh
         return rc;
     }
     if (!(dt > 0.0) || !(duration / dt <= (double)MCA_SCENARIO_MAX_TICKS)) {
-        set_err(why, whylen, "%.15g s at a tick of %g s is %.0f ticks, more than %d", duration, dt,
-                duration / dt, MCA_SCENARIO_MAX_TICKS);
+        mca_errbuf_printf(why, whylen, "%.15g s at a tick of %g s is %.0f ticks, more than %d", duration, dt,
+                          duration / dt, MCA_SCENARIO_MAX_TICKS);
         return MCA_ECONFIG;
     }
     return MCA_OK;
@@ -250,7 +239,8 @@ static int check_at(const char *path, const mca_yaml_marks_t *marks, const char 
     if (mca_range_check(mca_scenario_range(key), v, why, sizeof why) == MCA_OK) {
         return MCA_OK;
     }
-    set_err(err, errlen, "%s:%d: %s: %s", path, mca_yaml_marks_line_of(marks, "%s", field), field, why);
+    mca_errbuf_printf(err, errlen, "%s:%d: %s: %s", path, mca_yaml_marks_line_of(marks, "%s", field), field,
+                      why);
     return MCA_ECONFIG;
 }
 
@@ -286,12 +276,12 @@ static int unit3(double out[3], const double *in) {
 
 int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
     if (!path || !scn_out) {
-        set_err(err, errlen, "scenario: NULL argument");
+        mca_errbuf_printf(err, errlen, "scenario: NULL argument");
         return MCA_EINVAL;
     }
     FILE *f = fopen(path, "r");
     if (!f) {
-        set_err(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        mca_errbuf_printf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
         return MCA_ENOENT;
     }
     fclose(f);
@@ -308,14 +298,14 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     struct raw_scn *raw = NULL;
     cyaml_err_t cerr = cyaml_load_file(path, &cfg, &scn_schema, (cyaml_data_t **)&raw, NULL);
     if (cerr != CYAML_OK) {
-        set_err(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
+        mca_errbuf_printf(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
         return MCA_EPARSE;
     }
     if (!raw) {
         /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
          * no data */
-        set_err(err, errlen, "%s: empty document (no YAML mapping: the file is empty or only comments)",
-                path);
+        mca_errbuf_printf(err, errlen,
+                          "%s: empty document (no YAML mapping: the file is empty or only comments)", path);
         return MCA_EPARSE;
     }
 
@@ -490,9 +480,10 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
                     char why[160];
                     if (mca_range_check(mca_scenario_range("points"), pp->p[i + 1][k], why, sizeof why) !=
                         MCA_OK) {
-                        set_err(err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
-                                mca_yaml_marks_line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai,
-                                i, k, why);
+                        mca_errbuf_printf(
+                            err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
+                            mca_yaml_marks_line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai, i,
+                            k, why);
                         rc = MCA_ECONFIG;
                         goto out;
                     }
