@@ -21,16 +21,12 @@
 #include "mca/scheme.h"
 #include "mca/ros2.h" /* mca_ros2_name_ok */
 #include "mca/urdf.h"
-#include "mca/vec3.h"
 #include "mca/yaml_marks.h"
 
 /* ---------------------------------------------------------------- schema */
 
-enum raw_kind { RAW_HOLD, RAW_CIRCLE };
-enum raw_form { RAW_COMPONENTWISE, RAW_NORMAL };
-
 struct raw_path {
-    enum raw_kind kind;
+    mca_path_kind_t kind;
     double *t0, *radius, *period, *turns;
     double *u;
     unsigned u_count;
@@ -89,7 +85,7 @@ struct raw_task {
 
 struct raw_solver {
     double *K, *epsilon, *v_normal, *v_floor;
-    enum raw_form *form;
+    mca_collision_form_t *form;
     int *pdnn_max_steps;
     double *pdnn_tol, *eq_tol, *fault_residual;
     double *deadlock_time, *back_off_time;
@@ -138,12 +134,12 @@ struct raw_cell {
 };
 
 static const cyaml_strval_t kind_strings[] = {
-    {"hold", RAW_HOLD},
-    {"circle", RAW_CIRCLE},
+    {"hold", MCA_PATH_HOLD},
+    {"circle", MCA_PATH_CIRCLE},
 };
 static const cyaml_strval_t form_strings[] = {
-    {"componentwise", RAW_COMPONENTWISE},
-    {"normal", RAW_NORMAL},
+    {"componentwise", MCA_FORM_COMPONENTWISE},
+    {"normal", MCA_FORM_NORMAL},
 };
 
 #define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
@@ -434,14 +430,13 @@ static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t
         goto out;                                                                                            \
     } while (0)
 
-/* Range check of one loaded value (ranges: mca_range_t, issue 16); the field is printf-formatted and is
- * also the node whose line is reported: "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
+/* Range check of one loaded value (ranges: mca_range_t, issue 16), the one check the scenario reader uses
+ * too; the field is printf-formatted and is also the node whose line is reported:
+ * "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
 #define CHECK(range, v, ...)                                                                                 \
     do {                                                                                                     \
-        char f_[MCA_YAML_MARKS_PATH_MAX], why_[160];                                                         \
-        if (mca_range_check((range), (v), why_, sizeof why_) != MCA_OK) {                                    \
-            snprintf(f_, sizeof f_, __VA_ARGS__);                                                            \
-            FAIL(MCA_ECONFIG, LINE("%s", f_), "%s: %s", f_, why_);                                           \
+        if ((rc = mca_check_range(&ctx, (range), (v), __VA_ARGS__)) != MCA_OK) {                             \
+            goto out;                                                                                        \
         }                                                                                                    \
     } while (0)
 
@@ -564,63 +559,6 @@ const char *mca_cell_backend_name(mca_cell_backend_t b) {
     return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : b == MCA_CELL_BACKEND_CANOPEN ? "canopen" : "sim";
 }
 
-/* "KEY: must be in ..." into why when v is outside the scenario range of key. */
-static int path_value(const char *key, double v, char *why, size_t whylen) {
-    char r[160];
-    if (mca_range_check(mca_scenario_range(key), v, r, sizeof r) != MCA_OK) {
-        snprintf(why, whylen, "%s: %s", key, r);
-        return -1;
-    }
-    return 0;
-}
-
-/* Inline path of a cell arm (hold or circle; richer paths belong in a scenario file). */
-static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, size_t whylen) {
-    memset(pp, 0, sizeof *pp);
-    pp->relative = 1;
-    pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-    if (path_value("t0", pp->t0, why, whylen) != 0) {
-        return -1;
-    }
-    if (rp->kind == RAW_HOLD) {
-        pp->kind = MCA_PATH_HOLD;
-        return 0;
-    }
-    pp->kind = MCA_PATH_CIRCLE;
-    if (!rp->radius || !rp->period || !rp->u || !rp->v) {
-        snprintf(why, whylen, "circle: needs radius > 0, period > 0, u and v");
-        return -1;
-    }
-    pp->radius = *rp->radius;
-    pp->period = *rp->period;
-    pp->turns = rp->turns ? *rp->turns : 1.0;
-    if (path_value("radius", pp->radius, why, whylen) != 0 ||
-        path_value("period", pp->period, why, whylen) != 0 ||
-        path_value("turns", pp->turns, why, whylen) != 0) {
-        return -1;
-    }
-    const double nu = mca_v3_norm(rp->u);
-    if (!(nu > 1e-9) || !isfinite(nu)) {
-        snprintf(why, whylen, "u: zero vector");
-        return -1;
-    }
-    double u[3], v[3];
-    for (int i = 0; i < 3; i++) {
-        u[i] = rp->u[i] / nu;
-    }
-    mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u); /* Gram-Schmidt */
-    const double nv = mca_v3_norm(v);
-    if (!(nv > 1e-9) || !isfinite(nv)) {
-        snprintf(why, whylen, "v: parallel to u");
-        return -1;
-    }
-    for (int i = 0; i < 3; i++) {
-        pp->u[i] = u[i];
-        pp->v[i] = v[i] / nv;
-    }
-    return 0;
-}
-
 /* ---------------------------------------------------------------- load */
 
 int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
@@ -662,6 +600,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     /* where each field is (libcyaml keeps no positions): lines are 0 if the file cannot be read again */
     mca_yaml_marks_t marks = {.mark = NULL};
     (void)mca_yaml_marks_load(path, &marks, NULL, 0);
+    const mca_check_ctx_t ctx = {.file = path, .marks = &marks, .err = err, .errlen = errlen};
     mca_cell_t *cell = calloc(1, sizeof *cell);
     int rc = MCA_OK;
     if (!cell) {
@@ -766,20 +705,21 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         FAIL(MCA_ECONFIG, LINE("scheme"), "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
              raw->scheme);
     }
-    if (raw->d1) {
-        CHECK(mca_scenario_range("d1"), *raw->d1, "d1");
-        scn->params.d1 = *raw->d1;
+    {
+        /* d1, d2 and the scheme's gains: the scenario's checks (its values stay where the cell gives none) */
+        const struct raw_solver *s = raw->solver;
+        const mca_param_keys_t keys = {.solver = "solver.",
+                                       .d1 = raw->d1,
+                                       .d2 = raw->d2,
+                                       .K = s ? s->K : NULL,
+                                       .epsilon = s ? s->epsilon : NULL,
+                                       .v_normal = s ? s->v_normal : NULL,
+                                       .v_floor = s ? s->v_floor : NULL,
+                                       .form = s ? s->form : NULL};
+        if ((rc = mca_scenario_params_apply(&ctx, &keys, &scn->params, &scn->has_form)) != MCA_OK) {
+            goto out;
+        }
     }
-    if (raw->d2) {
-        CHECK(mca_scenario_range("d2"), *raw->d2, "d2");
-        scn->params.d2 = *raw->d2;
-    }
-    if (!(isfinite(scn->params.d1) && isfinite(scn->params.d2) && scn->params.d1 >= 0.0 &&
-          scn->params.d1 < scn->params.d2)) {
-        FAIL(MCA_ECONFIG, LINE("%s", raw->d1 ? "d1" : "d2"),
-             "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)", scn->params.d1, scn->params.d2);
-    }
-
     cell->pdnn_max_steps = 0;
     cell->pdnn_tol = cell->eq_tol = cell->fault_residual = -1.0;
     cell->deadlock_time = cell->back_off_time = -1.0;
@@ -792,26 +732,6 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (s->back_off_time) {
             CHECK(&r_back_off_time, *s->back_off_time, "solver.back_off_time");
             cell->back_off_time = *s->back_off_time;
-        }
-        if (s->K) {
-            CHECK(mca_scenario_range("K"), *s->K, "solver.K");
-            scn->params.K = *s->K;
-        }
-        if (s->epsilon) {
-            CHECK(mca_scenario_range("epsilon"), *s->epsilon, "solver.epsilon");
-            scn->params.epsilon = *s->epsilon;
-        }
-        if (s->v_normal) {
-            CHECK(mca_scenario_range("v_normal"), *s->v_normal, "solver.v_normal");
-            scn->params.v_normal = *s->v_normal;
-        }
-        if (s->v_floor) {
-            CHECK(mca_scenario_range("v_floor"), *s->v_floor, "solver.v_floor");
-            scn->params.v_floor = *s->v_floor;
-        }
-        if (s->form) {
-            scn->has_form = 1;
-            scn->params.form = *s->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
         }
         if (s->pdnn_max_steps) {
             CHECK(&r_pdnn_max_steps, *s->pdnn_max_steps, "solver.pdnn_max_steps");
@@ -990,16 +910,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->tip_link) {
             snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
         }
-        /* the scenario's placement was checked when it loaded; the cell's overrides here, same ranges */
-        for (int i = 0; i < 3; i++) {
-            if (ra->base_xyz) {
-                CHECK(mca_scenario_range("base_xyz"), ra->base_xyz[i], "arms[%d].base_xyz[%d]", ai, i);
-                sa->base_xyz[i] = ra->base_xyz[i];
-            }
-            if (ra->base_rpy) {
-                CHECK(mca_scenario_range("base_rpy"), ra->base_rpy[i], "arms[%d].base_rpy[%d]", ai, i);
-                sa->base_rpy[i] = ra->base_rpy[i];
-            }
+        /* the scenario's placement was checked when it loaded; the cell's overrides here, same check */
+        if ((rc = mca_scenario_place_apply(&ctx, ai, ra->base_xyz, ra->base_rpy, sa)) != MCA_OK) {
+            goto out;
         }
         if (ra->q0) {
             sa->n_q0 = (int)ra->q0_count;
@@ -1008,12 +921,19 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         if (ra->path) {
-            char why[256];
-            if (inline_path(&sa->path, ra->path, why, sizeof why) != 0) {
-                /* why starts with the bad key ("radius: ..."), or "circle: ..." for the path itself */
-                const int bad_key = strncmp(why, "circle:", 7) == 0 ? 0 : (int)strcspn(why, ":");
-                FAIL(MCA_ECONFIG, LINE("arms[%d].path%s%.*s", ai, bad_key ? "." : "", bad_key, why),
-                     "arms[%d].path.%s", ai, why);
+            /* an inline path: hold or circle (richer paths belong in a scenario file), checked as there */
+            const struct raw_path *rp = ra->path;
+            const mca_path_keys_t keys = {.kind = rp->kind,
+                                          .t0 = rp->t0,
+                                          .radius = rp->radius,
+                                          .period = rp->period,
+                                          .turns = rp->turns,
+                                          .u = rp->u,
+                                          .v = rp->v};
+            char at[32];
+            snprintf(at, sizeof at, "arms[%d].path", ai);
+            if ((rc = mca_scenario_path_apply(&ctx, at, &keys, &sa->path)) != MCA_OK) {
+                goto out;
             }
         }
         if (ra->stream && !raw->task.stream) {

@@ -20,11 +20,8 @@
 
 /* ---------------------------------------------------------------- YAML (start-up only) */
 
-enum raw_kind { RAW_HOLD, RAW_CIRCLE, RAW_WAYPOINTS };
-enum raw_form { RAW_COMPONENTWISE, RAW_NORMAL };
-
 struct raw_path {
-    enum raw_kind kind;
+    mca_path_kind_t kind;
     bool *relative;
     double *t0, *radius, *period, *turns;
     double *u;
@@ -54,7 +51,7 @@ struct raw_scn {
     char *name;
     double duration;
     double *dt, *d1, *d2, *K, *epsilon, *v_normal, *v_floor;
-    enum raw_form *form;
+    mca_collision_form_t *form;
     double *sample_times;
     unsigned sample_times_count;
     struct raw_arm *arms;
@@ -62,13 +59,13 @@ struct raw_scn {
 };
 
 static const cyaml_strval_t kind_strings[] = {
-    {"hold", RAW_HOLD},
-    {"circle", RAW_CIRCLE},
-    {"waypoints", RAW_WAYPOINTS},
+    {"hold", MCA_PATH_HOLD},
+    {"circle", MCA_PATH_CIRCLE},
+    {"waypoints", MCA_PATH_WAYPOINTS},
 };
 static const cyaml_strval_t form_strings[] = {
-    {"componentwise", RAW_COMPONENTWISE},
-    {"normal", RAW_NORMAL},
+    {"componentwise", MCA_FORM_COMPONENTWISE},
+    {"normal", MCA_FORM_NORMAL},
 };
 
 static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
@@ -231,36 +228,76 @@ int mca_scenario_check_duration(double duration, double dt, char *why, size_t wh
     return MCA_OK;
 }
 
-/* Range check of one value read from the file (range of key): "FILE:LINE: FIELD: must be in ..." on error,
- * LINE that of the node FIELD ("arms[1].base_xyz[2]"). */
-static int check_at(const char *path, const mca_yaml_marks_t *marks, const char *key, const char *field,
-                    double v, char *err, size_t errlen) {
+int mca_check_range(const mca_check_ctx_t *c, const mca_range_t *r, double v, const char *fmt, ...) {
     char why[160];
-    if (mca_range_check(mca_scenario_range(key), v, why, sizeof why) == MCA_OK) {
+    if (mca_range_check(r, v, why, sizeof why) == MCA_OK) {
         return MCA_OK;
     }
-    mca_errbuf_printf(err, errlen, "%s:%d: %s: %s", path, mca_yaml_marks_line_of(marks, "%s", field), field,
-                      why);
+    char field[MCA_YAML_MARKS_PATH_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(field, sizeof field, fmt, ap);
+    va_end(ap);
+    mca_errbuf_at(c->err, c->errlen, c->file, mca_yaml_marks_line_of(c->marks, "%s", field), "%s: %s", field,
+                  why);
     return MCA_ECONFIG;
 }
 
-#define CHECK_AT(key, field, v)                                                                              \
+int mca_check_fail(const mca_check_ctx_t *c, int rc, const char *node, const char *fmt, ...) {
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    mca_errbuf_at(c->err, c->errlen, c->file, mca_yaml_marks_line_of(c->marks, "%s", node), "%s", msg);
+    return rc;
+}
+
+/* Range check of a scenario key (mca_scenario_range(key)) in a loader with `ctx`, `rc` and `out:`. */
+#define CHECK_AT(key, v, ...)                                                                                \
     do {                                                                                                     \
-        if ((rc = check_at(path, &marks, key, field, v, err, errlen)) != MCA_OK) {                           \
+        if ((rc = mca_check_range(&ctx, mca_scenario_range(key), (v), __VA_ARGS__)) != MCA_OK) {             \
             goto out;                                                                                        \
         }                                                                                                    \
     } while (0)
 
-void mca_scenario_defaults(mca_scenario_t *scn) {
-    memset(scn, 0, sizeof *scn);
-    scn->params.d1 = 0.05;
-    scn->params.d2 = 0.12;
-    scn->params.K = 20.0;
-    scn->params.epsilon = 5.0;
-    scn->params.dt = 0.001;
-    scn->params.v_normal = 0.5;
-    scn->params.v_floor = 0.0;
-    scn->params.form = MCA_FORM_NORMAL;
+int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *k, mca_scenario_params_t *p,
+                              int *has_form) {
+    const char *sv = k->solver ? k->solver : "";
+    const struct {
+        const char *key, *at; /* range key; "" or the solver's prefix */
+        const double *v;
+        double *dst;
+    } num[] = {
+        {"d1", "", k->d1, &p->d1},
+        {"d2", "", k->d2, &p->d2},
+        {"K", sv, k->K, &p->K},
+        {"epsilon", sv, k->epsilon, &p->epsilon},
+        {"v_normal", sv, k->v_normal, &p->v_normal},
+        {"v_floor", sv, k->v_floor, &p->v_floor},
+    };
+    for (size_t i = 0; i < sizeof num / sizeof num[0]; i++) {
+        if (num[i].v) {
+            int rc =
+                mca_check_range(c, mca_scenario_range(num[i].key), *num[i].v, "%s%s", num[i].at, num[i].key);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            *num[i].dst = *num[i].v;
+        }
+        if (i == 1 && !(isfinite(p->d1) && isfinite(p->d2) && p->d1 >= 0.0 && p->d1 < p->d2)) {
+            /* right after d1 and d2: the band S(d) brakes in must not be empty */
+            return mca_check_fail(c, MCA_ECONFIG, k->d1 ? "d1" : "d2",
+                                  "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)", p->d1, p->d2);
+        }
+    }
+    if (k->form) {
+        p->form = *k->form;
+        if (has_form) {
+            *has_form = 1;
+        }
+    }
+    return MCA_OK;
 }
 
 static int unit3(double out[3], const double *in) {
@@ -272,6 +309,86 @@ static int unit3(double out[3], const double *in) {
         out[i] = in[i] / n;
     }
     return 0;
+}
+
+int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k,
+                            mca_path_t *pp) {
+    mca_path_t np;
+    memset(&np, 0, sizeof np);
+    np.kind = k->kind;
+    np.relative = 1;
+    np.t0 = k->t0 ? *k->t0 : 0.0;
+    char f[MCA_YAML_MARKS_PATH_MAX];
+    int rc = mca_check_range(c, mca_scenario_range("t0"), np.t0, "%s.t0", at);
+    if (rc != MCA_OK || k->kind != MCA_PATH_CIRCLE) {
+        if (rc == MCA_OK) {
+            *pp = np;
+        }
+        return rc;
+    }
+    if (!k->radius || !k->period) {
+        snprintf(f, sizeof f, "%s.%s", at, k->radius ? "period" : "radius");
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: circle needs %s > 0", f,
+                              k->radius ? "period" : "radius");
+    }
+    if (!k->u || !k->v) {
+        snprintf(f, sizeof f, "%s.%s", at, k->u ? "v" : "u");
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s.u/v: circle needs in-plane vectors u and v", at);
+    }
+    np.radius = *k->radius;
+    np.period = *k->period;
+    np.turns = k->turns ? *k->turns : 1.0;
+    if ((rc = mca_check_range(c, mca_scenario_range("radius"), np.radius, "%s.radius", at)) != MCA_OK ||
+        (rc = mca_check_range(c, mca_scenario_range("period"), np.period, "%s.period", at)) != MCA_OK ||
+        (rc = mca_check_range(c, mca_scenario_range("turns"), np.turns, "%s.turns", at)) != MCA_OK) {
+        return rc;
+    }
+    double v[3];
+    if (unit3(np.u, k->u) != 0) {
+        snprintf(f, sizeof f, "%s.u", at);
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: zero vector", f);
+    }
+    mca_v3_axpy(v, k->v, -mca_v3_dot(k->v, np.u), np.u); /* Gram-Schmidt: v orthogonal to u */
+    if (unit3(np.v, v) != 0) {
+        snprintf(f, sizeof f, "%s.v", at);
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: parallel to u", f);
+    }
+    *pp = np;
+    return MCA_OK;
+}
+
+int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
+                             mca_scenario_arm_t *sa) {
+    for (int i = 0; i < 3; i++) {
+        int rc;
+        if (xyz) {
+            if ((rc = mca_check_range(c, mca_scenario_range("base_xyz"), xyz[i], "arms[%d].base_xyz[%d]", arm,
+                                      i)) != MCA_OK) {
+                return rc;
+            }
+            sa->base_xyz[i] = xyz[i];
+        }
+        if (rpy) {
+            if ((rc = mca_check_range(c, mca_scenario_range("base_rpy"), rpy[i], "arms[%d].base_rpy[%d]", arm,
+                                      i)) != MCA_OK) {
+                return rc;
+            }
+            sa->base_rpy[i] = rpy[i];
+        }
+    }
+    return MCA_OK;
+}
+
+void mca_scenario_defaults(mca_scenario_t *scn) {
+    memset(scn, 0, sizeof *scn);
+    scn->params.d1 = 0.05;
+    scn->params.d2 = 0.12;
+    scn->params.K = 20.0;
+    scn->params.epsilon = 5.0;
+    scn->params.dt = 0.001;
+    scn->params.v_normal = 0.5;
+    scn->params.v_floor = 0.0;
+    scn->params.form = MCA_FORM_NORMAL;
 }
 
 int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
@@ -313,6 +430,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
      * them (cannot happen once libcyaml has read the file, but for a file changed since) the lines are 0 */
     mca_yaml_marks_t marks = {.mark = NULL};
     (void)mca_yaml_marks_load(path, &marks, NULL, 0);
+    const mca_check_ctx_t ctx = {.file = path, .marks = &marks, .err = err, .errlen = errlen};
 
     mca_scenario_t scn;
     int rc = MCA_OK;
@@ -322,7 +440,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     scn.duration = raw->duration;
     mca_scenario_params_t *p = &scn.params;
     if (raw->dt) {
-        CHECK_AT("dt", "dt", *raw->dt);
+        CHECK_AT("dt", *raw->dt, "dt");
         p->dt = *raw->dt;
     }
     {
@@ -331,43 +449,22 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             FAIL_AT(mca_yaml_marks_line_of(&marks, "duration"), "duration: %s", why);
         }
     }
-    if (raw->d1) {
-        CHECK_AT("d1", "d1", *raw->d1);
-        p->d1 = *raw->d1;
-    }
-    if (raw->d2) {
-        CHECK_AT("d2", "d2", *raw->d2);
-        p->d2 = *raw->d2;
-    }
-    if (!(p->d1 < p->d2)) {
-        FAIL_AT(raw->d1 ? mca_yaml_marks_line_of(&marks, "d1") : mca_yaml_marks_line_of(&marks, "d2"),
-                "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
-    }
-    if (raw->K) {
-        CHECK_AT("K", "K", *raw->K);
-        p->K = *raw->K;
-    }
-    if (raw->epsilon) {
-        CHECK_AT("epsilon", "epsilon", *raw->epsilon);
-        p->epsilon = *raw->epsilon;
-    }
-    if (raw->v_normal) {
-        CHECK_AT("v_normal", "v_normal", *raw->v_normal);
-        p->v_normal = *raw->v_normal;
-    }
-    if (raw->v_floor) {
-        CHECK_AT("v_floor", "v_floor", *raw->v_floor);
-        p->v_floor = *raw->v_floor;
-    }
-    if (raw->form) {
-        scn.has_form = 1;
-        p->form = *raw->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
+    {
+        const mca_param_keys_t keys = {.solver = "",
+                                       .d1 = raw->d1,
+                                       .d2 = raw->d2,
+                                       .K = raw->K,
+                                       .epsilon = raw->epsilon,
+                                       .v_normal = raw->v_normal,
+                                       .v_floor = raw->v_floor,
+                                       .form = raw->form};
+        if ((rc = mca_scenario_params_apply(&ctx, &keys, p, &scn.has_form)) != MCA_OK) {
+            goto out;
+        }
     }
     scn.n_sample_times = (int)raw->sample_times_count;
     for (unsigned i = 0; i < raw->sample_times_count; i++) {
-        char field[32];
-        snprintf(field, sizeof field, "sample_times[%u]", i);
-        CHECK_AT("sample_times", field, raw->sample_times[i]);
+        CHECK_AT("sample_times", raw->sample_times[i], "sample_times[%u]", i);
         scn.sample_times[i] = raw->sample_times[i];
     }
 
@@ -376,7 +473,6 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         const struct raw_arm *ra = &raw->arms[a];
         mca_scenario_arm_t *sa = &scn.arm[a];
         const int ai = (int)a;
-        char field[64];
         snprintf(sa->name, sizeof sa->name, "%s", ra->name);
         if (ra->urdf[0] == '/') {
             snprintf(sa->urdf, sizeof sa->urdf, "%s", ra->urdf);
@@ -387,15 +483,8 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             snprintf(sa->urdf, sizeof sa->urdf, "%.*s/%s", dl, slash ? path : ".", ra->urdf);
         }
         snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link ? ra->tip_link : "");
-        for (int i = 0; i < 3; i++) {
-            snprintf(field, sizeof field, "arms[%d].base_xyz[%d]", ai, i);
-            CHECK_AT("base_xyz", field, ra->base_xyz[i]);
-            sa->base_xyz[i] = ra->base_xyz[i];
-            if (ra->base_rpy) {
-                snprintf(field, sizeof field, "arms[%d].base_rpy[%d]", ai, i);
-                CHECK_AT("base_rpy", field, ra->base_rpy[i]);
-            }
-            sa->base_rpy[i] = ra->base_rpy ? ra->base_rpy[i] : 0.0;
+        if ((rc = mca_scenario_place_apply(&ctx, ai, ra->base_xyz, ra->base_rpy, sa)) != MCA_OK) {
+            goto out;
         }
         sa->n_q0 = (int)ra->q0_count;
         for (unsigned j = 0; j < ra->q0_count; j++) {
@@ -403,96 +492,56 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         }
         const struct raw_path *rp = &ra->path;
         mca_path_t *pp = &sa->path;
-        memset(pp, 0, sizeof *pp);
-        pp->relative = rp->relative ? (*rp->relative ? 1 : 0) : 1;
-        pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-        if (rp->t0) {
-            snprintf(field, sizeof field, "arms[%d].path.t0", ai);
-            CHECK_AT("t0", field, pp->t0);
-        }
+        char at[32];
+        snprintf(at, sizeof at, "arms[%d].path", ai);
         switch (rp->kind) {
-        case RAW_HOLD:
-            pp->kind = MCA_PATH_HOLD;
-            pp->relative = 1;
-            break;
-        case RAW_CIRCLE:
-            pp->kind = MCA_PATH_CIRCLE;
-            pp->relative = 1;
-            if (!rp->radius) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.radius", ai),
-                        "arms[%d].path.radius: circle needs radius > 0", ai);
-            }
-            if (!rp->period) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.period", ai),
-                        "arms[%d].path.period: circle needs period > 0", ai);
-            }
-            if (!rp->u || !rp->v) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.%s", ai, rp->u ? "v" : "u"),
-                        "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
-            }
-            snprintf(field, sizeof field, "arms[%d].path.radius", ai);
-            CHECK_AT("radius", field, *rp->radius);
-            snprintf(field, sizeof field, "arms[%d].path.period", ai);
-            CHECK_AT("period", field, *rp->period);
-            pp->radius = *rp->radius;
-            pp->period = *rp->period;
-            pp->turns = rp->turns ? *rp->turns : 1.0;
-            if (rp->turns) {
-                snprintf(field, sizeof field, "arms[%d].path.turns", ai);
-                CHECK_AT("turns", field, pp->turns);
-            }
-            {
-                double u[3], v[3];
-                if (unit3(u, rp->u) != 0) {
-                    FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.u", ai),
-                            "arms[%d].path.u: zero vector", ai);
-                }
-                /* Gram-Schmidt: v orthogonal to u */
-                mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u);
-                if (unit3(pp->v, v) != 0) {
-                    FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.v", ai),
-                            "arms[%d].path.v: parallel to u", ai);
-                }
-                mca_v3_set(pp->u, u);
+        case MCA_PATH_HOLD:
+        case MCA_PATH_CIRCLE: {
+            const mca_path_keys_t keys = {.kind = rp->kind,
+                                          .t0 = rp->t0,
+                                          .radius = rp->radius,
+                                          .period = rp->period,
+                                          .turns = rp->turns,
+                                          .u = rp->u,
+                                          .v = rp->v};
+            if ((rc = mca_scenario_path_apply(&ctx, at, &keys, pp)) != MCA_OK) {
+                goto out;
             }
             break;
-        case RAW_WAYPOINTS:
+        }
+        case MCA_PATH_WAYPOINTS:
+            memset(pp, 0, sizeof *pp);
             pp->kind = MCA_PATH_WAYPOINTS;
+            pp->relative = rp->relative ? (*rp->relative ? 1 : 0) : 1;
+            pp->t0 = rp->t0 ? *rp->t0 : 0.0;
+            CHECK_AT("t0", pp->t0, "%s.t0", at);
             /* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then
              * visits the file's points; one duration per point. */
             if (!rp->points || rp->points_count < 1) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.points", ai),
-                        "arms[%d].path.points: waypoints need points", ai);
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "%s.points", at), "%s.points: waypoints need points",
+                        at);
             }
             if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.points", ai),
-                        "arms[%d].path.points: at most %d points", ai, MCA_PATH_MAX_POINTS - 1);
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "%s.points", at), "%s.points: at most %d points", at,
+                        MCA_PATH_MAX_POINTS - 1);
             }
             if (!rp->durations || rp->durations_count != rp->points_count) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.durations", ai),
-                        "arms[%d].path.durations: need one duration per point (%u points, %u durations)", ai,
+                FAIL_AT(mca_yaml_marks_line_of(&marks, "%s.durations", at),
+                        "%s.durations: need one duration per point (%u points, %u durations)", at,
                         rp->points_count, rp->durations ? rp->durations_count : 0u);
             }
             pp->n_points = (int)rp->points_count + 1;
             for (unsigned i = 0; i < rp->points_count; i++) {
                 for (int k = 0; k < 3; k++) {
+                    CHECK_AT("points", rp->points[i][k], "%s.points[%u][%d]", at, i, k);
                     pp->p[i + 1][k] = rp->points[i][k];
-                    char why[160];
-                    if (mca_range_check(mca_scenario_range("points"), pp->p[i + 1][k], why, sizeof why) !=
-                        MCA_OK) {
-                        mca_errbuf_printf(
-                            err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
-                            mca_yaml_marks_line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai, i,
-                            k, why);
-                        rc = MCA_ECONFIG;
-                        goto out;
-                    }
                 }
-                snprintf(field, sizeof field, "arms[%d].path.durations[%u]", ai, i);
-                CHECK_AT("durations", field, rp->durations[i]);
+                CHECK_AT("durations", rp->durations[i], "%s.durations[%u]", at, i);
                 pp->dur[i] = rp->durations[i];
             }
             break;
+        default:
+            break; /* the schema knows no other kind */
         }
     }
     *scn_out = scn;

@@ -709,7 +709,7 @@ static void test_arm_error_lines(void **state) {
         {"a_radius", B_SIM, ARM_TAIL, PATH_CIRCLE("1e308", "      period: 3.0\n", "[1, 0, 0]", "[0, 0, 1]"),
          "radius:", MCA_ECONFIG, "arms[%d].path.radius", "must be in (0, 10] m", 0, 0, 0},
         {"a_circle", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "", "[1, 0, 0]", "[0, 0, 1]"), "path:", MCA_ECONFIG,
-         "arms[%d].path.circle", "needs radius > 0, period > 0, u and v", 0, 0, 0},
+         "arms[%d].path.period", "circle needs period > 0", 0, 0, 0},
         {"a_u", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "      period: 3.0\n", "[0, 0, 0]", "[0, 0, 1]"),
          "u:", MCA_ECONFIG, "arms[%d].path.u", "zero vector", 0, 0, 0},
         {"a_v", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "      period: 3.0\n", "[1, 0, 0]", "[2, 0, 0]"),
