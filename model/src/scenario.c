@@ -379,16 +379,34 @@ int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xy
     return MCA_OK;
 }
 
+/* A scenario's parameters are the scheme's (mca_scheme_params_t) and the tick period: these two move
+ * them each way, so that the defaults are the scheme's own (mca_scheme_default_params), not a copy. */
+static void params_from_scheme(mca_scenario_params_t *p, const mca_scheme_params_t *sp) {
+    p->form = (int)sp->form;
+    p->d1 = sp->d1;
+    p->d2 = sp->d2;
+    p->K = sp->K;
+    p->epsilon = sp->epsilon;
+    p->v_normal = sp->v_normal;
+    p->v_floor = sp->v_floor;
+}
+
+static void params_to_scheme(mca_scheme_params_t *sp, const mca_scenario_params_t *p) {
+    sp->form = (mca_collision_form_t)p->form;
+    sp->d1 = p->d1;
+    sp->d2 = p->d2;
+    sp->K = p->K;
+    sp->epsilon = p->epsilon;
+    sp->v_normal = p->v_normal;
+    sp->v_floor = p->v_floor;
+}
+
 void mca_scenario_defaults(mca_scenario_t *scn) {
     memset(scn, 0, sizeof *scn);
-    scn->params.d1 = 0.05;
-    scn->params.d2 = 0.12;
-    scn->params.K = 20.0;
-    scn->params.epsilon = 5.0;
-    scn->params.dt = 0.001;
-    scn->params.v_normal = 0.5;
-    scn->params.v_floor = 0.0;
-    scn->params.form = MCA_FORM_NORMAL;
+    mca_scheme_params_t sp;
+    mca_scheme_default_params(&sp);
+    params_from_scheme(&scn->params, &sp);
+    scn->params.dt = MCA_CONTROLLER_DT;
 }
 
 int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
@@ -587,13 +605,7 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
         cfg->path[a] = sa->path;
     }
     cfg->sp.collision = uses_rows(scheme);
-    cfg->sp.form = (mca_collision_form_t)scn->params.form;
-    cfg->sp.d1 = scn->params.d1;
-    cfg->sp.d2 = scn->params.d2;
-    cfg->sp.K = scn->params.K;
-    cfg->sp.epsilon = scn->params.epsilon;
-    cfg->sp.v_normal = scn->params.v_normal;
-    cfg->sp.v_floor = scn->params.v_floor;
+    params_to_scheme(&cfg->sp, &scn->params);
     cfg->dt = scn->params.dt;
     /* The baselines are run to show what happens without the scheme: no distance fault for them. */
     cfg->fault_distance = uses_rows(scheme);

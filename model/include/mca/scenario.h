@@ -162,7 +162,8 @@ int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_
 int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
                              mca_scenario_arm_t *sa);
 
-/** Defaults: d1 0.05, d2 0.12, K 20, epsilon 5, dt 0.001, normal form, v_normal 0.5. */
+/** Defaults: the scheme's (mca_scheme_default_params: d1 0.05, d2 0.12, K 20, epsilon 5, normal form,
+ *  v_normal 0.5, v_floor 0) and dt MCA_CONTROLLER_DT (0.001). */
 void mca_scenario_defaults(mca_scenario_t *scn);
 
 /**
