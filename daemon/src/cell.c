@@ -13,7 +13,6 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "mca/can_proto.h"
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
@@ -22,6 +21,8 @@
 #include "mca/ros2.h" /* mca_ros2_name_ok */
 #include "mca/urdf.h"
 #include "mca/yaml_marks.h"
+
+#include "daemon__backends.h"
 
 /* ---------------------------------------------------------------- schema */
 
@@ -32,20 +33,6 @@ struct raw_path {
     unsigned u_count;
     double *v;
     unsigned v_count;
-};
-
-struct raw_sim {
-    double *lag_tau;
-    int *latency_cycles;
-    double *noise_pos;
-};
-
-struct raw_canopen {
-    int *first_node;
-    int *sync_us;
-    char *mode;
-    double *pos_scale, *vel_scale;
-    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
 };
 
 struct raw_arm {
@@ -63,8 +50,8 @@ struct raw_arm {
     unsigned q0_count;
     double *dec_limit;
     double *priority;
-    struct raw_sim *sim;
-    struct raw_canopen *canopen;
+    mca_backend_sim_keys_t *sim;
+    mca_backend_co_keys_t *canopen;
     struct raw_path *path;
     char *stream;
 };
@@ -159,20 +146,20 @@ static const cyaml_schema_field_t path_fields[] = {
 };
 
 static const cyaml_schema_field_t sim_fields[] = {
-    CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, struct raw_sim, lag_tau),
-    CYAML_FIELD_INT_PTR("latency_cycles", OPT, struct raw_sim, latency_cycles),
-    CYAML_FIELD_FLOAT_PTR("noise_pos", OPT, struct raw_sim, noise_pos),
+    CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, mca_backend_sim_keys_t, lag_tau),
+    CYAML_FIELD_INT_PTR("latency_cycles", OPT, mca_backend_sim_keys_t, latency_cycles),
+    CYAML_FIELD_FLOAT_PTR("noise_pos", OPT, mca_backend_sim_keys_t, noise_pos),
     CYAML_FIELD_END,
 };
 
 static const cyaml_schema_field_t canopen_fields[] = {
-    CYAML_FIELD_INT_PTR("first_node", OPT, struct raw_canopen, first_node),
-    CYAML_FIELD_INT_PTR("sync_us", OPT, struct raw_canopen, sync_us),
-    CYAML_FIELD_STRING_PTR("mode", OPT, struct raw_canopen, mode, 3, 3),
-    CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, struct raw_canopen, pos_scale),
-    CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, struct raw_canopen, vel_scale),
-    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, struct raw_canopen, heartbeat_timeout_ms),
-    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, struct raw_canopen, pdo_timeout_syncs),
+    CYAML_FIELD_INT_PTR("first_node", OPT, mca_backend_co_keys_t, first_node),
+    CYAML_FIELD_INT_PTR("sync_us", OPT, mca_backend_co_keys_t, sync_us),
+    CYAML_FIELD_STRING_PTR("mode", OPT, mca_backend_co_keys_t, mode, 3, 3),
+    CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, mca_backend_co_keys_t, pos_scale),
+    CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, mca_backend_co_keys_t, vel_scale),
+    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, mca_backend_co_keys_t, heartbeat_timeout_ms),
+    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, mca_backend_co_keys_t, pdo_timeout_syncs),
     CYAML_FIELD_END,
 };
 
@@ -454,9 +441,6 @@ static const mca_range_t r_dec_limit = {"dec_limit", 0.05, 100.0, 0, 0, "rad/s^2
 /* longest brake from a joint's velocity limit at dec_limit */
 #define CELL_MAX_STOP_S 60.0
 static const mca_range_t r_arm_priority = {"priority", 0.0, 1000.0, 1, 0, ""};
-static const mca_range_t r_lag_tau = {"lag_tau", 0.0, 1.0, 0, 0, "s"};
-static const mca_range_t r_latency_cycles = {"latency_cycles", 0, 64, 0, 1, "cycles"};
-static const mca_range_t r_noise_pos = {"noise_pos", 0.0, 0.1, 0, 0, "rad"};
 static const mca_range_t r_dds_domain = {"domain", 0, 230, 0, 1, ""};
 static const mca_range_t r_publish_divisor = {"publish_divisor", 1, 100000, 0, 1, "ticks"};
 static const mca_range_t r_rt_priority = {"priority", 0, 99, 0, 1, "(0 = SCHED_OTHER)"};
@@ -553,10 +537,6 @@ static void ros2_name_from(char *out, size_t len, const char *name) {
 
 static int readable(const char *p) {
     return access(p, R_OK) == 0;
-}
-
-const char *mca_cell_backend_name(mca_cell_backend_t b) {
-    return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : b == MCA_CELL_BACKEND_CANOPEN ? "canopen" : "sim";
 }
 
 /* ---------------------------------------------------------------- load */
@@ -797,106 +777,38 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             sa->path.kind = MCA_PATH_HOLD;
             sa->path.relative = 1;
         }
-        /* backend */
-        if (strcmp(ra->backend, "sim") == 0) {
-            ca->backend = MCA_CELL_BACKEND_SIM;
-        } else if (strcmp(ra->backend, "socketcan") == 0) {
-            ca->backend = MCA_CELL_BACKEND_SOCKETCAN;
-            if (!ra->interface) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].interface", ai),
-                     "arms[%d].interface: required with backend socketcan", ai);
-            }
-            if (!ra->id_base) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].id_base", ai),
-                     "arms[%d].id_base: required with backend socketcan", ai);
-            }
-        } else if (strcmp(ra->backend, "canopen") == 0) {
-            ca->backend = MCA_CELL_BACKEND_CANOPEN;
-            if (!ra->interface) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].interface", ai),
-                     "arms[%d].interface: required with backend canopen", ai);
-            }
-        } else {
+        /* backend: the registry's, by name; its keys read and checked by it */
+        const mca_backend_def_t *be = mca_backend_find(ra->backend);
+        if (!be) {
+            char known[128];
+            mca_backend_names(known, sizeof known);
             FAIL(MCA_ECONFIG, LINE("arms[%d].backend", ai),
-                 "arms[%d].backend: unknown backend '%s' (known: sim, socketcan, canopen)", ai, ra->backend);
+                 "arms[%d].backend: unknown backend '%s' (known: %s)", ai, ra->backend, known);
         }
-        ca->co_first_node = 1;
-        ca->co_sync_us = 4000;
-        ca->co_mode = 9;
-        ca->co_pos_scale = 1e6;
-        ca->co_vel_scale = 1e6;
-        ca->co_hb_timeout_ms = 350;
-        ca->co_pdo_timeout = 5;
-        if (ra->canopen) {
-            const struct raw_canopen *rco = ra->canopen;
-            if (ca->backend != MCA_CELL_BACKEND_CANOPEN) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].canopen", ai), "arms[%d].canopen: only with backend canopen",
-                     ai);
-            }
-            if (rco->first_node && (*rco->first_node < 1 || *rco->first_node > 127)) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.first_node", ai),
-                     "arms[%d].canopen.first_node: 1..127 (got %d)", ai, *rco->first_node);
-            }
-            if (rco->sync_us && *rco->sync_us < 100) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.sync_us", ai),
-                     "arms[%d].canopen.sync_us: >= 100 (got %d)", ai, *rco->sync_us);
-            }
-            if (rco->mode && strcmp(rco->mode, "csv") != 0 && strcmp(rco->mode, "csp") != 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.mode", ai),
-                     "arms[%d].canopen.mode: csv or csp (got '%s')", ai, rco->mode);
-            }
-            const int pos_bad = rco->pos_scale && !(*rco->pos_scale > 0 && isfinite(*rco->pos_scale));
-            if (pos_bad || (rco->vel_scale && !(*rco->vel_scale > 0 && isfinite(*rco->vel_scale)))) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.%s", ai, pos_bad ? "pos_scale" : "vel_scale"),
-                     "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
-            }
-            ca->co_first_node = rco->first_node ? *rco->first_node : 1;
-            ca->co_sync_us = rco->sync_us ? (uint32_t)*rco->sync_us : 4000;
-            ca->co_mode = rco->mode && strcmp(rco->mode, "csp") == 0 ? 8 : 9;
-            ca->co_pos_scale = rco->pos_scale ? *rco->pos_scale : 1e6;
-            ca->co_vel_scale = rco->vel_scale ? *rco->vel_scale : 1e6;
-            const int hb_bad = rco->heartbeat_timeout_ms &&
-                               (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000);
-            if (hb_bad || (rco->pdo_timeout_syncs &&
-                           (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
-                FAIL(MCA_ECONFIG,
-                     LINE("arms[%d].canopen.%s", ai, hb_bad ? "heartbeat_timeout_ms" : "pdo_timeout_syncs"),
-                     "arms[%d].canopen: heartbeat_timeout_ms 101..60000 (the drives beat every 100 ms), "
-                     "pdo_timeout_syncs 1..100000",
-                     ai);
-            }
-            ca->co_hb_timeout_ms = rco->heartbeat_timeout_ms ? *rco->heartbeat_timeout_ms : 350;
-            ca->co_pdo_timeout = rco->pdo_timeout_syncs ? *rco->pdo_timeout_syncs : 5;
-        }
-        if (ra->interface) {
-            snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);
-        }
-        if (ra->id_base) {
-            if (*ra->id_base < 0 || *ra->id_base > (long long)MCA_CAN_ID_BASE_MAX ||
-                *ra->id_base % MCA_CAN_ID_BLOCK != 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", ai),
-                     "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)", ai,
-                     MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
-            }
-            ca->id_base = (uint32_t)*ra->id_base;
-        }
-        /* a CANopen bus has one SYNC producer and NMT master: one canopen arm per bus */
-        for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_CANOPEN; b++) {
-            if (strcmp(cell->arm[b].interface, ca->interface) == 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].interface", ai),
-                     "arms[%d].interface: %s is already arms[%u]'s (one bus per canopen arm)", ai,
-                     ca->interface, b);
+        ca->backend = be->id;
+        {
+            /* a backend's own section belongs to it alone */
+            const struct {
+                const char *key;
+                int given;
+            } sections[] = {{"sim", ra->sim != NULL}, {"canopen", ra->canopen != NULL}};
+            for (size_t k = 0; k < sizeof sections / sizeof sections[0]; k++) {
+                if (sections[k].given && (!be->section || strcmp(be->section, sections[k].key) != 0)) {
+                    const mca_backend_def_t *owner = NULL;
+                    for (size_t i = 0; (owner = mca_backend_at(i)) != NULL; i++) {
+                        if (owner->section && strcmp(owner->section, sections[k].key) == 0) {
+                            break;
+                        }
+                    }
+                    FAIL(MCA_EPARSE, LINE("arms[%d].%s", ai, sections[k].key),
+                         "arms[%d].%s: only with backend %s", ai, sections[k].key, owner ? owner->name : "?");
+                }
             }
         }
-        /* two arms on one bus with one id block would each take the other's frames */
-        for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_SOCKETCAN; b++) {
-            const mca_cell_arm_t *cb = &cell->arm[b];
-            if (cb->backend == MCA_CELL_BACKEND_SOCKETCAN && strcmp(cb->interface, ca->interface) == 0 &&
-                cb->id_base == ca->id_base) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", ai),
-                     "arms[%d].id_base: 0x%x on %s is already arms[%u]'s (one id block per arm and bus)", ai,
-                     ca->id_base, ca->interface, b);
-            }
+        const mca_backend_keys_t bkeys = {
+            .interface = ra->interface, .id_base = ra->id_base, .sim = ra->sim, .canopen = ra->canopen};
+        if ((rc = be->read(&ctx, cell, ai, &bkeys)) != MCA_OK) {
+            goto out;
         }
         /* model overrides */
         if (ra->urdf) {
@@ -996,20 +908,6 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->priority) {
             CHECK(&r_arm_priority, *ra->priority, "arms[%d].priority", ai);
             ca->priority = *ra->priority;
-        }
-        if (ra->sim) {
-            if (ra->sim->lag_tau) {
-                CHECK(&r_lag_tau, *ra->sim->lag_tau, "arms[%d].sim.lag_tau", ai);
-                ca->sim_lag_tau = *ra->sim->lag_tau;
-            }
-            if (ra->sim->latency_cycles) {
-                CHECK(&r_latency_cycles, *ra->sim->latency_cycles, "arms[%d].sim.latency_cycles", ai);
-                ca->sim_latency_cycles = *ra->sim->latency_cycles;
-            }
-            if (ra->sim->noise_pos) {
-                CHECK(&r_noise_pos, *ra->sim->noise_pos, "arms[%d].sim.noise_pos", ai);
-                ca->sim_noise_pos = *ra->sim->noise_pos;
-            }
         }
     }
     scn->n_arms = (int)raw->arms_count;

@@ -666,7 +666,7 @@ static void test_arm_error_lines(void **state) {
     write_fast_urdf();
     static const struct arm_case cases[] = {
         {"a_backend", B_SIM, "backend: sim", "backend: ethercat", "backend:", MCA_ECONFIG, "arms[%d].backend",
-         "unknown backend 'ethercat'", 0, 0, 0},
+         "unknown backend 'ethercat' (known: sim, socketcan, canopen)", 0, 0, 0},
         {"a_sc_noif", B_SOCKETCAN, "    interface: vcan#\n", "", NULL, MCA_EPARSE, "arms[%d].interface",
          "required with backend socketcan", 0, 0, 0},
         {"a_sc_noid", B_SOCKETCAN, "    id_base: 0x140\n", "", NULL, MCA_EPARSE, "arms[%d].id_base",
@@ -675,6 +675,8 @@ static void test_arm_error_lines(void **state) {
          "required with backend canopen", 0, 0, 0},
         {"a_co_only", B_SIM, ARM_TAIL, ARM_TAIL "    canopen:\n      sync_us: 4000\n", "canopen:", MCA_EPARSE,
          "arms[%d].canopen", "only with backend canopen", 0, 0, 0},
+        {"a_sim_only", B_SOCKETCAN, "    id_base: 0x140\n", "    id_base: 0x140\n    sim: {lag_tau: 0.01}\n",
+         "sim:", MCA_EPARSE, "arms[%d].sim", "only with backend sim", 0, 0, 0},
         {"a_co_node", B_CANOPEN, "first_node: 1", "first_node: 128", "first_node", MCA_ECONFIG,
          "arms[%d].canopen.first_node", "1..127 (got 128)", 0, 0, 0},
         {"a_co_sync", B_CANOPEN, "sync_us: 4000", "sync_us: 50", "sync_us", MCA_ECONFIG,
