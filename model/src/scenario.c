@@ -3,7 +3,6 @@
 #include "mca/scenario.h"
 
 #include <cyaml/cyaml.h>
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -16,6 +15,7 @@
 #include "mca/scheme.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
+#include "mca/yaml_load.h"
 #include "mca/yaml_marks.h"
 
 /* ---------------------------------------------------------------- YAML (start-up only) */
@@ -127,34 +127,6 @@ static const cyaml_schema_field_t scn_fields[] = {
 static const cyaml_schema_value_t scn_schema = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct raw_scn, scn_fields),
 };
-
-/* libcyaml reports errors (with a backtrace naming field, line and column) through its log function:
- * keep the error lines so the caller's message names them. */
-struct log_buf {
-    char text[768];
-    size_t len;
-};
-
-static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args) {
-    struct log_buf *b = ctx;
-    if (level < CYAML_LOG_ERROR || b->len + 2 >= sizeof b->text) {
-        return;
-    }
-    char line[256];
-    vsnprintf(line, sizeof line, fmt, args);
-    for (char *c = line; *c; c++) {
-        if (*c == '\n' || *c == '\t') {
-            *c = ' ';
-        }
-    }
-    int w = snprintf(b->text + b->len, sizeof b->text - b->len, "%s", line);
-    if (w > 0) {
-        b->len += (size_t)w;
-        if (b->len >= sizeof b->text) {
-            b->len = sizeof b->text - 1;
-        }
-    }
-}
 
 /* "FILE:LINE: message" and MCA_ECONFIG */
 #define FAIL_AT(line, ...)                                                                                   \
@@ -414,27 +386,10 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         mca_errbuf_printf(err, errlen, "scenario: NULL argument");
         return MCA_EINVAL;
     }
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        mca_errbuf_printf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        return MCA_ENOENT;
-    }
-    fclose(f);
-
-    struct log_buf lb = {.len = 0};
-    lb.text[0] = 0;
-    const cyaml_config_t cfg = {
-        .log_fn = log_collect,
-        .log_ctx = &lb,
-        .mem_fn = cyaml_mem,
-        .log_level = CYAML_LOG_ERROR,
-        .flags = CYAML_CFG_DEFAULT,
-    };
     struct raw_scn *raw = NULL;
-    cyaml_err_t cerr = cyaml_load_file(path, &cfg, &scn_schema, (cyaml_data_t **)&raw, NULL);
-    if (cerr != CYAML_OK) {
-        mca_errbuf_printf(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
-        return MCA_EPARSE;
+    int lrc = mca_yaml_load(path, "scenario", &scn_schema, (void **)&raw, err, errlen);
+    if (lrc != MCA_OK) {
+        return lrc;
     }
     if (!raw) {
         /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
@@ -565,7 +520,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     *scn_out = scn;
 out:
     mca_yaml_marks_free(&marks);
-    cyaml_free(&cfg, &scn_schema, raw, 0);
+    mca_yaml_free(&scn_schema, raw);
     return rc;
 }
 
