@@ -25,15 +25,6 @@
 
 /* ---------------------------------------------------------------- schema */
 
-struct raw_path {
-    mca_path_kind_t kind;
-    double *t0, *radius, *period, *turns;
-    double *u;
-    unsigned u_count;
-    double *v;
-    unsigned v_count;
-};
-
 struct raw_arm {
     char *name;
     char *backend;
@@ -51,7 +42,7 @@ struct raw_arm {
     double *priority;
     mca_backend_sim_keys_t *sim;
     mca_backend_co_keys_t *canopen;
-    struct raw_path *path;
+    mca_path_keys_t *path;
     char *stream;
 };
 
@@ -119,10 +110,6 @@ struct raw_cell {
     bool *debug_start_in_fault;
 };
 
-static const cyaml_strval_t kind_strings[] = {
-    {"hold", MCA_PATH_HOLD},
-    {"circle", MCA_PATH_CIRCLE},
-};
 static const cyaml_strval_t form_strings[] = {
     {"componentwise", MCA_FORM_COMPONENTWISE},
     {"normal", MCA_FORM_NORMAL},
@@ -131,18 +118,6 @@ static const cyaml_strval_t form_strings[] = {
 #define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
 
 static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
-
-static const cyaml_schema_field_t path_fields[] = {
-    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, struct raw_path, kind, kind_strings,
-                     CYAML_ARRAY_LEN(kind_strings)),
-    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_path, t0),
-    CYAML_FIELD_FLOAT_PTR("radius", OPT, struct raw_path, radius),
-    CYAML_FIELD_FLOAT_PTR("period", OPT, struct raw_path, period),
-    CYAML_FIELD_FLOAT_PTR("turns", OPT, struct raw_path, turns),
-    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, struct raw_path, u, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, struct raw_path, v, &float_entry, 3, 3),
-    CYAML_FIELD_END,
-};
 
 static const cyaml_schema_field_t sim_fields[] = {
     CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, mca_backend_sim_keys_t, lag_tau),
@@ -176,7 +151,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
     CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
     CYAML_FIELD_MAPPING_PTR("canopen", OPT, struct raw_arm, canopen, canopen_fields),
-    CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, mca_scenario_path_fields),
     CYAML_FIELD_STRING_PTR("stream", OPT, struct raw_arm, stream, 1, 15),
     CYAML_FIELD_END,
 };
@@ -684,18 +659,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         if (ra->path) {
-            /* an inline path: hold or circle (richer paths belong in a scenario file), checked as there */
-            const struct raw_path *rp = ra->path;
-            const mca_path_keys_t keys = {.kind = rp->kind,
-                                          .t0 = rp->t0,
-                                          .radius = rp->radius,
-                                          .period = rp->period,
-                                          .turns = rp->turns,
-                                          .u = rp->u,
-                                          .v = rp->v};
+            /* an inline path: the scenario's schema and check */
             char at[32];
             snprintf(at, sizeof at, "arms[%d].path", ai);
-            if ((rc = mca_scenario_path_apply(&ctx, at, &keys, &sa->path)) != MCA_OK) {
+            if ((rc = mca_scenario_path_apply(&ctx, at, ra->path, &sa->path)) != MCA_OK) {
                 goto out;
             }
         }

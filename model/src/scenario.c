@@ -15,24 +15,10 @@
 #include "mca/scheme.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
-#include "mca/yaml_load.h"
+#include "mca/yaml_load.h" /* mca_yaml_load, mca_scenario_path_fields */
 #include "mca/yaml_marks.h"
 
 /* ---------------------------------------------------------------- YAML (start-up only) */
-
-struct raw_path {
-    mca_path_kind_t kind;
-    bool *relative;
-    double *t0, *radius, *period, *turns;
-    double *u;
-    unsigned u_count;
-    double *v;
-    unsigned v_count;
-    double (*points)[3];
-    unsigned points_count;
-    double *durations;
-    unsigned durations_count;
-};
 
 struct raw_arm {
     char *name;
@@ -44,7 +30,7 @@ struct raw_arm {
     unsigned base_rpy_count;
     double *q0;
     unsigned q0_count;
-    struct raw_path path;
+    mca_path_keys_t path;
 };
 
 struct raw_scn {
@@ -74,18 +60,18 @@ static const cyaml_schema_value_t point_entry = {
 
 #define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
 
-static const cyaml_schema_field_t path_fields[] = {
-    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, struct raw_path, kind, kind_strings,
+const cyaml_schema_field_t mca_scenario_path_fields[] = {
+    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, mca_path_keys_t, kind, kind_strings,
                      CYAML_ARRAY_LEN(kind_strings)),
-    CYAML_FIELD_BOOL_PTR("relative", OPT, struct raw_path, relative),
-    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_path, t0),
-    CYAML_FIELD_FLOAT_PTR("radius", OPT, struct raw_path, radius),
-    CYAML_FIELD_FLOAT_PTR("period", OPT, struct raw_path, period),
-    CYAML_FIELD_FLOAT_PTR("turns", OPT, struct raw_path, turns),
-    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, struct raw_path, u, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, struct raw_path, v, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("points", OPT, struct raw_path, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
-    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, struct raw_path, durations, &float_entry, 1,
+    CYAML_FIELD_BOOL_PTR("relative", OPT, mca_path_keys_t, relative),
+    CYAML_FIELD_FLOAT_PTR("t0", OPT, mca_path_keys_t, t0),
+    CYAML_FIELD_FLOAT_PTR("radius", OPT, mca_path_keys_t, radius),
+    CYAML_FIELD_FLOAT_PTR("period", OPT, mca_path_keys_t, period),
+    CYAML_FIELD_FLOAT_PTR("turns", OPT, mca_path_keys_t, turns),
+    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, u, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, v, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("points", OPT, mca_path_keys_t, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, durations, &float_entry, 1,
                          MCA_PATH_MAX_POINTS),
     CYAML_FIELD_END,
 };
@@ -99,7 +85,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
     CYAML_FIELD_SEQUENCE("q0", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1,
                          MCA_MAX_DOF),
-    CYAML_FIELD_MAPPING("path", CYAML_FLAG_DEFAULT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_MAPPING("path", CYAML_FLAG_DEFAULT, struct raw_arm, path, mca_scenario_path_fields),
     CYAML_FIELD_END,
 };
 
@@ -283,6 +269,42 @@ static int unit3(double out[3], const double *in) {
     return 0;
 }
 
+/* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then visits the
+ * file's points; one duration per point. */
+static int waypoints(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k, mca_path_t *np) {
+    char f[MCA_YAML_MARKS_PATH_MAX];
+    snprintf(f, sizeof f, "%s.points", at);
+    if (!k->points || k->points_count < 1) {
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: waypoints need points", f);
+    }
+    if (k->points_count + 1 > MCA_PATH_MAX_POINTS) {
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: at most %d points", f, MCA_PATH_MAX_POINTS - 1);
+    }
+    if (!k->durations || k->durations_count != k->points_count) {
+        snprintf(f, sizeof f, "%s.durations", at);
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: need one duration per point (%u points, %u durations)",
+                              f, k->points_count, k->durations ? k->durations_count : 0u);
+    }
+    np->n_points = (int)k->points_count + 1;
+    for (unsigned i = 0; i < k->points_count; i++) {
+        int rc;
+        for (int j = 0; j < 3; j++) {
+            rc = mca_check_range(c, mca_scenario_range("points"), k->points[i][j], "%s.points[%u][%d]", at, i,
+                                 j);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            np->p[i + 1][j] = k->points[i][j];
+        }
+        rc = mca_check_range(c, mca_scenario_range("durations"), k->durations[i], "%s.durations[%u]", at, i);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        np->dur[i] = k->durations[i];
+    }
+    return MCA_OK;
+}
+
 int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k,
                             mca_path_t *pp) {
     mca_path_t np;
@@ -292,6 +314,10 @@ int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_
     np.t0 = k->t0 ? *k->t0 : 0.0;
     char f[MCA_YAML_MARKS_PATH_MAX];
     int rc = mca_check_range(c, mca_scenario_range("t0"), np.t0, "%s.t0", at);
+    if (rc == MCA_OK && k->kind == MCA_PATH_WAYPOINTS) {
+        np.relative = k->relative ? (*k->relative ? 1 : 0) : 1;
+        rc = waypoints(c, at, k, &np);
+    }
     if (rc != MCA_OK || k->kind != MCA_PATH_CIRCLE) {
         if (rc == MCA_OK) {
             *pp = np;
@@ -463,58 +489,10 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         for (unsigned j = 0; j < ra->q0_count; j++) {
             sa->q0[j] = ra->q0[j];
         }
-        const struct raw_path *rp = &ra->path;
-        mca_path_t *pp = &sa->path;
         char at[32];
         snprintf(at, sizeof at, "arms[%d].path", ai);
-        switch (rp->kind) {
-        case MCA_PATH_HOLD:
-        case MCA_PATH_CIRCLE: {
-            const mca_path_keys_t keys = {.kind = rp->kind,
-                                          .t0 = rp->t0,
-                                          .radius = rp->radius,
-                                          .period = rp->period,
-                                          .turns = rp->turns,
-                                          .u = rp->u,
-                                          .v = rp->v};
-            if ((rc = mca_scenario_path_apply(&ctx, at, &keys, pp)) != MCA_OK) {
-                goto out;
-            }
-            break;
-        }
-        case MCA_PATH_WAYPOINTS:
-            memset(pp, 0, sizeof *pp);
-            pp->kind = MCA_PATH_WAYPOINTS;
-            pp->relative = rp->relative ? (*rp->relative ? 1 : 0) : 1;
-            pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-            CHECK_AT("t0", pp->t0, "%s.t0", at);
-            /* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then
-             * visits the file's points; one duration per point. */
-            if (!rp->points || rp->points_count < 1) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "%s.points", at), "%s.points: waypoints need points",
-                        at);
-            }
-            if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "%s.points", at), "%s.points: at most %d points", at,
-                        MCA_PATH_MAX_POINTS - 1);
-            }
-            if (!rp->durations || rp->durations_count != rp->points_count) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "%s.durations", at),
-                        "%s.durations: need one duration per point (%u points, %u durations)", at,
-                        rp->points_count, rp->durations ? rp->durations_count : 0u);
-            }
-            pp->n_points = (int)rp->points_count + 1;
-            for (unsigned i = 0; i < rp->points_count; i++) {
-                for (int k = 0; k < 3; k++) {
-                    CHECK_AT("points", rp->points[i][k], "%s.points[%u][%d]", at, i, k);
-                    pp->p[i + 1][k] = rp->points[i][k];
-                }
-                CHECK_AT("durations", rp->durations[i], "%s.durations[%u]", at, i);
-                pp->dur[i] = rp->durations[i];
-            }
-            break;
-        default:
-            break; /* the schema knows no other kind */
+        if ((rc = mca_scenario_path_apply(&ctx, at, &ra->path, &sa->path)) != MCA_OK) {
+            goto out;
         }
     }
     *scn_out = scn;

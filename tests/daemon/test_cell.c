@@ -716,6 +716,10 @@ static void test_arm_error_lines(void **state) {
          "u:", MCA_ECONFIG, "arms[%d].path.u", "zero vector", 0, 0, 0},
         {"a_v", B_SIM, ARM_TAIL, PATH_CIRCLE("0.1", "      period: 3.0\n", "[1, 0, 0]", "[2, 0, 0]"),
          "v:", MCA_ECONFIG, "arms[%d].path.v", "parallel to u", 0, 0, 0},
+        {"a_waypoints", B_SIM, ARM_TAIL,
+         ARM_TAIL
+         "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0.1]\n      durations: [0]\n",
+         "durations:", MCA_ECONFIG, "arms[%d].path.durations[0]", "must be in (0, 3600] s (got 0)", 0, 0, 0},
         {"a_stream", B_SIM, ARM_TAIL, ARM_TAIL "    stream: pose\n", "stream:", MCA_EPARSE, "arms[%d].stream",
          "only in a streamed task", 0, 0, 0},
         {"a_stream_kind", B_SIM, ARM_TAIL, ARM_TAIL "    stream: spin\n", "stream:", MCA_ECONFIG,

@@ -11,6 +11,7 @@
 #ifndef MCA_SCENARIO_H
 #define MCA_SCENARIO_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "mca/controller.h"
@@ -139,16 +140,27 @@ typedef struct mca_param_keys {
 int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *k, mca_scenario_params_t *p,
                               int *has_form);
 
-/** A hold or circle path as a file gives it; NULL where it does not. */
+/** A path as a file gives it (NULL where it does not): what libcyaml reads for a path: mapping of scenario
+ *  and cell files alike (the schema: mca_scenario_path_fields, mca/yaml_load.h). */
 typedef struct mca_path_keys {
-    mca_path_kind_t kind; /**< MCA_PATH_HOLD or MCA_PATH_CIRCLE */
-    const double *t0, *radius, *period, *turns, *u, *v;
+    mca_path_kind_t kind;
+    bool *relative; /**< waypoints only (hold and circle are relative) */
+    double *t0, *radius, *period, *turns;
+    double *u;
+    unsigned u_count;
+    double *v;
+    unsigned v_count;
+    double (*points)[3];
+    unsigned points_count;
+    double *durations;
+    unsigned durations_count;
 } mca_path_keys_t;
 
 /**
- * Check and make a hold or circle path (relative to the start; u, v made orthonormal by Gram-Schmidt). The
- * one check of the circle for scenario and cell files: radius, period, u and v required; t0, radius,
- * period and turns in their ranges; u not zero, v not parallel to u.
+ * Check and make a path, the one check of paths for scenario and cell files. Hold and circle are relative to
+ * the start; a circle needs radius, period, u and v, has t0, radius, period and turns in their ranges, u not
+ * zero, v not parallel to u (u, v made orthonormal by Gram-Schmidt). Waypoints need points (at most
+ * MCA_PATH_MAX_POINTS - 1) and one duration per point, each in its range.
  * @param[in] at  the path's node ("arms[1].path"): fields are named below it
  * @retval MCA_OK, MCA_ECONFIG (c->err names the field; *pp unchanged)
  */

@@ -28,6 +28,10 @@ int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t
 /** Free what mca_yaml_load loaded (NULL allowed). */
 void mca_yaml_free(const cyaml_schema_value_t *schema, void *data);
 
+/** The schema of a path: mapping (into mca_path_keys_t, mca/scenario.h), one for scenario files and
+ *  for a cell arm's inline path. */
+extern const cyaml_schema_field_t mca_scenario_path_fields[];
+
 #ifdef __cplusplus
 }
 #endif
