@@ -60,7 +60,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     mca_pdnn_default_params(&cfg->pdnn);
     mca_apf_default_params(&cfg->apf);
     cfg->dist_method = MCA_DIST_CLOSED;
-    cfg->dt = 0.001;
+    cfg->dt = MCA_CONTROLLER_DT;
     cfg->pdnn.max_steps = 2000; /* ~1 ms worst case here: a tick must fit the 1 kHz period */
     cfg->fault_residual = 1e-6;
     cfg->eq_tol = 1e-4;

@@ -4,52 +4,26 @@
 
 #include <cyaml/cyaml.h>
 #include <ctype.h>
-#include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-#include "mca/can_proto.h"
 #include "mca/chain.h"
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
 #include "mca/scenario.h"
 #include "mca/scheme.h"
 #include "mca/ros2.h" /* mca_ros2_name_ok */
 #include "mca/urdf.h"
-#include "mca/vec3.h"
+#include "mca/yaml_load.h"
 #include "mca/yaml_marks.h"
 
+#include "daemon__backends.h"
+
 /* ---------------------------------------------------------------- schema */
-
-enum raw_kind { RAW_HOLD, RAW_CIRCLE };
-enum raw_form { RAW_COMPONENTWISE, RAW_NORMAL };
-
-struct raw_path {
-    enum raw_kind kind;
-    double *t0, *radius, *period, *turns;
-    double *u;
-    unsigned u_count;
-    double *v;
-    unsigned v_count;
-};
-
-struct raw_sim {
-    double *lag_tau;
-    int *latency_cycles;
-    double *noise_pos;
-};
-
-struct raw_canopen {
-    int *first_node;
-    int *sync_us;
-    char *mode;
-    double *pos_scale, *vel_scale;
-    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
-};
 
 struct raw_arm {
     char *name;
@@ -66,9 +40,9 @@ struct raw_arm {
     unsigned q0_count;
     double *dec_limit;
     double *priority;
-    struct raw_sim *sim;
-    struct raw_canopen *canopen;
-    struct raw_path *path;
+    mca_backend_sim_keys_t *sim;
+    mca_backend_co_keys_t *canopen;
+    mca_path_keys_t *path;
     char *stream;
 };
 
@@ -88,7 +62,7 @@ struct raw_task {
 
 struct raw_solver {
     double *K, *epsilon, *v_normal, *v_floor;
-    enum raw_form *form;
+    mca_collision_form_t *form;
     int *pdnn_max_steps;
     double *pdnn_tol, *eq_tol, *fault_residual;
     double *deadlock_time, *back_off_time;
@@ -136,46 +110,30 @@ struct raw_cell {
     bool *debug_start_in_fault;
 };
 
-static const cyaml_strval_t kind_strings[] = {
-    {"hold", RAW_HOLD},
-    {"circle", RAW_CIRCLE},
-};
 static const cyaml_strval_t form_strings[] = {
-    {"componentwise", RAW_COMPONENTWISE},
-    {"normal", RAW_NORMAL},
+    {"componentwise", MCA_FORM_COMPONENTWISE},
+    {"normal", MCA_FORM_NORMAL},
 };
 
 #define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
 
 static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
 
-static const cyaml_schema_field_t path_fields[] = {
-    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, struct raw_path, kind, kind_strings,
-                     CYAML_ARRAY_LEN(kind_strings)),
-    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_path, t0),
-    CYAML_FIELD_FLOAT_PTR("radius", OPT, struct raw_path, radius),
-    CYAML_FIELD_FLOAT_PTR("period", OPT, struct raw_path, period),
-    CYAML_FIELD_FLOAT_PTR("turns", OPT, struct raw_path, turns),
-    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, struct raw_path, u, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, struct raw_path, v, &float_entry, 3, 3),
-    CYAML_FIELD_END,
-};
-
 static const cyaml_schema_field_t sim_fields[] = {
-    CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, struct raw_sim, lag_tau),
-    CYAML_FIELD_INT_PTR("latency_cycles", OPT, struct raw_sim, latency_cycles),
-    CYAML_FIELD_FLOAT_PTR("noise_pos", OPT, struct raw_sim, noise_pos),
+    CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, mca_backend_sim_keys_t, lag_tau),
+    CYAML_FIELD_INT_PTR("latency_cycles", OPT, mca_backend_sim_keys_t, latency_cycles),
+    CYAML_FIELD_FLOAT_PTR("noise_pos", OPT, mca_backend_sim_keys_t, noise_pos),
     CYAML_FIELD_END,
 };
 
 static const cyaml_schema_field_t canopen_fields[] = {
-    CYAML_FIELD_INT_PTR("first_node", OPT, struct raw_canopen, first_node),
-    CYAML_FIELD_INT_PTR("sync_us", OPT, struct raw_canopen, sync_us),
-    CYAML_FIELD_STRING_PTR("mode", OPT, struct raw_canopen, mode, 3, 3),
-    CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, struct raw_canopen, pos_scale),
-    CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, struct raw_canopen, vel_scale),
-    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, struct raw_canopen, heartbeat_timeout_ms),
-    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, struct raw_canopen, pdo_timeout_syncs),
+    CYAML_FIELD_INT_PTR("first_node", OPT, mca_backend_co_keys_t, first_node),
+    CYAML_FIELD_INT_PTR("sync_us", OPT, mca_backend_co_keys_t, sync_us),
+    CYAML_FIELD_STRING_PTR("mode", OPT, mca_backend_co_keys_t, mode, 3, 3),
+    CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, mca_backend_co_keys_t, pos_scale),
+    CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, mca_backend_co_keys_t, vel_scale),
+    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, mca_backend_co_keys_t, heartbeat_timeout_ms),
+    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, mca_backend_co_keys_t, pdo_timeout_syncs),
     CYAML_FIELD_END,
 };
 
@@ -193,7 +151,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
     CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
     CYAML_FIELD_MAPPING_PTR("canopen", OPT, struct raw_arm, canopen, canopen_fields),
-    CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, mca_scenario_path_fields),
     CYAML_FIELD_STRING_PTR("stream", OPT, struct raw_arm, stream, 1, 15),
     CYAML_FIELD_END,
 };
@@ -292,180 +250,23 @@ static const cyaml_schema_value_t cell_schema = {
 
 /* ---------------------------------------------------------------- messages */
 
-/* libcyaml reports a load error as an error line ("Load: Invalid INT value: 'x'") followed by a backtrace,
- * innermost first: "in mapping field 'priority' (line: 12, column: 13)", "in sequence entry '1' (...)"
- * (1-based entry count), "in mapping (...)". Lines/columns are 1-based and are those of the last event
- * read. Keep the error text and the frames; cell_parse_error() turns them into "FILE:LINE:COL: field". */
-enum frame_kind { FR_FIELD, FR_ENTRY, FR_MAPPING };
-struct log_state {
-    char what[256];
-    int have_what;
-    int n;
-    struct {
-        enum frame_kind kind;
-        char name[48];
-        int entry; /* 0-based sequence index */
-        int line, col;
-    } fr[10]; /* innermost first */
-};
-
-static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args) {
-    struct log_state *s = ctx;
-    if (level < CYAML_LOG_ERROR) {
-        return;
-    }
-    char line[256];
-    vsnprintf(line, sizeof line, fmt, args);
-    size_t n = strlen(line);
-    while (n && (line[n - 1] == '\n' || line[n - 1] == ' ')) {
-        line[--n] = 0;
-    }
-    const char *p = line;
-    if (strncmp(p, "Load: ", 6) == 0) {
-        p += 6;
-    }
-    while (*p == ' ') {
-        p++;
-    }
-    int kind = -1;
-    if (strncmp(p, "in mapping field '", 18) == 0) {
-        kind = FR_FIELD;
-    } else if (strncmp(p, "in sequence entry '", 19) == 0) {
-        kind = FR_ENTRY;
-    } else if (strncmp(p, "in mapping", 10) == 0) {
-        kind = FR_MAPPING;
-    } else if (strncmp(p, "in ", 3) == 0 || strncmp(p, "Backtrace:", 10) == 0) {
-        return;
-    } else {
-        if (!s->have_what && *p) {
-            snprintf(s->what, sizeof s->what, "%s", p);
-            s->have_what = 1;
-        }
-        return;
-    }
-    if (s->n >= 10) {
-        return;
-    }
-    s->fr[s->n].kind = (enum frame_kind)kind;
-    s->fr[s->n].name[0] = 0;
-    s->fr[s->n].entry = 0;
-    if (kind == FR_FIELD) {
-        const char *name = p + 18;
-        const char *q = strchr(name, '\'');
-        snprintf(s->fr[s->n].name, sizeof s->fr[0].name, "%.*s", q ? (int)(q - name) : 0, name);
-    } else if (kind == FR_ENTRY) {
-        s->fr[s->n].entry = atoi(p + 19) - 1;
-    }
-    s->fr[s->n].line = s->fr[s->n].col = 0;
-    const char *lp = strstr(p, "(line: ");
-    if (lp) {
-        sscanf(lp, "(line: %d, column: %d)", &s->fr[s->n].line, &s->fr[s->n].col);
-    }
-    s->n++;
-}
-
-/* Message for a libcyaml load failure. */
-static void cell_parse_error(const char *path, struct log_state *ls, cyaml_err_t cerr, char *err,
-                             size_t errlen) {
-    int first = 0; /* innermost frame that belongs to the field path */
-    int line = ls->n ? ls->fr[0].line : 0, col = ls->n ? ls->fr[0].col : 0;
-    char extra[64] = "";
-    const char *missing = "Missing required mapping field: ";
-    const char *unexpected = "Unexpected key: ";
-    if (strncmp(ls->what, missing, strlen(missing)) == 0) {
-        /* the innermost named frame is the last field read, a sibling: the mapping is the next frame */
-        if (ls->n && ls->fr[0].kind == FR_FIELD) {
-            first = 1;
-        }
-        snprintf(extra, sizeof extra, "%s", ls->what + strlen(missing));
-        line = first < ls->n ? ls->fr[first].line : 0;
-        col = first < ls->n ? ls->fr[first].col : 0;
-    } else if (strncmp(ls->what, unexpected, strlen(unexpected)) == 0) {
-        if (ls->n && ls->fr[0].kind == FR_MAPPING) {
-            first = 1;
-        }
-        snprintf(extra, sizeof extra, "%s", ls->what + strlen(unexpected));
-    }
-    char field[256] = "";
-    for (int i = ls->n - 1; i >= first; i--) {
-        const size_t fl = strlen(field);
-        if (ls->fr[i].kind == FR_ENTRY) {
-            snprintf(field + fl, sizeof field - fl, "[%d]", ls->fr[i].entry);
-        } else if (ls->fr[i].kind == FR_FIELD) {
-            snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", ls->fr[i].name);
-        }
-    }
-    if (extra[0]) {
-        const size_t fl = strlen(field);
-        snprintf(field + fl, sizeof field - fl, "%s%s", fl ? "." : "", extra);
-    }
-    if (strncmp(ls->what, unexpected, strlen(unexpected)) == 0) {
-        /* the key's own line (the file is YAML, only the key is not in the schema) */
-        mca_yaml_marks_t marks = {.mark = NULL};
-        if (mca_yaml_marks_load(path, &marks, NULL, 0) == MCA_OK) {
-            const int l = mca_yaml_marks_line(&marks, field);
-            if (l > 0) {
-                line = l;
-                col = 0;
-            }
-        }
-        mca_yaml_marks_free(&marks);
-    }
-    char pos[32];
-    if (col > 0) {
-        snprintf(pos, sizeof pos, "%d:%d", line, col);
-    } else {
-        snprintf(pos, sizeof pos, "%d", line);
-    }
-    if (err && errlen) {
-        snprintf(err, errlen, "%s:%s: %s: %s (%s)", path, pos, field[0] ? field : "(document)",
-                 ls->have_what ? ls->what : "invalid", cyaml_strerror(cerr));
-    }
-}
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
-/* "FILE:LINE: message" into err (vsnprintf: messages are cut at errlen, never overflow). */
-static void fail_at(char *err, size_t errlen, const char *file, int line, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    int n = snprintf(err, errlen, "%s:%d: ", file, line);
-    if (n < 0 || (size_t)n >= errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err + n, errlen - (size_t)n, fmt, ap);
-    va_end(ap);
-}
-
 /* Fail with "FILE:LINE: message"; LINE(...) is the line of a printf-formatted field path in the cell's
  * marks ("arms[1].canopen.sync_us"), or of its nearest enclosing node when it is absent (a missing field). */
 #define LINE(...) mca_yaml_marks_line_of(&marks, __VA_ARGS__)
 #define FAIL(code, line, ...)                                                                                \
     do {                                                                                                     \
-        fail_at(err, errlen, path, (line), __VA_ARGS__);                                                     \
+        mca_errbuf_at(err, errlen, path, (line), __VA_ARGS__);                                               \
         rc = (code);                                                                                         \
         goto out;                                                                                            \
     } while (0)
 
-/* Range check of one loaded value (ranges: mca_range_t, issue 16); the field is printf-formatted and is
- * also the node whose line is reported: "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
+/* Range check of one loaded value (ranges: mca_range_t, issue 16), the one check the scenario reader uses
+ * too; the field is printf-formatted and is also the node whose line is reported:
+ * "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
 #define CHECK(range, v, ...)                                                                                 \
     do {                                                                                                     \
-        char f_[MCA_YAML_MARKS_PATH_MAX], why_[160];                                                         \
-        if (mca_range_check((range), (v), why_, sizeof why_) != MCA_OK) {                                    \
-            snprintf(f_, sizeof f_, __VA_ARGS__);                                                            \
-            FAIL(MCA_ECONFIG, LINE("%s", f_), "%s: %s", f_, why_);                                           \
+        if ((rc = mca_check_range(&ctx, (range), (v), __VA_ARGS__)) != MCA_OK) {                             \
+            goto out;                                                                                        \
         }                                                                                                    \
     } while (0)
 
@@ -483,9 +284,6 @@ static const mca_range_t r_dec_limit = {"dec_limit", 0.05, 100.0, 0, 0, "rad/s^2
 /* longest brake from a joint's velocity limit at dec_limit */
 #define CELL_MAX_STOP_S 60.0
 static const mca_range_t r_arm_priority = {"priority", 0.0, 1000.0, 1, 0, ""};
-static const mca_range_t r_lag_tau = {"lag_tau", 0.0, 1.0, 0, 0, "s"};
-static const mca_range_t r_latency_cycles = {"latency_cycles", 0, 64, 0, 1, "cycles"};
-static const mca_range_t r_noise_pos = {"noise_pos", 0.0, 0.1, 0, 0, "rad"};
 static const mca_range_t r_dds_domain = {"domain", 0, 230, 0, 1, ""};
 static const mca_range_t r_publish_divisor = {"publish_divisor", 1, 100000, 0, 1, "ticks"};
 static const mca_range_t r_rt_priority = {"priority", 0, 99, 0, 1, "(0 = SCHED_OTHER)"};
@@ -584,113 +382,36 @@ static int readable(const char *p) {
     return access(p, R_OK) == 0;
 }
 
-const char *mca_cell_backend_name(mca_cell_backend_t b) {
-    return b == MCA_CELL_BACKEND_SOCKETCAN ? "socketcan" : b == MCA_CELL_BACKEND_CANOPEN ? "canopen" : "sim";
-}
-
-/* "KEY: must be in ..." into why when v is outside the scenario range of key. */
-static int path_value(const char *key, double v, char *why, size_t whylen) {
-    char r[160];
-    if (mca_range_check(mca_scenario_range(key), v, r, sizeof r) != MCA_OK) {
-        snprintf(why, whylen, "%s: %s", key, r);
-        return -1;
-    }
-    return 0;
-}
-
-/* Inline path of a cell arm (hold or circle; richer paths belong in a scenario file). */
-static int inline_path(mca_path_t *pp, const struct raw_path *rp, char *why, size_t whylen) {
-    memset(pp, 0, sizeof *pp);
-    pp->relative = 1;
-    pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-    if (path_value("t0", pp->t0, why, whylen) != 0) {
-        return -1;
-    }
-    if (rp->kind == RAW_HOLD) {
-        pp->kind = MCA_PATH_HOLD;
-        return 0;
-    }
-    pp->kind = MCA_PATH_CIRCLE;
-    if (!rp->radius || !rp->period || !rp->u || !rp->v) {
-        snprintf(why, whylen, "circle: needs radius > 0, period > 0, u and v");
-        return -1;
-    }
-    pp->radius = *rp->radius;
-    pp->period = *rp->period;
-    pp->turns = rp->turns ? *rp->turns : 1.0;
-    if (path_value("radius", pp->radius, why, whylen) != 0 ||
-        path_value("period", pp->period, why, whylen) != 0 ||
-        path_value("turns", pp->turns, why, whylen) != 0) {
-        return -1;
-    }
-    const double nu = mca_v3_norm(rp->u);
-    if (!(nu > 1e-9) || !isfinite(nu)) {
-        snprintf(why, whylen, "u: zero vector");
-        return -1;
-    }
-    double u[3], v[3];
-    for (int i = 0; i < 3; i++) {
-        u[i] = rp->u[i] / nu;
-    }
-    mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u); /* Gram-Schmidt */
-    const double nv = mca_v3_norm(v);
-    if (!(nv > 1e-9) || !isfinite(nv)) {
-        snprintf(why, whylen, "v: parallel to u");
-        return -1;
-    }
-    for (int i = 0; i < 3; i++) {
-        pp->u[i] = u[i];
-        pp->v[i] = v[i] / nv;
-    }
-    return 0;
-}
-
 /* ---------------------------------------------------------------- load */
 
 int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     if (!path || !out) {
-        set_err(err, errlen, "cell: NULL argument");
+        mca_errbuf_printf(err, errlen, "cell: NULL argument");
         return MCA_EINVAL;
     }
-    FILE *fp = fopen(path, "r");
-    if (!fp) {
-        set_err(err, errlen, "%s:0: cannot open cell file: %s", path, strerror(errno));
-        return MCA_ENOENT;
-    }
-    fclose(fp);
-
-    struct log_state ls;
-    memset(&ls, 0, sizeof ls);
-    const cyaml_config_t ccfg = {
-        .log_fn = log_collect,
-        .log_ctx = &ls,
-        .mem_fn = cyaml_mem,
-        .log_level = CYAML_LOG_ERROR,
-        .flags = CYAML_CFG_DEFAULT,
-    };
     struct raw_cell *raw = NULL;
-    cyaml_err_t cerr = cyaml_load_file(path, &ccfg, &cell_schema, (cyaml_data_t **)&raw, NULL);
-    if (cerr != CYAML_OK) {
-        cell_parse_error(path, &ls, cerr, err, errlen);
-        return MCA_EPARSE;
+    int lrc = mca_yaml_load(path, "cell", &cell_schema, (void **)&raw, err, errlen);
+    if (lrc != MCA_OK) {
+        return lrc;
     }
     if (!raw) {
         /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
          * no data */
-        set_err(err, errlen,
-                "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)",
-                path);
+        mca_errbuf_printf(
+            err, errlen,
+            "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)", path);
         return MCA_EPARSE;
     }
 
     /* where each field is (libcyaml keeps no positions): lines are 0 if the file cannot be read again */
     mca_yaml_marks_t marks = {.mark = NULL};
     (void)mca_yaml_marks_load(path, &marks, NULL, 0);
+    const mca_check_ctx_t ctx = {.file = path, .marks = &marks, .err = err, .errlen = errlen};
     mca_cell_t *cell = calloc(1, sizeof *cell);
     int rc = MCA_OK;
     if (!cell) {
         rc = MCA_ENOMEM;
-        set_err(err, errlen, "%s:0: out of memory", path);
+        mca_errbuf_printf(err, errlen, "%s:0: out of memory", path);
         goto out;
     }
     snprintf(cell->name, sizeof cell->name, "%s", raw->name);
@@ -790,20 +511,21 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         FAIL(MCA_ECONFIG, LINE("scheme"), "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
              raw->scheme);
     }
-    if (raw->d1) {
-        CHECK(mca_scenario_range("d1"), *raw->d1, "d1");
-        scn->params.d1 = *raw->d1;
+    {
+        /* d1, d2 and the scheme's gains: the scenario's checks (its values stay where the cell gives none) */
+        const struct raw_solver *s = raw->solver;
+        const mca_param_keys_t keys = {.solver = "solver.",
+                                       .d1 = raw->d1,
+                                       .d2 = raw->d2,
+                                       .K = s ? s->K : NULL,
+                                       .epsilon = s ? s->epsilon : NULL,
+                                       .v_normal = s ? s->v_normal : NULL,
+                                       .v_floor = s ? s->v_floor : NULL,
+                                       .form = s ? s->form : NULL};
+        if ((rc = mca_scenario_params_apply(&ctx, &keys, &scn->params, &scn->has_form)) != MCA_OK) {
+            goto out;
+        }
     }
-    if (raw->d2) {
-        CHECK(mca_scenario_range("d2"), *raw->d2, "d2");
-        scn->params.d2 = *raw->d2;
-    }
-    if (!(isfinite(scn->params.d1) && isfinite(scn->params.d2) && scn->params.d1 >= 0.0 &&
-          scn->params.d1 < scn->params.d2)) {
-        FAIL(MCA_ECONFIG, LINE("%s", raw->d1 ? "d1" : "d2"),
-             "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)", scn->params.d1, scn->params.d2);
-    }
-
     cell->pdnn_max_steps = 0;
     cell->pdnn_tol = cell->eq_tol = cell->fault_residual = -1.0;
     cell->deadlock_time = cell->back_off_time = -1.0;
@@ -816,26 +538,6 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (s->back_off_time) {
             CHECK(&r_back_off_time, *s->back_off_time, "solver.back_off_time");
             cell->back_off_time = *s->back_off_time;
-        }
-        if (s->K) {
-            CHECK(mca_scenario_range("K"), *s->K, "solver.K");
-            scn->params.K = *s->K;
-        }
-        if (s->epsilon) {
-            CHECK(mca_scenario_range("epsilon"), *s->epsilon, "solver.epsilon");
-            scn->params.epsilon = *s->epsilon;
-        }
-        if (s->v_normal) {
-            CHECK(mca_scenario_range("v_normal"), *s->v_normal, "solver.v_normal");
-            scn->params.v_normal = *s->v_normal;
-        }
-        if (s->v_floor) {
-            CHECK(mca_scenario_range("v_floor"), *s->v_floor, "solver.v_floor");
-            scn->params.v_floor = *s->v_floor;
-        }
-        if (s->form) {
-            scn->has_form = 1;
-            scn->params.form = *s->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
         }
         if (s->pdnn_max_steps) {
             CHECK(&r_pdnn_max_steps, *s->pdnn_max_steps, "solver.pdnn_max_steps");
@@ -901,106 +603,38 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             sa->path.kind = MCA_PATH_HOLD;
             sa->path.relative = 1;
         }
-        /* backend */
-        if (strcmp(ra->backend, "sim") == 0) {
-            ca->backend = MCA_CELL_BACKEND_SIM;
-        } else if (strcmp(ra->backend, "socketcan") == 0) {
-            ca->backend = MCA_CELL_BACKEND_SOCKETCAN;
-            if (!ra->interface) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].interface", ai),
-                     "arms[%d].interface: required with backend socketcan", ai);
-            }
-            if (!ra->id_base) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].id_base", ai),
-                     "arms[%d].id_base: required with backend socketcan", ai);
-            }
-        } else if (strcmp(ra->backend, "canopen") == 0) {
-            ca->backend = MCA_CELL_BACKEND_CANOPEN;
-            if (!ra->interface) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].interface", ai),
-                     "arms[%d].interface: required with backend canopen", ai);
-            }
-        } else {
+        /* backend: the registry's, by name; its keys read and checked by it */
+        const mca_backend_def_t *be = mca_backend_find(ra->backend);
+        if (!be) {
+            char known[128];
+            mca_backend_names(known, sizeof known);
             FAIL(MCA_ECONFIG, LINE("arms[%d].backend", ai),
-                 "arms[%d].backend: unknown backend '%s' (known: sim, socketcan, canopen)", ai, ra->backend);
+                 "arms[%d].backend: unknown backend '%s' (known: %s)", ai, ra->backend, known);
         }
-        ca->co_first_node = 1;
-        ca->co_sync_us = 4000;
-        ca->co_mode = 9;
-        ca->co_pos_scale = 1e6;
-        ca->co_vel_scale = 1e6;
-        ca->co_hb_timeout_ms = 350;
-        ca->co_pdo_timeout = 5;
-        if (ra->canopen) {
-            const struct raw_canopen *rco = ra->canopen;
-            if (ca->backend != MCA_CELL_BACKEND_CANOPEN) {
-                FAIL(MCA_EPARSE, LINE("arms[%d].canopen", ai), "arms[%d].canopen: only with backend canopen",
-                     ai);
-            }
-            if (rco->first_node && (*rco->first_node < 1 || *rco->first_node > 127)) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.first_node", ai),
-                     "arms[%d].canopen.first_node: 1..127 (got %d)", ai, *rco->first_node);
-            }
-            if (rco->sync_us && *rco->sync_us < 100) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.sync_us", ai),
-                     "arms[%d].canopen.sync_us: >= 100 (got %d)", ai, *rco->sync_us);
-            }
-            if (rco->mode && strcmp(rco->mode, "csv") != 0 && strcmp(rco->mode, "csp") != 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.mode", ai),
-                     "arms[%d].canopen.mode: csv or csp (got '%s')", ai, rco->mode);
-            }
-            const int pos_bad = rco->pos_scale && !(*rco->pos_scale > 0 && isfinite(*rco->pos_scale));
-            if (pos_bad || (rco->vel_scale && !(*rco->vel_scale > 0 && isfinite(*rco->vel_scale)))) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.%s", ai, pos_bad ? "pos_scale" : "vel_scale"),
-                     "arms[%d].canopen: pos_scale and vel_scale must be > 0", ai);
-            }
-            ca->co_first_node = rco->first_node ? *rco->first_node : 1;
-            ca->co_sync_us = rco->sync_us ? (uint32_t)*rco->sync_us : 4000;
-            ca->co_mode = rco->mode && strcmp(rco->mode, "csp") == 0 ? 8 : 9;
-            ca->co_pos_scale = rco->pos_scale ? *rco->pos_scale : 1e6;
-            ca->co_vel_scale = rco->vel_scale ? *rco->vel_scale : 1e6;
-            const int hb_bad = rco->heartbeat_timeout_ms &&
-                               (*rco->heartbeat_timeout_ms <= 100 || *rco->heartbeat_timeout_ms > 60000);
-            if (hb_bad || (rco->pdo_timeout_syncs &&
-                           (*rco->pdo_timeout_syncs < 1 || *rco->pdo_timeout_syncs > 100000))) {
-                FAIL(MCA_ECONFIG,
-                     LINE("arms[%d].canopen.%s", ai, hb_bad ? "heartbeat_timeout_ms" : "pdo_timeout_syncs"),
-                     "arms[%d].canopen: heartbeat_timeout_ms 101..60000 (the drives beat every 100 ms), "
-                     "pdo_timeout_syncs 1..100000",
-                     ai);
-            }
-            ca->co_hb_timeout_ms = rco->heartbeat_timeout_ms ? *rco->heartbeat_timeout_ms : 350;
-            ca->co_pdo_timeout = rco->pdo_timeout_syncs ? *rco->pdo_timeout_syncs : 5;
-        }
-        if (ra->interface) {
-            snprintf(ca->interface, sizeof ca->interface, "%s", ra->interface);
-        }
-        if (ra->id_base) {
-            if (*ra->id_base < 0 || *ra->id_base > (long long)MCA_CAN_ID_BASE_MAX ||
-                *ra->id_base % MCA_CAN_ID_BLOCK != 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", ai),
-                     "arms[%d].id_base: must be a multiple of 0x%x in 0..0x%x (got 0x%llx)", ai,
-                     MCA_CAN_ID_BLOCK, MCA_CAN_ID_BASE_MAX, *ra->id_base);
-            }
-            ca->id_base = (uint32_t)*ra->id_base;
-        }
-        /* a CANopen bus has one SYNC producer and NMT master: one canopen arm per bus */
-        for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_CANOPEN; b++) {
-            if (strcmp(cell->arm[b].interface, ca->interface) == 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].interface", ai),
-                     "arms[%d].interface: %s is already arms[%u]'s (one bus per canopen arm)", ai,
-                     ca->interface, b);
+        ca->backend = be->id;
+        {
+            /* a backend's own section belongs to it alone */
+            const struct {
+                const char *key;
+                int given;
+            } sections[] = {{"sim", ra->sim != NULL}, {"canopen", ra->canopen != NULL}};
+            for (size_t k = 0; k < sizeof sections / sizeof sections[0]; k++) {
+                if (sections[k].given && (!be->section || strcmp(be->section, sections[k].key) != 0)) {
+                    const mca_backend_def_t *owner = NULL;
+                    for (size_t i = 0; (owner = mca_backend_at(i)) != NULL; i++) {
+                        if (owner->section && strcmp(owner->section, sections[k].key) == 0) {
+                            break;
+                        }
+                    }
+                    FAIL(MCA_EPARSE, LINE("arms[%d].%s", ai, sections[k].key),
+                         "arms[%d].%s: only with backend %s", ai, sections[k].key, owner ? owner->name : "?");
+                }
             }
         }
-        /* two arms on one bus with one id block would each take the other's frames */
-        for (unsigned b = 0; b < a && ca->backend == MCA_CELL_BACKEND_SOCKETCAN; b++) {
-            const mca_cell_arm_t *cb = &cell->arm[b];
-            if (cb->backend == MCA_CELL_BACKEND_SOCKETCAN && strcmp(cb->interface, ca->interface) == 0 &&
-                cb->id_base == ca->id_base) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", ai),
-                     "arms[%d].id_base: 0x%x on %s is already arms[%u]'s (one id block per arm and bus)", ai,
-                     ca->id_base, ca->interface, b);
-            }
+        const mca_backend_keys_t bkeys = {
+            .interface = ra->interface, .id_base = ra->id_base, .sim = ra->sim, .canopen = ra->canopen};
+        if ((rc = be->read(&ctx, cell, ai, &bkeys)) != MCA_OK) {
+            goto out;
         }
         /* model overrides */
         if (ra->urdf) {
@@ -1014,16 +648,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->tip_link) {
             snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
         }
-        /* the scenario's placement was checked when it loaded; the cell's overrides here, same ranges */
-        for (int i = 0; i < 3; i++) {
-            if (ra->base_xyz) {
-                CHECK(mca_scenario_range("base_xyz"), ra->base_xyz[i], "arms[%d].base_xyz[%d]", ai, i);
-                sa->base_xyz[i] = ra->base_xyz[i];
-            }
-            if (ra->base_rpy) {
-                CHECK(mca_scenario_range("base_rpy"), ra->base_rpy[i], "arms[%d].base_rpy[%d]", ai, i);
-                sa->base_rpy[i] = ra->base_rpy[i];
-            }
+        /* the scenario's placement was checked when it loaded; the cell's overrides here, same check */
+        if ((rc = mca_scenario_place_apply(&ctx, ai, ra->base_xyz, ra->base_rpy, sa)) != MCA_OK) {
+            goto out;
         }
         if (ra->q0) {
             sa->n_q0 = (int)ra->q0_count;
@@ -1032,12 +659,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
         }
         if (ra->path) {
-            char why[256];
-            if (inline_path(&sa->path, ra->path, why, sizeof why) != 0) {
-                /* why starts with the bad key ("radius: ..."), or "circle: ..." for the path itself */
-                const int bad_key = strncmp(why, "circle:", 7) == 0 ? 0 : (int)strcspn(why, ":");
-                FAIL(MCA_ECONFIG, LINE("arms[%d].path%s%.*s", ai, bad_key ? "." : "", bad_key, why),
-                     "arms[%d].path.%s", ai, why);
+            /* an inline path: the scenario's schema and check */
+            char at[32];
+            snprintf(at, sizeof at, "arms[%d].path", ai);
+            if ((rc = mca_scenario_path_apply(&ctx, at, ra->path, &sa->path)) != MCA_OK) {
+                goto out;
             }
         }
         if (ra->stream && !raw->task.stream) {
@@ -1100,20 +726,6 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if (ra->priority) {
             CHECK(&r_arm_priority, *ra->priority, "arms[%d].priority", ai);
             ca->priority = *ra->priority;
-        }
-        if (ra->sim) {
-            if (ra->sim->lag_tau) {
-                CHECK(&r_lag_tau, *ra->sim->lag_tau, "arms[%d].sim.lag_tau", ai);
-                ca->sim_lag_tau = *ra->sim->lag_tau;
-            }
-            if (ra->sim->latency_cycles) {
-                CHECK(&r_latency_cycles, *ra->sim->latency_cycles, "arms[%d].sim.latency_cycles", ai);
-                ca->sim_latency_cycles = *ra->sim->latency_cycles;
-            }
-            if (ra->sim->noise_pos) {
-                CHECK(&r_noise_pos, *ra->sim->noise_pos, "arms[%d].sim.noise_pos", ai);
-                ca->sim_noise_pos = *ra->sim->noise_pos;
-            }
         }
     }
     scn->n_arms = (int)raw->arms_count;
@@ -1286,7 +898,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
 out:
     free(cell);
     mca_yaml_marks_free(&marks);
-    cyaml_free(&ccfg, &cell_schema, raw, 0);
+    mca_yaml_free(&cell_schema, raw);
     return rc;
 }
 
@@ -1323,7 +935,7 @@ int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_sche
 int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *cfg, char *err,
                                size_t errlen) {
     if (!cell || !cfg) {
-        set_err(err, errlen, "cell: NULL argument");
+        mca_errbuf_printf(err, errlen, "cell: NULL argument");
         return MCA_EINVAL;
     }
     int rc = mca_controller_config_from_scenario(cfg, &cell->scn, cell->scheme, err, errlen);

@@ -18,17 +18,17 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "mca/arm_can.h"
 #include "mca/dds_bridge.h"
 #include "mca/dds_qos.h"
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf */
 #include "mca/scenario.h"
-#include "mca/sim_backend.h"
 #include "mca/tick_csv.h" /* mca_tick_csv_header, mca_tick_csv_row */
-#include "mca/canopen.h"  /* mca_canopen_backend_open, mca_canopen_backend_fault (issue 15) */
 #ifdef MCA_TEST_HOOKS
 #include "mca/daemon_test.h"
 #endif
+
+#include "daemon__backends.h" /* mca_backend_get */
 
 #define NS_PER_S 1000000000LL
 
@@ -146,12 +146,6 @@ static int64_t now_ns(void) {
     return (int64_t)ts.tv_sec * NS_PER_S + ts.tv_nsec;
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, const char *a, const char *b) {
-    if (err && errlen) {
-        snprintf(err, errlen, fmt, a, b);
-    }
-}
-
 #define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
 /* codes of mca_rtlog_code() records (formatted by log_format, non-rt) */
 enum { LOGC_FAULT = 1, LOGC_ARM_FAULT_TOO = 2 };
@@ -198,8 +192,9 @@ static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err,
     }
     char why[200];
     if (mca_ros2_config_check(rc2, why, sizeof why) != MCA_OK) {
-        set_err(err, errlen, "%s: dds.ros2: %s (ROS 2 topics are named after the cell and its arms)",
-                cell->source, why);
+        mca_errbuf_printf(err, errlen,
+                          "%s: dds.ros2: %s (ROS 2 topics are named after the cell and its arms)",
+                          cell->source, why);
         return MCA_EINVAL;
     }
     return MCA_OK;
@@ -234,8 +229,8 @@ const char *mca_feedback_fault_name(int kind) {
  * 6 sigma of a sim arm's measurement noise), MCA_FB_VELOCITY_FACTOR x the velocity limit. */
 static void feedback_bounds(mca_daemon_t *d, int a) {
     const mca_cell_arm_t *ca = &d->cell.arm[a];
-    const double margin =
-        MCA_FB_POSITION_MARGIN + (ca->backend == MCA_CELL_BACKEND_SIM ? 6.0 * ca->sim_noise_pos : 0.0);
+    const mca_backend_def_t *be = mca_backend_get(ca->backend);
+    const double margin = MCA_FB_POSITION_MARGIN + (be->feedback_margin ? be->feedback_margin(ca) : 0.0);
     for (int j = 0; j < d->dof[a]; j++) {
         const mca_joint_model_t *jm = &d->ccfg.chain[a].joint[j];
         d->fb_lo[a][j] = jm->lower - margin; /* -inf for a continuous joint */
@@ -298,72 +293,14 @@ static int open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
     const mca_cell_arm_t *ca = &d->cell.arm[a];
     const mca_scenario_arm_t *sa = &d->cell.scn.arm[a];
     char berr[256] = "";
-    int rc;
-    if (ca->backend == MCA_CELL_BACKEND_SIM) {
-        mca_sim_arm_config_t sc;
-        rc = mca_sim_arm_config_from_chain(&sc, &d->ccfg.chain[a]);
-        if (rc == MCA_OK) {
-            for (int j = 0; j < sc.n; j++) {
-                sc.q0[j] = sa->q0[j];
-                sc.dec_limit[j] = ca->dec_limit[j];
-                if (sc.acc_limit[j] < ca->dec_limit[j]) {
-                    sc.acc_limit[j] = ca->dec_limit[j];
-                }
-            }
-            sc.dt = (double)d->cell.rt.period_ns * 1e-9;
-            sc.lag_tau = ca->sim_lag_tau;
-            sc.latency_cycles = ca->sim_latency_cycles;
-            sc.noise_pos = ca->sim_noise_pos;
-            sc.seed = 1 + (uint64_t)a;
-            sc.stamp_monotonic = !d->opts.virtual_time;
-            if (ca->sim_ideal) {
-                /* mca-sim --euler: q += v dt with v the command, nothing limited */
-                sc.ideal = 1;
-                for (int j = 0; j < sc.n; j++) {
-                    sc.lower[j] = -INFINITY;
-                    sc.upper[j] = INFINITY;
-                    sc.vel_limit[j] = 1e300;
-                }
-            }
-#ifdef MCA_TEST_HOOKS
-            if (d->cell.debug_start_in_fault) {
-                /* test hook: the firmware latches a fault in its first cycle (INIT -> FAULT), as a fault
-                 * left from an earlier run would be */
-                sc.init_cycles = sc.init_cycles > 0 ? sc.init_cycles : 1;
-                sc.n_inject = 1;
-                sc.inject[0].kind = MCA_SIM_INJ_ACTUATOR;
-                sc.inject[0].at_cycle = 0;
-                sc.inject[0].joint = 0;
-            }
-#endif
-            rc = mca_sim_backend_open(&d->arm[a], &sc, berr, sizeof berr);
-        }
-    } else if (ca->backend == MCA_CELL_BACKEND_CANOPEN) {
-        /* issue 15: joint j = CiA 402 drive ca->co_first_node + j on ca->interface (docs/canopen.md) */
-        mca_co_master_config_t cc;
-        mca_co_master_config_default(&cc, d->dof[a], (uint8_t)ca->co_first_node);
-        snprintf(cc.iface, sizeof cc.iface, "%s", ca->interface);
-        cc.mode = ca->co_mode;
-        cc.sync_period_us = ca->co_sync_us;
-        cc.hb_timeout_ms = (uint16_t)ca->co_hb_timeout_ms;
-        cc.pdo_timeout_cycles = ca->co_pdo_timeout;
-        for (int j = 0; j < cc.n; j++) {
-            cc.drive[j].pos_scale = ca->co_pos_scale;
-            cc.drive[j].vel_scale = ca->co_vel_scale;
-        }
-        rc = mca_canopen_backend_open(&d->arm[a], &cc, (uint32_t)(d->cell.rt.period_ns / 1000), berr,
-                                      sizeof berr);
-    } else {
-        /* the link refuses feedback outside the same bounds the daemon checks (issue 16: at the decoder) */
-        mca_can_options_t co;
-        mca_can_options_default(&co);
-        for (int j = 0; j < d->dof[a]; j++) {
-            co.pos_lo[j] = d->fb_lo[a][j];
-            co.pos_hi[j] = d->fb_hi[a][j];
-            co.vel_max[j] = d->fb_vmax[a][j]; /* jumps: no faster than the velocity check allows */
-        }
-        rc = mca_can_backend_open(&d->arm[a], ca->interface, ca->id_base, d->dof[a], &co, berr, sizeof berr);
-    }
+    const mca_backend_open_args_t o = {.cell = &d->cell,
+                                       .arm = a,
+                                       .chain = &d->ccfg.chain[a],
+                                       .fb_lo = d->fb_lo[a],
+                                       .fb_hi = d->fb_hi[a],
+                                       .fb_vmax = d->fb_vmax[a],
+                                       .virtual_time = d->opts.virtual_time};
+    const int rc = mca_backend_get(ca->backend)->open(&d->arm[a], &o, berr, sizeof berr);
     if (rc != MCA_OK) {
         if (err && errlen) {
             snprintf(err, errlen, "arm '%s' (%s): cannot open: %s (%s)", sa->name,
@@ -383,16 +320,18 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
     mca_arm_command_t c;
     memset(&c, 0, sizeof c);
     c.n = d->dof[a];
-    const int can = d->cell.arm[a].backend == MCA_CELL_BACKEND_SOCKETCAN;
+    /* a backend whose arm names its own joint count (the CAN heartbeat): wait for it, and check it */
+    const mca_backend_def_t *be = mca_backend_get(d->cell.arm[a].backend);
+    const int can = be->reported_joints != NULL;
     while (now_ns() < deadline) {
         mca_arm_feedback_t fb;
         const int rc = mca_arm_read(d->arm[a], &fb);
-        mca_can_state_msg_t hb;
-        const int have_hb = can && mca_can_backend_state(d->arm[a], &hb) == MCA_OK;
-        if (have_hb && hb.n != d->dof[a]) {
+        int hb_n = 0;
+        const int have_hb = can && be->reported_joints(d->arm[a], &hb_n) == MCA_OK;
+        if (have_hb && hb_n != d->dof[a]) {
             /* the arm's own joint count (heartbeat), not the decoder's: the link refuses its feedback */
             snprintf(err, errlen, "arm '%s': its heartbeat names %d joints, the model has %d",
-                     d->cell.scn.arm[a].name, hb.n, d->dof[a]);
+                     d->cell.scn.arm[a].name, hb_n, d->dof[a]);
             return MCA_EINVAL;
         }
         if ((rc == MCA_OK || rc == MCA_EFAULT) && (!can || have_hb)) {
@@ -452,8 +391,8 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
             nanosleep(&ts, NULL);
         }
     }
-    set_err(err, errlen, "arm '%s' (%s): no answer within 2 s", d->cell.scn.arm[a].name,
-            mca_cell_backend_name(d->cell.arm[a].backend));
+    mca_errbuf_printf(err, errlen, "arm '%s' (%s): no answer within 2 s", d->cell.scn.arm[a].name,
+                      mca_cell_backend_name(d->cell.arm[a].backend));
     return MCA_ETIMEDOUT;
 }
 
@@ -543,7 +482,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (rc == MCA_OK) {
         rc = mca_controller_init(&d->ctrl, &d->ccfg);
         if (rc != MCA_OK) {
-            set_err(err, errlen, "%s: controller init failed: %s", cell->source, mca_strerror(rc));
+            mca_errbuf_printf(err, errlen, "%s: controller init failed: %s", cell->source, mca_strerror(rc));
         }
     }
     if (rc != MCA_OK) {
@@ -573,8 +512,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         pin_non_rt(d);
     }
     if (rc == MCA_OK && cell->stream.enabled && (!cell->dds.enabled || opts->no_dds)) {
-        set_err(err, errlen, "%s: task.stream: the targets come over ROS 2, but DDS is off%s", cell->source,
-                opts->no_dds ? " (--no-dds)" : "");
+        mca_errbuf_printf(err, errlen, "%s: task.stream: the targets come over ROS 2, but DDS is off%s",
+                          cell->source, opts->no_dds ? " (--no-dds)" : "");
         rc = MCA_EINVAL;
     }
     if (rc == MCA_OK && cell->dds.enabled && !opts->no_dds) {
@@ -596,10 +535,10 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
          * one */
         char exe[PATH_MAX];
         if (rc == MCA_OK && find_bridge_exe(opts, exe, sizeof exe) != MCA_OK) {
-            set_err(err, errlen,
-                    "DDS: the publisher program mca-dds-bridge is neither next to this program nor "
-                    "in %s%s (install it, or --no-dds)",
-                    MCA_LIBEXECDIR, "");
+            mca_errbuf_printf(err, errlen,
+                              "DDS: the publisher program mca-dds-bridge is neither next to this program nor "
+                              "in %s (install it, or --no-dds)",
+                              MCA_LIBEXECDIR);
             rc = MCA_ENOENT;
         }
         dc.process_exe = exe;
@@ -611,8 +550,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             mca_dds_log_capture(0);
         }
         if (rc != MCA_OK && !(err && err[0])) {
-            set_err(err, errlen, "DDS: cannot create the bridge: %s%s", why[0] ? why : mca_strerror(rc),
-                    dc.config_path ? " (check dds.config)" : "");
+            mca_errbuf_printf(err, errlen, "DDS: cannot create the bridge: %s%s",
+                              why[0] ? why : mca_strerror(rc), dc.config_path ? " (check dds.config)" : "");
         }
         if (rc == MCA_OK) {
             mca_dds_stats_t ds;
@@ -625,7 +564,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         const size_t sz = MCA_RING_STORAGE_SIZE(sizeof(mca_daemon_csv_rec_t), MCA_DAEMON_CSV_CAPACITY);
         d->csv_storage = aligned_alloc(64, sz);
         if (!d->csv || !d->csv_storage) {
-            set_err(err, errlen, "%s: cannot write the CSV file%s", opts->csv_path, "");
+            mca_errbuf_printf(err, errlen, "%s: cannot write the CSV file", opts->csv_path);
             rc = MCA_EIO;
         } else {
             rc = mca_ring_init(&d->csv_ring, d->csv_storage, sz, sizeof(mca_daemon_csv_rec_t),
@@ -715,11 +654,14 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
             snprintf(buf, len, "arm %s does not servo: state %s", name, mca_arm_state_name(arm_code));
         } else {
             char co[200] = "";
-            if (arm >= 0 && arm < d->n_arms && d->cell.arm[arm].backend == MCA_CELL_BACKEND_CANOPEN) {
-                /* which drive and why (the master's first latched fault: written once by the loop) */
+            const mca_backend_def_t *be =
+                arm >= 0 && arm < d->n_arms ? mca_backend_get(d->cell.arm[arm].backend) : NULL;
+            if (be && be->fault_detail) {
+                /* what the fault is about (CANopen: which drive and why, the master's first latched fault,
+                 * written once by the loop) */
                 co[0] = ' ';
                 co[1] = '(';
-                if (mca_canopen_backend_fault(d->arm[arm], co + 2, sizeof co - 3) == MCA_OK) {
+                if (be->fault_detail(d->arm[arm], co + 2, sizeof co - 3) == MCA_OK) {
                     strcat(co, ")");
                 } else {
                     co[0] = 0;

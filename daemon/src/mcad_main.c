@@ -73,14 +73,9 @@ static void print_cell(const mca_cell_t *c) {
         const mca_scenario_arm_t *sa = &c->scn.arm[a];
         printf("  arm %d '%s': %s, %d joints, base [%g %g %g], backend %s", a, sa->name, sa->urdf, sa->n_q0,
                sa->base_xyz[0], sa->base_xyz[1], sa->base_xyz[2], mca_cell_backend_name(c->arm[a].backend));
-        if (c->arm[a].backend == MCA_CELL_BACKEND_SOCKETCAN) {
-            printf(" %s id_base 0x%x", c->arm[a].interface, c->arm[a].id_base);
-        }
-        if (c->arm[a].backend == MCA_CELL_BACKEND_CANOPEN) {
-            printf(" %s nodes %d..%d sync %u us %s", c->arm[a].interface, c->arm[a].co_first_node,
-                   c->arm[a].co_first_node + sa->n_q0 - 1, c->arm[a].co_sync_us,
-                   c->arm[a].co_mode == 8 ? "csp" : "csv");
-        }
+        char where[128];
+        mca_cell_backend_describe(&c->arm[a], sa->n_q0, where, sizeof where);
+        printf("%s", where);
         if (c->stream.enabled) {
             printf(", follows /%s/%s/%s", c->dds.ros2.ns, sa->name,
                    c->arm[a].stream == MCA_CELL_STREAM_POSE ? "target_pose" : "target_twist");

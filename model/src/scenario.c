@@ -3,7 +3,6 @@
 #include "mca/scenario.h"
 
 #include <cyaml/cyaml.h>
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -12,29 +11,14 @@
 #include <string.h>
 
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
 #include "mca/scheme.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
+#include "mca/yaml_load.h" /* mca_yaml_load, mca_scenario_path_fields */
 #include "mca/yaml_marks.h"
 
 /* ---------------------------------------------------------------- YAML (start-up only) */
-
-enum raw_kind { RAW_HOLD, RAW_CIRCLE, RAW_WAYPOINTS };
-enum raw_form { RAW_COMPONENTWISE, RAW_NORMAL };
-
-struct raw_path {
-    enum raw_kind kind;
-    bool *relative;
-    double *t0, *radius, *period, *turns;
-    double *u;
-    unsigned u_count;
-    double *v;
-    unsigned v_count;
-    double (*points)[3];
-    unsigned points_count;
-    double *durations;
-    unsigned durations_count;
-};
 
 struct raw_arm {
     char *name;
@@ -46,14 +30,14 @@ struct raw_arm {
     unsigned base_rpy_count;
     double *q0;
     unsigned q0_count;
-    struct raw_path path;
+    mca_path_keys_t path;
 };
 
 struct raw_scn {
     char *name;
     double duration;
     double *dt, *d1, *d2, *K, *epsilon, *v_normal, *v_floor;
-    enum raw_form *form;
+    mca_collision_form_t *form;
     double *sample_times;
     unsigned sample_times_count;
     struct raw_arm *arms;
@@ -61,13 +45,13 @@ struct raw_scn {
 };
 
 static const cyaml_strval_t kind_strings[] = {
-    {"hold", RAW_HOLD},
-    {"circle", RAW_CIRCLE},
-    {"waypoints", RAW_WAYPOINTS},
+    {"hold", MCA_PATH_HOLD},
+    {"circle", MCA_PATH_CIRCLE},
+    {"waypoints", MCA_PATH_WAYPOINTS},
 };
 static const cyaml_strval_t form_strings[] = {
-    {"componentwise", RAW_COMPONENTWISE},
-    {"normal", RAW_NORMAL},
+    {"componentwise", MCA_FORM_COMPONENTWISE},
+    {"normal", MCA_FORM_NORMAL},
 };
 
 static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
@@ -76,18 +60,18 @@ static const cyaml_schema_value_t point_entry = {
 
 #define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
 
-static const cyaml_schema_field_t path_fields[] = {
-    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, struct raw_path, kind, kind_strings,
+const cyaml_schema_field_t mca_scenario_path_fields[] = {
+    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, mca_path_keys_t, kind, kind_strings,
                      CYAML_ARRAY_LEN(kind_strings)),
-    CYAML_FIELD_BOOL_PTR("relative", OPT, struct raw_path, relative),
-    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_path, t0),
-    CYAML_FIELD_FLOAT_PTR("radius", OPT, struct raw_path, radius),
-    CYAML_FIELD_FLOAT_PTR("period", OPT, struct raw_path, period),
-    CYAML_FIELD_FLOAT_PTR("turns", OPT, struct raw_path, turns),
-    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, struct raw_path, u, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, struct raw_path, v, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("points", OPT, struct raw_path, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
-    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, struct raw_path, durations, &float_entry, 1,
+    CYAML_FIELD_BOOL_PTR("relative", OPT, mca_path_keys_t, relative),
+    CYAML_FIELD_FLOAT_PTR("t0", OPT, mca_path_keys_t, t0),
+    CYAML_FIELD_FLOAT_PTR("radius", OPT, mca_path_keys_t, radius),
+    CYAML_FIELD_FLOAT_PTR("period", OPT, mca_path_keys_t, period),
+    CYAML_FIELD_FLOAT_PTR("turns", OPT, mca_path_keys_t, turns),
+    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, u, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, v, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("points", OPT, mca_path_keys_t, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, durations, &float_entry, 1,
                          MCA_PATH_MAX_POINTS),
     CYAML_FIELD_END,
 };
@@ -101,7 +85,7 @@ static const cyaml_schema_field_t arm_fields[] = {
     CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
     CYAML_FIELD_SEQUENCE("q0", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1,
                          MCA_MAX_DOF),
-    CYAML_FIELD_MAPPING("path", CYAML_FLAG_DEFAULT, struct raw_arm, path, path_fields),
+    CYAML_FIELD_MAPPING("path", CYAML_FLAG_DEFAULT, struct raw_arm, path, mca_scenario_path_fields),
     CYAML_FIELD_END,
 };
 
@@ -130,50 +114,10 @@ static const cyaml_schema_value_t scn_schema = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct raw_scn, scn_fields),
 };
 
-/* libcyaml reports errors (with a backtrace naming field, line and column) through its log function:
- * keep the error lines so the caller's message names them. */
-struct log_buf {
-    char text[768];
-    size_t len;
-};
-
-static void log_collect(cyaml_log_t level, void *ctx, const char *fmt, va_list args) {
-    struct log_buf *b = ctx;
-    if (level < CYAML_LOG_ERROR || b->len + 2 >= sizeof b->text) {
-        return;
-    }
-    char line[256];
-    vsnprintf(line, sizeof line, fmt, args);
-    for (char *c = line; *c; c++) {
-        if (*c == '\n' || *c == '\t') {
-            *c = ' ';
-        }
-    }
-    int w = snprintf(b->text + b->len, sizeof b->text - b->len, "%s", line);
-    if (w > 0) {
-        b->len += (size_t)w;
-        if (b->len >= sizeof b->text) {
-            b->len = sizeof b->text - 1;
-        }
-    }
-}
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 /* "FILE:LINE: message" and MCA_ECONFIG */
 #define FAIL_AT(line, ...)                                                                                   \
     do {                                                                                                     \
-        char m_[256];                                                                                        \
-        snprintf(m_, sizeof m_, __VA_ARGS__);                                                                \
-        set_err(err, errlen, "%s:%d: %s", path, (line), m_);                                                 \
+        mca_errbuf_at(err, errlen, path, (line), __VA_ARGS__);                                               \
         rc = MCA_ECONFIG;                                                                                    \
         goto out;                                                                                            \
     } while (0)
@@ -204,7 +148,7 @@ static const mca_range_t scn_ranges[] = {
 
 int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
     if (!r) {
-        set_err(why, whylen, "no range");
+        mca_errbuf_printf(why, whylen, "no range");
         return MCA_EINVAL;
     }
     if (isfinite(v) && (r->lo_open ? v > r->lo : v >= r->lo) && v <= r->hi) {
@@ -212,10 +156,10 @@ int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
     }
     const char *sp = r->unit[0] ? " " : "";
     if (r->integer) {
-        set_err(why, whylen, "must be in %.0f..%.0f%s%s (got %.15g)", r->lo, r->hi, sp, r->unit, v);
+        mca_errbuf_printf(why, whylen, "must be in %.0f..%.0f%s%s (got %.15g)", r->lo, r->hi, sp, r->unit, v);
     } else {
-        set_err(why, whylen, "must be in %c%.6g, %.6g]%s%s (got %.15g)", r->lo_open ? '(' : '[', r->lo, r->hi,
-                sp, r->unit, v);
+        mca_errbuf_printf(why, whylen, "must be in %c%.6g, %.6g]%s%s (got %.15g)", r->lo_open ? '(' : '[',
+                          r->lo, r->hi, sp, r->unit, v);
     }
     return MCA_ECONFIG;
 }
@@ -235,42 +179,83 @@ int mca_scenario_check_duration(double duration, double dt, char *why, size_t wh
         return rc;
     }
     if (!(dt > 0.0) || !(duration / dt <= (double)MCA_SCENARIO_MAX_TICKS)) {
-        set_err(why, whylen, "%.15g s at a tick of %g s is %.0f ticks, more than %d", duration, dt,
-                duration / dt, MCA_SCENARIO_MAX_TICKS);
+        mca_errbuf_printf(why, whylen, "%.15g s at a tick of %g s is %.0f ticks, more than %d", duration, dt,
+                          duration / dt, MCA_SCENARIO_MAX_TICKS);
         return MCA_ECONFIG;
     }
     return MCA_OK;
 }
 
-/* Range check of one value read from the file (range of key): "FILE:LINE: FIELD: must be in ..." on error,
- * LINE that of the node FIELD ("arms[1].base_xyz[2]"). */
-static int check_at(const char *path, const mca_yaml_marks_t *marks, const char *key, const char *field,
-                    double v, char *err, size_t errlen) {
+int mca_check_range(const mca_check_ctx_t *c, const mca_range_t *r, double v, const char *fmt, ...) {
     char why[160];
-    if (mca_range_check(mca_scenario_range(key), v, why, sizeof why) == MCA_OK) {
+    if (mca_range_check(r, v, why, sizeof why) == MCA_OK) {
         return MCA_OK;
     }
-    set_err(err, errlen, "%s:%d: %s: %s", path, mca_yaml_marks_line_of(marks, "%s", field), field, why);
+    char field[MCA_YAML_MARKS_PATH_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(field, sizeof field, fmt, ap);
+    va_end(ap);
+    mca_errbuf_at(c->err, c->errlen, c->file, mca_yaml_marks_line_of(c->marks, "%s", field), "%s: %s", field,
+                  why);
     return MCA_ECONFIG;
 }
 
-#define CHECK_AT(key, field, v)                                                                              \
+int mca_check_fail(const mca_check_ctx_t *c, int rc, const char *node, const char *fmt, ...) {
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    mca_errbuf_at(c->err, c->errlen, c->file, mca_yaml_marks_line_of(c->marks, "%s", node), "%s", msg);
+    return rc;
+}
+
+/* Range check of a scenario key (mca_scenario_range(key)) in a loader with `ctx`, `rc` and `out:`. */
+#define CHECK_AT(key, v, ...)                                                                                \
     do {                                                                                                     \
-        if ((rc = check_at(path, &marks, key, field, v, err, errlen)) != MCA_OK) {                           \
+        if ((rc = mca_check_range(&ctx, mca_scenario_range(key), (v), __VA_ARGS__)) != MCA_OK) {             \
             goto out;                                                                                        \
         }                                                                                                    \
     } while (0)
 
-void mca_scenario_defaults(mca_scenario_t *scn) {
-    memset(scn, 0, sizeof *scn);
-    scn->params.d1 = 0.05;
-    scn->params.d2 = 0.12;
-    scn->params.K = 20.0;
-    scn->params.epsilon = 5.0;
-    scn->params.dt = 0.001;
-    scn->params.v_normal = 0.5;
-    scn->params.v_floor = 0.0;
-    scn->params.form = MCA_FORM_NORMAL;
+int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *k, mca_scenario_params_t *p,
+                              int *has_form) {
+    const char *sv = k->solver ? k->solver : "";
+    const struct {
+        const char *key, *at; /* range key; "" or the solver's prefix */
+        const double *v;
+        double *dst;
+    } num[] = {
+        {"d1", "", k->d1, &p->d1},
+        {"d2", "", k->d2, &p->d2},
+        {"K", sv, k->K, &p->K},
+        {"epsilon", sv, k->epsilon, &p->epsilon},
+        {"v_normal", sv, k->v_normal, &p->v_normal},
+        {"v_floor", sv, k->v_floor, &p->v_floor},
+    };
+    for (size_t i = 0; i < sizeof num / sizeof num[0]; i++) {
+        if (num[i].v) {
+            int rc =
+                mca_check_range(c, mca_scenario_range(num[i].key), *num[i].v, "%s%s", num[i].at, num[i].key);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            *num[i].dst = *num[i].v;
+        }
+        if (i == 1 && !(isfinite(p->d1) && isfinite(p->d2) && p->d1 >= 0.0 && p->d1 < p->d2)) {
+            /* right after d1 and d2: the band S(d) brakes in must not be empty */
+            return mca_check_fail(c, MCA_ECONFIG, k->d1 ? "d1" : "d2",
+                                  "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)", p->d1, p->d2);
+        }
+    }
+    if (k->form) {
+        p->form = *k->form;
+        if (has_form) {
+            *has_form = 1;
+        }
+    }
+    return MCA_OK;
 }
 
 static int unit3(double out[3], const double *in) {
@@ -284,38 +269,159 @@ static int unit3(double out[3], const double *in) {
     return 0;
 }
 
+/* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then visits the
+ * file's points; one duration per point. */
+static int waypoints(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k, mca_path_t *np) {
+    char f[MCA_YAML_MARKS_PATH_MAX];
+    snprintf(f, sizeof f, "%s.points", at);
+    if (!k->points || k->points_count < 1) {
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: waypoints need points", f);
+    }
+    if (k->points_count + 1 > MCA_PATH_MAX_POINTS) {
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: at most %d points", f, MCA_PATH_MAX_POINTS - 1);
+    }
+    if (!k->durations || k->durations_count != k->points_count) {
+        snprintf(f, sizeof f, "%s.durations", at);
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: need one duration per point (%u points, %u durations)",
+                              f, k->points_count, k->durations ? k->durations_count : 0u);
+    }
+    np->n_points = (int)k->points_count + 1;
+    for (unsigned i = 0; i < k->points_count; i++) {
+        int rc;
+        for (int j = 0; j < 3; j++) {
+            rc = mca_check_range(c, mca_scenario_range("points"), k->points[i][j], "%s.points[%u][%d]", at, i,
+                                 j);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            np->p[i + 1][j] = k->points[i][j];
+        }
+        rc = mca_check_range(c, mca_scenario_range("durations"), k->durations[i], "%s.durations[%u]", at, i);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        np->dur[i] = k->durations[i];
+    }
+    return MCA_OK;
+}
+
+int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k,
+                            mca_path_t *pp) {
+    mca_path_t np;
+    memset(&np, 0, sizeof np);
+    np.kind = k->kind;
+    np.relative = 1;
+    np.t0 = k->t0 ? *k->t0 : 0.0;
+    char f[MCA_YAML_MARKS_PATH_MAX];
+    int rc = mca_check_range(c, mca_scenario_range("t0"), np.t0, "%s.t0", at);
+    if (rc == MCA_OK && k->kind == MCA_PATH_WAYPOINTS) {
+        np.relative = k->relative ? (*k->relative ? 1 : 0) : 1;
+        rc = waypoints(c, at, k, &np);
+    }
+    if (rc != MCA_OK || k->kind != MCA_PATH_CIRCLE) {
+        if (rc == MCA_OK) {
+            *pp = np;
+        }
+        return rc;
+    }
+    if (!k->radius || !k->period) {
+        snprintf(f, sizeof f, "%s.%s", at, k->radius ? "period" : "radius");
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: circle needs %s > 0", f,
+                              k->radius ? "period" : "radius");
+    }
+    if (!k->u || !k->v) {
+        snprintf(f, sizeof f, "%s.%s", at, k->u ? "v" : "u");
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s.u/v: circle needs in-plane vectors u and v", at);
+    }
+    np.radius = *k->radius;
+    np.period = *k->period;
+    np.turns = k->turns ? *k->turns : 1.0;
+    if ((rc = mca_check_range(c, mca_scenario_range("radius"), np.radius, "%s.radius", at)) != MCA_OK ||
+        (rc = mca_check_range(c, mca_scenario_range("period"), np.period, "%s.period", at)) != MCA_OK ||
+        (rc = mca_check_range(c, mca_scenario_range("turns"), np.turns, "%s.turns", at)) != MCA_OK) {
+        return rc;
+    }
+    double v[3];
+    if (unit3(np.u, k->u) != 0) {
+        snprintf(f, sizeof f, "%s.u", at);
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: zero vector", f);
+    }
+    mca_v3_axpy(v, k->v, -mca_v3_dot(k->v, np.u), np.u); /* Gram-Schmidt: v orthogonal to u */
+    if (unit3(np.v, v) != 0) {
+        snprintf(f, sizeof f, "%s.v", at);
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: parallel to u", f);
+    }
+    *pp = np;
+    return MCA_OK;
+}
+
+int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
+                             mca_scenario_arm_t *sa) {
+    for (int i = 0; i < 3; i++) {
+        int rc;
+        if (xyz) {
+            if ((rc = mca_check_range(c, mca_scenario_range("base_xyz"), xyz[i], "arms[%d].base_xyz[%d]", arm,
+                                      i)) != MCA_OK) {
+                return rc;
+            }
+            sa->base_xyz[i] = xyz[i];
+        }
+        if (rpy) {
+            if ((rc = mca_check_range(c, mca_scenario_range("base_rpy"), rpy[i], "arms[%d].base_rpy[%d]", arm,
+                                      i)) != MCA_OK) {
+                return rc;
+            }
+            sa->base_rpy[i] = rpy[i];
+        }
+    }
+    return MCA_OK;
+}
+
+/* A scenario's parameters are the scheme's (mca_scheme_params_t) and the tick period: these two move
+ * them each way, so that the defaults are the scheme's own (mca_scheme_default_params), not a copy. */
+static void params_from_scheme(mca_scenario_params_t *p, const mca_scheme_params_t *sp) {
+    p->form = (int)sp->form;
+    p->d1 = sp->d1;
+    p->d2 = sp->d2;
+    p->K = sp->K;
+    p->epsilon = sp->epsilon;
+    p->v_normal = sp->v_normal;
+    p->v_floor = sp->v_floor;
+}
+
+static void params_to_scheme(mca_scheme_params_t *sp, const mca_scenario_params_t *p) {
+    sp->form = (mca_collision_form_t)p->form;
+    sp->d1 = p->d1;
+    sp->d2 = p->d2;
+    sp->K = p->K;
+    sp->epsilon = p->epsilon;
+    sp->v_normal = p->v_normal;
+    sp->v_floor = p->v_floor;
+}
+
+void mca_scenario_defaults(mca_scenario_t *scn) {
+    memset(scn, 0, sizeof *scn);
+    mca_scheme_params_t sp;
+    mca_scheme_default_params(&sp);
+    params_from_scheme(&scn->params, &sp);
+    scn->params.dt = MCA_CONTROLLER_DT;
+}
+
 int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
     if (!path || !scn_out) {
-        set_err(err, errlen, "scenario: NULL argument");
+        mca_errbuf_printf(err, errlen, "scenario: NULL argument");
         return MCA_EINVAL;
     }
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        set_err(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        return MCA_ENOENT;
-    }
-    fclose(f);
-
-    struct log_buf lb = {.len = 0};
-    lb.text[0] = 0;
-    const cyaml_config_t cfg = {
-        .log_fn = log_collect,
-        .log_ctx = &lb,
-        .mem_fn = cyaml_mem,
-        .log_level = CYAML_LOG_ERROR,
-        .flags = CYAML_CFG_DEFAULT,
-    };
     struct raw_scn *raw = NULL;
-    cyaml_err_t cerr = cyaml_load_file(path, &cfg, &scn_schema, (cyaml_data_t **)&raw, NULL);
-    if (cerr != CYAML_OK) {
-        set_err(err, errlen, "%s: %s: %s", path, cyaml_strerror(cerr), lb.len ? lb.text : "");
-        return MCA_EPARSE;
+    int lrc = mca_yaml_load(path, "scenario", &scn_schema, (void **)&raw, err, errlen);
+    if (lrc != MCA_OK) {
+        return lrc;
     }
     if (!raw) {
         /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
          * no data */
-        set_err(err, errlen, "%s: empty document (no YAML mapping: the file is empty or only comments)",
-                path);
+        mca_errbuf_printf(err, errlen,
+                          "%s: empty document (no YAML mapping: the file is empty or only comments)", path);
         return MCA_EPARSE;
     }
 
@@ -323,6 +429,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
      * them (cannot happen once libcyaml has read the file, but for a file changed since) the lines are 0 */
     mca_yaml_marks_t marks = {.mark = NULL};
     (void)mca_yaml_marks_load(path, &marks, NULL, 0);
+    const mca_check_ctx_t ctx = {.file = path, .marks = &marks, .err = err, .errlen = errlen};
 
     mca_scenario_t scn;
     int rc = MCA_OK;
@@ -332,7 +439,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     scn.duration = raw->duration;
     mca_scenario_params_t *p = &scn.params;
     if (raw->dt) {
-        CHECK_AT("dt", "dt", *raw->dt);
+        CHECK_AT("dt", *raw->dt, "dt");
         p->dt = *raw->dt;
     }
     {
@@ -341,43 +448,22 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             FAIL_AT(mca_yaml_marks_line_of(&marks, "duration"), "duration: %s", why);
         }
     }
-    if (raw->d1) {
-        CHECK_AT("d1", "d1", *raw->d1);
-        p->d1 = *raw->d1;
-    }
-    if (raw->d2) {
-        CHECK_AT("d2", "d2", *raw->d2);
-        p->d2 = *raw->d2;
-    }
-    if (!(p->d1 < p->d2)) {
-        FAIL_AT(raw->d1 ? mca_yaml_marks_line_of(&marks, "d1") : mca_yaml_marks_line_of(&marks, "d2"),
-                "d1/d2: need 0 <= d1 < d2 (got d1 %g, d2 %g)", p->d1, p->d2);
-    }
-    if (raw->K) {
-        CHECK_AT("K", "K", *raw->K);
-        p->K = *raw->K;
-    }
-    if (raw->epsilon) {
-        CHECK_AT("epsilon", "epsilon", *raw->epsilon);
-        p->epsilon = *raw->epsilon;
-    }
-    if (raw->v_normal) {
-        CHECK_AT("v_normal", "v_normal", *raw->v_normal);
-        p->v_normal = *raw->v_normal;
-    }
-    if (raw->v_floor) {
-        CHECK_AT("v_floor", "v_floor", *raw->v_floor);
-        p->v_floor = *raw->v_floor;
-    }
-    if (raw->form) {
-        scn.has_form = 1;
-        p->form = *raw->form == RAW_COMPONENTWISE ? MCA_FORM_COMPONENTWISE : MCA_FORM_NORMAL;
+    {
+        const mca_param_keys_t keys = {.solver = "",
+                                       .d1 = raw->d1,
+                                       .d2 = raw->d2,
+                                       .K = raw->K,
+                                       .epsilon = raw->epsilon,
+                                       .v_normal = raw->v_normal,
+                                       .v_floor = raw->v_floor,
+                                       .form = raw->form};
+        if ((rc = mca_scenario_params_apply(&ctx, &keys, p, &scn.has_form)) != MCA_OK) {
+            goto out;
+        }
     }
     scn.n_sample_times = (int)raw->sample_times_count;
     for (unsigned i = 0; i < raw->sample_times_count; i++) {
-        char field[32];
-        snprintf(field, sizeof field, "sample_times[%u]", i);
-        CHECK_AT("sample_times", field, raw->sample_times[i]);
+        CHECK_AT("sample_times", raw->sample_times[i], "sample_times[%u]", i);
         scn.sample_times[i] = raw->sample_times[i];
     }
 
@@ -386,7 +472,6 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         const struct raw_arm *ra = &raw->arms[a];
         mca_scenario_arm_t *sa = &scn.arm[a];
         const int ai = (int)a;
-        char field[64];
         snprintf(sa->name, sizeof sa->name, "%s", ra->name);
         if (ra->urdf[0] == '/') {
             snprintf(sa->urdf, sizeof sa->urdf, "%s", ra->urdf);
@@ -397,117 +482,23 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             snprintf(sa->urdf, sizeof sa->urdf, "%.*s/%s", dl, slash ? path : ".", ra->urdf);
         }
         snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link ? ra->tip_link : "");
-        for (int i = 0; i < 3; i++) {
-            snprintf(field, sizeof field, "arms[%d].base_xyz[%d]", ai, i);
-            CHECK_AT("base_xyz", field, ra->base_xyz[i]);
-            sa->base_xyz[i] = ra->base_xyz[i];
-            if (ra->base_rpy) {
-                snprintf(field, sizeof field, "arms[%d].base_rpy[%d]", ai, i);
-                CHECK_AT("base_rpy", field, ra->base_rpy[i]);
-            }
-            sa->base_rpy[i] = ra->base_rpy ? ra->base_rpy[i] : 0.0;
+        if ((rc = mca_scenario_place_apply(&ctx, ai, ra->base_xyz, ra->base_rpy, sa)) != MCA_OK) {
+            goto out;
         }
         sa->n_q0 = (int)ra->q0_count;
         for (unsigned j = 0; j < ra->q0_count; j++) {
             sa->q0[j] = ra->q0[j];
         }
-        const struct raw_path *rp = &ra->path;
-        mca_path_t *pp = &sa->path;
-        memset(pp, 0, sizeof *pp);
-        pp->relative = rp->relative ? (*rp->relative ? 1 : 0) : 1;
-        pp->t0 = rp->t0 ? *rp->t0 : 0.0;
-        if (rp->t0) {
-            snprintf(field, sizeof field, "arms[%d].path.t0", ai);
-            CHECK_AT("t0", field, pp->t0);
-        }
-        switch (rp->kind) {
-        case RAW_HOLD:
-            pp->kind = MCA_PATH_HOLD;
-            pp->relative = 1;
-            break;
-        case RAW_CIRCLE:
-            pp->kind = MCA_PATH_CIRCLE;
-            pp->relative = 1;
-            if (!rp->radius) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.radius", ai),
-                        "arms[%d].path.radius: circle needs radius > 0", ai);
-            }
-            if (!rp->period) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.period", ai),
-                        "arms[%d].path.period: circle needs period > 0", ai);
-            }
-            if (!rp->u || !rp->v) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.%s", ai, rp->u ? "v" : "u"),
-                        "arms[%d].path.u/v: circle needs in-plane vectors u and v", ai);
-            }
-            snprintf(field, sizeof field, "arms[%d].path.radius", ai);
-            CHECK_AT("radius", field, *rp->radius);
-            snprintf(field, sizeof field, "arms[%d].path.period", ai);
-            CHECK_AT("period", field, *rp->period);
-            pp->radius = *rp->radius;
-            pp->period = *rp->period;
-            pp->turns = rp->turns ? *rp->turns : 1.0;
-            if (rp->turns) {
-                snprintf(field, sizeof field, "arms[%d].path.turns", ai);
-                CHECK_AT("turns", field, pp->turns);
-            }
-            {
-                double u[3], v[3];
-                if (unit3(u, rp->u) != 0) {
-                    FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.u", ai),
-                            "arms[%d].path.u: zero vector", ai);
-                }
-                /* Gram-Schmidt: v orthogonal to u */
-                mca_v3_axpy(v, rp->v, -mca_v3_dot(rp->v, u), u);
-                if (unit3(pp->v, v) != 0) {
-                    FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.v", ai),
-                            "arms[%d].path.v: parallel to u", ai);
-                }
-                mca_v3_set(pp->u, u);
-            }
-            break;
-        case RAW_WAYPOINTS:
-            pp->kind = MCA_PATH_WAYPOINTS;
-            /* The path starts at the end effector's start position (p[0], set by mca_path_anchor) and then
-             * visits the file's points; one duration per point. */
-            if (!rp->points || rp->points_count < 1) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.points", ai),
-                        "arms[%d].path.points: waypoints need points", ai);
-            }
-            if (rp->points_count + 1 > MCA_PATH_MAX_POINTS) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.points", ai),
-                        "arms[%d].path.points: at most %d points", ai, MCA_PATH_MAX_POINTS - 1);
-            }
-            if (!rp->durations || rp->durations_count != rp->points_count) {
-                FAIL_AT(mca_yaml_marks_line_of(&marks, "arms[%d].path.durations", ai),
-                        "arms[%d].path.durations: need one duration per point (%u points, %u durations)", ai,
-                        rp->points_count, rp->durations ? rp->durations_count : 0u);
-            }
-            pp->n_points = (int)rp->points_count + 1;
-            for (unsigned i = 0; i < rp->points_count; i++) {
-                for (int k = 0; k < 3; k++) {
-                    pp->p[i + 1][k] = rp->points[i][k];
-                    char why[160];
-                    if (mca_range_check(mca_scenario_range("points"), pp->p[i + 1][k], why, sizeof why) !=
-                        MCA_OK) {
-                        set_err(err, errlen, "%s:%d: arms[%d].path.points[%u][%d]: %s", path,
-                                mca_yaml_marks_line_of(&marks, "arms[%d].path.points[%u][%d]", ai, i, k), ai,
-                                i, k, why);
-                        rc = MCA_ECONFIG;
-                        goto out;
-                    }
-                }
-                snprintf(field, sizeof field, "arms[%d].path.durations[%u]", ai, i);
-                CHECK_AT("durations", field, rp->durations[i]);
-                pp->dur[i] = rp->durations[i];
-            }
-            break;
+        char at[32];
+        snprintf(at, sizeof at, "arms[%d].path", ai);
+        if ((rc = mca_scenario_path_apply(&ctx, at, &ra->path, &sa->path)) != MCA_OK) {
+            goto out;
         }
     }
     *scn_out = scn;
 out:
     mca_yaml_marks_free(&marks);
-    cyaml_free(&cfg, &scn_schema, raw, 0);
+    mca_yaml_free(&scn_schema, raw);
     return rc;
 }
 
@@ -547,13 +538,7 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
         cfg->path[a] = sa->path;
     }
     cfg->sp.collision = uses_rows(scheme);
-    cfg->sp.form = (mca_collision_form_t)scn->params.form;
-    cfg->sp.d1 = scn->params.d1;
-    cfg->sp.d2 = scn->params.d2;
-    cfg->sp.K = scn->params.K;
-    cfg->sp.epsilon = scn->params.epsilon;
-    cfg->sp.v_normal = scn->params.v_normal;
-    cfg->sp.v_floor = scn->params.v_floor;
+    params_to_scheme(&cfg->sp, &scn->params);
     cfg->dt = scn->params.dt;
     /* The baselines are run to show what happens without the scheme: no distance fault for them. */
     cfg->fault_distance = uses_rows(scheme);

@@ -11,6 +11,7 @@
 #include <yaml.h>
 
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf */
 
 enum { FR_MAP, FR_SEQ };
 
@@ -33,16 +34,6 @@ struct walk {
     int depth;
     long over; /* collections open below the depth bound (not recorded) */
 };
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (!err || !errlen) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
 
 /* Append fmt to the path cur[0..at): 1 and *len the new length, or 0 and *len = at when it does not fit
  * (only cur[at..] is written: the open collections' paths stay). */
@@ -137,7 +128,7 @@ static int on_node(struct walk *w, const yaml_event_t *ev) {
 static int walk(yaml_parser_t *parser, const char *name, mca_yaml_marks_t *marks, char *err, size_t errlen) {
     struct walk *w = calloc(1, sizeof *w);
     if (!w) {
-        set_err(err, errlen, "%s: out of memory", name);
+        mca_errbuf_printf(err, errlen, "%s: out of memory", name);
         return MCA_ENOMEM;
     }
     w->marks = marks;
@@ -145,9 +136,10 @@ static int walk(yaml_parser_t *parser, const char *name, mca_yaml_marks_t *marks
     while (!done && rc == MCA_OK) {
         yaml_event_t ev;
         if (!yaml_parser_parse(parser, &ev)) {
-            set_err(err, errlen, "%s:%lu: %s%s%s", name, (unsigned long)parser->problem_mark.line + 1,
-                    parser->problem ? parser->problem : "YAML error", parser->context ? " " : "",
-                    parser->context ? parser->context : "");
+            mca_errbuf_printf(err, errlen, "%s:%lu: %s%s%s", name,
+                              (unsigned long)parser->problem_mark.line + 1,
+                              parser->problem ? parser->problem : "YAML error", parser->context ? " " : "",
+                              parser->context ? parser->context : "");
             rc = parser->error == YAML_MEMORY_ERROR ? MCA_ENOMEM : MCA_EPARSE;
             break;
         }
@@ -158,10 +150,10 @@ static int walk(yaml_parser_t *parser, const char *name, mca_yaml_marks_t *marks
         case YAML_SEQUENCE_START_EVENT:
             rc = on_node(w, &ev);
             if (rc == MCA_ERANGE) {
-                set_err(err, errlen, "%s:%lu: more than %d nodes", name,
-                        (unsigned long)ev.start_mark.line + 1, MCA_YAML_MARKS_MAX);
+                mca_errbuf_printf(err, errlen, "%s:%lu: more than %d nodes", name,
+                                  (unsigned long)ev.start_mark.line + 1, MCA_YAML_MARKS_MAX);
             } else if (rc != MCA_OK) {
-                set_err(err, errlen, "%s: out of memory", name);
+                mca_errbuf_printf(err, errlen, "%s: out of memory", name);
             }
             break;
         case YAML_MAPPING_END_EVENT:
@@ -205,19 +197,19 @@ static int load(yaml_parser_t *parser, const char *name, mca_yaml_marks_t *marks
 
 int mca_yaml_marks_load(const char *path, mca_yaml_marks_t *marks, char *err, size_t errlen) {
     if (!path || !marks) {
-        set_err(err, errlen, "yaml marks: NULL argument");
+        mca_errbuf_printf(err, errlen, "yaml marks: NULL argument");
         return MCA_EINVAL;
     }
     memset(marks, 0, sizeof *marks);
     FILE *f = fopen(path, "rb");
     if (!f) {
-        set_err(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        mca_errbuf_printf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
         return MCA_ENOENT;
     }
     yaml_parser_t parser;
     if (!yaml_parser_initialize(&parser)) {
         fclose(f);
-        set_err(err, errlen, "%s: out of memory", path);
+        mca_errbuf_printf(err, errlen, "%s: out of memory", path);
         return MCA_ENOMEM;
     }
     yaml_parser_set_input_file(&parser, f);
@@ -228,13 +220,13 @@ int mca_yaml_marks_load(const char *path, mca_yaml_marks_t *marks, char *err, si
 
 int mca_yaml_marks_parse(const char *text, size_t len, mca_yaml_marks_t *marks, char *err, size_t errlen) {
     if (!text || !marks) {
-        set_err(err, errlen, "yaml marks: NULL argument");
+        mca_errbuf_printf(err, errlen, "yaml marks: NULL argument");
         return MCA_EINVAL;
     }
     memset(marks, 0, sizeof *marks);
     yaml_parser_t parser;
     if (!yaml_parser_initialize(&parser)) {
-        set_err(err, errlen, "<string>: out of memory");
+        mca_errbuf_printf(err, errlen, "<string>: out of memory");
         return MCA_ENOMEM;
     }
     yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);

@@ -60,8 +60,14 @@ def main():
         text = open(good).read().replace("../robots/", robots)
         open(bad, "w").write(text.replace("d2: 0.12", "d2: 0.01"))
         expect([sim, "--scenario", bad], 1, [bad, "d1/d2"])
-        open(bad, "w").write(text.replace("kind: hold", "kind: hold\n      radius: [1]"))
-        expect([sim, "--scenario", bad], 1, [bad, "radius", "line"])
+        btext = text.replace("kind: hold", "kind: hold\n      radius: [1]")
+        open(bad, "w").write(btext)
+        # file:line:column of the value, then the field (the cell loader's form, issue 12)
+        blines = btext.split("\n")
+        bl = next(i for i, ln in enumerate(blines) if "radius: [1]" in ln)
+        barm = sum(1 for ln in blines[:bl] if ln.lstrip().startswith("- name:")) - 1
+        expect([sim, "--scenario", bad], 1,
+               ["%s:%d:%d: arms[%d].path.radius: " % (bad, bl + 1, blines[bl].index("[") + 1, barm)])
         open(bad, "w").write(text.replace("pa10plus.urdf", "nothere.urdf"))
         expect([sim, "--scenario", bad], 1, ["nothere.urdf"])
         open(bad, "w").write(text.replace("q0: [0.0, 0.785", "q0: [0.785"))

@@ -461,9 +461,14 @@ static void test_scenario_files(void **state) {
     snprintf(buf, sizeof buf, "%s    bogus: 3\n", base);
     const char *p = write_tmp("unknown", buf);
     assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_EPARSE);
-    assert_non_null(strstr(err, p));
-    assert_non_null(strstr(err, "bogus"));
-    assert_non_null(strstr(err, "line"));
+    {
+        /* the key's own line and its path, as the cell loader names it (issue 12) */
+        char want_key[300];
+        snprintf(want_key, sizeof want_key, "%s:10: arms[0].bogus: Unexpected key: bogus", p);
+        if (strncmp(err, want_key, strlen(want_key)) != 0) {
+            fail_msg("got '%s', want '%s...'", err, want_key);
+        }
+    }
     remove(p);
     /* bad enum value */
     snprintf(buf, sizeof buf, "%s", base);
@@ -471,6 +476,13 @@ static void test_scenario_files(void **state) {
     memcpy(k, "kind: oval", 10);
     p = write_tmp("enum", buf);
     assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_EPARSE);
+    {
+        char want_kind[300];
+        snprintf(want_kind, sizeof want_kind, "%s:9:13: arms[0].path.kind: ", p);
+        if (strncmp(err, want_kind, strlen(want_kind)) != 0) {
+            fail_msg("got '%s', want '%s...'", err, want_kind);
+        }
+    }
     assert_non_null(strstr(err, "oval"));
     remove(p);
     /* semantic error: d1 >= d2, message names file, line and field */

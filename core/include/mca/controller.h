@@ -142,15 +142,18 @@ typedef struct mca_controller_config {
     mca_pdnn_params_t pdnn;
     mca_apf_params_t apf;
     mca_dist_method_t dist_method; /**< MCA_DIST_CLOSED (default, exact) or MCA_DIST_LSDM */
-    double dt;                     /**< tick period [s] (prediction of the next distance, APF D terms) */
-    double fault_residual;         /**< PDNN residual that is a fault at the step cap (1e-6) */
-    double eq_tol;                 /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
-    int fault_distance;            /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
-    mca_timescale_params_t ts;     /**< mca-ts only */
+    double dt; /**< tick period [s] (prediction of the next distance, APF D terms); MCA_CONTROLLER_DT */
+    double fault_residual;     /**< PDNN residual that is a fault at the step cap (1e-6) */
+    double eq_tol;             /**< ||G phi - alpha||_inf that is a fault [m/s] (1e-4) */
+    int fault_distance;        /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
+    mca_timescale_params_t ts; /**< mca-ts only */
     int64_t pdnn_budget_ns; /**< wall time the PDNN may use from the start of a tick (0: none); running out is
                                  the fault MCA_CTRL_FAULT_TIME_BUDGET, a braking tick's the keep-direction
                                  fallback. mcad: rt.pdnn_budget_us (half the period); mca-sim: none */
 } mca_controller_config_t;
+
+/** The default tick period [s]: 1 kHz (mca_controller_default_config, mca_scenario_defaults). */
+#define MCA_CONTROLLER_DT 0.001
 
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
 void mca_controller_default_config(mca_controller_config_t *cfg);

@@ -161,8 +161,12 @@ int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *
  */
 int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_scheme_kind_t scheme);
 
-/** "sim" / "socketcan". */
+/** The backend's name as in cell files: "sim", "socketcan", "canopen" (the backend registry's). */
 const char *mca_cell_backend_name(mca_cell_backend_t b);
+
+/** Where an arm's backend reaches it, for a summary line (" vcan0 id_base 0x140"; "" for the sim backend);
+ *  n_joints: the arm's joint count. */
+void mca_cell_backend_describe(const mca_cell_arm_t *ca, int n_joints, char *buf, size_t len);
 
 #ifdef __cplusplus
 }

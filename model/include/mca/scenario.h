@@ -11,11 +11,13 @@
 #ifndef MCA_SCENARIO_H
 #define MCA_SCENARIO_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "mca/controller.h"
 #include "mca/limits.h"
 #include "mca/path.h"
+#include "mca/yaml_marks.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -96,7 +98,84 @@ const mca_range_t *mca_scenario_range(const char *key);
  */
 int mca_scenario_check_duration(double duration, double dt, char *why, size_t whylen);
 
-/** Defaults: d1 0.05, d2 0.12, K 20, epsilon 5, dt 0.001, normal form, v_normal 0.5. */
+/**
+ * Where a reader's values stand and where its message goes: the scenario and the cell readers check the
+ * keys they share through the functions below, so that a value has one range, one check and one message
+ * ("FILE:LINE: FIELD: reason", LINE that of FIELD's node, or of its nearest enclosing node when absent).
+ */
+typedef struct mca_check_ctx {
+    const char *file;              /**< the file, first in every message */
+    const mca_yaml_marks_t *marks; /**< its nodes' lines (empty: every line is 0) */
+    char *err;                     /**< the caller's message buffer (may be NULL) */
+    size_t errlen;
+} mca_check_ctx_t;
+
+/**
+ * Range check of v, the value of the printf-formatted field ("arms[1].base_xyz[2]").
+ * @retval MCA_OK
+ * @retval MCA_ECONFIG  "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)" in c->err
+ */
+__attribute__((format(printf, 4, 5))) int mca_check_range(const mca_check_ctx_t *c, const mca_range_t *r,
+                                                          double v, const char *fmt, ...);
+
+/**
+ * "FILE:LINE: message" in c->err, LINE that of node (a path as in mca_yaml_marks_line_or_parent()).
+ * @return rc, for `return mca_check_fail(...)`
+ */
+__attribute__((format(printf, 4, 5))) int mca_check_fail(const mca_check_ctx_t *c, int rc, const char *node,
+                                                         const char *fmt, ...);
+
+/** The scheme parameters as a file gives them; NULL where it does not (the value in place stays). */
+typedef struct mca_param_keys {
+    const char *solver; /**< where K, epsilon, v_normal, v_floor and form stand: "" or "solver." */
+    const double *d1, *d2, *K, *epsilon, *v_normal, *v_floor;
+    const mca_collision_form_t *form;
+} mca_param_keys_t;
+
+/**
+ * Check and set the given parameters (ranges of mca_scenario_range(), then 0 <= d1 < d2); *has_form = 1 when
+ * the form is given. The one check of d1, d2, K, epsilon, v_normal, v_floor for scenario and cell files.
+ * @retval MCA_OK, MCA_ECONFIG (c->err names the field; p may be partly set)
+ */
+int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *k, mca_scenario_params_t *p,
+                              int *has_form);
+
+/** A path as a file gives it (NULL where it does not): what libcyaml reads for a path: mapping of scenario
+ *  and cell files alike (the schema: mca_scenario_path_fields, mca/yaml_load.h). */
+typedef struct mca_path_keys {
+    mca_path_kind_t kind;
+    bool *relative; /**< waypoints only (hold and circle are relative) */
+    double *t0, *radius, *period, *turns;
+    double *u;
+    unsigned u_count;
+    double *v;
+    unsigned v_count;
+    double (*points)[3];
+    unsigned points_count;
+    double *durations;
+    unsigned durations_count;
+} mca_path_keys_t;
+
+/**
+ * Check and make a path, the one check of paths for scenario and cell files. Hold and circle are relative to
+ * the start; a circle needs radius, period, u and v, has t0, radius, period and turns in their ranges, u not
+ * zero, v not parallel to u (u, v made orthonormal by Gram-Schmidt). Waypoints need points (at most
+ * MCA_PATH_MAX_POINTS - 1) and one duration per point, each in its range.
+ * @param[in] at  the path's node ("arms[1].path"): fields are named below it
+ * @retval MCA_OK, MCA_ECONFIG (c->err names the field; *pp unchanged)
+ */
+int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k,
+                            mca_path_t *pp);
+
+/**
+ * Check and set arm `arm`'s base placement where given (base_xyz, base_rpy: 3 values each, or NULL).
+ * @retval MCA_OK, MCA_ECONFIG ("FILE:LINE: arms[A].base_xyz[I]: must be in ...")
+ */
+int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
+                             mca_scenario_arm_t *sa);
+
+/** Defaults: the scheme's (mca_scheme_default_params: d1 0.05, d2 0.12, K 20, epsilon 5, normal form,
+ *  v_normal 0.5, v_floor 0) and dt MCA_CONTROLLER_DT (0.001). */
 void mca_scenario_defaults(mca_scenario_t *scn);
 
 /**

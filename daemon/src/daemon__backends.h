@@ -1,0 +1,76 @@
+/* SPDX-License-Identifier: MIT */
+/* The arm backends mcad knows, in one const table (issue 12): each names itself as cell files do
+ * ("backend: NAME"), reads and checks its keys of a cell arm, opens the arm and says what the daemon must
+ * know of it. The cell reader looks a backend up by name, the daemon by id; neither switches on names.
+ * Private to mca_daemon (cell.c, daemon.c, mcad_main.c). Start-up only, but fault_detail (main thread). */
+#ifndef MCA_DAEMON__BACKENDS_H
+#define MCA_DAEMON__BACKENDS_H
+
+#include <stddef.h>
+
+#include "mca/arm.h"
+#include "mca/cell.h"
+#include "mca/chain.h"
+#include "mca/scenario.h" /* mca_check_ctx_t */
+
+/* The sim: section of a cell arm (NULL: key not in the file). */
+typedef struct mca_backend_sim_keys {
+    double *lag_tau;
+    int *latency_cycles;
+    double *noise_pos;
+} mca_backend_sim_keys_t;
+
+/* The canopen: section of a cell arm (NULL: key not in the file). */
+typedef struct mca_backend_co_keys {
+    int *first_node;
+    int *sync_us;
+    char *mode;
+    double *pos_scale, *vel_scale;
+    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
+} mca_backend_co_keys_t;
+
+/* An arm's backend keys as the cell gives them (NULL: not in the file). */
+typedef struct mca_backend_keys {
+    const char *interface;
+    const long long *id_base;
+    const mca_backend_sim_keys_t *sim;
+    const mca_backend_co_keys_t *canopen;
+} mca_backend_keys_t;
+
+/* What a backend's open gets from the daemon. */
+typedef struct mca_backend_open_args {
+    const mca_cell_t *cell;
+    int arm;                               /* index in the cell */
+    const mca_chain_t *chain;              /* the arm's model */
+    const double *fb_lo, *fb_hi, *fb_vmax; /* the daemon's plausible feedback per joint (its check) */
+    int virtual_time;                      /* mca_daemon_opts_t.virtual_time */
+} mca_backend_open_args_t;
+
+typedef struct mca_backend_def {
+    const char *name;      /* as in cell files */
+    mca_cell_backend_t id; /* as in mca_cell_arm_t.backend */
+    const char *section;   /* its own mapping in a cell arm ("sim", "canopen"; NULL: none): only with it */
+    /* check and set arm `a`'s backend keys into cell->arm[a] (arms 0..a-1 are set: bus clashes) */
+    int (*read)(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const mca_backend_keys_t *k);
+    int (*open)(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen);
+    /* optional (NULL: none): */
+    double (*feedback_margin)(const mca_cell_arm_t *ca);  /* added to the position check's margin [rad] */
+    int (*reported_joints)(const mca_arm_t *arm, int *n); /* the arm's own joint count once it says it
+                                                              (MCA_OK; MCA_EAGAIN: not yet): wait for it */
+    int (*fault_detail)(const mca_arm_t *arm, char *buf, size_t len); /* what the arm's fault is about */
+    void (*describe)(const mca_cell_arm_t *ca, int n_joints, char *buf, size_t len); /* for mcad --check */
+} mca_backend_def_t;
+
+/* The backend named `name`, or NULL. */
+const mca_backend_def_t *mca_backend_find(const char *name);
+
+/* The backend of id `id` (the sim backend for an id no backend has). */
+const mca_backend_def_t *mca_backend_get(mca_cell_backend_t id);
+
+/* The known names, ", "-separated ("sim, socketcan, canopen"), for messages. */
+void mca_backend_names(char *buf, size_t len);
+
+/* Every backend in turn: i from 0 until NULL. */
+const mca_backend_def_t *mca_backend_at(size_t i);
+
+#endif

@@ -1,0 +1,38 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/yaml_load.h
+ * Loading a YAML file against a libcyaml schema (mca_model, start-up only): the one loader of scenario and
+ * cell files, so that both name a syntax, type, unknown-key or missing-key error the same way:
+ * "FILE:LINE:COL: FIELD: what (libcyaml's reason)" (FIELD the path, "arms[1].path.radius"; LINE:COL of the
+ * node libcyaml was reading, or the unknown key's own line).
+ */
+#ifndef MCA_YAML_LOAD_H
+#define MCA_YAML_LOAD_H
+
+#include <cyaml/cyaml.h>
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/**
+ * Load the file at `path` into *data (allocated by libcyaml; mca_yaml_free).
+ * @param[in] what  the kind of file, for "FILE:0: cannot open WHAT file: reason"
+ * @param[out] data  the loaded document, or NULL for a file without one (empty or only comments: the caller
+ *                   says so in its own words)
+ * @retval MCA_OK, MCA_ENOENT (cannot open), MCA_EPARSE (not YAML or not the schema: err as above)
+ */
+int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t *schema, void **data,
+                  char *err, size_t errlen);
+
+/** Free what mca_yaml_load loaded (NULL allowed). */
+void mca_yaml_free(const cyaml_schema_value_t *schema, void *data);
+
+/** The schema of a path: mapping (into mca_path_keys_t, mca/scenario.h), one for scenario files and
+ *  for a cell arm's inline path. */
+extern const cyaml_schema_field_t mca_scenario_path_fields[];
+
+#ifdef __cplusplus
+}
+#endif
+#endif
