@@ -1,8 +1,8 @@
 #!/bin/sh
 # Build (once, cached) the QEMU guest used to run the CAN suite on a host kernel without SocketCAN:
 # Debian's own kernel (fetched with apt-get download, unpacked with dpkg -x, never installed) and a
-# busybox-static initramfs that loads virtio/9p/can/vcan modules, mounts the host / over 9p and runs a
-# job script in a chroot (see init.sh).
+# busybox-static initramfs that loads virtio/9p/can/vcan/overlay modules, mounts the host / over 9p and runs
+# a job script in a chroot, or boots the host's systemd on an overlay of it (see init.sh).
 # Usage: build-image.sh CACHE_DIR      -> CACHE_DIR/vmlinuz, CACHE_DIR/initrd.gz
 set -eu
 cache=${1:?usage: build-image.sh CACHE_DIR}
@@ -44,7 +44,7 @@ rm -rf "$root" && mkdir -p "$root/bin" "$root/lib/modules" "$root/proc" "$root/s
 cp "$bb" "$root/bin/busybox"
 ln -s busybox "$root/bin/sh"
 # Dependency order (see /work/shared/notes/vcan-guest.md).
-mods="virtio_ring virtio virtio_pci_legacy_dev virtio_pci_modern_dev virtio_pci netfs fscache 9pnet 9pnet_virtio 9p can can-raw can-dev vcan"
+mods="virtio_ring virtio virtio_pci_legacy_dev virtio_pci_modern_dev virtio_pci netfs fscache 9pnet 9pnet_virtio 9p can can-raw can-dev vcan overlay"
 : >"$root/lib/modules/order"
 for m in $mods; do
     f=$(find "$cache/modules" -name "$m.ko" | head -n 1)
