@@ -44,7 +44,7 @@ done
 echo "fuzz summary (${secs} s per target):"
 printf '%s\n' "${summary[@]}"
 echo "ledger ($build/fuzz-work/ledger.tsv), every run so far:"
-awk -F'\t' '{ n[$3] += $5; r[$3]++; s[$3] += $4; if ($6 != "ok") f[$3]++; if (!($3 in first)) first[$3] = $1 " " $2; last[$3] = $1 " " $2 }
+awk -F'\t' '{ n[$3] += $5; r[$3]++; s[$3] += $4; if ($6 !~ /^ok/) f[$3]++; if (!($3 in first)) first[$3] = $1 " " $2; last[$3] = $1 " " $2 }
   END { for (t in n) printf "%-12s %13d execs in %3d runs, %7d s, %d failed runs (%s .. %s)\n", t, n[t], r[t], s[t], f[t], first[t], last[t] }' \
   "$build/fuzz-work/ledger.tsv" | sort
 exit $fail
