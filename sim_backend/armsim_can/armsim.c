@@ -530,17 +530,9 @@ int main(int argc, char **argv) {
             cfg.dec_limit[j] = dec;
         }
     }
-    if (q0s) {
-        const char *p = q0s;
-        for (int j = 0; j < cfg.n; j++) {
-            char *end = NULL;
-            cfg.q0[j] = strtod(p, &end);
-            if (end == p || !isfinite(cfg.q0[j]) || (j < cfg.n - 1 ? *end != ',' : *end != 0)) {
-                fprintf(stderr, "mca-armsim: --q0 '%s': expected %d comma-separated numbers\n", q0s, cfg.n);
-                return 2;
-            }
-            p = end + 1;
-        }
+    if (q0s && mca_sim_parse_joint_list(q0s, cfg.n, cfg.q0) != MCA_OK) {
+        fprintf(stderr, "mca-armsim: --q0 '%s': expected %d comma-separated numbers\n", q0s, cfg.n);
+        return 2;
     }
     if (mca_sim_arm_init(&s.arm, &cfg, err, sizeof(err)) != MCA_OK) {
         fprintf(stderr, "mca-armsim: arm configuration: %s\n", err);

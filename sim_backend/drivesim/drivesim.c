@@ -762,17 +762,9 @@ int main(int argc, char **argv) {
                 MCA_CO_MAX_NODES);
         return 2;
     }
-    if (q0s) {
-        const char *p = q0s;
-        for (int j = 0; j < arm.n; j++) {
-            char *end = NULL;
-            arm.q0[j] = strtod(p, &end);
-            if (end == p || !isfinite(arm.q0[j]) || (j < arm.n - 1 ? *end != ',' : *end != 0)) {
-                fprintf(stderr, "mca-drivesim: --q0 '%s': expected %d comma-separated numbers\n", q0s, arm.n);
-                return 2;
-            }
-            p = end + 1;
-        }
+    if (q0s && mca_sim_parse_joint_list(q0s, arm.n, arm.q0) != MCA_OK) {
+        fprintf(stderr, "mca-drivesim: --q0 '%s': expected %d comma-separated numbers\n", q0s, arm.n);
+        return 2;
     }
     s.sync_timeout_ns = (int64_t)sync_tmo * 1000000;
     for (int j = 0; j < s.n; j++) {

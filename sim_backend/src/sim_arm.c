@@ -567,6 +567,24 @@ static int parse_count(const char **p, uint64_t *out) {
     return MCA_OK;
 }
 
+int mca_sim_parse_joint_list(const char *text, int n, double *q) {
+    if (!text || !q || n < 1 || n > MCA_MAX_DOF) {
+        return MCA_EINVAL;
+    }
+    double v[MCA_MAX_DOF];
+    const char *p = text;
+    for (int j = 0; j < n; j++) {
+        char *end = NULL;
+        v[j] = strtod(p, &end);
+        if (end == p || !isfinite(v[j]) || (j < n - 1 ? *end != ',' : *end != '\0')) {
+            return MCA_EINVAL;
+        }
+        p = end + 1;
+    }
+    memcpy(q, v, (size_t)n * sizeof *q);
+    return MCA_OK;
+}
+
 int mca_sim_inject_parse(const char *text, int n_joints, mca_sim_inject_t *out) {
     if (!out) {
         return MCA_EINVAL;

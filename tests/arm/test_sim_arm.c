@@ -849,6 +849,28 @@ static void test_inject_parse(void **state) {
     assert_string_equal(mca_sim_inject_kind_name(5), "none");
 }
 
+/* The emulators' --q0 (mca-armsim, mca-drivesim): exactly n finite numbers, else refused with q unchanged. */
+static void test_parse_joint_list(void **state) {
+    (void)state;
+    double q[3] = {9, 9, 9};
+    assert_int_equal(mca_sim_parse_joint_list("0.5,-1e-3,2", 3, q), MCA_OK);
+    assert_true(q[0] == 0.5 && q[1] == -1e-3 && q[2] == 2.0);
+    assert_int_equal(mca_sim_parse_joint_list("1.25", 1, q), MCA_OK);
+    assert_true(q[0] == 1.25 && q[1] == -1e-3);
+    static const char *const bad[] = {"",      "1,2",     "1,2,3,4", "1,,3",   "1,2,", "1;2;3",
+                                      "1,2,x", "1,nan,3", "1,inf,3", "1,2,3 ", ",1,2", "1e999,0,0"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        double r[3] = {7, 7, 7};
+        if (mca_sim_parse_joint_list(bad[i], 3, r) != MCA_EINVAL) {
+            fail_msg("'%s' accepted", bad[i]);
+        }
+        assert_true(r[0] == 7 && r[1] == 7 && r[2] == 7);
+    }
+    assert_int_equal(mca_sim_parse_joint_list(NULL, 3, q), MCA_EINVAL);
+    assert_int_equal(mca_sim_parse_joint_list("1", 0, q), MCA_EINVAL);
+    assert_int_equal(mca_sim_parse_joint_list("1", 1, NULL), MCA_EINVAL);
+}
+
 /* Limits from a URDF chain model (filled by hand: the loader is tested elsewhere). */
 static void test_config_from_chain(void **state) {
     (void)state;
@@ -894,6 +916,7 @@ int main(void) {
         cmocka_unit_test(test_fault_injection),
         cmocka_unit_test(test_inject_now),
         cmocka_unit_test(test_inject_parse),
+        cmocka_unit_test(test_parse_joint_list),
         cmocka_unit_test(test_random_invariants),
         cmocka_unit_test(test_config_errors),
         cmocka_unit_test(test_config_from_chain),

@@ -208,6 +208,13 @@ int mca_sim_arm_inject_now(mca_sim_arm_t *arm, int kind, uint64_t duration, int 
  */
 int mca_sim_inject_parse(const char *text, int n_joints, mca_sim_inject_t *out);
 
+/**
+ * Parse the emulators' --q0: exactly n comma-separated finite numbers (joint positions [rad]) into q.
+ * Start-up only; prints nothing (the caller names the option).
+ * @retval MCA_OK, MCA_EINVAL (NULL, n < 1, not n numbers, or one not finite: q unchanged)
+ */
+int mca_sim_parse_joint_list(const char *text, int n, double *q);
+
 /** KIND's name in MCA_SIM_INJECT_SYNTAX ("actuator", "freeze", "silent", "drop-rx"), "none" otherwise. */
 const char *mca_sim_inject_kind_name(int kind);
 
