@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <yaml.h>
 
 #include "mca/err.h"
 #include "mca/errbuf.h"
@@ -148,6 +149,39 @@ static const cyaml_config_t free_cfg = {
     .flags = CYAML_CFG_DEFAULT,
 };
 
+/* MCA_EPARSE (err set) when the document opens more than MCA_YAML_MAX_DEPTH collections at once, found by
+ * reading events only up to that depth. A syntax error is libcyaml's to name (in its words, with the field):
+ * MCA_OK then. */
+static int depth_check(const char *path, FILE *fp, char *err, size_t errlen) {
+    yaml_parser_t parser;
+    if (!yaml_parser_initialize(&parser)) {
+        mca_errbuf_printf(err, errlen, "%s: out of memory", path);
+        return MCA_ENOMEM;
+    }
+    yaml_parser_set_input_file(&parser, fp);
+    int rc = MCA_OK, depth = 0, done = 0;
+    while (!done && rc == MCA_OK) {
+        yaml_event_t ev;
+        if (!yaml_parser_parse(&parser, &ev)) {
+            break;
+        }
+        if (ev.type == YAML_MAPPING_START_EVENT || ev.type == YAML_SEQUENCE_START_EVENT) {
+            if (++depth > MCA_YAML_MAX_DEPTH) {
+                mca_errbuf_printf(err, errlen, "%s:%lu: nested deeper than %d levels", path,
+                                  (unsigned long)ev.start_mark.line + 1, MCA_YAML_MAX_DEPTH);
+                rc = MCA_EPARSE;
+            }
+        } else if (ev.type == YAML_MAPPING_END_EVENT || ev.type == YAML_SEQUENCE_END_EVENT) {
+            depth--;
+        } else if (ev.type == YAML_DOCUMENT_END_EVENT || ev.type == YAML_STREAM_END_EVENT) {
+            done = 1; /* the first document only, as libcyaml loads */
+        }
+        yaml_event_delete(&ev);
+    }
+    yaml_parser_delete(&parser);
+    return rc;
+}
+
 int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t *schema, void **data,
                   char *err, size_t errlen) {
     if (!path || !schema || !data) {
@@ -161,7 +195,11 @@ int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t
                           strerror(errno));
         return MCA_ENOENT;
     }
+    const int drc = depth_check(path, fp, err, errlen);
     fclose(fp);
+    if (drc != MCA_OK) {
+        return drc;
+    }
     struct log_state ls;
     memset(&ls, 0, sizeof ls);
     const cyaml_config_t cfg = {

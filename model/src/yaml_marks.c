@@ -32,7 +32,6 @@ struct walk {
     char cur[MCA_YAML_MARKS_PATH_MAX];
     struct frame fr[MCA_YAML_MARKS_MAX_DEPTH];
     int depth;
-    long over; /* collections open below the depth bound (not recorded) */
 };
 
 /* Append fmt to the path cur[0..at): 1 and *len the new length, or 0 and *len = at when it does not fit
@@ -79,10 +78,6 @@ static int add(struct walk *w, size_t len, const yaml_mark_t *m) {
  * entry, and open a frame for a collection. */
 static int on_node(struct walk *w, const yaml_event_t *ev) {
     const int coll = ev->type == YAML_MAPPING_START_EVENT || ev->type == YAML_SEQUENCE_START_EVENT;
-    if (w->over) {
-        w->over += coll;
-        return MCA_OK;
-    }
     size_t len = 0;
     int skip = 0, rc = MCA_OK;
     if (w->depth > 0) {
@@ -113,8 +108,7 @@ static int on_node(struct walk *w, const yaml_event_t *ev) {
     }
     if (coll && rc == MCA_OK) {
         if (w->depth == MCA_YAML_MARKS_MAX_DEPTH) {
-            w->over = 1;
-            return MCA_OK;
+            return MCA_EPARSE; /* stop reading: libyaml's scanner costs the depth per token */
         }
         struct frame *f = &w->fr[w->depth++];
         memset(f, 0, sizeof *f);
@@ -152,15 +146,16 @@ static int walk(yaml_parser_t *parser, const char *name, mca_yaml_marks_t *marks
             if (rc == MCA_ERANGE) {
                 mca_errbuf_printf(err, errlen, "%s:%lu: more than %d nodes", name,
                                   (unsigned long)ev.start_mark.line + 1, MCA_YAML_MARKS_MAX);
+            } else if (rc == MCA_EPARSE) {
+                mca_errbuf_printf(err, errlen, "%s:%lu: nested deeper than %d levels", name,
+                                  (unsigned long)ev.start_mark.line + 1, MCA_YAML_MARKS_MAX_DEPTH);
             } else if (rc != MCA_OK) {
                 mca_errbuf_printf(err, errlen, "%s: out of memory", name);
             }
             break;
         case YAML_MAPPING_END_EVENT:
         case YAML_SEQUENCE_END_EVENT:
-            if (w->over) {
-                w->over--;
-            } else if (w->depth > 0) {
+            if (w->depth > 0) {
                 w->depth--;
             }
             break;

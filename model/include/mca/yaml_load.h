@@ -15,12 +15,18 @@
 extern "C" {
 #endif
 
+/** Deepest nesting of mappings and sequences a cell or scenario file may have (they need 5 or 6): a deeper
+ *  file is refused before libcyaml reads it, since libyaml's scanner costs the depth per token (a 25 kB
+ *  file of "[[[[..." took 0.6 s). */
+#define MCA_YAML_MAX_DEPTH 32
+
 /**
  * Load the file at `path` into *data (allocated by libcyaml; mca_yaml_free).
  * @param[in] what  the kind of file, for "FILE:0: cannot open WHAT file: reason"
  * @param[out] data  the loaded document, or NULL for a file without one (empty or only comments: the caller
  *                   says so in its own words)
- * @retval MCA_OK, MCA_ENOENT (cannot open), MCA_EPARSE (not YAML or not the schema: err as above)
+ * @retval MCA_OK, MCA_ENOENT (cannot open), MCA_EPARSE (not YAML, not the schema, or nested deeper than
+ *         MCA_YAML_MAX_DEPTH: "FILE:LINE: nested deeper than 32 levels")
  */
 int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t *schema, void **data,
                   char *err, size_t errlen);

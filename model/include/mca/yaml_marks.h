@@ -16,9 +16,10 @@
  *           points:            arms[0].path.points      -> 6
  *             - [0, 0, 0]      arms[0].path.points[0], arms[0].path.points[0][0..2] -> 7
  *
- * Bounded for hostile input: nesting deeper than MCA_YAML_MARKS_MAX_DEPTH and paths longer than
- * MCA_YAML_MARKS_PATH_MAX - 1 characters are not recorded (nor is anything below them); more than
- * MCA_YAML_MARKS_MAX nodes is an error. No global state.
+ * Bounded for hostile input: paths longer than MCA_YAML_MARKS_PATH_MAX - 1 characters are not recorded (nor
+ * is anything below them); nesting deeper than MCA_YAML_MARKS_MAX_DEPTH and more than MCA_YAML_MARKS_MAX
+ * nodes are errors (reading stops there: libyaml's scanner costs the open depth per token). No global
+ * state.
  */
 #ifndef MCA_YAML_MARKS_H
 #define MCA_YAML_MARKS_H
@@ -30,7 +31,7 @@ extern "C" {
 #endif
 
 #define MCA_YAML_MARKS_PATH_MAX 128 /**< path buffer, with its terminating NUL */
-#define MCA_YAML_MARKS_MAX_DEPTH 64 /**< deepest nesting of mappings and sequences recorded */
+#define MCA_YAML_MARKS_MAX_DEPTH 64 /**< deepest nesting of mappings and sequences read */
 #define MCA_YAML_MARKS_MAX 65536    /**< most nodes a file may have */
 
 /** One recorded node: "arms[1].path.t0" at line 23. */
@@ -49,8 +50,8 @@ typedef struct {
 /**
  * Parse the YAML file at `path` and record its marks into `*marks` (any earlier content is replaced; on
  * error `*marks` is left empty). Returns MCA_OK, MCA_EINVAL (NULL argument), MCA_ENOENT (cannot open),
- * MCA_EPARSE (not YAML: the message names the line), MCA_ERANGE (more than MCA_YAML_MARKS_MAX nodes) or
- * MCA_ENOMEM; the message goes to err (may be NULL).
+ * MCA_EPARSE (not YAML, or nested deeper than MCA_YAML_MARKS_MAX_DEPTH: the message names the line),
+ * MCA_ERANGE (more than MCA_YAML_MARKS_MAX nodes) or MCA_ENOMEM; the message goes to err (may be NULL).
  */
 int mca_yaml_marks_load(const char *path, mca_yaml_marks_t *marks, char *err, size_t errlen);
 
