@@ -98,20 +98,6 @@ void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec) {
     push_at(&p->ring->head, p->slots, p->elem_size, p->slot_size, p->mask, rec);
 }
 
-void mca_ring_producer_prefetch(const mca_ring_producer_t *p) {
-    const uint64_t n = atomic_load_explicit(&p->ring->head, memory_order_relaxed);
-    const unsigned char *s = p->slots + (size_t)(n & p->mask) * p->slot_size;
-    for (size_t off = 0; off < p->slot_size; off += 64u) {
-#if defined(__x86_64__)
-        /* PREFETCHW: the line in exclusive state (gcc emits it for __builtin_prefetch only with -mprfchw;
-         * CPUs without it execute the opcode as a no-op) */
-        __asm__ volatile("prefetchw %0" : : "m"(s[off]));
-#else
-        __builtin_prefetch(s + off, 1, 3);
-#endif
-    }
-}
-
 /* First record that can still be intact when a slot shows sequence word s (record (s-1)/2 is in it). */
 static uint64_t first_survivor(const mca_ring_t *ring, uint64_t s) {
     const uint64_t m = (s - 1u) / 2u;

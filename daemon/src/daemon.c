@@ -1063,11 +1063,6 @@ static void stream_targets(mca_daemon_t *d, double t, int64_t now_ns) {
 
 int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     d->t_tick = t;
-    const uint64_t n = atomic_load_explicit(&d->ticks, memory_order_relaxed); /* only this thread writes it */
-    const int publishes = d->dds && n % d->cell.dds.publish_divisor == 0 && dds_ab_publishes(d, n);
-    if (publishes) {
-        mca_dds_bridge_prepare(d->dds); /* the ring slot's lines come while the tick computes */
-    }
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
     if (state == MCA_DAEMON_READY) {
         state = MCA_DAEMON_RUNNING;
@@ -1155,6 +1150,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         }
         send_commands(d, 0);
     }
+    const uint64_t n = atomic_load_explicit(&d->ticks, memory_order_relaxed);
     if (n % 1000 == 0) {
         /* once a second: figures for the DDS status and for the supervisor (STATUS= lines) */
         compute_summary(d, &d->sum_rt);
@@ -1165,7 +1161,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         d->pct_cache[5] = d->sum_rt.jitter_p999_ns;
         mca_ring_push(&d->sum_ring, &d->sum_rt);
     }
-    if (publishes) {
+    if (d->dds && n % d->cell.dds.publish_divisor == 0 && dds_ab_publishes(d, n)) {
         /* only a tick that publishes fills the snapshot (the bridge queues every push) */
         fill_snapshot(d, stamp_ns, state);
         mca_dds_bridge_push(d->dds, &d->snap);

@@ -819,10 +819,6 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
     }
 }
 
-void mca_dds_bridge_prepare(mca_dds_bridge_t *bridge) {
-    mca_ring_producer_prefetch(&bridge->producer);
-}
-
 int mca_dds_bridge_stream_target(mca_dds_bridge_t *bridge, int arm, mca_ros2_target_t *out) {
     if (bridge == NULL || out == NULL || arm < 0 || arm >= bridge->n_stream_arms ||
         bridge->stream_kind[arm] == MCA_ROS2_STREAM_NONE) {

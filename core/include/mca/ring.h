@@ -145,14 +145,6 @@ void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring);
 /** mca_ring_push() through the producer's copy of the geometry. Context: rt (the single producer). */
 void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec);
 
-/**
- * Ask the CPU for the cache lines of the slot the next push writes, for writing, ahead of the push: the
- * consumer (another CPU) last read them, and a push would otherwise wait for each line's ownership in
- * turn. Call it early (e.g. at the start of a tick that will push); it changes nothing in the ring.
- * Context: rt (the single producer).
- */
-void mca_ring_producer_prefetch(const mca_ring_producer_t *p);
-
 /** Capacity in records. */
 static inline size_t mca_ring_capacity(const mca_ring_t *ring) {
     return (size_t)ring->mask + 1u;

@@ -216,13 +216,6 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
 
 /**
- * Before a tick that will push: fetch the ring slot the push writes for writing (mca_ring_producer_prefetch),
- * so that its cache lines, last read by the publisher on another CPU, arrive while the tick computes.
- * Context: rt, the loop's thread.
- */
-void mca_dds_bridge_prepare(mca_dds_bridge_t *bridge);
-
-/**
  * Process mode: notice a dead publisher (waitpid, WNOHANG: never blocks) or a hung one (nothing published for
  * MCA_DDS_BRIDGE_HUNG_S while snapshots wait: logged and killed), log a death with its cause on log
  * (`<3>PREFIXdds bridge (pid N) died: signal 11 (SIGSEGV); restart 1 in 0.5 s ...`), restart it when its
