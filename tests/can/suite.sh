@@ -95,8 +95,11 @@ chrt -f 50 true 2>/dev/null && RT="chrt -f 50" && RT_HI="chrt -f 60"
 
 # candump writes to a tmpfs (the shared tree is 9p in the guest: slow), copied out afterwards.
 TMPD=$(mktemp -d /dev/shm/mca-can.XXXXXX 2>/dev/null || mktemp -d)
-# the arm's id block, the end marker (candump_stop) and every error frame (#FFFFFFFF: error mask)
-dump_start() { DUMPF=$1; candump -r 33554432 -L "$IF,100:7F0,7FF:7FF,#FFFFFFFF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
+# the arm's id block, the end marker (candump_stop) and every error frame (#FFFFFFFF: error mask). candump may
+# not run at all while the real-time programs do (one vCPU): its socket must hold the whole case. 32 MB held
+# ~45 800 frames and case d sends ~50 000 (seen failing twice, "capture incomplete"): 128 MB here and in the
+# other captures (canopen suite, vcan_e2e)
+dump_start() { DUMPF=$1; candump -r 134217728 -L "$IF,100:7F0,7FF:7FF,#FFFFFFFF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
 # candump runs below the real-time programs and may lag far behind: let it drain (up to 120 s), stop it
 . "$S/tests/can/candump_stop.sh"
 dump_stop() { candump_stop "$TMPD/dump" "$DUMP" 240 "$IF"; cp "$TMPD/dump" "$DUMPF"; }

@@ -48,7 +48,7 @@ note "CANOPEN-SUITE kernel $(uname -r), $IF, $(nproc) cpu"
 RT=""
 chrt -f 50 true 2>/dev/null && RT="chrt -f 50"
 TMPD=$(mktemp -d /dev/shm/mca-co.XXXXXX 2>/dev/null || mktemp -d)
-dump_start() { candump -r 33554432 -L "$IF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
+dump_start() { candump -r 134217728 -L "$IF" >"$TMPD/dump" 2>/dev/null & DUMP=$!; sleep 0.2; }
 . "$S/tests/can/candump_stop.sh"
 dump_stop() { candump_stop "$TMPD/dump" "$DUMP" 120 "$IF"; cp "$TMPD/dump" "$1"; }
 # wait for a file to appear (python start-up under TCG is slow), at most 120 s

@@ -69,9 +69,12 @@ for g in /lib/systemd/system-generators/*; do
     case $g in */systemd-fstab-generator) continue ;; esac
     ln -s /dev/null "$R/etc/systemd/system-generators/$(basename "$g")"
 done
+# the checks go into the overlay too: once systemd mounts /tmp (fstab above), a tree under the host's /tmp
+# (a CI clone) is hidden from the guest (seen: "cannot open .../systemd_guest_checks.sh")
+cp "$S/tests/daemon/systemd_guest_checks.sh" "$R/usr/local/libexec/mca-guest-checks.sh"
 cat >"$R/usr/local/libexec/mca-guest-test" <<END
 #!/bin/sh
-sh $S/tests/daemon/systemd_guest_checks.sh $S >/mca-results/result.txt 2>&1
+sh /usr/local/libexec/mca-guest-checks.sh $S >/mca-results/result.txt 2>&1
 rc=\$?
 sync
 echo MCA-GUEST-EXIT=\$rc >/dev/ttyS0

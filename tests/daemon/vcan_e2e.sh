@@ -428,7 +428,7 @@ if echo "$PHASES" | grep -q B; then
     # start in the emulated guest and the lockstep emulators fall silent once mcad has stopped: wait until
     # its capture has frames (1 kHz on each bus) before the signal can be sent (seen: an empty capture when
     # it was started 0.3 s of task time before the signal).
-    $PIN2 candump -r 33554432 -L vcan0,101:7FF,7FF:7FF vcan1,101:7FF,7FF:7FF > "$TMPD/b.candump" 2>/dev/null &
+    $PIN2 candump -r 134217728 -L vcan0,101:7FF,7FF:7FF vcan1,101:7FF,7FF:7FF > "$TMPD/b.candump" 2>/dev/null &
     CD=$!
     k=0
     while [ ! -s "$TMPD/b.candump" ] && [ $k -lt 600 ]; do
@@ -542,7 +542,7 @@ if echo "$PHASES" | grep -q D; then
     D_GAP_MS=$(awk -v p="$D_PERIOD_US" 'BEGIN { print 2 * p / 1000 }')
     skipD=0
     for attempt in 1 2 3; do
-        $PIN2 candump -r 33554432 -L vcan0,100:7F0,7FF:7FF vcan1,100:7F0,7FF:7FF > "$TMPD/d.candump" 2>/dev/null &
+        $PIN2 candump -r 134217728 -L vcan0,100:7F0,7FF:7FF vcan1,100:7F0,7FF:7FF > "$TMPD/d.candump" 2>/dev/null &
         CD=$!
         sleep 0.3
         armsims D clocked
@@ -621,7 +621,7 @@ pa10_phase() {
     URDF1=$S/config/scenarios/$(arm_field 2 urdf "$3") Q01=$(arm_field 2 q0 "$3")
     # the emulators' feedback frames on both buses, from before the start (the lockstep emulators answer
     # every tick until mcad exits)
-    $PIN2 candump -r 33554432 -L vcan0,101:7FF,7FF:7FF vcan1,101:7FF,7FF:7FF > "$TMPD/$tag.candump" 2>/dev/null &
+    $PIN2 candump -r 134217728 -L vcan0,101:7FF,7FF:7FF vcan1,101:7FF,7FF:7FF > "$TMPD/$tag.candump" 2>/dev/null &
     CD=$!
     sleep 0.3
     armsims "$tag"
