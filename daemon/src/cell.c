@@ -26,23 +26,14 @@
 /* ---------------------------------------------------------------- schema */
 
 struct raw_arm {
-    char *name;
+    mca_arm_keys_t model; /* the scenario's arm keys, each optional here (the scenario gives the rest) */
     char *backend;
     char *interface;
     long long *id_base;
-    char *urdf;
-    char *tip_link;
-    double *base_xyz;
-    unsigned base_xyz_count;
-    double *base_rpy;
-    unsigned base_rpy_count;
-    double *q0;
-    unsigned q0_count;
     double *dec_limit;
     double *priority;
     mca_backend_sim_keys_t *sim;
     mca_backend_co_keys_t *canopen;
-    mca_path_keys_t *path;
     char *stream;
 };
 
@@ -61,8 +52,7 @@ struct raw_task {
 };
 
 struct raw_solver {
-    double *K, *epsilon, *v_normal, *v_floor;
-    mca_collision_form_t *form;
+    mca_gain_keys_t gain;
     int *pdnn_max_steps;
     double *pdnn_tol, *eq_tol, *fault_residual;
     double *deadlock_time, *back_off_time;
@@ -110,14 +100,8 @@ struct raw_cell {
     bool *debug_start_in_fault;
 };
 
-static const cyaml_strval_t form_strings[] = {
-    {"componentwise", MCA_FORM_COMPONENTWISE},
-    {"normal", MCA_FORM_NORMAL},
-};
-
-#define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
-
-static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
+#define OPT MCA_YAML_OPT
+#define float_entry mca_yaml_float_entry
 
 static const cyaml_schema_field_t sim_fields[] = {
     CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, mca_backend_sim_keys_t, lag_tau),
@@ -138,20 +122,14 @@ static const cyaml_schema_field_t canopen_fields[] = {
 };
 
 static const cyaml_schema_field_t arm_fields[] = {
-    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_arm, name, 1, 31),
+    MCA_YAML_ARM_FIELDS(struct raw_arm, model, OPT),
     CYAML_FIELD_STRING_PTR("backend", CYAML_FLAG_POINTER, struct raw_arm, backend, 1, 31),
     CYAML_FIELD_STRING_PTR("interface", OPT, struct raw_arm, interface, 1, 31),
     CYAML_FIELD_INT_PTR("id_base", OPT, struct raw_arm, id_base),
-    CYAML_FIELD_STRING_PTR("urdf", OPT, struct raw_arm, urdf, 1, 400),
-    CYAML_FIELD_STRING_PTR("tip_link", OPT, struct raw_arm, tip_link, 0, 63),
-    CYAML_FIELD_SEQUENCE("base_xyz", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_xyz, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("q0", OPT | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1, MCA_MAX_DOF),
     CYAML_FIELD_FLOAT_PTR("dec_limit", OPT, struct raw_arm, dec_limit),
     CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
     CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
     CYAML_FIELD_MAPPING_PTR("canopen", OPT, struct raw_arm, canopen, canopen_fields),
-    CYAML_FIELD_MAPPING_PTR("path", OPT, struct raw_arm, path, mca_scenario_path_fields),
     CYAML_FIELD_STRING_PTR("stream", OPT, struct raw_arm, stream, 1, 15),
     CYAML_FIELD_END,
 };
@@ -180,11 +158,7 @@ static const cyaml_schema_field_t task_fields[] = {
 };
 
 static const cyaml_schema_field_t solver_fields[] = {
-    CYAML_FIELD_FLOAT_PTR("K", OPT, struct raw_solver, K),
-    CYAML_FIELD_FLOAT_PTR("epsilon", OPT, struct raw_solver, epsilon),
-    CYAML_FIELD_FLOAT_PTR("v_normal", OPT, struct raw_solver, v_normal),
-    CYAML_FIELD_FLOAT_PTR("v_floor", OPT, struct raw_solver, v_floor),
-    CYAML_FIELD_ENUM_PTR("form", OPT, struct raw_solver, form, form_strings, CYAML_ARRAY_LEN(form_strings)),
+    MCA_YAML_GAIN_FIELDS(struct raw_solver, gain),
     CYAML_FIELD_INT_PTR("pdnn_max_steps", OPT, struct raw_solver, pdnn_max_steps),
     CYAML_FIELD_FLOAT_PTR("pdnn_tol", OPT, struct raw_solver, pdnn_tol),
     CYAML_FIELD_FLOAT_PTR("eq_tol", OPT, struct raw_solver, eq_tol),
@@ -231,8 +205,7 @@ static const cyaml_schema_field_t cell_fields[] = {
     CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_cell, name, 1, 63),
     CYAML_FIELD_MAPPING("task", CYAML_FLAG_DEFAULT, struct raw_cell, task, task_fields),
     CYAML_FIELD_STRING_PTR("scheme", OPT, struct raw_cell, scheme, 1, 15),
-    CYAML_FIELD_FLOAT_PTR("d1", OPT, struct raw_cell, d1),
-    CYAML_FIELD_FLOAT_PTR("d2", OPT, struct raw_cell, d2),
+    MCA_YAML_THRESHOLD_FIELDS(struct raw_cell),
     CYAML_FIELD_MAPPING_PTR("solver", OPT, struct raw_cell, solver, solver_fields),
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_cell, arms, &arm_entry, 1, MCA_MAX_ARMS),
     CYAML_FIELD_MAPPING_PTR("dds", OPT, struct raw_cell, dds, dds_fields),
@@ -298,62 +271,6 @@ static const mca_range_t r_lost_feedback_cycles = {"lost_feedback_cycles", 1, 10
 #define CELL_MAX_LOST_FEEDBACK_S 1.0
 static const mca_range_t r_stop_after = {"stop_after", 0.0, 86400.0, 0, 0, "s"};
 
-/* Resolve `rel` against the directory of `base_file` (made absolute, so paths do not depend on the
- * current directory later). */
-/* The data search path after the cell's own folder: $MCA_PATH (':'-separated), or the build's
- * MCA_SEARCH_PATH (this install's etc/mca and share/mca, then /etc/mca and /usr/share/mca). */
-#ifdef MCA_SEARCH_PATH
-#define CELL_SEARCH_PATH MCA_SEARCH_PATH
-#else
-#define CELL_SEARCH_PATH "/etc/mca:/usr/share/mca"
-#endif
-
-static int readable(const char *p);
-
-static const char *search_path(void) {
-    const char *env = getenv("MCA_PATH");
-    return env && env[0] ? env : CELL_SEARCH_PATH;
-}
-
-/* A cell's relative path: against the cell file's own folder first; when nothing is there, against each
- * folder of the search path with the leading "../" and "./" dropped ("../scenarios/x.yaml" ->
- * /usr/share/mca/scenarios/x.yaml), so that a cell copied elsewhere still finds the shipped files. out is
- * the cell-relative path when no candidate exists (the error names it). */
-static void resolve(char *out, size_t outlen, const char *base_file, const char *rel) {
-    char abs_base[4096];
-    if (realpath(base_file, abs_base)) {
-        base_file = abs_base;
-    }
-    if (rel[0] == '/') {
-        snprintf(out, outlen, "%s", rel);
-        return;
-    }
-    const char *slash = strrchr(base_file, '/');
-    if (slash) {
-        snprintf(out, outlen, "%.*s/%s", (int)(slash - base_file), base_file, rel);
-    } else {
-        snprintf(out, outlen, "%s", rel);
-    }
-    if (readable(out)) {
-        return;
-    }
-    const char *tail = rel;
-    while (strncmp(tail, "../", 3) == 0 || strncmp(tail, "./", 2) == 0) {
-        tail += tail[1] == '/' ? 2 : 3;
-    }
-    const char *path = search_path();
-    while (*path) {
-        const size_t n = strcspn(path, ":");
-        char cand[4096];
-        if (n > 0 && (size_t)snprintf(cand, sizeof cand, "%.*s/%s", (int)n, path, tail) < sizeof cand &&
-            readable(cand) && strlen(cand) < outlen) {
-            memcpy(out, cand, strlen(cand) + 1);
-            return;
-        }
-        path += n + (path[n] == ':');
-    }
-}
-
 /* The default ROS 2 namespace of a cell: its name with every other character as one '_' ("monitor-vs-mcad"
  * -> "monitor_vs_mcad"), "cell_" in front when it does not start with a letter. */
 static void ros2_name_from(char *out, size_t len, const char *name) {
@@ -390,25 +307,13 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         return MCA_EINVAL;
     }
     struct raw_cell *raw = NULL;
-    int lrc = mca_yaml_load(path, "cell", &cell_schema, (void **)&raw, err, errlen);
-    if (lrc != MCA_OK) {
-        return lrc;
+    mca_yaml_marks_t marks;
+    int rc = mca_yaml_load(path, "cell", &cell_schema, (void **)&raw, &marks, err, errlen);
+    if (rc != MCA_OK) {
+        return rc;
     }
-    if (!raw) {
-        /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
-         * no data */
-        mca_errbuf_printf(
-            err, errlen,
-            "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)", path);
-        return MCA_EPARSE;
-    }
-
-    /* where each field is (libcyaml keeps no positions): lines are 0 if the file cannot be read again */
-    mca_yaml_marks_t marks = {.mark = NULL};
-    (void)mca_yaml_marks_load(path, &marks, NULL, 0);
     const mca_check_ctx_t ctx = {.file = path, .marks = &marks, .err = err, .errlen = errlen};
     mca_cell_t *cell = calloc(1, sizeof *cell);
-    int rc = MCA_OK;
     if (!cell) {
         rc = MCA_ENOMEM;
         mca_errbuf_printf(err, errlen, "%s:0: out of memory", path);
@@ -437,10 +342,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     mca_scenario_t *scn = &cell->scn;
     if (raw->task.scenario) {
         char sp[512];
-        resolve(sp, sizeof sp, path, raw->task.scenario);
+        mca_config_resolve(sp, sizeof sp, path, raw->task.scenario);
         if (!readable(sp)) {
             FAIL(MCA_ENOENT, LINE("task.scenario"),
-                 "task.scenario: file '%s' not found (nor in the search path %s)", sp, search_path());
+                 "task.scenario: file '%s' not found (nor in the search path %s)", sp,
+                 mca_config_search_path());
         }
         char serr[512];
         int src = mca_scenario_load(sp, scn, serr, sizeof serr);
@@ -513,15 +419,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     {
         /* d1, d2 and the scheme's gains: the scenario's checks (its values stay where the cell gives none) */
-        const struct raw_solver *s = raw->solver;
         const mca_param_keys_t keys = {.solver = "solver.",
                                        .d1 = raw->d1,
                                        .d2 = raw->d2,
-                                       .K = s ? s->K : NULL,
-                                       .epsilon = s ? s->epsilon : NULL,
-                                       .v_normal = s ? s->v_normal : NULL,
-                                       .v_floor = s ? s->v_floor : NULL,
-                                       .form = s ? s->form : NULL};
+                                       .gain = raw->solver ? &raw->solver->gain : NULL};
         if ((rc = mca_scenario_params_apply(&ctx, &keys, &scn->params, &scn->has_form)) != MCA_OK) {
             goto out;
         }
@@ -571,15 +472,16 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         mca_cell_arm_t *ca = &cell->arm[a];
         mca_scenario_arm_t *sa = &scn->arm[a];
         for (unsigned b = 0; b < a; b++) {
-            if (strcmp(raw->arms[b].name, ra->name) == 0) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].name", ai), "arms[%d].name: '%s' used twice", ai, ra->name);
+            if (strcmp(raw->arms[b].model.name, ra->model.name) == 0) {
+                FAIL(MCA_ECONFIG, LINE("arms[%d].name", ai), "arms[%d].name: '%s' used twice", ai,
+                     ra->model.name);
             }
         }
         if (raw->task.scenario) {
             int found = -1;
             char names[160] = "";
             for (int s = 0; s < scn->n_arms; s++) {
-                if (strcmp(sarm[s].name, ra->name) == 0) {
+                if (strcmp(sarm[s].name, ra->model.name) == 0) {
                     found = s;
                 }
                 if (s) {
@@ -589,14 +491,14 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             }
             if (found < 0) {
                 FAIL(MCA_ECONFIG, LINE("arms[%d].name", ai),
-                     "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai, ra->name, scn->source,
-                     names);
+                     "arms[%d].name: no arm '%s' in scenario %s (it has: %s)", ai, ra->model.name,
+                     scn->source, names);
             }
             *sa = sarm[found];
         } else {
             memset(sa, 0, sizeof *sa);
-            snprintf(sa->name, sizeof sa->name, "%s", ra->name);
-            if (!ra->urdf || !ra->base_xyz || !ra->q0) {
+            snprintf(sa->name, sizeof sa->name, "%s", ra->model.name);
+            if (!ra->model.urdf || !ra->model.base_xyz || !ra->model.q0) {
                 FAIL(MCA_EPARSE, LINE("arms[%d]", ai),
                      "arms[%d]: an inline task needs urdf, base_xyz and q0 for every arm", ai);
             }
@@ -636,35 +538,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         if ((rc = be->read(&ctx, cell, ai, &bkeys)) != MCA_OK) {
             goto out;
         }
-        /* model overrides */
-        if (ra->urdf) {
-            resolve(sa->urdf, sizeof sa->urdf, path, ra->urdf);
-        }
-        if (!readable(sa->urdf)) {
-            FAIL(MCA_ENOENT, LINE("arms[%d].urdf", ai),
-                 "arms[%d].urdf: file '%s' not found (nor in the search path %s)", ai, sa->urdf,
-                 search_path());
-        }
-        if (ra->tip_link) {
-            snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link);
-        }
-        /* the scenario's placement was checked when it loaded; the cell's overrides here, same check */
-        if ((rc = mca_scenario_place_apply(&ctx, ai, ra->base_xyz, ra->base_rpy, sa)) != MCA_OK) {
+        /* the model keys the cell gives over its scenario's: the scenario's one check */
+        if ((rc = mca_scenario_arm_apply(&ctx, ai, &ra->model, sa)) != MCA_OK) {
             goto out;
-        }
-        if (ra->q0) {
-            sa->n_q0 = (int)ra->q0_count;
-            for (unsigned j = 0; j < ra->q0_count; j++) {
-                sa->q0[j] = ra->q0[j];
-            }
-        }
-        if (ra->path) {
-            /* an inline path: the scenario's schema and check */
-            char at[32];
-            snprintf(at, sizeof at, "arms[%d].path", ai);
-            if ((rc = mca_scenario_path_apply(&ctx, at, ra->path, &sa->path)) != MCA_OK) {
-                goto out;
-            }
         }
         if (ra->stream && !raw->task.stream) {
             FAIL(MCA_EPARSE, LINE("arms[%d].stream", ai),
@@ -744,11 +620,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             cell->dds.domain = (uint32_t)*d->domain;
         }
         if (d->config && d->config[0]) {
-            resolve(cell->dds.config, sizeof cell->dds.config, path, d->config);
+            mca_config_resolve(cell->dds.config, sizeof cell->dds.config, path, d->config);
             if (!readable(cell->dds.config)) {
                 FAIL(MCA_ENOENT, LINE("dds.config"),
                      "dds.config: file '%s' not found (nor in the search path %s)", cell->dds.config,
-                     search_path());
+                     mca_config_search_path());
             }
         }
         if (d->publish_divisor) {

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h> /* access */
 
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
@@ -21,23 +22,14 @@
 /* ---------------------------------------------------------------- YAML (start-up only) */
 
 struct raw_arm {
-    char *name;
-    char *urdf;
-    char *tip_link;
-    double *base_xyz;
-    unsigned base_xyz_count;
-    double *base_rpy;
-    unsigned base_rpy_count;
-    double *q0;
-    unsigned q0_count;
-    mca_path_keys_t path;
+    mca_arm_keys_t model;
 };
 
 struct raw_scn {
     char *name;
     double duration;
-    double *dt, *d1, *d2, *K, *epsilon, *v_normal, *v_floor;
-    mca_collision_form_t *form;
+    double *dt, *d1, *d2;
+    mca_gain_keys_t gain;
     double *sample_times;
     unsigned sample_times_count;
     struct raw_arm *arms;
@@ -49,16 +41,11 @@ static const cyaml_strval_t kind_strings[] = {
     {"circle", MCA_PATH_CIRCLE},
     {"waypoints", MCA_PATH_WAYPOINTS},
 };
-static const cyaml_strval_t form_strings[] = {
-    {"componentwise", MCA_FORM_COMPONENTWISE},
-    {"normal", MCA_FORM_NORMAL},
-};
 
-static const cyaml_schema_value_t float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
 static const cyaml_schema_value_t point_entry = {
-    CYAML_VALUE_SEQUENCE_FIXED(CYAML_FLAG_FLOW, double, &float_entry, 3)};
+    CYAML_VALUE_SEQUENCE_FIXED(CYAML_FLAG_FLOW, double, &mca_yaml_float_entry, 3)};
 
-#define OPT (CYAML_FLAG_OPTIONAL | CYAML_FLAG_POINTER)
+#define OPT MCA_YAML_OPT
 
 const cyaml_schema_field_t mca_scenario_path_fields[] = {
     CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, mca_path_keys_t, kind, kind_strings,
@@ -68,24 +55,17 @@ const cyaml_schema_field_t mca_scenario_path_fields[] = {
     CYAML_FIELD_FLOAT_PTR("radius", OPT, mca_path_keys_t, radius),
     CYAML_FIELD_FLOAT_PTR("period", OPT, mca_path_keys_t, period),
     CYAML_FIELD_FLOAT_PTR("turns", OPT, mca_path_keys_t, turns),
-    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, u, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, v, &float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("u", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, u, &mca_yaml_float_entry, 3, 3),
+    CYAML_FIELD_SEQUENCE("v", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, v, &mca_yaml_float_entry, 3, 3),
     CYAML_FIELD_SEQUENCE("points", OPT, mca_path_keys_t, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
-    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, durations, &float_entry, 1,
-                         MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, durations,
+                         &mca_yaml_float_entry, 1, MCA_PATH_MAX_POINTS),
     CYAML_FIELD_END,
 };
 
+/* a scenario arm is the model keys alone, every one given (a cell may leave them to its scenario) */
 static const cyaml_schema_field_t arm_fields[] = {
-    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_arm, name, 1, 31),
-    CYAML_FIELD_STRING_PTR("urdf", CYAML_FLAG_POINTER, struct raw_arm, urdf, 1, 400),
-    CYAML_FIELD_STRING_PTR("tip_link", OPT, struct raw_arm, tip_link, 0, 63),
-    CYAML_FIELD_SEQUENCE("base_xyz", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_arm, base_xyz,
-                         &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("base_rpy", OPT | CYAML_FLAG_FLOW, struct raw_arm, base_rpy, &float_entry, 3, 3),
-    CYAML_FIELD_SEQUENCE("q0", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_arm, q0, &float_entry, 1,
-                         MCA_MAX_DOF),
-    CYAML_FIELD_MAPPING("path", CYAML_FLAG_DEFAULT, struct raw_arm, path, mca_scenario_path_fields),
+    MCA_YAML_ARM_FIELDS(struct raw_arm, model, CYAML_FLAG_POINTER),
     CYAML_FIELD_END,
 };
 
@@ -97,15 +77,10 @@ static const cyaml_schema_field_t scn_fields[] = {
     CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_scn, name, 1, 63),
     CYAML_FIELD_FLOAT("duration", CYAML_FLAG_DEFAULT, struct raw_scn, duration),
     CYAML_FIELD_FLOAT_PTR("dt", OPT, struct raw_scn, dt),
-    CYAML_FIELD_FLOAT_PTR("d1", OPT, struct raw_scn, d1),
-    CYAML_FIELD_FLOAT_PTR("d2", OPT, struct raw_scn, d2),
-    CYAML_FIELD_FLOAT_PTR("K", OPT, struct raw_scn, K),
-    CYAML_FIELD_FLOAT_PTR("epsilon", OPT, struct raw_scn, epsilon),
-    CYAML_FIELD_FLOAT_PTR("v_normal", OPT, struct raw_scn, v_normal),
-    CYAML_FIELD_FLOAT_PTR("v_floor", OPT, struct raw_scn, v_floor),
-    CYAML_FIELD_ENUM_PTR("form", OPT, struct raw_scn, form, form_strings, CYAML_ARRAY_LEN(form_strings)),
-    CYAML_FIELD_SEQUENCE("sample_times", OPT | CYAML_FLAG_FLOW, struct raw_scn, sample_times, &float_entry, 1,
-                         16),
+    MCA_YAML_THRESHOLD_FIELDS(struct raw_scn),
+    MCA_YAML_GAIN_FIELDS(struct raw_scn, gain),
+    CYAML_FIELD_SEQUENCE("sample_times", OPT | CYAML_FLAG_FLOW, struct raw_scn, sample_times,
+                         &mca_yaml_float_entry, 1, 16),
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_scn, arms, &arm_entry, 1, MCA_MAX_ARMS),
     CYAML_FIELD_END,
 };
@@ -222,6 +197,7 @@ int mca_check_fail(const mca_check_ctx_t *c, int rc, const char *node, const cha
 int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *k, mca_scenario_params_t *p,
                               int *has_form) {
     const char *sv = k->solver ? k->solver : "";
+    const mca_gain_keys_t *g = k->gain;
     const struct {
         const char *key, *at; /* range key; "" or the solver's prefix */
         const double *v;
@@ -229,10 +205,10 @@ int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *
     } num[] = {
         {"d1", "", k->d1, &p->d1},
         {"d2", "", k->d2, &p->d2},
-        {"K", sv, k->K, &p->K},
-        {"epsilon", sv, k->epsilon, &p->epsilon},
-        {"v_normal", sv, k->v_normal, &p->v_normal},
-        {"v_floor", sv, k->v_floor, &p->v_floor},
+        {"K", sv, g ? g->K : NULL, &p->K},
+        {"epsilon", sv, g ? g->epsilon : NULL, &p->epsilon},
+        {"v_normal", sv, g ? g->v_normal : NULL, &p->v_normal},
+        {"v_floor", sv, g ? g->v_floor : NULL, &p->v_floor},
     };
     for (size_t i = 0; i < sizeof num / sizeof num[0]; i++) {
         if (num[i].v) {
@@ -249,8 +225,8 @@ int mca_scenario_params_apply(const mca_check_ctx_t *c, const mca_param_keys_t *
                                   "d1/d2: need 0 <= d1 < d2 (got d1 = %g, d2 = %g)", p->d1, p->d2);
         }
     }
-    if (k->form) {
-        p->form = *k->form;
+    if (g && g->form) {
+        p->form = *g->form;
         if (has_form) {
             *has_form = 1;
         }
@@ -305,8 +281,8 @@ static int waypoints(const mca_check_ctx_t *c, const char *at, const mca_path_ke
     return MCA_OK;
 }
 
-int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k,
-                            mca_path_t *pp) {
+/* A path at node `at` ("arms[1].path"): *pp unchanged on error. */
+static int path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k, mca_path_t *pp) {
     mca_path_t np;
     memset(&np, 0, sizeof np);
     np.kind = k->kind;
@@ -355,8 +331,9 @@ int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_
     return MCA_OK;
 }
 
-int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
-                             mca_scenario_arm_t *sa) {
+/* The base placement where given (3 values each, or NULL). */
+static int place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
+                       mca_scenario_arm_t *sa) {
     for (int i = 0; i < 3; i++) {
         int rc;
         if (xyz) {
@@ -375,6 +352,88 @@ int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xy
         }
     }
     return MCA_OK;
+}
+
+#ifdef MCA_SEARCH_PATH
+#define CONFIG_SEARCH_PATH MCA_SEARCH_PATH
+#else
+#define CONFIG_SEARCH_PATH "/etc/mca:/usr/share/mca"
+#endif
+
+const char *mca_config_search_path(void) {
+    const char *env = getenv("MCA_PATH");
+    return env && env[0] ? env : CONFIG_SEARCH_PATH;
+}
+
+static int readable(const char *p) {
+    return access(p, R_OK) == 0;
+}
+
+void mca_config_resolve(char *out, size_t outlen, const char *base_file, const char *rel) {
+    char abs_base[4096];
+    if (realpath(base_file, abs_base)) {
+        base_file = abs_base;
+    }
+    if (rel[0] == '/') {
+        snprintf(out, outlen, "%s", rel);
+        return;
+    }
+    const char *slash = strrchr(base_file, '/');
+    if (slash) {
+        snprintf(out, outlen, "%.*s/%s", (int)(slash - base_file), base_file, rel);
+    } else {
+        snprintf(out, outlen, "%s", rel);
+    }
+    if (readable(out)) {
+        return;
+    }
+    const char *tail = rel;
+    while (strncmp(tail, "../", 3) == 0 || strncmp(tail, "./", 2) == 0) {
+        tail += tail[1] == '/' ? 2 : 3;
+    }
+    const char *path = mca_config_search_path();
+    while (*path) {
+        const size_t n = strcspn(path, ":");
+        char cand[4096];
+        if (n > 0 && (size_t)snprintf(cand, sizeof cand, "%.*s/%s", (int)n, path, tail) < sizeof cand &&
+            readable(cand) && strlen(cand) < outlen) {
+            memcpy(out, cand, strlen(cand) + 1);
+            return;
+        }
+        path += n + (path[n] == ':');
+    }
+}
+
+int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys_t *k,
+                           mca_scenario_arm_t *sa) {
+    if (k->urdf) {
+        mca_config_resolve(sa->urdf, sizeof sa->urdf, c->file, k->urdf);
+        if (!readable(sa->urdf)) {
+            char f[32];
+            snprintf(f, sizeof f, "arms[%d].urdf", arm);
+            return mca_check_fail(c, MCA_ENOENT, f, "%s: file '%s' not found (nor in the search path %s)", f,
+                                  sa->urdf, mca_config_search_path());
+        }
+    }
+    if (k->tip_link) {
+        snprintf(sa->tip_link, sizeof sa->tip_link, "%s", k->tip_link);
+    }
+    int rc = place_apply(c, arm, k->base_xyz, k->base_rpy, sa);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    if (k->q0) {
+        sa->n_q0 = (int)k->q0_count;
+        for (unsigned j = 0; j < k->q0_count; j++) {
+            sa->q0[j] = k->q0[j];
+        }
+    }
+    if (k->path) {
+        char at[32];
+        snprintf(at, sizeof at, "arms[%d].path", arm);
+        rc = path_apply(c, at, k->path, &sa->path);
+    }
+    return rc;
 }
 
 /* A scenario's parameters are the scheme's (mca_scheme_params_t) and the tick period: these two move
@@ -413,26 +472,14 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         return MCA_EINVAL;
     }
     struct raw_scn *raw = NULL;
-    int lrc = mca_yaml_load(path, "scenario", &scn_schema, (void **)&raw, err, errlen);
-    if (lrc != MCA_OK) {
-        return lrc;
+    mca_yaml_marks_t marks;
+    int rc = mca_yaml_load(path, "scenario", &scn_schema, (void **)&raw, &marks, err, errlen);
+    if (rc != MCA_OK) {
+        return rc;
     }
-    if (!raw) {
-        /* an empty or comment-only file is a valid YAML stream with no document: libcyaml returns OK and
-         * no data */
-        mca_errbuf_printf(err, errlen,
-                          "%s: empty document (no YAML mapping: the file is empty or only comments)", path);
-        return MCA_EPARSE;
-    }
-
-    /* where each field is, for the messages below (the same file parsed once more, by libyaml); without
-     * them (cannot happen once libcyaml has read the file, but for a file changed since) the lines are 0 */
-    mca_yaml_marks_t marks = {.mark = NULL};
-    (void)mca_yaml_marks_load(path, &marks, NULL, 0);
     const mca_check_ctx_t ctx = {.file = path, .marks = &marks, .err = err, .errlen = errlen};
 
     mca_scenario_t scn;
-    int rc = MCA_OK;
     mca_scenario_defaults(&scn);
     snprintf(scn.name, sizeof scn.name, "%s", raw->name);
     snprintf(scn.source, sizeof scn.source, "%s", path);
@@ -449,14 +496,7 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         }
     }
     {
-        const mca_param_keys_t keys = {.solver = "",
-                                       .d1 = raw->d1,
-                                       .d2 = raw->d2,
-                                       .K = raw->K,
-                                       .epsilon = raw->epsilon,
-                                       .v_normal = raw->v_normal,
-                                       .v_floor = raw->v_floor,
-                                       .form = raw->form};
+        const mca_param_keys_t keys = {.solver = "", .d1 = raw->d1, .d2 = raw->d2, .gain = &raw->gain};
         if ((rc = mca_scenario_params_apply(&ctx, &keys, p, &scn.has_form)) != MCA_OK) {
             goto out;
         }
@@ -469,29 +509,10 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
 
     scn.n_arms = (int)raw->arms_count;
     for (unsigned a = 0; a < raw->arms_count; a++) {
-        const struct raw_arm *ra = &raw->arms[a];
+        const mca_arm_keys_t *ra = &raw->arms[a].model;
         mca_scenario_arm_t *sa = &scn.arm[a];
-        const int ai = (int)a;
         snprintf(sa->name, sizeof sa->name, "%s", ra->name);
-        if (ra->urdf[0] == '/') {
-            snprintf(sa->urdf, sizeof sa->urdf, "%s", ra->urdf);
-        } else {
-            /* relative to the scenario file's directory */
-            const char *slash = strrchr(path, '/');
-            const int dl = slash ? (int)(slash - path) : 1;
-            snprintf(sa->urdf, sizeof sa->urdf, "%.*s/%s", dl, slash ? path : ".", ra->urdf);
-        }
-        snprintf(sa->tip_link, sizeof sa->tip_link, "%s", ra->tip_link ? ra->tip_link : "");
-        if ((rc = mca_scenario_place_apply(&ctx, ai, ra->base_xyz, ra->base_rpy, sa)) != MCA_OK) {
-            goto out;
-        }
-        sa->n_q0 = (int)ra->q0_count;
-        for (unsigned j = 0; j < ra->q0_count; j++) {
-            sa->q0[j] = ra->q0[j];
-        }
-        char at[32];
-        snprintf(at, sizeof at, "arms[%d].path", ai);
-        if ((rc = mca_scenario_path_apply(&ctx, at, &ra->path, &sa->path)) != MCA_OK) {
+        if ((rc = mca_scenario_arm_apply(&ctx, (int)a, ra, sa)) != MCA_OK) {
             goto out;
         }
     }

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <yaml.h>
 
+#include "mca/scheme.h" /* MCA_FORM_* */
 #include "mca/err.h"
 #include "mca/errbuf.h"
 #include "mca/yaml_marks.h"
@@ -182,13 +183,20 @@ static int depth_check(const char *path, FILE *fp, char *err, size_t errlen) {
     return rc;
 }
 
+const cyaml_schema_value_t mca_yaml_float_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
+const cyaml_strval_t mca_yaml_form_strings[2] = {
+    {"componentwise", MCA_FORM_COMPONENTWISE},
+    {"normal", MCA_FORM_NORMAL},
+};
+
 int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t *schema, void **data,
-                  char *err, size_t errlen) {
-    if (!path || !schema || !data) {
+                  mca_yaml_marks_t *marks, char *err, size_t errlen) {
+    if (!path || !schema || !data || !marks) {
         mca_errbuf_printf(err, errlen, "yaml load: NULL argument");
         return MCA_EINVAL;
     }
     *data = NULL;
+    memset(marks, 0, sizeof *marks);
     FILE *fp = fopen(path, "r");
     if (!fp) {
         mca_errbuf_printf(err, errlen, "%s:0: cannot open %s file: %s", path, what ? what : "YAML",
@@ -215,7 +223,16 @@ int mca_yaml_load(const char *path, const char *what, const cyaml_schema_value_t
         parse_error(path, &ls, cerr, err, errlen);
         return MCA_EPARSE;
     }
-    *data = raw; /* NULL: a valid YAML stream with no document (empty or comment-only file) */
+    if (!raw) {
+        /* a valid YAML stream with no document: libcyaml returns OK and no data */
+        mca_errbuf_printf(
+            err, errlen,
+            "%s:0: (document): empty document (no YAML mapping: the file is empty or only comments)", path);
+        return MCA_EPARSE;
+    }
+    *data = raw;
+    /* where each node is (libcyaml keeps no positions); lines are 0 if the file cannot be read again */
+    (void)mca_yaml_marks_load(path, marks, NULL, 0);
     return MCA_OK;
 }
 

@@ -107,10 +107,10 @@ printf '# nothing but comments\n\n   # and blank lines\n' > "$tmp/comments.yaml"
 run_both comment_only_cell "$tmp/comments.yaml" 0 "(document)" "empty document"
 : > "$tmp/empty_scn.yaml"
 expect empty_scenario "  duration: 3.5$NL" "  scenario: empty_scn.yaml$NL" "scenario: empty_scn" "task.scenario" \
-    "$tmp/empty_scn.yaml: empty document"
+    "$tmp/empty_scn.yaml:0: (document): empty document"
 printf '# a scenario\n# still to be written\n' > "$tmp/comments_scn.yaml"
 expect comment_only_scenario "  duration: 3.5$NL" "  scenario: comments_scn.yaml$NL" "scenario: comments_scn" \
-    "task.scenario" "$tmp/comments_scn.yaml: empty document"
+    "task.scenario" "$tmp/comments_scn.yaml:0: (document): empty document"
 expect yaml_syntax "[0.0, 0.6, 0.0]" "[0.0, 0.6, 0.0" "[0.0, 0.6, 0.0" "arms[1].base_xyz" "did not find expected"
 expect wrong_type "priority: 70" "priority: high" "priority: high" "rt.priority" "Invalid INT value: 'high'"
 expect wrong_type_in_arm "dec_limit: 4.0" "dec_limit: fast" "dec_limit: fast" "arms[0].dec_limit" "Invalid FLOAT value"

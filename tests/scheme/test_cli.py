@@ -76,9 +76,9 @@ def main():
         expect([sim, "--scenario", bad], 1, [bad])
         # issue 16: an empty or comment-only file was a NULL dereference (SIGSEGV)
         open(bad, "w").write("")
-        expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
+        expect([sim, "--scenario", bad], 1, [bad + ":0: (document): empty document"])
         open(bad, "w").write("# a scenario\n\n  # to be written\n")
-        expect([sim, "--scenario", bad], 1, [bad + ": empty document"])
+        expect([sim, "--scenario", bad], 1, [bad + ":0: (document): empty document"])
         # issue 16: a line over 1023 characters (fgets split it) shifted the line numbers of range errors
         # (d1 >= d2 names the line of d1, issue 12)
         expect_at(bad, "# " + "x" * 3000 + "\n" + text.replace("d2: 0.12", "d2: 0.01"), "d1: 0.05", ["d1/d2"])

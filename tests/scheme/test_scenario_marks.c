@@ -247,7 +247,9 @@ struct scase {
     const char *field;
 };
 
-#define ARM_HEAD(n) "  - name: " n "\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
+#define ARM_HEAD(n)                                                                                          \
+    "  - name: " n "\n    urdf: " MCA_SOURCE_DIR                                                             \
+    "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
 
 /* Valid arms with every optional key, so a locator that counts occurrences would be misled. */
 static const char *const good_arms[] = {
@@ -272,7 +274,8 @@ static const struct scase arm_cases[] = {
                      "           turns: -1, u: [0, 1, 0], v: [1, 0, 0]} #@\n",
      "arms[*].path.turns"},
     {"base_xyz",
-     "  - name: bad\n    urdf: /x.urdf\n    base_xyz: [0, 0, 200] #@\n    q0: [0]\n"
+     "  - name: bad\n    urdf: " MCA_SOURCE_DIR
+     "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 200] #@\n    q0: [0]\n"
      "    path:\n      kind: hold\n",
      "arms[*].base_xyz[2]"},
     {"base_rpy", ARM_HEAD("bad") "    base_rpy: [0, 7, 0] #@\n    path:\n      kind: hold\n",

@@ -454,9 +454,24 @@ static void test_scenario_files(void **state) {
     assert_int_equal(mca_scenario_load("/nonexistent/x.yaml", &s, err, sizeof err), MCA_ENOENT);
     assert_non_null(strstr(err, "/nonexistent/x.yaml"));
     /* unknown key: libcyaml names it with its line */
-    const char *base =
-        "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n"
-        "    q0: [0]\n    path:\n      kind: hold\n";
+    const char *base = "name: t\nduration: 1\narms:\n  - name: a\n    urdf: " MCA_SOURCE_DIR
+                       "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n"
+                       "    q0: [0]\n    path:\n      kind: hold\n";
+    /* a URDF that is not there: named at load, with its line (the cell's check, shared: issue 12) */
+    {
+        char nourdf[512];
+        snprintf(nourdf, sizeof nourdf,
+                 "name: t\nduration: 1\narms:\n  - name: a\n    base_xyz: [0, 0, 0]\n    urdf: nothere.urdf\n"
+                 "    q0: [0]\n    path:\n      kind: hold\n");
+        const char *np = write_tmp("nourdf", nourdf);
+        assert_int_equal(mca_scenario_load(np, &s, err, sizeof err), MCA_ENOENT);
+        char want_u[300];
+        snprintf(want_u, sizeof want_u, "%s:6: arms[0].urdf: file '", np);
+        if (strncmp(err, want_u, strlen(want_u)) != 0 || !strstr(err, "nothere.urdf' not found")) {
+            fail_msg("got '%s', want '%s...nothere.urdf' not found'", err, want_u);
+        }
+        remove(np);
+    }
     char buf[1024];
     snprintf(buf, sizeof buf, "%s    bogus: 3\n", base);
     const char *p = write_tmp("unknown", buf);
@@ -494,11 +509,11 @@ static void test_scenario_files(void **state) {
     assert_memory_equal(err, want, strlen(want));
     remove(p);
     /* waypoints without matching durations */
-    snprintf(
-        buf, sizeof buf,
-        "name: t\nduration: 1\narms:\n  - name: a\n    urdf: /x.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
-        "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n        - [1, 0, 0]\n"
-        "      durations: [1]\n");
+    snprintf(buf, sizeof buf,
+             "name: t\nduration: 1\narms:\n  - name: a\n    urdf: " MCA_SOURCE_DIR
+             "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
+             "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n        - [1, 0, 0]\n"
+             "      durations: [1]\n");
     p = write_tmp("dur", buf);
     assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_ECONFIG);
     assert_non_null(strstr(err, "durations"));

@@ -125,11 +125,18 @@ __attribute__((format(printf, 4, 5))) int mca_check_range(const mca_check_ctx_t 
 __attribute__((format(printf, 4, 5))) int mca_check_fail(const mca_check_ctx_t *c, int rc, const char *node,
                                                          const char *fmt, ...);
 
+/** The scheme's gains and form as a file gives them (NULL where it does not): a scenario's top level, a
+ * cell's `solver:` section; both read them with MCA_YAML_GAIN_FIELDS (mca/yaml_load.h). */
+typedef struct mca_gain_keys {
+    double *K, *epsilon, *v_normal, *v_floor;
+    mca_collision_form_t *form;
+} mca_gain_keys_t;
+
 /** The scheme parameters as a file gives them; NULL where it does not (the value in place stays). */
 typedef struct mca_param_keys {
     const char *solver; /**< where K, epsilon, v_normal, v_floor and form stand: "" or "solver." */
-    const double *d1, *d2, *K, *epsilon, *v_normal, *v_floor;
-    const mca_collision_form_t *form;
+    const double *d1, *d2;
+    const mca_gain_keys_t *gain; /**< NULL: no gains given */
 } mca_param_keys_t;
 
 /**
@@ -156,23 +163,45 @@ typedef struct mca_path_keys {
     unsigned durations_count;
 } mca_path_keys_t;
 
-/**
- * Check and make a path, the one check of paths for scenario and cell files. Hold and circle are relative to
- * the start; a circle needs radius, period, u and v, has t0, radius, period and turns in their ranges, u not
- * zero, v not parallel to u (u, v made orthonormal by Gram-Schmidt). Waypoints need points (at most
- * MCA_PATH_MAX_POINTS - 1) and one duration per point, each in its range.
- * @param[in] at  the path's node ("arms[1].path"): fields are named below it
- * @retval MCA_OK, MCA_ECONFIG (c->err names the field; *pp unchanged)
- */
-int mca_scenario_path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_keys_t *k,
-                            mca_path_t *pp);
+/** One arm's model as a file gives it (NULL where it does not): every arm of a scenario, and a cell's arm
+ * over its scenario's; both read it with MCA_YAML_ARM_FIELDS (mca/yaml_load.h). */
+typedef struct mca_arm_keys {
+    char *name;
+    char *urdf;
+    char *tip_link;
+    double *base_xyz;
+    unsigned base_xyz_count;
+    double *base_rpy;
+    unsigned base_rpy_count;
+    double *q0;
+    unsigned q0_count;
+    mca_path_keys_t *path;
+} mca_arm_keys_t;
 
 /**
- * Check and set arm `arm`'s base placement where given (base_xyz, base_rpy: 3 values each, or NULL).
- * @retval MCA_OK, MCA_ECONFIG ("FILE:LINE: arms[A].base_xyz[I]: must be in ...")
+ * Check and set what k gives of arm `arm` over *sa: the one check of an arm for scenario and cell files. The
+ * urdf is resolved against c->file (mca_config_resolve()) and must be readable; base_xyz and base_rpy in
+ * their ranges; q0 copied (its count is checked against the URDF later); a path: hold and circle are relative
+ * to the start, a circle needs radius, period, u and v (u not zero, v not parallel to u; made orthonormal),
+ * waypoints need points (at most MCA_PATH_MAX_POINTS - 1) and one duration per point; every number in its
+ * range. The name is the caller's (a cell matches it to its scenario's arms).
+ * @retval MCA_OK, MCA_ENOENT (urdf not found), MCA_ECONFIG (c->err names the field; *sa may be partly set)
  */
-int mca_scenario_place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, const double *rpy,
-                             mca_scenario_arm_t *sa);
+int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys_t *k,
+                           mca_scenario_arm_t *sa);
+
+/** The data search path after a file's own folder: $MCA_PATH (':'-separated), or the build's (this install's
+ *  etc/mca and share/mca, then /etc/mca and /usr/share/mca). */
+const char *mca_config_search_path(void);
+
+/**
+ * Resolve `rel`, a path written in the file `base_file`: absolute as it stands; else against base_file's own
+ * folder (made absolute); when nothing is there, against each folder of mca_config_search_path() with the
+ * leading "../" and "./" dropped ("../robots/x.urdf" -> /usr/share/mca/robots/x.urdf), so that a copied cell
+ * or scenario still finds the shipped files. out is the file-relative path when no candidate exists (the
+ * error names it).
+ */
+void mca_config_resolve(char *out, size_t outlen, const char *base_file, const char *rel);
 
 /** Defaults: the scheme's (mca_scheme_default_params: d1 0.05, d2 0.12, K 20, epsilon 5, normal form,
  *  v_normal 0.5, v_floor 0) and dt MCA_CONTROLLER_DT (0.001). */
@@ -183,7 +212,7 @@ void mca_scenario_defaults(mca_scenario_t *scn);
  * @param[out] scn  filled on success (unchanged on error)
  * @param[out] err  message naming the file, the line when known, and the field at fault
  * @retval MCA_OK, MCA_ENOENT (file missing), MCA_EPARSE (bad YAML, unknown/missing field, empty or
- *         comment-only file: "FILE: empty document ..."),
+ *         comment-only file: "FILE:0: (document): empty document ..."),
  *         MCA_ERANGE (value out of range: too many arms/points, d1 >= d2, non-positive duration, ...)
  */
 int mca_scenario_load(const char *path, mca_scenario_t *scn, char *err, size_t errlen);
