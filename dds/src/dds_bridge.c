@@ -14,7 +14,6 @@
 #include <pthread.h>
 #include <signal.h> /* kill */
 #include <spawn.h>  /* posix_spawn: vfork semantics, no copy-on-write of the owner's locked memory */
-#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,6 +28,7 @@
 #include "dds_shm.h"
 #include "mca/dds_qos.h"
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf: reasons into the caller's buffer */
 #include "mca/ring.h"
 #include "mca/scheme.h" /* mca_brake_s: S(d) */
 #include "mca_dds.h"    /* idlc output: mca_dds_JointState, ... */
@@ -419,17 +419,6 @@ static int is_pow2(uint32_t x) {
     return x >= 2 && (x & (x - 1u)) == 0;
 }
 
-/* The reason of a failure, for the caller's error buffer (a library function never prints it). */
-static void set_err(char *err, size_t errlen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (err != NULL && errlen > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-}
-
 static void publisher_delete_entities(publisher_t *b) {
     if (b->participant > 0) {
         dds_delete(b->participant); /* deletes topics and writers too */
@@ -465,8 +454,8 @@ static int publisher_open(publisher_t *b, char *err, size_t errlen) {
         b->topic[w] = dds_create_topic(p, descs[w], topic_names[w], q, NULL);
         b->writer[w] = b->topic[w] > 0 ? dds_create_writer(pub, b->topic[w], q, NULL) : b->topic[w];
         if (b->writer[w] < 0) {
-            set_err(err, errlen, "cannot create topic/writer '%s': %s", topic_names[w],
-                    dds_strretcode(b->writer[w]));
+            mca_errbuf_printf(err, errlen, "cannot create topic/writer '%s': %s", topic_names[w],
+                              dds_strretcode(b->writer[w]));
             rc = MCA_EIO;
         }
     }
@@ -579,27 +568,29 @@ static int config_ok(const mca_dds_config_t *cfg, char *err, size_t errlen) {
     if (cfg->status_divisor == 0 || !is_pow2(cfg->ring_capacity) ||
         cfg->ring_capacity > MCA_RING_MAX_CAPACITY || cfg->domain_id > MCA_DDS_MAX_DOMAIN ||
         cfg->wake_period_ns > 10000000000ULL || cfg->wake_offset_ns > 10000000000ULL) {
-        set_err(err, errlen,
-                "bad settings (status divisor %u, ring %u, domain %u, wake period %llu ns, offset %llu ns)",
-                cfg->status_divisor, cfg->ring_capacity, cfg->domain_id,
-                (unsigned long long)cfg->wake_period_ns, (unsigned long long)cfg->wake_offset_ns);
+        mca_errbuf_printf(
+            err, errlen,
+            "bad settings (status divisor %u, ring %u, domain %u, wake period %llu ns, offset %llu ns)",
+            cfg->status_divisor, cfg->ring_capacity, cfg->domain_id, (unsigned long long)cfg->wake_period_ns,
+            (unsigned long long)cfg->wake_offset_ns);
         return MCA_EINVAL;
     }
     const char *frame = cfg->frame_id != NULL ? cfg->frame_id : "world";
     if (strlen(frame) > MCA_DDS_FRAME_ID_MAX) {
-        set_err(err, errlen, "frame id '%s' longer than %d bytes", frame, MCA_DDS_FRAME_ID_MAX);
+        mca_errbuf_printf(err, errlen, "frame id '%s' longer than %d bytes", frame, MCA_DDS_FRAME_ID_MAX);
         return MCA_EINVAL;
     }
     if (cfg->partition != NULL && strlen(cfg->partition) > MCA_DDS_PARTITION_MAX) {
-        set_err(err, errlen, "partition '%s' longer than %d bytes", cfg->partition, MCA_DDS_PARTITION_MAX);
+        mca_errbuf_printf(err, errlen, "partition '%s' longer than %d bytes", cfg->partition,
+                          MCA_DDS_PARTITION_MAX);
         return MCA_EINVAL;
     }
     if (cfg->config_path != NULL && strlen(cfg->config_path) > MCA_DDS_CONFIG_PATH_MAX) {
-        set_err(err, errlen, "config path longer than %d bytes", MCA_DDS_CONFIG_PATH_MAX);
+        mca_errbuf_printf(err, errlen, "config path longer than %d bytes", MCA_DDS_CONFIG_PATH_MAX);
         return MCA_EINVAL;
     }
     if (cfg->process_exe != NULL && (cfg->process_exe[0] == '\0' || strlen(cfg->process_exe) >= PATH_MAX)) {
-        set_err(err, errlen, "bridge program path empty or longer than %d bytes", PATH_MAX - 1);
+        mca_errbuf_printf(err, errlen, "bridge program path empty or longer than %d bytes", PATH_MAX - 1);
         return MCA_EINVAL;
     }
     return MCA_OK;
@@ -635,7 +626,7 @@ static int spawn_publisher(mca_dds_bridge_t *b, char *err, size_t errlen) {
     posix_spawn_file_actions_destroy(&fa);
     posix_spawnattr_destroy(&at);
     if (e != 0) {
-        set_err(err, errlen, "cannot start the bridge program %s: %s", b->exe, strerror(e));
+        mca_errbuf_printf(err, errlen, "cannot start the bridge program %s: %s", b->exe, strerror(e));
         return e == ENOENT ? MCA_ENOENT : MCA_EIO;
     }
     b->pid = pid;
@@ -714,7 +705,7 @@ static int first_start(mca_dds_bridge_t *b, char *err, size_t errlen) {
             rc = atomic_load_explicit(&b->shm->open_rc, memory_order_acquire);
             if (rc != MCA_OK) {
                 reap(b, 5.0);
-                set_err(err, errlen, "%.*s", (int)sizeof b->shm->open_err, b->shm->open_err);
+                mca_errbuf_printf(err, errlen, "%.*s", (int)sizeof b->shm->open_err, b->shm->open_err);
             }
             b->announced = gen;
             return rc;
@@ -722,13 +713,13 @@ static int first_start(mca_dds_bridge_t *b, char *err, size_t errlen) {
         int status;
         if (waitpid(b->pid, &status, WNOHANG) == b->pid) {
             b->pid = 0;
-            set_err(err, errlen, "the bridge program %s ended at start-up (%s %d)", b->exe,
-                    WIFSIGNALED(status) ? "signal" : "status",
-                    WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
+            mca_errbuf_printf(err, errlen, "the bridge program %s ended at start-up (%s %d)", b->exe,
+                              WIFSIGNALED(status) ? "signal" : "status",
+                              WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
             return MCA_EIO;
         }
         if (mono_s() >= end) {
-            set_err(err, errlen, "the bridge program %s did not come up within 20 s", b->exe);
+            mca_errbuf_printf(err, errlen, "the bridge program %s did not come up within 20 s", b->exe);
             reap(b, 0.0);
             return MCA_ETIMEDOUT;
         }
@@ -743,9 +734,9 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
         err = scratch;
         errlen = sizeof scratch;
     }
-    set_err(err, errlen, "%s", "");
+    mca_errbuf_printf(err, errlen, "%s", "");
     if (out == NULL || cfg == NULL) {
-        set_err(err, errlen, "NULL argument");
+        mca_errbuf_printf(err, errlen, "NULL argument");
         return MCA_EINVAL;
     }
     if (config_ok(cfg, err, errlen) != MCA_OK) {

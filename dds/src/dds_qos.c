@@ -3,13 +3,13 @@
 #include "mca/dds_qos.h"
 
 #include <pthread.h>
-#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "mca/err.h"
+#include "mca/errbuf.h" /* mca_errbuf_printf */
 
 dds_qos_t *mca_dds_qos_stream(void) {
     dds_qos_t *q = dds_create_qos();
@@ -65,27 +65,17 @@ int mca_dds_rc(dds_return_t rc) {
     }
 }
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static void set_err(char *err, size_t errlen, const char *fmt, ...) {
-    if (err != NULL && errlen > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-}
-
 int mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_entity_t *participant,
                              dds_entity_t *domain, char *err, size_t errlen) {
     if (participant == NULL || domain == NULL || domain_id > MCA_DDS_MAX_DOMAIN) {
-        set_err(err, errlen, "domain id %u out of range 0..%d", domain_id, MCA_DDS_MAX_DOMAIN);
+        mca_errbuf_printf(err, errlen, "domain id %u out of range 0..%d", domain_id, MCA_DDS_MAX_DOMAIN);
         return MCA_EINVAL;
     }
     *domain = 0;
     if (config_path != NULL) {
         FILE *f = fopen(config_path, "r");
         if (f == NULL) {
-            set_err(err, errlen, "cannot read config file '%s'", config_path);
+            mca_errbuf_printf(err, errlen, "cannot read config file '%s'", config_path);
             return MCA_ENOENT;
         }
         fclose(f);
@@ -98,15 +88,16 @@ int mca_dds_open_participant(uint32_t domain_id, const char *config_path, dds_en
         const dds_entity_t d = dds_create_domain((dds_domainid_t)domain_id, uri);
         free(uri);
         if (d < 0) {
-            set_err(err, errlen, "config '%s' for domain %u rejected: %s", config_path, domain_id,
-                    dds_strretcode(d));
+            mca_errbuf_printf(err, errlen, "config '%s' for domain %u rejected: %s", config_path, domain_id,
+                              dds_strretcode(d));
             return MCA_EIO; /* whatever Cyclone's code: the file or the network, not the caller's argument */
         }
         *domain = d;
     }
     const dds_entity_t p = dds_create_participant((dds_domainid_t)domain_id, NULL, NULL);
     if (p < 0) {
-        set_err(err, errlen, "cannot create participant on domain %u: %s", domain_id, dds_strretcode(p));
+        mca_errbuf_printf(err, errlen, "cannot create participant on domain %u: %s", domain_id,
+                          dds_strretcode(p));
         if (*domain > 0) {
             dds_delete(*domain);
             *domain = 0;
@@ -127,7 +118,8 @@ static int create_in_partition(dds_entity_t pp, const char *partition, int publi
     if (partition != NULL) {
         q = dds_create_qos();
         if (q == NULL) {
-            set_err(err, errlen, "cannot create %s in partition '%s': out of memory", what, partition);
+            mca_errbuf_printf(err, errlen, "cannot create %s in partition '%s': out of memory", what,
+                              partition);
             return MCA_ENOMEM;
         }
         dds_qset_partition1(q, partition);
@@ -137,8 +129,8 @@ static int create_in_partition(dds_entity_t pp, const char *partition, int publi
         dds_delete_qos(q);
     }
     if (e < 0) {
-        set_err(err, errlen, "cannot create %s in partition '%s': %s", what,
-                partition != NULL ? partition : "", dds_strretcode(e));
+        mca_errbuf_printf(err, errlen, "cannot create %s in partition '%s': %s", what,
+                          partition != NULL ? partition : "", dds_strretcode(e));
         return mca_dds_rc(e);
     }
     *out = e;
