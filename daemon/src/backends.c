@@ -17,6 +17,7 @@
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_at */
 #include "mca/sim_backend.h"
+#include "mca/yaml_load.h" /* MCA_YAML_OPT */
 
 /* The line of a printf-formatted field of the cell (or of its nearest enclosing node). */
 #define LINE(...) mca_yaml_marks_line_of(c->marks, __VA_ARGS__)
@@ -56,6 +57,20 @@ static int read_id_base(const mca_check_ctx_t *c, int a, const mca_backend_keys_
 
 /* ---------------------------------------------------------------- sim */
 
+/* The sim: section of a cell arm (NULL: key not in the file). */
+typedef struct sim_keys {
+    double *lag_tau;
+    int *latency_cycles;
+    double *noise_pos;
+} sim_keys_t;
+
+static const cyaml_schema_field_t sim_fields[] = {
+    CYAML_FIELD_FLOAT_PTR("lag_tau", MCA_YAML_OPT, sim_keys_t, lag_tau),
+    CYAML_FIELD_INT_PTR("latency_cycles", MCA_YAML_OPT, sim_keys_t, latency_cycles),
+    CYAML_FIELD_FLOAT_PTR("noise_pos", MCA_YAML_OPT, sim_keys_t, noise_pos),
+    CYAML_FIELD_END,
+};
+
 /* Ranges of the sim model's keys (docs/daemon.md) */
 static const mca_range_t r_lag_tau = {"lag_tau", 0.0, 1.0, 0, 0, "s"};
 static const mca_range_t r_latency_cycles = {"latency_cycles", 0, 64, 0, 1, "cycles"};
@@ -65,20 +80,21 @@ static int sim_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const mca
     mca_cell_arm_t *ca = &cell->arm[a];
     copy_interface(ca, k);
     int rc = read_id_base(c, a, k, ca);
-    if (rc != MCA_OK || !k->sim) {
+    const sim_keys_t *sk = k->section;
+    if (rc != MCA_OK || !sk) {
         return rc;
     }
-    if (k->sim->lag_tau) {
-        CHECK(&r_lag_tau, *k->sim->lag_tau, "arms[%d].sim.lag_tau", a);
-        ca->sim_lag_tau = *k->sim->lag_tau;
+    if (sk->lag_tau) {
+        CHECK(&r_lag_tau, *sk->lag_tau, "arms[%d].sim.lag_tau", a);
+        ca->sim_lag_tau = *sk->lag_tau;
     }
-    if (k->sim->latency_cycles) {
-        CHECK(&r_latency_cycles, *k->sim->latency_cycles, "arms[%d].sim.latency_cycles", a);
-        ca->sim_latency_cycles = *k->sim->latency_cycles;
+    if (sk->latency_cycles) {
+        CHECK(&r_latency_cycles, *sk->latency_cycles, "arms[%d].sim.latency_cycles", a);
+        ca->sim_latency_cycles = *sk->latency_cycles;
     }
-    if (k->sim->noise_pos) {
-        CHECK(&r_noise_pos, *k->sim->noise_pos, "arms[%d].sim.noise_pos", a);
-        ca->sim_noise_pos = *k->sim->noise_pos;
+    if (sk->noise_pos) {
+        CHECK(&r_noise_pos, *sk->noise_pos, "arms[%d].sim.noise_pos", a);
+        ca->sim_noise_pos = *sk->noise_pos;
     }
     return MCA_OK;
 }
@@ -191,13 +207,33 @@ static void socketcan_describe(const mca_cell_arm_t *ca, int n_joints, char *buf
 
 /* ---------------------------------------------------------------- canopen */
 
+/* The canopen: section of a cell arm (NULL: key not in the file). */
+typedef struct co_keys {
+    int *first_node;
+    int *sync_us;
+    char *mode;
+    double *pos_scale, *vel_scale;
+    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
+} co_keys_t;
+
+static const cyaml_schema_field_t co_fields[] = {
+    CYAML_FIELD_INT_PTR("first_node", MCA_YAML_OPT, co_keys_t, first_node),
+    CYAML_FIELD_INT_PTR("sync_us", MCA_YAML_OPT, co_keys_t, sync_us),
+    CYAML_FIELD_STRING_PTR("mode", MCA_YAML_OPT, co_keys_t, mode, 3, 3),
+    CYAML_FIELD_FLOAT_PTR("pos_scale", MCA_YAML_OPT, co_keys_t, pos_scale),
+    CYAML_FIELD_FLOAT_PTR("vel_scale", MCA_YAML_OPT, co_keys_t, vel_scale),
+    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", MCA_YAML_OPT, co_keys_t, heartbeat_timeout_ms),
+    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", MCA_YAML_OPT, co_keys_t, pdo_timeout_syncs),
+    CYAML_FIELD_END,
+};
+
 static int canopen_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const mca_backend_keys_t *k) {
     mca_cell_arm_t *ca = &cell->arm[a];
     if (!k->interface) {
         FAIL(MCA_EPARSE, LINE("arms[%d].interface", a), "arms[%d].interface: required with backend canopen",
              a);
     }
-    const mca_backend_co_keys_t *rco = k->canopen;
+    const co_keys_t *rco = k->section;
     if (rco) {
         if (rco->first_node && (*rco->first_node < 1 || *rco->first_node > 127)) {
             FAIL(MCA_ECONFIG, LINE("arms[%d].canopen.first_node", a),
@@ -279,6 +315,8 @@ static const mca_backend_def_t backends[] = {
         .name = "sim",
         .id = MCA_CELL_BACKEND_SIM,
         .section = "sim",
+        .section_fields = sim_fields,
+        .section_size = sizeof(sim_keys_t),
         .read = sim_read,
         .open = sim_open,
         .feedback_margin = sim_feedback_margin,
@@ -295,6 +333,8 @@ static const mca_backend_def_t backends[] = {
         .name = "canopen",
         .id = MCA_CELL_BACKEND_CANOPEN,
         .section = "canopen",
+        .section_fields = co_fields,
+        .section_size = sizeof(co_keys_t),
         .read = canopen_read,
         .open = canopen_open,
         .fault_detail = mca_canopen_backend_fault,
@@ -302,6 +342,7 @@ static const mca_backend_def_t backends[] = {
     },
 };
 #define N_BACKENDS (sizeof backends / sizeof backends[0])
+_Static_assert(N_BACKENDS <= MCA_BACKEND_MAX, "raise MCA_BACKEND_MAX");
 
 const mca_backend_def_t *mca_backend_find(const char *name) {
     for (size_t i = 0; name && i < N_BACKENDS; i++) {

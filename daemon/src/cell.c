@@ -5,6 +5,8 @@
 #include <cyaml/cyaml.h>
 #include <ctype.h>
 #include <math.h>
+#include <pthread.h> /* pthread_once: the arm schema, built once from the backend registry */
+#include <stddef.h>  /* offsetof */
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,8 +34,7 @@ struct raw_arm {
     long long *id_base;
     double *dec_limit;
     double *priority;
-    mca_backend_sim_keys_t *sim;
-    mca_backend_co_keys_t *canopen;
+    void *section[MCA_BACKEND_MAX]; /* backend i's own section (mca_backend_at(i)->section), as loaded */
     char *stream;
 };
 
@@ -103,36 +104,45 @@ struct raw_cell {
 #define OPT MCA_YAML_OPT
 #define float_entry mca_yaml_float_entry
 
-static const cyaml_schema_field_t sim_fields[] = {
-    CYAML_FIELD_FLOAT_PTR("lag_tau", OPT, mca_backend_sim_keys_t, lag_tau),
-    CYAML_FIELD_INT_PTR("latency_cycles", OPT, mca_backend_sim_keys_t, latency_cycles),
-    CYAML_FIELD_FLOAT_PTR("noise_pos", OPT, mca_backend_sim_keys_t, noise_pos),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t canopen_fields[] = {
-    CYAML_FIELD_INT_PTR("first_node", OPT, mca_backend_co_keys_t, first_node),
-    CYAML_FIELD_INT_PTR("sync_us", OPT, mca_backend_co_keys_t, sync_us),
-    CYAML_FIELD_STRING_PTR("mode", OPT, mca_backend_co_keys_t, mode, 3, 3),
-    CYAML_FIELD_FLOAT_PTR("pos_scale", OPT, mca_backend_co_keys_t, pos_scale),
-    CYAML_FIELD_FLOAT_PTR("vel_scale", OPT, mca_backend_co_keys_t, vel_scale),
-    CYAML_FIELD_INT_PTR("heartbeat_timeout_ms", OPT, mca_backend_co_keys_t, heartbeat_timeout_ms),
-    CYAML_FIELD_INT_PTR("pdo_timeout_syncs", OPT, mca_backend_co_keys_t, pdo_timeout_syncs),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t arm_fields[] = {
+/* The keys of a cell arm that are the cell's; each backend's own section is added from the registry
+ * (arm_schema_init). */
+static const cyaml_schema_field_t arm_cell_fields[] = {
     MCA_YAML_ARM_FIELDS(struct raw_arm, model, OPT),
     CYAML_FIELD_STRING_PTR("backend", CYAML_FLAG_POINTER, struct raw_arm, backend, 1, 31),
     CYAML_FIELD_STRING_PTR("interface", OPT, struct raw_arm, interface, 1, 31),
     CYAML_FIELD_INT_PTR("id_base", OPT, struct raw_arm, id_base),
     CYAML_FIELD_FLOAT_PTR("dec_limit", OPT, struct raw_arm, dec_limit),
     CYAML_FIELD_FLOAT_PTR("priority", OPT, struct raw_arm, priority),
-    CYAML_FIELD_MAPPING_PTR("sim", OPT, struct raw_arm, sim, sim_fields),
-    CYAML_FIELD_MAPPING_PTR("canopen", OPT, struct raw_arm, canopen, canopen_fields),
     CYAML_FIELD_STRING_PTR("stream", OPT, struct raw_arm, stream, 1, 15),
     CYAML_FIELD_END,
 };
+
+#define N_ARM_CELL_FIELDS (sizeof arm_cell_fields / sizeof arm_cell_fields[0] - 1)
+static cyaml_schema_field_t arm_fields[N_ARM_CELL_FIELDS + MCA_BACKEND_MAX + 1];
+static pthread_once_t arm_schema_once = PTHREAD_ONCE_INIT;
+
+/* arm_fields: the cell's keys, then one optional mapping per backend that has a section, its schema the
+ * backend's (the cell reader knows no backend's keys), then the end. */
+static void arm_schema_init(void) {
+    size_t n = 0;
+    for (; n < N_ARM_CELL_FIELDS; n++) {
+        arm_fields[n] = arm_cell_fields[n];
+    }
+    const mca_backend_def_t *be;
+    for (size_t i = 0; (be = mca_backend_at(i)) != NULL; i++) {
+        if (be->section) {
+            arm_fields[n++] = (cyaml_schema_field_t){
+                .key = be->section,
+                .data_offset = (uint32_t)(offsetof(struct raw_arm, section) + i * sizeof(void *)),
+                .value = {.type = CYAML_MAPPING,
+                          .flags = (enum cyaml_flag)(OPT),
+                          .data_size = (uint32_t)be->section_size,
+                          .mapping = {.fields = be->section_fields}},
+            };
+        }
+    }
+    arm_fields[n] = (cyaml_schema_field_t)CYAML_FIELD_END;
+}
 
 static const cyaml_schema_value_t arm_entry = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct raw_arm, arm_fields),
@@ -308,6 +318,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     struct raw_cell *raw = NULL;
     mca_yaml_marks_t marks;
+    pthread_once(&arm_schema_once, arm_schema_init);
     int rc = mca_yaml_load(path, "cell", &cell_schema, (void **)&raw, &marks, err, errlen);
     if (rc != MCA_OK) {
         return rc;
@@ -514,27 +525,18 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
                  "arms[%d].backend: unknown backend '%s' (known: %s)", ai, ra->backend, known);
         }
         ca->backend = be->id;
-        {
-            /* a backend's own section belongs to it alone */
-            const struct {
-                const char *key;
-                int given;
-            } sections[] = {{"sim", ra->sim != NULL}, {"canopen", ra->canopen != NULL}};
-            for (size_t k = 0; k < sizeof sections / sizeof sections[0]; k++) {
-                if (sections[k].given && (!be->section || strcmp(be->section, sections[k].key) != 0)) {
-                    const mca_backend_def_t *owner = NULL;
-                    for (size_t i = 0; (owner = mca_backend_at(i)) != NULL; i++) {
-                        if (owner->section && strcmp(owner->section, sections[k].key) == 0) {
-                            break;
-                        }
-                    }
-                    FAIL(MCA_EPARSE, LINE("arms[%d].%s", ai, sections[k].key),
-                         "arms[%d].%s: only with backend %s", ai, sections[k].key, owner ? owner->name : "?");
-                }
+        /* a backend's own section belongs to it alone */
+        const void *own = NULL;
+        const mca_backend_def_t *owner;
+        for (size_t i = 0; (owner = mca_backend_at(i)) != NULL; i++) {
+            if (owner == be) {
+                own = ra->section[i];
+            } else if (ra->section[i]) {
+                FAIL(MCA_EPARSE, LINE("arms[%d].%s", ai, owner->section), "arms[%d].%s: only with backend %s",
+                     ai, owner->section, owner->name);
             }
         }
-        const mca_backend_keys_t bkeys = {
-            .interface = ra->interface, .id_base = ra->id_base, .sim = ra->sim, .canopen = ra->canopen};
+        const mca_backend_keys_t bkeys = {.interface = ra->interface, .id_base = ra->id_base, .section = own};
         if ((rc = be->read(&ctx, cell, ai, &bkeys)) != MCA_OK) {
             goto out;
         }

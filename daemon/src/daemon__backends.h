@@ -1,11 +1,13 @@
 /* SPDX-License-Identifier: MIT */
 /* The arm backends mcad knows, in one const table (issue 12): each names itself as cell files do
  * ("backend: NAME"), reads and checks its keys of a cell arm, opens the arm and says what the daemon must
- * know of it. The cell reader looks a backend up by name, the daemon by id; neither switches on names.
+ * know of it; its own section of a cell arm comes with its schema. The cell reader builds the arm schema from
+ * the table and looks a backend up by name, the daemon by id; neither switches on names nor knows sections.
  * Private to mca_daemon (cell.c, daemon.c, mcad_main.c). Start-up only, but fault_detail (main thread). */
 #ifndef MCA_DAEMON__BACKENDS_H
 #define MCA_DAEMON__BACKENDS_H
 
+#include <cyaml/cyaml.h>
 #include <stddef.h>
 
 #include "mca/arm.h"
@@ -13,28 +15,14 @@
 #include "mca/chain.h"
 #include "mca/scenario.h" /* mca_check_ctx_t */
 
-/* The sim: section of a cell arm (NULL: key not in the file). */
-typedef struct mca_backend_sim_keys {
-    double *lag_tau;
-    int *latency_cycles;
-    double *noise_pos;
-} mca_backend_sim_keys_t;
-
-/* The canopen: section of a cell arm (NULL: key not in the file). */
-typedef struct mca_backend_co_keys {
-    int *first_node;
-    int *sync_us;
-    char *mode;
-    double *pos_scale, *vel_scale;
-    int *heartbeat_timeout_ms, *pdo_timeout_syncs;
-} mca_backend_co_keys_t;
+/* Most backends the table may hold (the cell's arm schema has room for each one's section). */
+#define MCA_BACKEND_MAX 8
 
 /* An arm's backend keys as the cell gives them (NULL: not in the file). */
 typedef struct mca_backend_keys {
     const char *interface;
     const long long *id_base;
-    const mca_backend_sim_keys_t *sim;
-    const mca_backend_co_keys_t *canopen;
+    const void *section; /* the backend's own section as libcyaml loaded it (its section_fields) */
 } mca_backend_keys_t;
 
 /* What a backend's open gets from the daemon. */
@@ -50,6 +38,8 @@ typedef struct mca_backend_def {
     const char *name;      /* as in cell files */
     mca_cell_backend_t id; /* as in mca_cell_arm_t.backend */
     const char *section;   /* its own mapping in a cell arm ("sim", "canopen"; NULL: none): only with it */
+    const cyaml_schema_field_t *section_fields; /* the section's schema: the cell's arm schema takes it */
+    size_t section_size;                        /* what libcyaml allocates for it */
     /* check and set arm `a`'s backend keys into cell->arm[a] (arms 0..a-1 are set: bus clashes) */
     int (*read)(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const mca_backend_keys_t *k);
     int (*open)(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen);
