@@ -141,9 +141,7 @@ int main(int argc, char **argv) {
             return 2;
         }
     }
-    if (optind < argc) {
-        fprintf(stderr, "mca-dds-synth: unexpected argument '%s'\n", argv[optind]);
-        usage(stderr);
+    if (mca_prog_no_operands("mca-dds-synth", argc, argv, optind, usage) != 0) {
         return 2;
     }
 

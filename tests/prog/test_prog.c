@@ -4,6 +4,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include <cmocka.h>
 
@@ -22,6 +23,22 @@ static void test_parse_u64(void **state) {
         assert_int_equal(mca_prog_parse_u64("t", "--n", bad[i], 10, &v), -1);
         assert_int_equal(v, 10);
     }
+}
+
+static int usage_calls;
+static void count_usage(FILE *f) {
+    (void)f;
+    usage_calls++;
+}
+
+static void test_no_operands(void **state) {
+    (void)state;
+    char *argv[] = {"prog", "--x", "left", NULL};
+    usage_calls = 0;
+    assert_int_equal(mca_prog_no_operands("prog", 3, argv, 3, count_usage), 0); /* all taken */
+    assert_int_equal(usage_calls, 0);
+    assert_int_equal(mca_prog_no_operands("prog", 3, argv, 2, count_usage), 2); /* "left" is left */
+    assert_int_equal(usage_calls, 1);
 }
 
 static void test_ns_summary(void **state) {
@@ -44,6 +61,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_parse_u64),
         cmocka_unit_test(test_ns_summary),
+        cmocka_unit_test(test_no_operands),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

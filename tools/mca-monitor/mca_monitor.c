@@ -308,9 +308,7 @@ int main(int argc, char **argv) {
             return 2;
         }
     }
-    if (optind < argc) {
-        fprintf(stderr, "mca-monitor: unexpected argument '%s'\n", argv[optind]);
-        usage(stderr);
+    if (mca_prog_no_operands("mca-monitor", argc, argv, optind, usage) != 0) {
         return 2;
     }
 

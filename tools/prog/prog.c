@@ -53,3 +53,14 @@ mca_prog_ns_summary_t mca_prog_ns_summary(int64_t *v, size_t n) {
     s.mean = sum / (double)n * 1e-3;
     return s;
 }
+
+int mca_prog_no_operands(const char *prog, int argc, char *const argv[], int optind_, void (*usage)(FILE *)) {
+    if (optind_ >= argc) {
+        return 0;
+    }
+    fprintf(stderr, "%s: unexpected argument '%s'\n", prog, argv[optind_]);
+    if (usage) {
+        usage(stderr);
+    }
+    return 2;
+}

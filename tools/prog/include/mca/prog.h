@@ -10,6 +10,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -23,6 +24,13 @@ extern "C" {
  */
 int mca_prog_parse_u64(const char *prog, const char *opt, const char *s, unsigned long long max,
                        unsigned long long *out);
+
+/**
+ * After getopt: refuse what is left on the command line ("PROG: unexpected argument 'X'" and the usage on
+ * stderr) for a program that takes options only.
+ * @retval 0 nothing left @retval 2 (the exit code) something left
+ */
+int mca_prog_no_operands(const char *prog, int argc, char *const argv[], int optind_, void (*usage)(FILE *));
 
 /** Run handler on SIGINT and SIGTERM (sigaction, no SA_RESTART: a blocking call returns EINTR). */
 void mca_prog_on_stop_signals(void (*handler)(int));
