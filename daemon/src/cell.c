@@ -562,27 +562,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             memcpy(sa->path.box_lo, cell->stream.box_lo, sizeof sa->path.box_lo);
             memcpy(sa->path.box_hi, cell->stream.box_hi, sizeof sa->path.box_hi);
         }
-        /* the model: DOF must match q0, q0 within the joint limits */
+        /* the model: DOF must match q0, q0 within the joint limits (the scenario's check) */
         mca_chain_t chain;
-        char cerrbuf[400];
-        int crc = mca_chain_load_urdf(&chain, sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, cerrbuf,
-                                      sizeof cerrbuf);
-        if (crc != MCA_OK) {
-            FAIL(crc, LINE("arms[%d].urdf", ai), "arms[%d].urdf: %s", ai, cerrbuf);
-        }
-        if (sa->n_q0 != chain.dof) {
-            FAIL(MCA_ECONFIG, LINE("arms[%d].q0", ai),
-                 "arms[%d].q0: %d values but %s has %d joints (DOF mismatch)", ai, sa->n_q0, sa->urdf,
-                 chain.dof);
-        }
-        for (int j = 0; j < chain.dof; j++) {
-            const mca_joint_model_t *jm = &chain.joint[j];
-            if (!isfinite(sa->q0[j]) ||
-                (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
-                FAIL(MCA_ECONFIG, LINE("arms[%d].q0[%d]", ai, j),
-                     "arms[%d].q0[%d] = %g: outside joint '%s' limits [%g, %g]", ai, j, sa->q0[j], jm->name,
-                     jm->lower, jm->upper);
-            }
+        if ((rc = mca_scenario_arm_model(&ctx, ai, sa, &chain)) != MCA_OK) {
+            goto out;
         }
         const double dec = ra->dec_limit ? *ra->dec_limit : 10.0;
         CHECK(&r_dec_limit, dec, "arms[%d].dec_limit", ai);

@@ -436,6 +436,30 @@ int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys
     return rc;
 }
 
+int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, const mca_scenario_arm_t *sa,
+                           mca_chain_t *chain) {
+    char f[40], why[400];
+    int rc = mca_chain_load_urdf(chain, sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, why, sizeof why);
+    if (rc != MCA_OK) {
+        snprintf(f, sizeof f, "arms[%d].urdf", arm);
+        return mca_check_fail(c, rc, f, "%s: %s", f, why);
+    }
+    snprintf(f, sizeof f, "arms[%d].q0", arm);
+    if (sa->n_q0 != chain->dof) {
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: %d values but %s has %d joints (DOF mismatch)", f,
+                              sa->n_q0, sa->urdf, chain->dof);
+    }
+    for (int j = 0; j < chain->dof; j++) {
+        const mca_joint_model_t *jm = &chain->joint[j];
+        if (!isfinite(sa->q0[j]) || (!jm->continuous && (sa->q0[j] < jm->lower || sa->q0[j] > jm->upper))) {
+            snprintf(f, sizeof f, "arms[%d].q0[%d]", arm, j);
+            return mca_check_fail(c, MCA_ECONFIG, f, "%s: %g outside joint '%s' limits [%g, %g]", f,
+                                  sa->q0[j], jm->name, jm->lower, jm->upper);
+        }
+    }
+    return MCA_OK;
+}
+
 /* A scenario's parameters are the scheme's (mca_scheme_params_t) and the tick period: these two move
  * them each way, so that the defaults are the scheme's own (mca_scheme_default_params), not a copy. */
 static void params_from_scheme(mca_scenario_params_t *p, const mca_scheme_params_t *sp) {
@@ -512,7 +536,9 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         const mca_arm_keys_t *ra = &raw->arms[a].model;
         mca_scenario_arm_t *sa = &scn.arm[a];
         snprintf(sa->name, sizeof sa->name, "%s", ra->name);
-        if ((rc = mca_scenario_arm_apply(&ctx, (int)a, ra, sa)) != MCA_OK) {
+        mca_chain_t chain;
+        if ((rc = mca_scenario_arm_apply(&ctx, (int)a, ra, sa)) != MCA_OK ||
+            (rc = mca_scenario_arm_model(&ctx, (int)a, sa, &chain)) != MCA_OK) {
             goto out;
         }
     }

@@ -126,7 +126,7 @@ expect unknown_backend "backend: socketcan" "backend: ethercat" "ethercat" "arms
     "unknown backend 'ethercat' (known: sim, socketcan, canopen)"
 expect dof_mismatch "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]" "q0: [0.0, 0.3, 0.0]" "q0: [0.0, 0.3, 0.0]" \
     "arms[0].q0" "3 values but"
-expect q0_outside_limits "q0: [0.1, 0.3," "q0: [9.0, 0.3," "q0: [9.0" "arms[1].q0[0] = 9" "outside joint"
+expect q0_outside_limits "q0: [0.1, 0.3," "q0: [9.0, 0.3," "q0: [9.0" "arms[1].q0[0]: 9" "outside joint"
 expect negative_period "period_us: 2000" "period_us: -1000" "period_us" "rt.period_us" "must be in 100..100000 us (got -1000)"
 expect zero_period "period_us: 2000" "period_us: 0" "period_us" "rt.period_us" "must be in 100..100000 us (got 0)"
 expect bad_priority "priority: 70" "priority: 150" "priority: 150" "rt.priority" "must be in 0..99"

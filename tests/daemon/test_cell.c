@@ -256,7 +256,7 @@ static void test_dof_mismatch(void **state) {
 static void test_q0_outside_limits(void **state) {
     (void)state;
     const char *p = write_variant("q0lim", "q0: [0.1, 0.3,", "q0: [9.0, 0.3,");
-    expect_error(p, MCA_ECONFIG, line_of(p, "q0: [9.0"), "arms[1].q0[0] = 9", "outside joint", NULL);
+    expect_error(p, MCA_ECONFIG, line_of(p, "q0: [9.0"), "arms[1].q0[0]: 9", "outside joint", NULL);
 }
 
 #ifdef MCA_TEST_HOOKS
@@ -726,7 +726,7 @@ static void test_arm_error_lines(void **state) {
          "arms[%d].stream", "'spin' (known: twist, pose)", 1, 0, 0},
         {"a_dof", B_SIM, "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]", "q0: [0.0, 0.3, 0.0]",
          "q0:", MCA_ECONFIG, "arms[%d].q0", "3 values but", 0, 0, 0},
-        {"a_q0", B_SIM, "q0: [0.0, 0.3,", "q0: [0.0, 9.0,", "q0:", MCA_ECONFIG, "arms[%d].q0[1] = 9",
+        {"a_q0", B_SIM, "q0: [0.0, 0.3,", "q0: [0.0, 9.0,", "q0:", MCA_ECONFIG, "arms[%d].q0[1]: 9",
          "outside joint", 0, 0, 0},
         {"a_dec", B_SIM, "dec_limit: 4.0", "dec_limit: 1e-12", "dec_limit", MCA_ECONFIG, "arms[%d].dec_limit",
          "must be in [0.05, 100] rad/s^2", 0, 0, 0},

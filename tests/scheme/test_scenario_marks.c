@@ -249,7 +249,8 @@ struct scase {
 
 #define ARM_HEAD(n)                                                                                          \
     "  - name: " n "\n    urdf: " MCA_SOURCE_DIR                                                             \
-    "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n    q0: [0]\n"
+    "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n    q0: " Q0 "\n"
+#define Q0 "[0, 0, 0, 0, 0, 0, 0, 0]" /* pa10plus: 8 joints, 0 within every limit */
 
 /* Valid arms with every optional key, so a locator that counts occurrences would be misled. */
 static const char *const good_arms[] = {
@@ -275,7 +276,7 @@ static const struct scase arm_cases[] = {
      "arms[*].path.turns"},
     {"base_xyz",
      "  - name: bad\n    urdf: " MCA_SOURCE_DIR
-     "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 200] #@\n    q0: [0]\n"
+     "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 200] #@\n    q0: " Q0 "\n"
      "    path:\n      kind: hold\n",
      "arms[*].base_xyz[2]"},
     {"base_rpy", ARM_HEAD("bad") "    base_rpy: [0, 7, 0] #@\n    path:\n      kind: hold\n",
@@ -332,6 +333,15 @@ static const struct scase arm_cases[] = {
      ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points: [[0, 0, 0],\n"
                      "               [0, 0, -500]] #@\n      durations: [1, 1]\n",
      "arms[*].path.points[1][2]"},
+    /* the model check (mca_scenario_arm_model, shared with cells): q0 against the URDF */
+    {"q0_count",
+     "  - name: bad\n    urdf: " MCA_SOURCE_DIR "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n"
+     "    q0: [0, 0, 0, 0, 0, 0, 0] #@\n    path:\n      kind: hold\n",
+     "arms[*].q0"},
+    {"q0_limit",
+     "  - name: bad\n    urdf: " MCA_SOURCE_DIR "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n"
+     "    q0: [0, 1.7, 0, 0, 0, 0, 0, 0] #@\n    path:\n      kind: hold\n",
+     "arms[*].q0[1]"},
     {"durations_value",
      ARM_HEAD("bad") "    path:\n      kind: waypoints\n      points:\n        - [0, 0, 0]\n"
                      "        - [1, 0, 0]\n      durations: [1, 0] #@\n",

@@ -190,6 +190,17 @@ typedef struct mca_arm_keys {
 int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys_t *k,
                            mca_scenario_arm_t *sa);
 
+/**
+ * Check an arm's model against its start: load its URDF (to tip_link) into *chain, then q0 has one value per
+ * joint and each within the joint's limits. The one model check of scenario and cell files (both call it at
+ * load, the cell after its overrides).
+ * @retval MCA_OK, the URDF's error ("FILE:LINE: arms[A].urdf: the URDF's reason"), MCA_ECONFIG
+ *         ("FILE:LINE: arms[A].q0: 7 values but X.urdf has 8 joints (DOF mismatch)", "arms[A].q0[J]: V
+ *         outside joint 'NAME' limits [LO, HI]")
+ */
+int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, const mca_scenario_arm_t *sa,
+                           mca_chain_t *chain);
+
 /** The data search path after a file's own folder: $MCA_PATH (':'-separated), or the build's (this install's
  *  etc/mca and share/mca, then /etc/mca and /usr/share/mca). */
 const char *mca_config_search_path(void);
