@@ -74,7 +74,7 @@ sweep: build
 deb: deps
 	sh tools/deb/build_deb.sh . $(BUILD)/deb-build $(JOBS)
 
-SOURCES_CMD = find core model firmware_iface dds sim_backend daemon tools bench tests fuzz \
+SOURCES_CMD = find core geom model firmware_iface dds sim_backend daemon tools bench tests fuzz \
 	  \( -name '*.c' -o -name '*.h' -o -name '*.cpp' \) -print0
 
 format:

@@ -32,10 +32,12 @@ check "include/mca/path.h (core), scenario.h, urdf.h, qp_dump.h (model)" test -f
 core_links() {
     b=$(sed -n '/^set_target_properties(mca::core /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
     m=$(sed -n '/^set_target_properties(mca::model /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
-    echo "$b" | grep -q 'INTERFACE_LINK_LIBRARIES.*ccd' && ! echo "$b" | grep -qi 'cyaml\|urdf\|Threads' &&
-        echo "$m" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*CYAML.*urdfdom'
+    g=$(sed -n '/^set_target_properties(mca::geom /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
+    echo "$b" | grep -q 'INTERFACE_LINK_LIBRARIES' && ! echo "$b" | grep -qi 'cyaml\|urdf\|Threads\|ccd' &&
+        echo "$m" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*CYAML.*urdfdom' &&
+        echo "$g" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*ccd'
 }
-check "mca::core links no libcyaml, urdfdom or Threads; mca::model links mca::core, libcyaml, urdfdom" core_links
+check "mca::core links no libcyaml, urdfdom, Threads or libccd; mca::model links mca::core, libcyaml, urdfdom; mca::geom mca::core, libccd" core_links
 check "etc/mca/cells, etc/mca/dds" test -f "$P/etc/mca/cells/cup_stacking_sim.yaml" -a -f "$P/etc/mca/dds/loopback.xml"
 check "share/mca/robots, scenarios, ros2" test -f "$P/share/mca/robots/jaco2.urdf" -a -f "$P/share/mca/scenarios/cup_stacking.yaml" -a -f "$P/share/mca/ros2/mca.rviz"
 check "share/doc/mca" test -f "$P/share/doc/mca/daemon.md"
