@@ -256,10 +256,9 @@ static int drain(mca_co_master_t *m, int64_t now_ns, mca_co_sdo_client_t *sdo, m
                 continue;
             }
             mca_co_frame_t f;
-            memset(&f, 0, sizeof(f));
-            f.id = (uint16_t)(fr[i].can_id & CAN_SFF_MASK);
-            f.len = fr[i].len > 8 ? 8 : fr[i].len;
-            memcpy(f.data, fr[i].data, f.len);
+            if (!mca_co_frame_from_can(&f, &fr[i])) {
+                continue;
+            }
             total++;
             if (sdo && *sdo_st == MCA_CO_SDO_SEND && f.id == MCA_CO_COB_SDO_TX + sdo->node) {
                 *sdo_st = mca_co_sdo_client_rx(sdo, &f, sdo_tx);
@@ -300,6 +299,17 @@ int mca_co_nmt_send(mca_co_master_t *m, uint8_t cmd, uint8_t node) {
     }
     const int rc = send_frame(m, &f);
     return rc == MCA_OK ? MCA_OK : MCA_EIO;
+}
+
+int mca_co_frame_from_can(mca_co_frame_t *f, const mca_can_frame_t *c) {
+    if (c->can_id & (CAN_ERR_FLAG | CAN_EFF_FLAG | CAN_RTR_FLAG)) {
+        return 0;
+    }
+    memset(f, 0, sizeof *f);
+    f->id = (uint16_t)(c->can_id & CAN_SFF_MASK);
+    f->len = c->len > 8 ? 8 : c->len;
+    memcpy(f->data, c->data, f->len);
+    return 1;
 }
 
 /* wait up to timeout_ms for readable input */

@@ -841,14 +841,10 @@ int main(int argc, char **argv) {
         const int n = mca_can_sock_recv_batch(s.fd, fr, MCA_CAN_RX_BATCH, &bad);
         const int64_t now = mono_ns();
         for (int i = 0; i < n; i++) {
-            if (fr[i].can_id & (CAN_ERR_FLAG | CAN_EFF_FLAG | CAN_RTR_FLAG)) {
+            mca_co_frame_t f;
+            if (!mca_co_frame_from_can(&f, &fr[i])) {
                 continue;
             }
-            mca_co_frame_t f;
-            memset(&f, 0, sizeof(f));
-            f.id = (uint16_t)(fr[i].can_id & CAN_SFF_MASK);
-            f.len = fr[i].len > 8 ? 8 : fr[i].len;
-            memcpy(f.data, fr[i].data, f.len);
             s.rx_frames++;
             on_frame(&s, &f, now);
         }

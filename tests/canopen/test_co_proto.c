@@ -10,6 +10,7 @@
 
 #include <cmocka.h>
 
+#include "mca/can_sock.h" /* mca_can_frame_t */
 #include "mca/canopen.h"
 #include "mca/err.h"
 
@@ -478,6 +479,31 @@ static void test_master_open_bad(void **state) {
     assert_int_equal(mca_co_master_open(&m, &cfg), MCA_EINVAL);
 }
 
+/* Only classic 11-bit data frames are CANopen frames: an extended id masked to 11 bits would pass for one. */
+static void test_frame_from_can(void **state) {
+    (void)state;
+    mca_can_frame_t c;
+    memset(&c, 0, sizeof c);
+    c.can_id = 0x185; /* TPDO1 of node 5 */
+    c.len = 12;       /* an FD frame: cut to 8 */
+    c.fd = 1;
+    for (int i = 0; i < 12; i++) {
+        c.data[i] = (uint8_t)(i + 1);
+    }
+    mca_co_frame_t f;
+    assert_int_equal(mca_co_frame_from_can(&f, &c), 1);
+    assert_int_equal(f.id, 0x185);
+    assert_int_equal(f.len, 8);
+    assert_int_equal(f.data[7], 8);
+    const uint32_t flags[] = {0x80000000u /* EFF */, 0x40000000u /* RTR */, 0x20000000u /* ERR */};
+    for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++) {
+        memset(&f, 0xAB, sizeof f);
+        c.can_id = 0x185 | flags[k];
+        assert_int_equal(mca_co_frame_from_can(&f, &c), 0);
+        assert_int_equal(f.id, 0xABAB); /* untouched */
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_classify),
@@ -491,6 +517,7 @@ int main(void) {
         cmocka_unit_test(test_cia402_walk),
         cmocka_unit_test(test_master_rx_faults),
         cmocka_unit_test(test_master_open_bad),
+        cmocka_unit_test(test_frame_from_can),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -90,6 +90,15 @@ typedef enum mca_co_kind {
 /** Kind, node (1..127; 0 for NMT/SYNC) and PDO number (1..4) of COB-id @p id. */
 mca_co_kind_t mca_co_classify(uint16_t id, uint8_t *node, uint8_t *pdo);
 
+struct mca_can_frame; /* mca/can_sock.h */
+
+/**
+ * The CANopen frame in a received SocketCAN frame: a classic data frame with an 11-bit id (payload cut to
+ * 8 bytes). Error, extended-id and remote frames are no CANopen frame (a 29-bit id masked to 11 bits would
+ * pass for one). @retval 1 filled @retval 0 not a CANopen frame (*f untouched)
+ */
+int mca_co_frame_from_can(mca_co_frame_t *f, const struct mca_can_frame *c);
+
 /** NMT command @p cmd to @p node (0 = all). @retval MCA_OK, MCA_EINVAL (NULL, node > 127) */
 int mca_co_nmt_encode(mca_co_frame_t *f, uint8_t cmd, uint8_t node);
 /** Heartbeat / boot-up (state MCA_CO_NMT_BOOTUP) of @p node. @retval MCA_OK, MCA_EINVAL */
