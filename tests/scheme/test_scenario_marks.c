@@ -364,7 +364,7 @@ static const struct scase top_cases[] = {
 };
 
 /* Load text (which holds one "#@") and require the error to start with "FILE:LINE: FIELD: ". */
-static void expect(const char *name, const char *text, const char *field, int arm) {
+static void expect_rc(const char *name, const char *text, const char *field, int arm, int want_rc) {
     const char *mark = strstr(text, "#@");
     assert_non_null(mark);
     assert_null(strstr(mark + 2, "#@"));
@@ -384,13 +384,17 @@ static void expect(const char *name, const char *text, const char *field, int ar
     const int rc = mca_scenario_load(p, &s, err, sizeof err);
     char want[512];
     snprintf(want, sizeof want, "%s:%d: %s: ", p, line, f);
-    if (rc != MCA_ECONFIG || strncmp(err, want, strlen(want)) != 0) {
+    if (rc != want_rc || strncmp(err, want, strlen(want)) != 0) {
         print_error("case %s (bad arm %d): rc %d\n  got  %s\n  want %s...\n--\n%s--\n", name, arm, rc, err,
                     want, text);
     }
-    assert_int_equal(rc, MCA_ECONFIG);
+    assert_int_equal(rc, want_rc);
     assert_memory_equal(err, want, strlen(want));
     remove(p);
+}
+
+static void expect(const char *name, const char *text, const char *field, int arm) {
+    expect_rc(name, text, field, arm, MCA_ECONFIG);
 }
 
 static void test_scenario_arm_errors(void **state) {
@@ -405,6 +409,19 @@ static void test_scenario_arm_errors(void **state) {
                 expect(arm_cases[c].name, text, arm_cases[c].field, bad);
             }
         }
+    }
+}
+
+/* A URDF that is not there (nor along the search path): MCA_ENOENT with its line, in either arm. */
+static void test_scenario_urdf_missing(void **state) {
+    (void)state;
+    static char text[16384];
+    const char *bad_arm = "  - name: bad\n    urdf: ../robots/nothere.urdf #@\n    base_xyz: [0, 0, 0]\n"
+                          "    q0: " Q0 "\n    path:\n      kind: hold\n";
+    for (int bad = 0; bad < 2; bad++) {
+        snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%s", bad == 0 ? bad_arm : good_arms[1],
+                 bad == 0 ? good_arms[1] : bad_arm);
+        expect_rc("urdf_missing", text, "arms[*].urdf", bad, MCA_ENOENT);
     }
 }
 
@@ -447,9 +464,13 @@ static void test_scenario_top_errors(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_marks_doc),           cmocka_unit_test(test_marks_errors),
-        cmocka_unit_test(test_marks_bounds),        cmocka_unit_test(test_scenario_top_errors),
-        cmocka_unit_test(test_scenario_arm_errors), cmocka_unit_test(test_scenario_too_many_points),
+        cmocka_unit_test(test_marks_doc),
+        cmocka_unit_test(test_marks_errors),
+        cmocka_unit_test(test_marks_bounds),
+        cmocka_unit_test(test_scenario_top_errors),
+        cmocka_unit_test(test_scenario_arm_errors),
+        cmocka_unit_test(test_scenario_too_many_points),
+        cmocka_unit_test(test_scenario_urdf_missing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
