@@ -102,7 +102,6 @@ struct raw_cell {
 };
 
 #define OPT MCA_YAML_OPT
-#define float_entry mca_yaml_float_entry
 
 /* The keys of a cell arm that are the cell's; each backend's own section is added from the registry
  * (arm_schema_init). */
@@ -154,9 +153,9 @@ static const cyaml_schema_field_t stream_fields[] = {
     CYAML_FIELD_FLOAT_PTR("hold_after", OPT, struct raw_stream, hold_after),
     CYAML_FIELD_FLOAT_PTR("brake_after", OPT, struct raw_stream, brake_after),
     CYAML_FIELD_SEQUENCE("workspace_min", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_stream, box_min,
-                         &float_entry, 3, 3),
+                         &mca_yaml_float_entry, 3, 3),
     CYAML_FIELD_SEQUENCE("workspace_max", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_stream, box_max,
-                         &float_entry, 3, 3),
+                         &mca_yaml_float_entry, 3, 3),
     CYAML_FIELD_END,
 };
 
@@ -305,10 +304,6 @@ static void ros2_name_from(char *out, size_t len, const char *name) {
     }
 }
 
-static int readable(const char *p) {
-    return access(p, R_OK) == 0;
-}
-
 /* ---------------------------------------------------------------- load */
 
 int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
@@ -353,11 +348,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     mca_scenario_t *scn = &cell->scn;
     if (raw->task.scenario) {
         char sp[512];
-        mca_config_resolve(sp, sizeof sp, path, raw->task.scenario);
-        if (!readable(sp)) {
-            FAIL(MCA_ENOENT, LINE("task.scenario"),
-                 "task.scenario: file '%s' not found (nor in the search path %s)", sp,
-                 mca_config_search_path());
+        if ((rc = mca_config_find(&ctx, "task.scenario", raw->task.scenario, sp, sizeof sp)) != MCA_OK) {
+            goto out;
         }
         char serr[512];
         int src = mca_scenario_load(sp, scn, serr, sizeof serr);
@@ -605,11 +597,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             cell->dds.domain = (uint32_t)*d->domain;
         }
         if (d->config && d->config[0]) {
-            mca_config_resolve(cell->dds.config, sizeof cell->dds.config, path, d->config);
-            if (!readable(cell->dds.config)) {
-                FAIL(MCA_ENOENT, LINE("dds.config"),
-                     "dds.config: file '%s' not found (nor in the search path %s)", cell->dds.config,
-                     mca_config_search_path());
+            if ((rc = mca_config_find(&ctx, "dds.config", d->config, cell->dds.config,
+                                      sizeof cell->dds.config)) != MCA_OK) {
+                goto out;
             }
         }
         if (d->publish_divisor) {

@@ -404,21 +404,29 @@ void mca_config_resolve(char *out, size_t outlen, const char *base_file, const c
     }
 }
 
+int mca_config_find(const mca_check_ctx_t *c, const char *field, const char *rel, char *out, size_t outlen) {
+    mca_config_resolve(out, outlen, c->file, rel);
+    if (readable(out)) {
+        return MCA_OK;
+    }
+    return mca_check_fail(c, MCA_ENOENT, field, "%s: file '%s' not found (nor in the search path %s)", field,
+                          out, mca_config_search_path());
+}
+
 int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys_t *k,
                            mca_scenario_arm_t *sa) {
+    int rc;
     if (k->urdf) {
-        mca_config_resolve(sa->urdf, sizeof sa->urdf, c->file, k->urdf);
-        if (!readable(sa->urdf)) {
-            char f[32];
-            snprintf(f, sizeof f, "arms[%d].urdf", arm);
-            return mca_check_fail(c, MCA_ENOENT, f, "%s: file '%s' not found (nor in the search path %s)", f,
-                                  sa->urdf, mca_config_search_path());
+        char f[32];
+        snprintf(f, sizeof f, "arms[%d].urdf", arm);
+        if ((rc = mca_config_find(c, f, k->urdf, sa->urdf, sizeof sa->urdf)) != MCA_OK) {
+            return rc;
         }
     }
     if (k->tip_link) {
         snprintf(sa->tip_link, sizeof sa->tip_link, "%s", k->tip_link);
     }
-    int rc = place_apply(c, arm, k->base_xyz, k->base_rpy, sa);
+    rc = place_apply(c, arm, k->base_xyz, k->base_rpy, sa);
     if (rc != MCA_OK) {
         return rc;
     }

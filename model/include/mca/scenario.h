@@ -201,6 +201,14 @@ int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys
 int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, const mca_scenario_arm_t *sa,
                            mca_chain_t *chain);
 
+/**
+ * mca_config_resolve() `rel` against c->file into out, and require it readable.
+ * @retval MCA_OK
+ * @retval MCA_ENOENT  "FILE:LINE: FIELD: file 'OUT' not found (nor in the search path P)" in c->err, LINE
+ * that of the node `field`
+ */
+int mca_config_find(const mca_check_ctx_t *c, const char *field, const char *rel, char *out, size_t outlen);
+
 /** The data search path after a file's own folder: $MCA_PATH (':'-separated), or the build's (this install's
  *  etc/mca and share/mca, then /etc/mca and /usr/share/mca). */
 const char *mca_config_search_path(void);
