@@ -26,11 +26,11 @@ for t in "${targets[@]}"; do
   [ -d "$src/regress/$t" ] && dirs+=("$src/regress/$t")
   log="$build/fuzz-work/$t.log"
   echo "fuzz: $t for ${secs} s (log $log)"
+  # the file parsers read every input from scratch (libcyaml, TinyXML + urdfdom): inputs of 60 kB made them
+  # crawl (348 exec/s for urdf); the largest shipped file is a 4.4 kB URDF, and 16 kB still nests any depth
+  # bound thousands of times over. The frame sequences keep 64 kB.
+  case $t in cell | scenario | urdf) maxlen=16384 ;; *) maxlen=65536 ;; esac
   ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    # the file parsers read every input from scratch (libcyaml, TinyXML + urdfdom): inputs of 60 kB made them
-    # crawl (348 exec/s for urdf); the largest shipped file is a 4.4 kB URDF, and 16 kB still nests any depth
-    # bound thousands of times over. The frame sequences keep 64 kB.
-    case $t in cell | scenario | urdf) maxlen=16384 ;; *) maxlen=65536 ;; esac
     "$exe" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=$maxlen -print_final_stats=1 \
     -artifact_prefix="$art/" "${dirs[@]}" >"$log" 2>&1
   rc=$?
