@@ -15,6 +15,11 @@ shift 2
 src=$(cd "$(dirname "$0")" && pwd)
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(can_link armsim_rx cell scenario urdf inject ros2_target canopen)
+# The file targets write every input to a file (fuzz/fuzz_file.h): on this ext4 (mounted with discard) each
+# rewrite freed blocks with a synchronous discard, 31 % of a cell run's time in the kernel. tmpfs doubled the
+# rate (cell 2040 -> 4044, urdf 1725 -> 3092 exec/s). MCA_FUZZ_TMPDIR overrides.
+tmp=${MCA_FUZZ_TMPDIR:-/dev/shm}
+[ -d "$tmp" ] && [ -w "$tmp" ] && export TMPDIR=$tmp
 fail=0
 summary=()
 for t in "${targets[@]}"; do
