@@ -96,6 +96,8 @@ struct mca_daemon {
     int fault_arm_code; /* ARM: the arm's fault code (reports FAULT, brakes) or state (does not servo) */
     int fault_count;    /* OVERRUN: periods missed in a row; LOST_FEEDBACK/BUS: cycles without feedback */
     mca_ctrl_fault_why_t ctrl_why; /* CONTROLLER: the controller's cause (a code and numbers, copied once) */
+    mca_arm_stats_t fault_link;    /* LOST_FEEDBACK: the arm's link counters then (why nothing was taken) */
+    int have_fault_link;
     double fault_t;
     int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
     int consecutive_overruns;
@@ -644,7 +646,18 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
                  d->cell.rt.overrun_limit);
         break;
     case MCA_DAEMON_FAULT_LOST_FEEDBACK:
-        snprintf(buf, len, "lost feedback: arm %s, no new feedback for %d cycles", name, count);
+        if (d->have_fault_link) {
+            const mca_arm_stats_t *st = &d->fault_link;
+            snprintf(buf, len,
+                     "lost feedback: arm %s, no new feedback for %d cycles (link: %llu taken; ignored %llu "
+                     "length, %llu counter, %llu id, %llu implausible; %llu bus errors)",
+                     name, count, (unsigned long long)st->feedback_received,
+                     (unsigned long long)st->rx_bad_length, (unsigned long long)st->rx_bad_counter,
+                     (unsigned long long)st->rx_unknown_id, (unsigned long long)st->rx_implausible,
+                     (unsigned long long)st->bus_errors);
+        } else {
+            snprintf(buf, len, "lost feedback: arm %s, no new feedback for %d cycles", name, count);
+        }
         break;
     case MCA_DAEMON_FAULT_BUS:
         snprintf(buf, len, "arm %s link is bus-off: lost feedback (%d cycles)", name, count);
@@ -696,7 +709,7 @@ static void fault_text_of(const mca_daemon_t *d, char *buf, size_t len) {
 static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len) {
     const mca_daemon_t *d = arg;
     if (rec->code == LOGC_FAULT) {
-        char txt[192];
+        char txt[256];
         fault_text_of(d, txt, sizeof txt);
         snprintf(buf, len, "fault at t = %.3f s: braking both arms: %s", rec->arg[0], txt);
         if (d->dds) {
@@ -804,7 +817,13 @@ static void read_feedback(mca_daemon_t *d, double t) {
                 /* the link refused what came (implausible feedback, another joint count): name it */
                 latch_fault(d, MCA_DAEMON_FAULT_FEEDBACK, MCA_EINVAL, t, a, FB_DETAIL_LINK, st.link_fault,
                             d->lost[a], NULL);
-            } else {
+            } else if (d->fault == MCA_DAEMON_FAULT_NONE) {
+                /* frames that came and were not taken show in the link's counters: keep them with the fault
+                 */
+                d->have_fault_link = have_st;
+                if (have_st) {
+                    d->fault_link = st;
+                }
                 latch_fault(d, MCA_DAEMON_FAULT_LOST_FEEDBACK, MCA_ETIMEDOUT, t, a, 0, 0, d->lost[a], NULL);
             }
         }

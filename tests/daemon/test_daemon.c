@@ -203,6 +203,22 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
     mca_daemon_summary(d, &s);
     assert_int_equal(s.fault, MCA_DAEMON_FAULT_LOST_FEEDBACK);
     assert_non_null(strstr(s.fault_text, "lost feedback"));
+    /* the text names the link's counters at the fault: what came and why nothing was taken (a silent
+     * firmware: nothing came since, so the link's counters now are the ones then) */
+    print_message("  %s\n", s.fault_text);
+    mca_arm_stats_t ls;
+    assert_int_equal(mca_arm_stats(mca_daemon_arm(d, 1), &ls), MCA_OK);
+    unsigned long long taken, len_ign, ctr_ign, id_ign, impl_ign, bus;
+    const char *link = strstr(s.fault_text, "(link: ");
+    assert_non_null(link);
+    assert_int_equal(
+        sscanf(link,
+               "(link: %llu taken; ignored %llu length, %llu counter, %llu id, %llu implausible; "
+               "%llu bus errors)",
+               &taken, &len_ign, &ctr_ign, &id_ign, &impl_ign, &bus),
+        6);
+    assert_true(taken >= 1200);
+    assert_true(taken == ls.feedback_received && ctr_ign == ls.rx_bad_counter && bus == ls.bus_errors);
     /* a fault latches: still FAULT, zero commands, servo released */
     t += 0.001;
     assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_FAULT);

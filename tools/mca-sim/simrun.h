@@ -51,7 +51,7 @@ typedef struct mca_simrun_result {
     double max_err_free;    /**< same, over ticks where no collision row binds */
     double max_err_nobrake; /**< same, over ticks with S(d) = 1 (no link inside d2) */
     int fault;              /**< first fault (mca_ctrl_fault_t) */
-    char fault_text[160];
+    char fault_text[256];
     double fault_t, fault_distance;
     int stopped; /**< 1: all joints at rest after the fault */
     double stop_t;

@@ -166,7 +166,7 @@ typedef struct mca_daemon_summary {
     int fault_arm_code; /**< ARM: the arm's fault code (1, 2) or state (3) */
     int fault_count;    /**< OVERRUN: periods missed in a row; LOST_FEEDBACK, BUS: cycles without feedback */
     mca_ctrl_fault_why_t ctrl_why; /**< CONTROLLER: the controller's cause */
-    char fault_text[160];          /**< made by mca_daemon_summary() (non-rt) from the fields above */
+    char fault_text[256];          /**< made by mca_daemon_summary() (non-rt) from the fields above */
     double fault_t;
     uint64_t log_dropped, csv_dropped;
     /* braking (SIGTERM or a fault; through mca_controller_brake) */
