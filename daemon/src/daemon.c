@@ -454,6 +454,9 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (!out || !cell || !opts) {
         return MCA_EINVAL;
     }
+    if (err && errlen) {
+        err[0] = '\0'; /* the steps below keep the first reason they find: none yet */
+    }
     /* the rings inside have 64-byte aligned members (producer/consumer cache lines) */
     mca_daemon_t *d = aligned_alloc(_Alignof(mca_daemon_t), sizeof *d);
     if (!d) {
