@@ -555,21 +555,21 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             memcpy(sa->path.box_hi, cell->stream.box_hi, sizeof sa->path.box_hi);
         }
         /* the model: DOF must match q0, q0 within the joint limits (the scenario's check) */
-        mca_chain_t chain;
-        if ((rc = mca_scenario_arm_model(&ctx, ai, sa, &chain)) != MCA_OK) {
+        if ((rc = mca_scenario_arm_model(&ctx, ai, sa)) != MCA_OK) {
             goto out;
         }
+        const mca_chain_t *chain = &sa->chain;
         const double dec = ra->dec_limit ? *ra->dec_limit : 10.0;
         CHECK(&r_dec_limit, dec, "arms[%d].dec_limit", ai);
-        for (int j = 0; j < chain.dof; j++) {
+        for (int j = 0; j < chain->dof; j++) {
             /* a stop has a bounded duration: from the joint's velocity limit to rest */
-            const double stop_s = chain.joint[j].vel_limit / dec;
+            const double stop_s = chain->joint[j].vel_limit / dec;
             if (!(stop_s <= CELL_MAX_STOP_S)) {
                 FAIL(MCA_ECONFIG, LINE("arms[%d].dec_limit", ai),
                      "arms[%d].dec_limit: %g rad/s^2 brakes joint '%s' from its velocity limit %g rad/s in "
                      "%.3g s, "
                      "more than %g s",
-                     ai, dec, chain.joint[j].name, chain.joint[j].vel_limit, stop_s, CELL_MAX_STOP_S);
+                     ai, dec, chain->joint[j].name, chain->joint[j].vel_limit, stop_s, CELL_MAX_STOP_S);
             }
         }
         for (int j = 0; j < MCA_MAX_DOF; j++) {

@@ -416,6 +416,9 @@ int mca_config_find(const mca_check_ctx_t *c, const char *field, const char *rel
 int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys_t *k,
                            mca_scenario_arm_t *sa) {
     int rc;
+    if (k->urdf || k->tip_link) {
+        sa->chain.dof = 0; /* another model: mca_scenario_arm_model() loads it */
+    }
     if (k->urdf) {
         char f[32];
         snprintf(f, sizeof f, "arms[%d].urdf", arm);
@@ -444,13 +447,16 @@ int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys
     return rc;
 }
 
-int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, const mca_scenario_arm_t *sa,
-                           mca_chain_t *chain) {
+int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, mca_scenario_arm_t *sa) {
     char f[40], why[400];
-    int rc = mca_chain_load_urdf(chain, sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, why, sizeof why);
-    if (rc != MCA_OK) {
-        snprintf(f, sizeof f, "arms[%d].urdf", arm);
-        return mca_check_fail(c, rc, f, "%s: %s", f, why);
+    mca_chain_t *chain = &sa->chain;
+    if (chain->dof == 0) {
+        int rc = mca_chain_load_urdf(chain, sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, why, sizeof why);
+        if (rc != MCA_OK) {
+            chain->dof = 0;
+            snprintf(f, sizeof f, "arms[%d].urdf", arm);
+            return mca_check_fail(c, rc, f, "%s: %s", f, why);
+        }
     }
     snprintf(f, sizeof f, "arms[%d].q0", arm);
     if (sa->n_q0 != chain->dof) {
@@ -544,9 +550,8 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         const mca_arm_keys_t *ra = &raw->arms[a].model;
         mca_scenario_arm_t *sa = &scn.arm[a];
         snprintf(sa->name, sizeof sa->name, "%s", ra->name);
-        mca_chain_t chain;
         if ((rc = mca_scenario_arm_apply(&ctx, (int)a, ra, sa)) != MCA_OK ||
-            (rc = mca_scenario_arm_model(&ctx, (int)a, sa, &chain)) != MCA_OK) {
+            (rc = mca_scenario_arm_model(&ctx, (int)a, sa)) != MCA_OK) {
             goto out;
         }
     }
@@ -577,10 +582,15 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
     cfg->scheme = scheme;
     for (int a = 0; a < scn->n_arms; a++) {
         const mca_scenario_arm_t *sa = &scn->arm[a];
-        int rc =
-            mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err, errlen);
-        if (rc != MCA_OK) {
-            return rc;
+        if (sa->chain.dof > 0) {
+            cfg->chain[a] = sa->chain; /* loaded and checked with the file */
+        } else {
+            /* a scenario made in code: its model was never loaded */
+            int rc = mca_chain_load_urdf(&cfg->chain[a], sa->urdf, sa->tip_link[0] ? sa->tip_link : NULL, err,
+                                         errlen);
+            if (rc != MCA_OK) {
+                return rc;
+            }
         }
         if (sa->n_q0 != cfg->chain[a].dof) {
             if (err && errlen) {

@@ -33,6 +33,9 @@ typedef struct mca_scenario_arm {
     int n_q0; /**< entries given for q0 (must equal the chain's dof once loaded) */
     double q0[MCA_MAX_DOF];
     mca_path_t path;
+    /** The URDF's chain to tip_link as mca_scenario_arm_model() loaded and checked it (base not applied;
+     *  dof 0: not loaded, or urdf/tip_link changed since): loaded once per file, then copied. */
+    mca_chain_t chain;
 } mca_scenario_arm_t;
 
 /** Scheme and fault parameters a scenario may set (defaults in mca_scenario_defaults()). */
@@ -191,15 +194,15 @@ int mca_scenario_arm_apply(const mca_check_ctx_t *c, int arm, const mca_arm_keys
                            mca_scenario_arm_t *sa);
 
 /**
- * Check an arm's model against its start: load its URDF (to tip_link) into *chain, then q0 has one value per
- * joint and each within the joint's limits. The one model check of scenario and cell files (both call it at
- * load, the cell after its overrides).
+ * Check an arm's model against its start: load its URDF (to tip_link) into sa->chain unless it is loaded
+ * already, then q0 has one value per joint and each within the joint's limits. The one model check of
+ * scenario and cell files (both call it at load, the cell after its overrides, which reload the URDF only
+ * when they name another urdf or tip_link).
  * @retval MCA_OK, the URDF's error ("FILE:LINE: arms[A].urdf: the URDF's reason"), MCA_ECONFIG
  *         ("FILE:LINE: arms[A].q0: 7 values but X.urdf has 8 joints (DOF mismatch)", "arms[A].q0[J]: V
  *         outside joint 'NAME' limits [LO, HI]")
  */
-int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, const mca_scenario_arm_t *sa,
-                           mca_chain_t *chain);
+int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, mca_scenario_arm_t *sa);
 
 /**
  * mca_config_resolve() `rel` against c->file into out, and require it readable.
