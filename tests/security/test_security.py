@@ -233,9 +233,12 @@ def main():
     t0 = time.monotonic()
     r = subprocess.run([MCAD, "--stop-after", "1", os.path.join(SRC, "config", "cells", "stream_secure_sim.yaml")],
                        env=dict(env, MCA_SECURITY_DIR=os.path.join(tmp, "nowhere")), capture_output=True, text=True,
-                       timeout=60)
+                       errors="backslashreplace", timeout=60)
     why = [l for l in r.stderr.splitlines() if "mcad: dds:" in l]
-    check(r.returncode == 1 and "start-up failed" in r.stderr and why and "nowhere/mcad/" in why[0],
+    # the start-up line names the bridge as the reason (it once printed stale stack bytes there)
+    failed = [l for l in r.stderr.splitlines() if "mcad: start-up failed: " in l]
+    check(r.returncode == 1 and failed and "start-up failed: DDS: cannot create the bridge: " in failed[0]
+          and why and "nowhere/mcad/" in why[0],
           f"without its security files mcad exits {r.returncode} (1: start-up failed) before its loop starts, "
           f"{time.monotonic() - t0:.1f} s, saying why: '{why[0] if why else None}'")
 
