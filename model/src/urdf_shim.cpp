@@ -147,6 +147,55 @@ const char *type_name(int type) {
     }
 }
 
+/* The text must be UTF-8 without NUL bytes before TinyXML (the pre-scan's and urdfdom's parser) reads it:
+ * TinyXML steps over a UTF-8 lead byte by the length the byte announces, so a lead byte in the last three
+ * bytes (0xF4 at the end of a name) carried its read past the string's end (heap overflow in
+ * TiXmlBase::ReadName, found by fuzz/fuzz_urdf); a NUL ends its text early, silently. Strict UTF-8
+ * (RFC 3629: no overlong forms, no surrogates, nothing above U+10FFFF), as XML's default encoding. */
+int utf8_check(Ctx &cx, const std::string &text) {
+    const unsigned char *s = reinterpret_cast<const unsigned char *>(text.data());
+    const size_t n = text.size();
+    int line = 1;
+    size_t line_start = 0;
+    for (size_t i = 0; i < n;) {
+        const unsigned c = s[i];
+        size_t len = 0;
+        unsigned lo = 0x80, hi = 0xBF; /* the allowed range of the first continuation byte */
+        if (c == 0) {
+            return cx.fail(MCA_EPARSE, "line %d, column %zu: NUL byte: not a text file", line,
+                           i - line_start + 1);
+        } else if (c < 0x80) {
+            if (c == '\n') {
+                line++;
+                line_start = i + 1;
+            }
+            i++;
+            continue;
+        } else if (c >= 0xC2 && c <= 0xDF) {
+            len = 2;
+        } else if (c >= 0xE0 && c <= 0xEF) {
+            len = 3;
+            lo = c == 0xE0 ? 0xA0 : 0x80;
+            hi = c == 0xED ? 0x9F : 0xBF;
+        } else if (c >= 0xF0 && c <= 0xF4) {
+            len = 4;
+            lo = c == 0xF0 ? 0x90 : 0x80;
+            hi = c == 0xF4 ? 0x8F : 0xBF;
+        }
+        bool ok = len > 0 && i + len <= n;
+        for (size_t k = 1; ok && k < len; k++) {
+            ok = k == 1 ? s[i + k] >= lo && s[i + k] <= hi : (s[i + k] & 0xC0) == 0x80;
+        }
+        if (!ok) {
+            return cx.fail(MCA_EPARSE,
+                           "line %d, column %zu: byte 0x%02X is not UTF-8 text (a URDF is UTF-8 XML)", line,
+                           i - line_start + 1, c);
+        }
+        i += len;
+    }
+    return MCA_OK;
+}
+
 /* Element nesting deeper than this is refused before any XML parser sees the text: TinyXML (the pre-scan's
  * and urdfdom's parser) descends recursively, one stack frame chain per element level, so a file nested
  * 50 000 deep overflows the stack. A robot's URDF nests about 5 deep (robot/link/collision/geometry/...). */
@@ -300,7 +349,11 @@ int load(Ctx &cx, mca_chain_t *chain, const char *tip_link) {
         return cx.fail(MCA_EPARSE, "file is larger than %zu bytes: not a URDF", max_size);
     }
 
-    int rc = depth_scan(cx, text);
+    int rc = utf8_check(cx, text);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    rc = depth_scan(cx, text);
     if (rc != MCA_OK) {
         return rc;
     }

@@ -303,12 +303,75 @@ static void test_nested_too_deep(void **state) {
     unlink(path);
 }
 
+/* jaco2.urdf with `insert` put in at the first occurrence of `at` (or appended when NULL) into a temp file
+ * (`len` bytes of insert: it may hold NUL bytes); loads it with the tool tip. */
+static void load_jaco_with(load_t *l, const char *at, const char *insert, size_t len) {
+    char src[512];
+    snprintf(src, sizeof src, "%s/jaco2.urdf", MCA_ROBOTS_DIR);
+    FILE *f = fopen(src, "rb");
+    assert_non_null(f);
+    static char text[1 << 16];
+    const size_t n = fread(text, 1, sizeof text, f);
+    fclose(f);
+    assert_true(n > 0 && n < sizeof text);
+    text[n] = '\0';
+    const char *p = at ? strstr(text, at) : text + n;
+    assert_non_null(p);
+    snprintf(l->path, sizeof l->path, "/tmp/mca-utf8-XXXXXX");
+    const int fd = mkstemp(l->path);
+    assert_true(fd >= 0);
+    f = fdopen(fd, "wb");
+    assert_non_null(f);
+    fwrite(text, 1, (size_t)(p - text), f);
+    fwrite(insert, 1, len, f);
+    fwrite(p, 1, n - (size_t)(p - text), f);
+    fclose(f);
+    memset(&l->chain, 0xA5, sizeof l->chain);
+    l->rc = mca_chain_load_urdf(&l->chain, l->path, "tool_tip", l->err, sizeof l->err);
+    print_message("jaco2 + %zu bytes -> rc %d: %s\n", len, l->rc, l->err);
+    unlink(l->path);
+}
+
+/* Issue 16 (fuzz/fuzz_urdf): a UTF-8 lead byte among the last bytes of the text made TinyXML read past the
+ * string's end (heap overflow in TiXmlBase::ReadName under ASan; fuzz/regress/urdf/utf8-lead-at-end). The
+ * loader takes UTF-8 text only and names the first byte that is not. */
+static void test_not_utf8(void **state) {
+    (void)state;
+    load_t l;
+    /* the fuzzer's case: a 4-byte lead at the end, inside a name */
+    load_jaco_with(&l, NULL, "<a\n  io\xf4", 8);
+    assert_error(&l, MCA_EPARSE, "line 98, column 5: byte 0xF4 is not UTF-8 text", NULL);
+    /* inside the file: an overlong form, a surrogate, a lone continuation byte, a cut sequence, a NUL */
+    static const struct {
+        const char *bytes;
+        size_t len;
+        const char *want;
+    } bad[] = {
+        {"\xc0\xaf", 2, "byte 0xC0 is not UTF-8"},
+        {"\xed\xa0\x80", 3, "byte 0xED is not UTF-8"},
+        {"\x80", 1, "byte 0x80 is not UTF-8"},
+        {"\xe2\x82 ", 3, "byte 0xE2 is not UTF-8"},
+        {"\xf4\x90\x80\x80", 4, "byte 0xF4 is not UTF-8"},
+        {"\0x", 2, "NUL byte: not a text file"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        load_jaco_with(&l, "<robot", bad[i].bytes, bad[i].len);
+        assert_error(&l, MCA_EPARSE, bad[i].want, "line 8, column 1: ");
+    }
+    /* UTF-8 text loads: 2-, 3- and 4-byte characters in a comment */
+    const char ok[] = "<!-- 60\xc2\xb0 wrist, \xe2\x80\x9cJACO\xe2\x80\x9d \xf0\x9f\xa6\xbe -->\n";
+    load_jaco_with(&l, "<robot", ok, sizeof ok - 1);
+    assert_int_equal(l.rc, MCA_OK);
+    assert_int_equal(l.chain.dof, 6);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_missing_file),
         cmocka_unit_test(test_self_parent),
         cmocka_unit_test(test_link_loop),
         cmocka_unit_test(test_malformed_xml),
+        cmocka_unit_test(test_not_utf8),
         cmocka_unit_test(test_prismatic),
         cmocka_unit_test(test_revolute_without_limit),
         cmocka_unit_test(test_continuous_without_limit),
