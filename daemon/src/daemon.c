@@ -653,11 +653,12 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
             const mca_arm_stats_t *st = &d->fault_link;
             snprintf(buf, len,
                      "lost feedback: arm %s, no new feedback for %d cycles (link: %llu taken; ignored %llu "
-                     "length, %llu counter, %llu id, %llu implausible; %llu bus errors)",
+                     "length, %llu counter, %llu id, %llu implausible; %llu bus errors, %llu dropped by the "
+                     "kernel)",
                      name, count, (unsigned long long)st->feedback_received,
                      (unsigned long long)st->rx_bad_length, (unsigned long long)st->rx_bad_counter,
                      (unsigned long long)st->rx_unknown_id, (unsigned long long)st->rx_implausible,
-                     (unsigned long long)st->bus_errors);
+                     (unsigned long long)st->bus_errors, (unsigned long long)st->rx_dropped);
         } else {
             snprintf(buf, len, "lost feedback: arm %s, no new feedback for %d cycles", name, count);
         }

@@ -302,6 +302,10 @@ static int can_read(void *ctx, mca_arm_feedback_t *fb) {
         }
         for (int i = 0; i < n; i++) {
             mca_can_link_rx(&b->link, &f[i]);
+            /* the kernel's count only grows (a u32 that wraps after 4 G drops) */
+            if (f[i].rxq_drops > b->link.st.rx_dropped) {
+                b->link.st.rx_dropped = f[i].rxq_drops;
+            }
         }
         if (bad) {
             b->link.err_pending = 1;

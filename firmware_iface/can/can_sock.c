@@ -89,6 +89,13 @@ int mca_can_sock_open(int *fd, const char *iface, uint32_t id_base, uint32_t err
         close(s);
         return fail(err, errlen, MCA_EIO, "can: SO_TIMESTAMPNS on %s", iface, e);
     }
+    /* the kernel's count of frames it dropped from this socket's queue, with every frame: a gap in the
+     * stream that the link would otherwise only see as a skipped rolling counter */
+    if (setsockopt(s, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on)) < 0) {
+        int e = errno;
+        close(s);
+        return fail(err, errlen, MCA_EIO, "can: SO_RXQ_OVFL on %s", iface, e);
+    }
     int fl = fcntl(s, F_GETFL, 0);
     if (fl < 0 || fcntl(s, F_SETFL, fl | O_NONBLOCK) < 0) {
         int e = errno;
@@ -142,7 +149,7 @@ int mca_can_sock_recv_batch(int fd, mca_can_frame_t *f, int max, int *bad) {
     struct canfd_frame cf[MCA_CAN_RX_BATCH];
     struct iovec iov[MCA_CAN_RX_BATCH];
     union {
-        char buf[CMSG_SPACE(sizeof(struct timespec))];
+        char buf[CMSG_SPACE(sizeof(struct timespec)) + CMSG_SPACE(sizeof(uint32_t))];
         struct cmsghdr align;
     } ctl[MCA_CAN_RX_BATCH];
     struct mmsghdr mm[MCA_CAN_RX_BATCH];
@@ -181,6 +188,7 @@ int mca_can_sock_recv_batch(int fd, mca_can_frame_t *f, int max, int *bad) {
          * such (kstamp = 0) so the backend can count it instead of passing it off as a kernel stamp. */
         o->stamp_ns = ts_ns(&mono);
         o->kstamp = 0;
+        o->rxq_drops = 0;
         const struct msghdr *msg = &mm[i].msg_hdr;
         if (msg->msg_flags & MSG_CTRUNC) {
             continue;
@@ -196,6 +204,9 @@ int mca_can_sock_recv_batch(int fd, mca_can_frame_t *f, int max, int *bad) {
                 }
                 o->stamp_ns = ts_ns(&k) + off;
                 o->kstamp = 1;
+            } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL &&
+                       c->cmsg_len >= CMSG_LEN(sizeof(uint32_t))) {
+                memcpy(&o->rxq_drops, CMSG_DATA(c), sizeof(o->rxq_drops));
             }
         }
     }

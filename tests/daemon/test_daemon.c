@@ -208,17 +208,18 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
     print_message("  %s\n", s.fault_text);
     mca_arm_stats_t ls;
     assert_int_equal(mca_arm_stats(mca_daemon_arm(d, 1), &ls), MCA_OK);
-    unsigned long long taken, len_ign, ctr_ign, id_ign, impl_ign, bus;
+    unsigned long long taken, len_ign, ctr_ign, id_ign, impl_ign, bus, dropped;
     const char *link = strstr(s.fault_text, "(link: ");
     assert_non_null(link);
     assert_int_equal(
         sscanf(link,
                "(link: %llu taken; ignored %llu length, %llu counter, %llu id, %llu implausible; "
-               "%llu bus errors)",
-               &taken, &len_ign, &ctr_ign, &id_ign, &impl_ign, &bus),
-        6);
+               "%llu bus errors, %llu dropped by the kernel)",
+               &taken, &len_ign, &ctr_ign, &id_ign, &impl_ign, &bus, &dropped),
+        7);
     assert_true(taken >= 1200);
-    assert_true(taken == ls.feedback_received && ctr_ign == ls.rx_bad_counter && bus == ls.bus_errors);
+    assert_true(taken == ls.feedback_received && ctr_ign == ls.rx_bad_counter && bus == ls.bus_errors &&
+                dropped == ls.rx_dropped);
     /* a fault latches: still FAULT, zero commands, servo released */
     t += 0.001;
     assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_FAULT);

@@ -120,6 +120,7 @@ typedef struct mca_arm_stats {
     uint16_t implausible_kind; /**< kind of the newest refused one (CAN: enum mca_can_fb_check) */
     uint64_t rx_bad_joints;    /**< heartbeats whose joint count differs from the configured arm */
     uint8_t hb_joints;         /**< joint count of the newest heartbeat (0: none yet) */
+    uint64_t rx_dropped;       /**< frames the kernel dropped before the link read them (CAN: SO_RXQ_OVFL) */
 } mca_arm_stats_t;
 
 typedef struct mca_arm mca_arm_t; /**< opaque handle */

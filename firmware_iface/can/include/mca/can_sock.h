@@ -26,6 +26,8 @@ typedef struct mca_can_frame {
     uint8_t data[64];
     int64_t stamp_ns; /**< kernel receive time, CLOCK_MONOTONIC [ns] (read time if the kernel gave none) */
     uint8_t kstamp;   /**< 1: stamp_ns is the kernel's (SO_TIMESTAMPNS), 0: user-space read time (fallback) */
+    uint32_t rxq_drops; /**< frames the kernel dropped from this socket's queue so far (SO_RXQ_OVFL; a full
+                             queue), as of this frame; 0 when the kernel did not say */
 } mca_can_frame_t;
 
 /**
