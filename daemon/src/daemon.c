@@ -1503,8 +1503,11 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->ctrl_fault = d->ctrl_fault;
     s->fault_arm = d->fault ? d->fault_arm : -1;
     s->feedback_fault = d->fault == MCA_DAEMON_FAULT_FEEDBACK ? d->feedback_fault : MCA_FB_OK;
+    s->n_arms = d->n_arms;
     for (int a = 0; a < d->n_arms; a++) {
         s->implausible_samples += d->implausible[a];
+        memcpy(s->arm_name[a], d->cell.scn.arm[a].name, sizeof s->arm_name[a]);
+        mca_arm_stats(d->arm[a], &s->link[a]);
     }
     /* the record, not the text (this runs in the loop once a second): mca_daemon_summary() makes the text */
     s->fault_detail = d->fault_detail;
@@ -1606,6 +1609,21 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
         fprintf(f, "<3>mcad: summary: faults: 1 (at t = %.3f s: %s)\n", s->fault_t, s->fault_text);
     } else {
         fprintf(f, "<6>mcad: summary: faults: none\n");
+    }
+    for (int a = 0; a < s->n_arms && a < MCA_MAX_ARMS; a++) {
+        /* what each link took and why it ignored the rest: a field diagnosis starts here */
+        const mca_arm_stats_t *st = &s->link[a];
+        const int unusual =
+            st->rx_bad_length || st->rx_bad_counter || st->rx_implausible || st->bus_errors || st->rx_dropped;
+        fprintf(f,
+                "<%d>mcad: summary: arm %.32s link: commands sent %llu, feedback taken %llu; ignored %llu "
+                "length, "
+                "%llu counter, %llu id, %llu implausible; %llu bus errors, %llu dropped by the kernel\n",
+                unusual ? 4 : 6, s->arm_name[a], (unsigned long long)st->commands_sent,
+                (unsigned long long)st->feedback_received, (unsigned long long)st->rx_bad_length,
+                (unsigned long long)st->rx_bad_counter, (unsigned long long)st->rx_unknown_id,
+                (unsigned long long)st->rx_implausible, (unsigned long long)st->bus_errors,
+                (unsigned long long)st->rx_dropped);
     }
     if (s->implausible_samples) {
         fprintf(f, "<4>mcad: summary: implausible feedback samples dropped %llu\n",

@@ -218,6 +218,24 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
                &taken, &len_ign, &ctr_ign, &id_ign, &impl_ign, &bus, &dropped),
         7);
     assert_true(taken >= 1200);
+    /* the summary names every arm's link counters too */
+    char *sum_text = NULL;
+    size_t sum_len = 0;
+    FILE *mf = open_memstream(&sum_text, &sum_len);
+    assert_non_null(mf);
+    mca_daemon_print_summary(&s, mf);
+    fclose(mf);
+    char want[256];
+    snprintf(want, sizeof want,
+             "mcad: summary: arm right link: commands sent %llu, feedback taken %llu; ignored 0 length, 0 "
+             "counter, "
+             "0 id, 0 implausible; 0 bus errors, 0 dropped by the kernel\n",
+             (unsigned long long)ls.commands_sent, taken);
+    if (!strstr(sum_text, want)) {
+        fail_msg("summary without '%s':\n%s", want, sum_text);
+    }
+    assert_non_null(strstr(sum_text, "mcad: summary: arm left link: commands sent "));
+    free(sum_text);
     assert_true(taken == ls.feedback_received && ctr_ign == ls.rx_bad_counter && bus == ls.bus_errors &&
                 dropped == ls.rx_dropped);
     /* a fault latches: still FAULT, zero commands, servo released */

@@ -160,6 +160,9 @@ typedef struct mca_daemon_summary {
     int fault_arm;      /**< the arm the fault is about (ARM, LOST_FEEDBACK, BUS, FEEDBACK), else -1 */
     int feedback_fault; /**< mca_feedback_fault_t when fault == FEEDBACK */
     uint64_t implausible_samples; /**< feedback samples dropped as implausible (every arm, whole run) */
+    int n_arms;
+    char arm_name[MCA_MAX_ARMS][32];    /**< the cell's arm names */
+    mca_arm_stats_t link[MCA_MAX_ARMS]; /**< each arm's link counters (mca_arm_stats) */
     /* The fault as the loop latched it: a code and numbers (no text is made on the rt path). */
     int fault_detail;   /**< ARM: 1 reports FAULT, 2 brakes on its own, 3 does not servo; FEEDBACK: the
                              mca_feedback_fault_t; CONTROLLER: the mca_ctrl_fault_t */
