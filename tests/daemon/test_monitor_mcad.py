@@ -75,7 +75,7 @@ with tempfile.TemporaryDirectory(prefix="mca-monitor-mcad-") as tmp:
     print("mca-monitor:", mon_err.strip())
     check(run.returncode == 0, f"mcad exit status {run.returncode}")
     check(mon.returncode == 0, f"mca-monitor exit status {mon.returncode} after SIGINT")
-    check("dropped" not in run.stderr, "mcad dropped no CSV rows or log records")
+    check("summary: dropped" not in run.stderr, "mcad dropped no CSV rows or log records")
     with open(mcad_csv) as f:
         ref = {round(float(r["t"]) * 1000): r for r in csv.DictReader(f)}
     with open(mon_csv) as f:
