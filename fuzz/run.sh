@@ -31,6 +31,8 @@ for t in "${targets[@]}"; do
   [ -d "$src/regress/$t" ] && dirs+=("$src/regress/$t")
   log="$build/fuzz-work/$t.log"
   echo "fuzz: $t for ${secs} s (log $log)"
+  # the tree as the run starts (the ledger's git column; a commit during a long run must not relabel it)
+  rev=$(git -C "$src" rev-parse --short HEAD 2>/dev/null || echo ?)
   # the file parsers read every input from scratch (libcyaml, TinyXML + urdfdom): inputs of 60 kB made them
   # crawl (348 exec/s for urdf); the largest shipped file is a 4.4 kB URDF, and 16 kB still nests any depth
   # bound thousands of times over. The frame sequences keep 64 kB.
@@ -47,7 +49,7 @@ for t in "${targets[@]}"; do
   summary+=("$(printf '%-10s %12s execs %8s exec/s  cov %6s  new corpus %5s  %s' "$t" "${execs:-?}" \
     "${rate:-?}" "${cov:-?}" "$corp" "$res")")
   [ $rc -eq 0 ] || tail -40 "$log"
-  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$(git -C "$src" rev-parse --short HEAD 2>/dev/null || echo ?)" \
+  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$rev" \
     "$t" "$secs" "${execs:-0}" "$([ $rc -eq 0 ] && echo ok || echo "fail-rc$rc")" >>"$build/fuzz-work/ledger.tsv"
 done
 echo "fuzz summary (${secs} s per target):"
