@@ -632,6 +632,17 @@ static int ctrl_fault_code(int f) {
     }
 }
 
+/* What an arm's link did not take, and why (non-rt): the lost-feedback fault and the summary say it alike. */
+static void link_ignored_text(const mca_arm_stats_t *st, char *buf, size_t len) {
+    snprintf(
+        buf, len,
+        "ignored %llu length, %llu counter, %llu id, %llu implausible; %llu bus errors, %llu dropped by the "
+        "kernel",
+        (unsigned long long)st->rx_bad_length, (unsigned long long)st->rx_bad_counter,
+        (unsigned long long)st->rx_unknown_id, (unsigned long long)st->rx_implausible,
+        (unsigned long long)st->bus_errors, (unsigned long long)st->rx_dropped);
+}
+
 /* The text of a latched fault (non-rt: summary, log drainer, DDS publisher). */
 static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail, int arm_code, int count,
                            const mca_ctrl_fault_why_t *ctrl_why, char *buf, size_t len) {
@@ -650,15 +661,10 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
         break;
     case MCA_DAEMON_FAULT_LOST_FEEDBACK:
         if (d->have_fault_link) {
-            const mca_arm_stats_t *st = &d->fault_link;
-            snprintf(buf, len,
-                     "lost feedback: arm %s, no new feedback for %d cycles (link: %llu taken; ignored %llu "
-                     "length, %llu counter, %llu id, %llu implausible; %llu bus errors, %llu dropped by the "
-                     "kernel)",
-                     name, count, (unsigned long long)st->feedback_received,
-                     (unsigned long long)st->rx_bad_length, (unsigned long long)st->rx_bad_counter,
-                     (unsigned long long)st->rx_unknown_id, (unsigned long long)st->rx_implausible,
-                     (unsigned long long)st->bus_errors, (unsigned long long)st->rx_dropped);
+            char ign[160];
+            link_ignored_text(&d->fault_link, ign, sizeof ign);
+            snprintf(buf, len, "lost feedback: arm %s, no new feedback for %d cycles (link: %llu taken; %s)",
+                     name, count, (unsigned long long)d->fault_link.feedback_received, ign);
         } else {
             snprintf(buf, len, "lost feedback: arm %s, no new feedback for %d cycles", name, count);
         }
@@ -1615,15 +1621,11 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
         const mca_arm_stats_t *st = &s->link[a];
         const int unusual =
             st->rx_bad_length || st->rx_bad_counter || st->rx_implausible || st->bus_errors || st->rx_dropped;
-        fprintf(f,
-                "<%d>mcad: summary: arm %.32s link: commands sent %llu, feedback taken %llu; ignored %llu "
-                "length, "
-                "%llu counter, %llu id, %llu implausible; %llu bus errors, %llu dropped by the kernel\n",
+        char ign[160];
+        link_ignored_text(st, ign, sizeof ign);
+        fprintf(f, "<%d>mcad: summary: arm %.32s link: commands sent %llu, feedback taken %llu; %s\n",
                 unusual ? 4 : 6, s->arm_name[a], (unsigned long long)st->commands_sent,
-                (unsigned long long)st->feedback_received, (unsigned long long)st->rx_bad_length,
-                (unsigned long long)st->rx_bad_counter, (unsigned long long)st->rx_unknown_id,
-                (unsigned long long)st->rx_implausible, (unsigned long long)st->bus_errors,
-                (unsigned long long)st->rx_dropped);
+                (unsigned long long)st->feedback_received, ign);
     }
     if (s->implausible_samples) {
         fprintf(f, "<4>mcad: summary: implausible feedback samples dropped %llu\n",
