@@ -2,11 +2,11 @@
 # SPDX-License-Identifier: MIT
 # Issue 13's benchmark rows, one run each, with the other CPU quiet and then loaded (a busy loop pinned there):
 #   1. mcad's wake-up jitter (loop pinned to CPU 1, SCHED_FIFO 80, DDS on as shipped, mca-monitor subscribed)
-#      against cyclictest on the same CPU, same priority, same length (run right after);
+#      against cyclictest on the same CPU, same priority, same length, at the same time (half a period apart);
 #   2. DDS latency tick stamp -> mca-monitor receipt (the run of 1), with ddsperf's ping/pong round trip on the
 #      same loopback config beside it (one-way = RTT / 2);
-#   3. mcad's whole tick with DDS publishing vs without (mcad --dds-ab 500, publish_divisor 1: every tick of
-#      every other block of 500), one run.
+#   3. mcad's whole tick with DDS publishing vs without (mcad --dds-ab 500: publishing only in every other
+#      block of 500 ticks), one run as shipped (publish_divisor 10, 100 Hz) and one publishing every tick.
 # usage: bench/rt/issue13.sh BUILD_DIR [SECONDS (20)] [OUT_DIR (out/bench-issue13)] [MODES ("quiet busy")]
 # Needs root (SCHED_FIFO, mlockall) and 2 CPUs; prints one table (markdown) on stdout, raw outputs in OUT_DIR.
 set -u
@@ -19,6 +19,12 @@ MCAD=$B/daemon/mcad
 MON=$B/tools/mca-monitor/mca-monitor
 XML=$ROOT/config/dds/loopback.xml
 DOM=${MCA_BENCH_DOMAIN:-96}
+# The bench's own helpers (mca-monitor, ddsperf) run where a controller's other work would: off the loop's
+# CPU (MCA_BENCH_AUX_CPUS, default 0; "any" lets them run anywhere, as before 2026-12-05)
+AUX_CPUS=${MCA_BENCH_AUX_CPUS:-0}
+aux() {
+    if [ "$AUX_CPUS" = any ]; then "$@"; else taskset -c "$AUX_CPUS" "$@"; fi
+}
 mkdir -p "$OUT"
 export CYCLONEDDS_URI=file://$XML
 
@@ -36,30 +42,41 @@ for mode in $MODES; do
         busy=$!
     fi
     {
-        echo "mode $mode: $(date -u +%FT%TZ), git $(git -C "$ROOT" rev-parse --short HEAD), $(uptime)"
+        echo "mode $mode: $(date -u +%FT%TZ), git $(git -C "$ROOT" rev-parse --short HEAD), aux CPUs $AUX_CPUS, $(uptime)"
     } >"$R/machine.txt"
-    # 1 + 2: mcad as shipped (100 Hz on DDS), mca-monitor subscribed, ddsperf ping/pong beside it
+    # 1 + 2: mcad as shipped (100 Hz on DDS), mca-monitor subscribed, ddsperf ping/pong beside it; cyclictest
+    # at the same time on the loop's CPU at its priority, a quarter period before mcad's grid (mcad wakes at
+    # whole ms + 500 us of CLOCK_MONOTONIC, cyclictest --secaligned at whole seconds + 250 us: both clear of
+    # the kernel's tick on whole ms): both see the same stalls of this VM, and neither wakes while the other
+    # runs
     cell "$R/cell.yaml" 10
-    "$MON" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor.err" &
+    aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 12)) >/dev/null 2>"$R/monitor.err" &
     mon=$!
-    ddsperf -i $((DOM + 1)) -D $((DUR + 4)) pong >"$R/pong.txt" 2>&1 &
+    aux ddsperf -i $((DOM + 1)) -D $((DUR + 10)) pong >"$R/pong.txt" 2>&1 &
     pong=$!
-    ddsperf -i $((DOM + 1)) -D $((DUR + 2)) ping 100Hz >"$R/ping.txt" 2>&1 &
+    aux ddsperf -i $((DOM + 1)) -D $((DUR + 8)) ping 100Hz >"$R/ping.txt" 2>&1 &
     ping=$!
     sleep 2
-    "$MCAD" --stop-after "$DUR" "$R/cell.yaml" >/dev/null 2>"$R/mcad.err"
+    "$MCAD" --stop-after $((DUR + 3)) "$R/cell.yaml" >/dev/null 2>"$R/mcad.err" &
+    mcad=$!
+    for _ in $(seq 100); do
+        grep -q "mcad: running" "$R/mcad.err" && break
+        sleep 0.1
+    done
+    cyclictest -m -p 80 -a 1 -i 1000 --secaligned=250 -l $((DUR * 1000)) -q -h 200000 >"$R/cyclictest.txt" 2>&1
+    wait $mcad
     kill -INT $mon 2>/dev/null
     wait $mon $ping $pong 2>/dev/null
-    # 1: cyclictest, same CPU, priority, length
-    cyclictest -m -p 80 -a 1 -i 1000 -l $((DUR * 1000)) -q -h 200000 >"$R/cyclictest.txt" 2>&1
-    # 3: publishing on/off in one run
-    cell "$R/cell_ab.yaml" 1
-    "$MON" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor_ab.err" &
-    mon=$!
-    sleep 1
-    "$MCAD" --dds-ab 500 --stop-after "$DUR" "$R/cell_ab.yaml" >/dev/null 2>"$R/mcad_ab.err"
-    kill -INT $mon 2>/dev/null
-    wait $mon 2>/dev/null
+    # 3: publishing on/off in one run, as shipped (every 10th tick, 100 Hz) and every tick (1 kHz)
+    for div in 10 1; do
+        cell "$R/cell_ab$div.yaml" $div
+        aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor_ab$div.err" &
+        mon=$!
+        sleep 1
+        "$MCAD" --dds-ab 500 --stop-after "$DUR" "$R/cell_ab$div.yaml" >/dev/null 2>"$R/mcad_ab$div.err"
+        kill -INT $mon 2>/dev/null
+        wait $mon 2>/dev/null
+    done
     [ -n "$busy" ] && kill "$busy" && wait "$busy" 2>/dev/null
 done
 
@@ -118,10 +135,13 @@ for mode in modes:
               f"{dp or 'ddsperf: no figures (see ping.txt)'} | - | {mon_line[:160]} |")
     else:
         print(f"| 2. DDS latency tick -> mca-monitor | {mode} | (no latency line: see monitor.err) | {dp} | - | |")
-    ab = re.search(r"off p50 ([\d.]+) us, p99 ([\d.]+) us, mean ([\d.]+) us \((\d+) ticks\); on p50 ([\d.]+) us, p99 ([\d.]+) us, "
-                   r"mean ([\d.]+) us \((\d+) ticks\); ratio on/off p50 ([\d.]+), p99 ([\d.]+), mean ([\d.]+)", f(R + "/mcad_ab.err"))
-    if ab:
-        g = ab.groups()
-        print(f"| 3. whole tick, DDS publishing every tick vs none (mcad --dds-ab 500) | {mode} | on p50 {g[4]} / p99 {g[5]} / mean {g[6]} us | "
-              f"off p50 {g[0]} / p99 {g[1]} / mean {g[2]} us | mean {g[10]}, p50 {g[8]}, p99 {g[9]} | {g[7]} vs {g[3]} ticks, 1 us bins: read the mean |")
+    for div, what in (("10", "as shipped (100 Hz)"), ("1", "every tick (1 kHz)")):
+        ab = re.search(r"off p50 ([\d.]+) us, p99 ([\d.]+) us, mean ([\d.]+) us \((\d+) ticks\); on p50 ([\d.]+) us, p99 ([\d.]+) us, "
+                       r"mean ([\d.]+) us \((\d+) ticks\); ratio on/off p50 ([\d.]+), p99 ([\d.]+), mean ([\d.]+)", f(f"{R}/mcad_ab{div}.err"))
+        if ab:
+            g = ab.groups()
+            print(f"| 3. whole tick, DDS publishing {what} vs none (mcad --dds-ab 500) | {mode} | on p50 {g[4]} / p99 {g[5]} / mean {g[6]} us | "
+                  f"off p50 {g[0]} / p99 {g[1]} / mean {g[2]} us | mean {g[10]}, p50 {g[8]}, p99 {g[9]} | {g[7]} vs {g[3]} ticks, 1 us bins: read the mean |")
+        else:
+            print(f"| 3. whole tick, DDS publishing {what} vs none | {mode} | (no dds-ab line: see mcad_ab{div}.err) | | | |")
 PYEOF

@@ -332,8 +332,10 @@ static void wake(mca_dds_shm_t *shm) {
 }
 
 /* wake_period_ns: sleep until the next publishing tick of the caller's grid has pushed (the last
- * snapshot's stamp + period + offset), unless that is already past or the ring is not empty. */
-static void sleep_on_grid(mca_dds_shm_t *shm, int64_t stamp_ns) {
+ * snapshot's due time + period + offset), unless that is already past or the ring is not empty. Anchored
+ * on the due time, not the stamp: the stamp carries that tick's wake-up jitter, which the next tick does
+ * not share (the offset had to cover both ticks' jitter). */
+static void sleep_on_grid(mca_dds_shm_t *shm, int64_t due_ns) {
     mca_ring_stats_t rs;
     mca_ring_stats(&shm->ring, &rs);
     if (rs.pending > 0 || atomic_load_explicit(&shm->stop, memory_order_acquire)) {
@@ -343,7 +345,7 @@ static void sleep_on_grid(mca_dds_shm_t *shm, int64_t stamp_ns) {
     clock_gettime(CLOCK_MONOTONIC, &now);
     const int64_t t_now = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
     const int64_t step = (int64_t)(shm->cfg.wake_period_ns + shm->cfg.wake_offset_ns);
-    int64_t target = stamp_ns + step;
+    int64_t target = due_ns + step;
     if (target <= t_now) {
         return; /* late already: look now, park if nothing is there */
     }
@@ -399,7 +401,7 @@ static void publisher_run(publisher_t *b) {
             }
             publish_timed(b);
             if (shm->cfg.wake_period_ns > 0) {
-                sleep_on_grid(shm, b->work.stamp_ns);
+                sleep_on_grid(shm, b->work.due_ns != 0 ? b->work.due_ns : b->work.stamp_ns);
             }
             continue;
         }

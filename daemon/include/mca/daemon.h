@@ -128,10 +128,13 @@ typedef struct mca_daemon_csv_rec {
 
 #define MCA_DAEMON_CSV_CAPACITY 4096
 
-/** The DDS publisher wakes this long after a publishing tick's wake-up (mca_dds_config_t.wake_offset_ns):
- *  above the whole tick's usual compute time here (p50 ~25 us, p99 ~50 us), so that most pushes find the
- *  publisher asleep on the grid (no system call) and the sample still leaves soon after the tick. */
-#define MCA_DAEMON_DDS_WAKE_OFFSET_NS 60000
+/** The DDS publisher wakes this long after a publishing tick was due (mca_dds_config_t.wake_offset_ns, from
+ *  the snapshot's due_ns): above the tick's usual wake-up jitter plus compute time here (p50 ~15 + 8 us), so
+ *  that most pushes find the publisher asleep on the grid (no system call; the loop woke it on 1-4 % of the
+ *  publishing ticks in 10-s runs) and the sample leaves soon after the tick. 60, 40, 30 and 20 us, three
+ *  interleaved rounds of 10 s (p50 tick -> mca-monitor): 205/91/97, 120/97/77, 62/90/57, 48/57/61 us, the
+ *  loop's wakes 12/3/5, 8/12/6, 9/44/9, 22/55/84 per 1001 (docs/bench-runs/2026-12-05-issue13-*.md). */
+#define MCA_DAEMON_DDS_WAKE_OFFSET_NS 30000
 
 /** Controller ticks the loop runs on a scratch copy before its first command (the code runs cold once). */
 #define MCA_DAEMON_WARM_TICKS 20

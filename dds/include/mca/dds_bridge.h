@@ -108,6 +108,8 @@ typedef struct mca_dds_status_snapshot {
 typedef struct mca_dds_snapshot {
     uint64_t tick;    /**< controller tick number */
     int64_t stamp_ns; /**< tick time stamp [ns] (CLOCK_MONOTONIC in this repo's programs) */
+    int64_t due_ns;   /**< when the tick was due, its point on the caller's grid (same clock; 0: stamp_ns):
+                       *   the publisher's wake-up anchor (wake_period_ns), free of the tick's own jitter */
     uint32_t n_arms;  /**< <= MCA_MAX_ARMS */
     uint32_t n_pairs; /**< <= MCA_MAX_PAIRS */
     mca_dds_arm_snapshot_t arm[MCA_MAX_ARMS];
