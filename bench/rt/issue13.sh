@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 # Issue 13's benchmark rows, one run each, with the other CPU quiet and then loaded (a busy loop pinned there):
 #   1. mcad's wake-up jitter (loop pinned to CPU 1, SCHED_FIFO 80, DDS on as shipped, mca-monitor subscribed)
-#      against cyclictest on the same CPU, same priority, same length, at the same time (half a period apart);
+#      against cyclictest on the same CPU, same priority, same length, at the same time (a quarter period apart);
 #   2. DDS latency tick stamp -> mca-monitor receipt (the run of 1), with ddsperf's ping/pong round trip on the
 #      same loopback config beside it (one-way = RTT / 2);
 #   3. mcad's whole tick with DDS publishing vs without (mcad --dds-ab 500: publishing only in every other
@@ -28,8 +28,10 @@ aux() {
 mkdir -p "$OUT"
 export CYCLONEDDS_URI=file://$XML
 
-cell() { # cell FILE DIVISOR: cross circles on the sim arms, loop on CPU 1, our domain
-    sed -e "s#\.\./#$ROOT/config/#" -e "s#domain: .*#domain: $DOM#" -e "s#publish_divisor: .*#publish_divisor: $2#" \
+cell() { # cell FILE DIVISOR: cross circles on the sim arms, loop on CPU 1, the DDS publisher SCHED_FIFO 10 off
+    #   CPU 1 (docs/daemon.md "CPUs": the isolated-core set-up), our domain
+    sed -e "s#\.\./#$ROOT/config/#" -e "s#domain: .*#domain: $DOM#" \
+        -e "s#publish_divisor: .*#publish_divisor: $2\n  priority: 10#" \
         -e "s#cpu: .*#cpu: 1#" "$ROOT/config/cells/cross_circles_sim.yaml" >"$1"
 }
 

@@ -72,6 +72,7 @@ struct raw_dds {
     long long *domain;
     char *config;
     long long *publish_divisor;
+    int *priority;
 };
 
 struct raw_rt {
@@ -195,6 +196,7 @@ static const cyaml_schema_field_t dds_fields[] = {
     CYAML_FIELD_INT_PTR("domain", OPT, struct raw_dds, domain),
     CYAML_FIELD_STRING_PTR("config", OPT, struct raw_dds, config, 0, 400),
     CYAML_FIELD_INT_PTR("publish_divisor", OPT, struct raw_dds, publish_divisor),
+    CYAML_FIELD_INT_PTR("priority", OPT, struct raw_dds, priority),
     CYAML_FIELD_END,
 };
 
@@ -269,6 +271,7 @@ static const mca_range_t r_arm_priority = {"priority", 0.0, 1000.0, 1, 0, ""};
 static const mca_range_t r_dds_domain = {"domain", 0, 230, 0, 1, ""};
 static const mca_range_t r_publish_divisor = {"publish_divisor", 1, 100000, 0, 1, "ticks"};
 static const mca_range_t r_rt_priority = {"priority", 0, 99, 0, 1, "(0 = SCHED_OTHER)"};
+static const mca_range_t r_dds_priority = {"priority", 0, 98, 0, 1, "(0 = SCHED_OTHER)"};
 /* overruns: real arms need 3-10; arms in virtual time (the sim backend, lockstep emulators on an emulated
  * CPU) tolerate any stall, so up to the longest task's tick count (an hour of periods) */
 static const mca_range_t r_overrun_limit = {"overrun_limit", 1, MCA_SCENARIO_MAX_TICKS, 0, 1, "periods"};
@@ -606,6 +609,10 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
             CHECK(&r_publish_divisor, (double)*d->publish_divisor, "dds.publish_divisor");
             cell->dds.publish_divisor = (uint32_t)*d->publish_divisor;
         }
+        if (d->priority) {
+            CHECK(&r_dds_priority, *d->priority, "dds.priority");
+            cell->dds.priority = *d->priority;
+        }
     }
     if (cell->stream.enabled &&
         !(cell->dds.enabled &&
@@ -714,6 +721,11 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     if (rt->pdnn_budget_ns == 0) {
         rt->pdnn_budget_ns = rt->period_ns / 2; /* the default: half the period */
+    }
+    if (cell->dds.priority > 0 && cell->dds.priority >= rt->priority) {
+        /* the publisher must never delay the loop it publishes for (also when both share a CPU) */
+        FAIL(MCA_ECONFIG, LINE("dds.priority"), "dds.priority: %d must be below rt.priority (%d%s)",
+             cell->dds.priority, rt->priority, rt->priority == 0 ? ", SCHED_OTHER" : "");
     }
     /* the controller's prediction uses the loop period */
     scn->params.dt = (double)rt->period_ns * 1e-9;

@@ -536,6 +536,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;
             dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
         }
+        dc.sched_priority = opts->no_rt ? 0 : cell->dds.priority;
         /* the publisher is a process of its own (issue 16): no DDS, and so no peer on the network, in this
          * one */
         char exe[PATH_MAX];
@@ -561,7 +562,18 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         if (rc == MCA_OK) {
             mca_dds_stats_t ds;
             mca_dds_bridge_stats(d->dds, &ds);
-            fprintf(d->opts.log, "<6>mcad: dds bridge: pid %d (%s)\n", (int)ds.pid, exe);
+            if (dc.sched_priority > 0 && ds.sched_refused) {
+                fprintf(d->opts.log,
+                        "<4>mcad: dds.priority %d (SCHED_FIFO) not permitted: the publisher runs SCHED_OTHER "
+                        "and a busy CPU delays its samples\n",
+                        dc.sched_priority);
+            }
+            if (dc.sched_priority > 0 && !ds.sched_refused) {
+                fprintf(d->opts.log, "<6>mcad: dds bridge: pid %d (%s), SCHED_FIFO %d\n", (int)ds.pid, exe,
+                        dc.sched_priority);
+            } else {
+                fprintf(d->opts.log, "<6>mcad: dds bridge: pid %d (%s)\n", (int)ds.pid, exe);
+            }
         }
     }
     if (rc == MCA_OK && opts->csv_path) {

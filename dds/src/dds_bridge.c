@@ -12,6 +12,7 @@
 #include <linux/futex.h> /* FUTEX_WAIT, FUTEX_WAKE (shared: the word may be in a memfd) */
 #include <math.h>
 #include <pthread.h>
+#include <sched.h>  /* SCHED_FIFO */
 #include <signal.h> /* kill */
 #include <spawn.h>  /* posix_spawn: vfork semantics, no copy-on-write of the owner's locked memory */
 #include <stdatomic.h>
@@ -71,6 +72,8 @@ struct mca_dds_bridge {
     publisher_t *pub;
     pthread_t thread;
     int thread_started;
+    int sched_priority; /* cfg->sched_priority: SCHED_FIFO of the publisher, 0: the caller's policy */
+    int sched_refused;  /* 1: that was not permitted */
     /* process mode (the owner's supervising thread only) */
     int memfd;
     char exe[PATH_MAX];
@@ -595,7 +598,32 @@ static int config_ok(const mca_dds_config_t *cfg, char *err, size_t errlen) {
         mca_errbuf_printf(err, errlen, "bridge program path empty or longer than %d bytes", PATH_MAX - 1);
         return MCA_EINVAL;
     }
+    if (cfg->sched_priority < 0 || cfg->sched_priority > 98) {
+        mca_errbuf_printf(err, errlen, "publisher priority %d: must be 0 (the caller's policy) or 1..98",
+                          cfg->sched_priority);
+        return MCA_EINVAL;
+    }
     return MCA_OK;
+}
+
+/* In-process: the publisher thread, SCHED_FIFO at sched_priority if asked and permitted. */
+static int start_publisher_thread(mca_dds_bridge_t *b) {
+    int e = -1;
+    if (b->sched_priority > 0) {
+        pthread_attr_t at;
+        pthread_attr_init(&at);
+        const struct sched_param sp = {.sched_priority = b->sched_priority};
+        pthread_attr_setinheritsched(&at, PTHREAD_EXPLICIT_SCHED);
+        pthread_attr_setschedpolicy(&at, SCHED_FIFO);
+        pthread_attr_setschedparam(&at, &sp);
+        e = pthread_create(&b->thread, &at, publisher_thread, b->pub);
+        pthread_attr_destroy(&at);
+        b->sched_refused = e == EPERM;
+    }
+    if (e != 0) {
+        e = pthread_create(&b->thread, NULL, publisher_thread, b->pub);
+    }
+    return e;
 }
 
 /* Start one publisher process over the region: the memfd as fd 3, every other descriptor of the owner closed
@@ -621,10 +649,23 @@ static int spawn_publisher(mca_dds_bridge_t *b, char *err, size_t errlen) {
     sigdelset(&all, SIGSTOP);
     posix_spawnattr_setsigmask(&at, &none);
     posix_spawnattr_setsigdefault(&at, &all);
-    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+    short flags = POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF;
+    if (b->sched_priority > 0 && !b->sched_refused) {
+        /* set in the child before exec: every thread it creates (Cyclone's too) inherits it */
+        const struct sched_param sp = {.sched_priority = b->sched_priority};
+        posix_spawnattr_setschedpolicy(&at, SCHED_FIFO);
+        posix_spawnattr_setschedparam(&at, &sp);
+        flags |= POSIX_SPAWN_SETSCHEDULER;
+    }
+    posix_spawnattr_setflags(&at, flags);
     atomic_fetch_add_explicit(&b->shm->start_gen, 1u, memory_order_release);
     pid_t pid = 0;
-    const int e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
+    int e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
+    if (e == EPERM && (flags & POSIX_SPAWN_SETSCHEDULER)) {
+        b->sched_refused = 1; /* not permitted: the caller's policy (the stats say so) */
+        posix_spawnattr_setflags(&at, (short)(flags & ~POSIX_SPAWN_SETSCHEDULER));
+        e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
+    }
     posix_spawn_file_actions_destroy(&fa);
     posix_spawnattr_destroy(&at);
     if (e != 0) {
@@ -750,6 +791,7 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
     }
     b->memfd = -1;
     b->process = cfg->process_exe != NULL;
+    b->sched_priority = cfg->sched_priority;
     b->shm_size = mca_dds_shm_size(cfg->ring_capacity);
     int rc = MCA_OK;
     if (b->process) {
@@ -782,7 +824,7 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
         b->pub->fault_text = cfg->fault_text;
         b->pub->fault_text_arg = cfg->fault_text_arg;
         rc = publisher_open(b->pub, err, errlen);
-        if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_thread, b->pub) != 0) {
+        if (rc == MCA_OK && start_publisher_thread(b) != 0) {
             publisher_close(b->pub);
             rc = MCA_ENOMEM;
         }
@@ -829,6 +871,7 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     mca_ring_stats(&shm->ring, &rs);
     memset(out, 0, sizeof *out);
     out->offered = atomic_load_explicit(&shm->offered, memory_order_relaxed);
+    out->sched_refused = bridge->sched_refused;
     out->queued = rs.pushed;
     out->dropped = rs.dropped;
     out->pending = rs.pending;

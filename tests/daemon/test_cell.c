@@ -162,6 +162,7 @@ static void test_good_cell(void **state) {
     assert_int_equal(cell.dds.enabled, 0);
     assert_int_equal(cell.dds.domain, 7);
     assert_int_equal(cell.dds.publish_divisor, 4);
+    assert_int_equal(cell.dds.priority, 0); /* default: SCHED_OTHER */
     assert_true(cell.rt.period_ns == 2000000);
     assert_true(fabs(cell.scn.params.dt - 0.002) < 1e-15); /* controller dt follows the period */
     assert_int_equal(cell.rt.priority, 70);
@@ -308,6 +309,36 @@ static void test_bad_priority(void **state) {
     (void)state;
     const char *p = write_variant("prio", "priority: 70", "priority: 150");
     expect_error(p, MCA_ECONFIG, line_of(p, "priority: 150"), "rt.priority", "0..99", NULL);
+}
+
+/* dds.priority: 0..98 and below the loop's (rt.priority 70 in the base cell); accepted below it */
+static void test_dds_priority(void **state) {
+    (void)state;
+    const char *p = write_variant("ddsprio_range", "  domain: 7\n", "  domain: 7\n  priority: 99\n");
+    expect_error(p, MCA_ECONFIG, line_of(p, "priority: 99"), "dds.priority", "0..98", NULL);
+    p = write_variant("ddsprio_above", "  domain: 7\n", "  domain: 7\n  priority: 75\n");
+    expect_error(p, MCA_ECONFIG, line_of(p, "priority: 75"), "dds.priority",
+                 "75 must be below rt.priority (70)", NULL);
+    p = write_variant("ddsprio_other", "  priority: 70\n", "  priority: 0\n");
+    char text[4096];
+    FILE *f = fopen(p, "r");
+    assert_non_null(f);
+    text[fread(text, 1, sizeof text - 1, f)] = 0;
+    fclose(f);
+    f = fopen(p, "w");
+    assert_non_null(f);
+    char *at = strstr(text, "  domain: 7\n");
+    assert_non_null(at);
+    fprintf(f, "%.*s  domain: 7\n  priority: 1\n%s", (int)(at - text), text, at + strlen("  domain: 7\n"));
+    fclose(f);
+    expect_error(p, MCA_ECONFIG, line_of(p, "priority: 1"), "dds.priority",
+                 "1 must be below rt.priority (0, SCHED_OTHER)", NULL);
+    p = write_variant("ddsprio_ok", "  domain: 7\n", "  domain: 7\n  priority: 69\n");
+    char err[1024] = "";
+    if (mca_cell_load(p, &cell, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    assert_int_equal(cell.dds.priority, 69);
 }
 
 static void test_scenario_missing(void **state) {
@@ -847,10 +878,11 @@ int main(void) {
         cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
         cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
         cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_ros2_keys),          cmocka_unit_test(test_search_path),
-        cmocka_unit_test(test_duplicate_arm),      cmocka_unit_test(test_shipped_cells),
-        cmocka_unit_test(test_mca_ts_keys),        cmocka_unit_test(test_cell_error_lines),
-        cmocka_unit_test(test_arm_error_lines),    cmocka_unit_test(test_scenario_arm_lines),
+        cmocka_unit_test(test_dds_priority),       cmocka_unit_test(test_ros2_keys),
+        cmocka_unit_test(test_search_path),        cmocka_unit_test(test_duplicate_arm),
+        cmocka_unit_test(test_shipped_cells),      cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_cell_error_lines),   cmocka_unit_test(test_arm_error_lines),
+        cmocka_unit_test(test_scenario_arm_lines),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[300];

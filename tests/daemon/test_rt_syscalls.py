@@ -14,7 +14,9 @@ one restart_syscall (the sleep strace's attach interrupted). Allowed only after 
 (the thread ending: glibc's thread exit): rt_sigprocmask, madvise, exit. Anything else fails the test.
 
 With two or more CPUs the cell sets rt.cpu: 1, and the test also checks the threads' CPU affinity: the loop
-on CPU 1 alone, every other thread (supervisor/drainer, DDS publisher, Cyclone's) off CPU 1.
+on CPU 1 alone, every other thread (supervisor/drainer, DDS publisher, Cyclone's) off CPU 1. The cell also
+sets dds.priority: 10, and every thread of the DDS bridge process must run SCHED_FIFO 10 (SCHED_OTHER with
+--no-rt, which mcad passes on to the publisher).
 
 --can ARMSIM (in the vcan guest, tests/daemon/rt_syscalls_can.sh): the same on the CAN backend, cell
 negative_vcan (no DDS): each arm's CAN FD bus a vcan answered by mca-armsim in lockstep (no watchdog, so the
@@ -62,6 +64,15 @@ def threads(pid):
             continue
         out[int(tid)] = (name, cpus)
     return out
+
+
+def sched_of(pid, tid):
+    """(policy, rt priority) of a thread: /proc stat fields 41 and 40 (1 = SCHED_FIFO)."""
+    try:
+        f = open(f"/proc/{pid}/task/{tid}/stat").read().rsplit(")", 1)[1].split()
+        return int(f[38]), int(f[37])
+    except (OSError, IndexError, ValueError):
+        return None
 
 
 def cpu_list(s):
@@ -187,6 +198,9 @@ def main():
     text = re.sub(r"domain: *\d+", f"domain: {domain}", text)
     if pin:
         text = re.sub(r"cpu: *-?\d+", "cpu: 1", text)
+    # dds.priority: the publisher process (all its threads) SCHED_FIFO 10, below the loop's 80
+    dds_fifo = not armsim and "--no-rt" not in extra
+    text = re.sub(r"(\n  publish_divisor: *\d+[^\n]*)", r"\1\n  priority: 10", text, count=1)
     if armsim:
         # strace stops the loop at every call of an emulated CPU: the longest supervision limits, so that
         # the task runs a while before a fault (seen with the cell's 20 cycles: lost feedback at 0.12 s)
@@ -226,8 +240,10 @@ def main():
         children = open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()
     except OSError:
         children = []
+    policies = {}
     for child in children:
         affinity.update({tid: ("bridge:" + name, cpus) for tid, (name, cpus) in threads(int(child)).items()})
+        policies.update({tid: (name, sched_of(int(child), tid)) for tid, (name, _) in threads(int(child)).items()})
     mcad_ns = ns_of(p.pid)  # while it runs (diagnostics when strace traces nothing)
     rc = p.wait(timeout=300)
     lost = 0
@@ -255,6 +271,16 @@ def main():
             print(f"thread {tid} {name:16s} CPUs {cpus}{'' if ok else '   <- wrong'}")
             if not ok:
                 bad.append(f"thread {name} on CPUs {cpus} (rt.cpu 1: the loop alone on 1, every other thread off it)")
+
+    if not armsim:
+        want = (1, 10) if dds_fifo else (0, 0)
+        if not policies:
+            bad.append("no thread of the DDS bridge process found")
+        for tid, (name, sp) in sorted(policies.items()):
+            print(f"bridge thread {tid} {name:16s} policy/priority {sp}{'' if sp == want else '   <- wrong'}")
+            if sp != want:
+                bad.append(f"bridge thread {name}: policy/priority {sp}, expected {want} (dds.priority 10"
+                           f"{'' if dds_fifo else ', but --no-rt'})")
 
     calls = []
     if ftrace:

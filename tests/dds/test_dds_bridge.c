@@ -67,6 +67,10 @@ static void test_create_rejects_bad_arguments(void **state) {
     cfg.partition = "a_partition_name_that_is_much_longer_than_the_sixty_three_bytes_allowed";
     assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
     cfg.partition = NULL;
+    cfg.sched_priority = 99; /* 0 or 1..98: never the 99 of the kernel's own threads */
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_EINVAL);
+    assert_non_null(strstr(err, "publisher priority 99"));
+    cfg.sched_priority = 0;
     cfg.config_path = "/nonexistent/mca/cyclone.xml";
     assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_ENOENT);
     assert_string_equal(err, "cannot read config file '/nonexistent/mca/cyclone.xml'");
@@ -405,8 +409,77 @@ static void test_publisher_parks_and_wakes(void **state) {
     dds_delete(r.pp);
 }
 
-/* With wake_period_ns the publisher sleeps on the caller's grid (stamp + period + offset) after each
- * snapshot: on-time pushes find it asleep there and make no system call (no FUTEX_WAKE). */
+/* Scheduling policy and priority of this process's thread named @p name (/proc stat fields 41, 40); -1. */
+static int thread_sched(const char *name, int *prio) {
+    char path[300], line[1024];
+    DIR *dir = opendir("/proc/self/task");
+    int policy = -1;
+    for (struct dirent *e; dir != NULL && policy < 0 && (e = readdir(dir)) != NULL;) {
+        snprintf(path, sizeof path, "/proc/self/task/%s/comm", e->d_name);
+        FILE *f = fopen(path, "r");
+        if (f == NULL) {
+            continue;
+        }
+        const int same = fgets(line, sizeof line, f) != NULL && strncmp(line, name, strlen(name)) == 0;
+        fclose(f);
+        snprintf(path, sizeof path, "/proc/self/task/%s/stat", e->d_name);
+        if (!same || (f = fopen(path, "r")) == NULL) {
+            continue;
+        }
+        const char *p = fgets(line, sizeof line, f) != NULL ? strrchr(line, ')') : NULL;
+        fclose(f);
+        for (int field = 2; p != NULL && field < 41; field++) { /* ") S ..." : field 3 follows */
+            p = strchr(p + 1, ' ');
+            if (p != NULL && field == 39) {
+                *prio = atoi(p + 1);
+            }
+        }
+        policy = p != NULL ? atoi(p + 1) : -1;
+    }
+    if (dir != NULL) {
+        closedir(dir);
+    }
+    return policy;
+}
+
+/* sched_priority: the in-process publisher thread runs SCHED_FIFO at it (as root; else it is refused and
+ * the stats say so), and pushes still arrive. */
+static void test_publisher_priority(void **state) {
+    (void)state;
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.ring_capacity = 16;
+    cfg.partition = g_partition;
+    cfg.sched_priority = 7;
+    mca_dds_bridge_t *b = NULL;
+    char err[320] = "";
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
+    mca_dds_stats_t st;
+    assert_int_equal(mca_dds_bridge_stats(b, &st), MCA_OK);
+    int prio = -1;
+    const int policy = thread_sched("mca-dds-pub", &prio);
+    print_message("publisher thread: policy %d priority %d (refused %d)\n", policy, prio, st.sched_refused);
+    if (geteuid() == 0) {
+        assert_int_equal(st.sched_refused, 0);
+        assert_int_equal(policy, 1); /* SCHED_FIFO */
+        assert_int_equal(prio, 7);
+    } else {
+        assert_true(st.sched_refused || policy == 1);
+    }
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    mca_dds_synth_fill(&snap, 0, 1, &mn, &ms);
+    mca_dds_bridge_push(b, &snap);
+    mca_dds_bridge_destroy(b, &st); /* flushes first */
+    assert_int_equal(st.published, 1);
+}
+
+/* With wake_period_ns the publisher sleeps on the caller's grid (due time + period + offset) after each
+ * snapshot: on-time pushes find it asleep there and make no system call (no FUTEX_WAKE). The stamps here are
+ * 8 ms before the due times: a publisher anchored on the stamp would look 5 ms after each push, find the
+ * ring empty, park, and need a FUTEX_WAKE for every push. */
 static void test_publisher_wakes_on_grid(void **state) {
     (void)state;
     mca_dds_config_t cfg;
@@ -435,7 +508,8 @@ static void test_publisher_wakes_on_grid(void **state) {
         while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
         }
         mca_dds_synth_fill(&snap, (uint64_t)k, at, &mn, &ms);
-        snap.stamp_ns = at; /* the tick's grid time, as mcad's wake stamp */
+        snap.due_ns = at;             /* the tick's grid time */
+        snap.stamp_ns = at - 8000000; /* not the anchor (see above) */
         mca_dds_bridge_push(b, &snap);
     }
     mca_dds_stats_t st;
@@ -877,6 +951,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(test_every_snapshot_arrives_intact),
         cmocka_unit_test(test_publisher_parks_and_wakes),
         cmocka_unit_test(test_publisher_wakes_on_grid),
+        cmocka_unit_test(test_publisher_priority),
         cmocka_unit_test(test_overrun_drops_oldest_and_counts),
         cmocka_unit_test(test_partition_isolates),
         cmocka_unit_test(test_invalid_snapshot_rejected),

@@ -87,6 +87,8 @@ typedef struct mca_cell_dds {
     uint32_t domain;
     char config[512];         /**< Cyclone XML (absolute), "" = CYCLONEDDS_URI / defaults */
     uint32_t publish_divisor; /**< publish every Nth tick */
+    int priority;             /**< SCHED_FIFO priority of the publisher (mca-dds-bridge), below rt.priority;
+                               *   0 = SCHED_OTHER */
     mca_cell_ros2_t ros2;
 } mca_cell_dds_t;
 

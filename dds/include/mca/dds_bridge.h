@@ -148,6 +148,11 @@ typedef struct mca_dds_config {
      *  alone talks DDS; NULL (default): a thread of the caller. In process mode fault_text is not called
      *  (the owner hands the text over with mca_dds_bridge_fault_text()) and wait_readers is not available. */
     const char *process_exe;
+    /** > 0: the publisher runs SCHED_FIFO at this priority (1..98), so that a loaded CPU delays its samples
+     *  no more than its own work does (process mode: all of mca-dds-bridge, Cyclone's threads too;
+     *  in-process: the publisher thread). Not permitted (no CAP_SYS_NICE / RLIMIT_RTPRIO): it runs with the
+     *  caller's policy and mca_dds_stats_t.sched_refused says so. 0 (default): the caller's policy. */
+    int sched_priority;
 } mca_dds_config_t;
 
 /** Bridge counters. */
@@ -171,6 +176,7 @@ typedef struct mca_dds_stats {
     uint64_t hung;          /**< process mode: of those, killed by the supervisor as hung */
     int32_t pid;            /**< process mode: the running publisher's pid, 0: none (down or restarting) */
     int down;               /**< process mode: 1 = it died too often and is not restarted any more */
+    int sched_refused; /**< 1: sched_priority was not permitted; the publisher runs the caller's policy */
 } mca_dds_stats_t;
 
 /** Process mode: the first restart comes this long after a death [s], each further one twice as long after
