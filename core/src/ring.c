@@ -54,28 +54,42 @@ int mca_ring_init(mca_ring_t *ring, void *storage, size_t storage_size, size_t e
     return MCA_OK;
 }
 
-/* The producer's side, from the geometry given (the ring's own, or the producer's copy of it). */
-static inline void push_at(_Atomic uint64_t *head, unsigned char *slots, size_t elem_size, size_t slot_size,
-                           uint64_t mask, const void *rec) {
-    /* Only this thread writes head, so a relaxed load reads our own last store. */
-    const uint64_t n = atomic_load_explicit(head, memory_order_relaxed);
-    _Atomic uint64_t *s = (_Atomic uint64_t *)(void *)(slots + (size_t)(n & mask) * slot_size);
-    _Atomic uint64_t *payload = s + 1;
-    const unsigned char *src = rec;
-    const size_t full = elem_size / 8u;
-    const size_t rest = elem_size % 8u;
-
-    atomic_store_explicit(&s[0], 2u * n + 1u, memory_order_relaxed); /* W1: writing */
-    atomic_thread_fence(memory_order_release);                       /* W2 */
-    for (size_t w = 0; w < full; ++w) {                              /* W3 */
+/* W3 for bytes [from, to) of the record (from a multiple of 8; to <= elem_size). */
+static inline void copy_words(_Atomic uint64_t *payload, const unsigned char *src, size_t from, size_t to) {
+    const size_t full = to / 8u;
+    for (size_t w = from / 8u; w < full; ++w) {
         uint64_t v;
         memcpy(&v, src + 8u * w, 8u);
         atomic_store_explicit(&payload[w], v, memory_order_relaxed);
     }
-    if (rest != 0) {
+    if (to % 8u != 0 && from < to) {
         uint64_t v = 0;
-        memcpy(&v, src + 8u * full, rest);
+        memcpy(&v, src + 8u * full, to % 8u);
         atomic_store_explicit(&payload[full], v, memory_order_relaxed);
+    }
+}
+
+/* The producer's side, from the geometry given (the ring's own, or the producer's copy of it): the whole
+ * record (parts NULL) or the given byte ranges of it. */
+static inline void push_at(_Atomic uint64_t *head, unsigned char *slots, size_t elem_size, size_t slot_size,
+                           uint64_t mask, const void *rec, const mca_ring_part_t *parts, int n_parts) {
+    /* Only this thread writes head, so a relaxed load reads our own last store. */
+    const uint64_t n = atomic_load_explicit(head, memory_order_relaxed);
+    _Atomic uint64_t *s = (_Atomic uint64_t *)(void *)(slots + (size_t)(n & mask) * slot_size);
+    _Atomic uint64_t *payload = s + 1;
+
+    atomic_store_explicit(&s[0], 2u * n + 1u, memory_order_relaxed); /* W1: writing */
+    atomic_thread_fence(memory_order_release);                       /* W2 */
+    if (parts == NULL) {                                             /* W3 */
+        copy_words(payload, rec, 0, elem_size);
+    } else {
+        for (int k = 0; k < n_parts; ++k) {
+            const size_t from = parts[k].offset & ~(size_t)7u;
+            if (from < elem_size) {
+                const size_t len = parts[k].len < elem_size - from ? parts[k].len : elem_size - from;
+                copy_words(payload, rec, from, from + len);
+            }
+        }
     }
     atomic_store_explicit(&s[0], 2u * n + 2u, memory_order_release); /* W4: complete */
     atomic_store_explicit(head, n + 1u, memory_order_release);       /* W5 */
@@ -83,7 +97,7 @@ static inline void push_at(_Atomic uint64_t *head, unsigned char *slots, size_t 
 
 void mca_ring_push(mca_ring_t *ring, const void *rec) {
     push_at(&ring->head, (unsigned char *)(void *)slot_at(ring, 0), ring->elem_size, ring->slot_size,
-            ring->mask, rec);
+            ring->mask, rec, NULL, 0);
 }
 
 void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring) {
@@ -95,7 +109,12 @@ void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring) {
 }
 
 void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec) {
-    push_at(&p->ring->head, p->slots, p->elem_size, p->slot_size, p->mask, rec);
+    push_at(&p->ring->head, p->slots, p->elem_size, p->slot_size, p->mask, rec, NULL, 0);
+}
+
+void mca_ring_producer_push_parts(const mca_ring_producer_t *p, const void *rec, const mca_ring_part_t *parts,
+                                  int n_parts) {
+    push_at(&p->ring->head, p->slots, p->elem_size, p->slot_size, p->mask, rec, parts, n_parts);
 }
 
 /* First record that can still be intact when a slot shows sequence word s (record (s-1)/2 is in it). */

@@ -841,10 +841,24 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
     return MCA_OK;
 }
 
+/* mca_ring_part_t ranges are whole words */
+_Static_assert(offsetof(mca_dds_snapshot_t, arm) % 8 == 0 && sizeof(mca_dds_arm_snapshot_t) % 8 == 0 &&
+                   offsetof(mca_dds_snapshot_t, pair) % 8 == 0 && sizeof(mca_dds_pair_snapshot_t) % 8 == 0 &&
+                   offsetof(mca_dds_snapshot_t, status) % 8 == 0,
+               "the snapshot's arm, pair and status parts must start on whole words");
+
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap) {
     mca_dds_shm_t *shm = bridge->shm;
     bump(&shm->offered);
-    mca_ring_producer_push(&bridge->producer, snap);
+    /* only the arms and pairs in use (2 arms, 1 pair: 1.6 of 4 kB): the publisher reads no more */
+    const size_t n_arms = snap->n_arms < MCA_MAX_ARMS ? snap->n_arms : MCA_MAX_ARMS;
+    const size_t n_pairs = snap->n_pairs < MCA_MAX_PAIRS ? snap->n_pairs : MCA_MAX_PAIRS;
+    const mca_ring_part_t parts[3] = {
+        {0, offsetof(mca_dds_snapshot_t, arm) + n_arms * sizeof snap->arm[0]},
+        {offsetof(mca_dds_snapshot_t, pair), n_pairs * sizeof snap->pair[0]},
+        {offsetof(mca_dds_snapshot_t, status), sizeof snap->status},
+    };
+    mca_ring_producer_push_parts(&bridge->producer, snap, parts, 3);
     /* pairs with the fence in park(): the publisher sees the record or we see it parked */
     atomic_thread_fence(memory_order_seq_cst);
     if (atomic_load_explicit(&shm->parked, memory_order_relaxed) &&

@@ -285,6 +285,48 @@ static void run_stress(size_t capacity, uint64_t n) {
 /* A ring and its storage in one block moved elsewhere (as two processes map one memfd at different
  * addresses): the copy works; a producer with its own geometry (mca_ring_producer_t) never writes outside the
  * storage even when the ring's fields are scribbled over (issue 16: the consumer may be another process). */
+/* push_parts writes only the given words of a record (a range past the end cut there, on a record whose size
+ * is not a multiple of 8); the slot's other words keep the earlier record's. */
+static void test_push_parts(void **state) {
+    (void)state;
+    enum { CAP = 2, SIZE = 60 }; /* 7 whole words and 4 bytes */
+    static mca_ring_t ring;
+    static _Alignas(64) unsigned char storage[MCA_RING_STORAGE_SIZE(SIZE, CAP)];
+    assert_int_equal(mca_ring_init(&ring, storage, sizeof storage, SIZE, CAP), MCA_OK);
+    mca_ring_producer_t p;
+    mca_ring_producer_init(&p, &ring);
+    unsigned char a[SIZE], b[SIZE], out[SIZE], want[SIZE];
+    for (int i = 0; i < SIZE; ++i) {
+        a[i] = (unsigned char)(1 + i);
+        b[i] = (unsigned char)(101 + i);
+    }
+    const mca_ring_part_t parts[] = {{0, 16}, {40, 8}, {56, 64}}; /* words 0-1, 5, and the last 4 bytes */
+    mca_ring_producer_push_parts(&p, a, parts, 3);                /* slot 0, never written before */
+    assert_int_equal(mca_ring_pop(&ring, out), MCA_OK);
+    memset(want, 0, sizeof want);
+    memcpy(want, a, 16);
+    memcpy(want + 40, a + 40, 8);
+    memcpy(want + 56, a + 56, 4);
+    assert_memory_equal(out, want, SIZE);
+
+    mca_ring_producer_push(&p, b);                 /* slot 1 */
+    mca_ring_producer_push(&p, b);                 /* slot 0: whole b */
+    mca_ring_producer_push_parts(&p, a, parts, 3); /* slot 1 again (over b): drops the oldest b */
+    assert_int_equal(mca_ring_pop(&ring, out), MCA_OK);
+    assert_memory_equal(out, b, SIZE);
+    assert_int_equal(mca_ring_pop(&ring, out), MCA_OK);
+    memcpy(want, b, SIZE);
+    memcpy(want, a, 16);
+    memcpy(want + 40, a + 40, 8);
+    memcpy(want + 56, a + 56, 4);
+    assert_memory_equal(out, want, SIZE);
+    assert_int_equal(mca_ring_pop(&ring, out), MCA_EAGAIN);
+    mca_ring_stats_t st;
+    mca_ring_stats(&ring, &st);
+    assert_int_equal(st.pushed, 4);
+    assert_int_equal(st.dropped, 1);
+}
+
 static void test_position_independent_and_producer_copy(void **state) {
     (void)state;
     enum { CAP = 8 };
@@ -352,6 +394,7 @@ int main(void) {
         cmocka_unit_test(test_full_ring_drops_oldest),
         cmocka_unit_test(test_odd_element_size),
         cmocka_unit_test(test_position_independent_and_producer_copy),
+        cmocka_unit_test(test_push_parts),
         cmocka_unit_test(test_stress_two_threads_small_ring),
         cmocka_unit_test(test_stress_two_threads_large_ring),
     };

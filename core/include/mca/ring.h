@@ -145,6 +145,19 @@ void mca_ring_producer_init(mca_ring_producer_t *p, mca_ring_t *ring);
 /** mca_ring_push() through the producer's copy of the geometry. Context: rt (the single producer). */
 void mca_ring_producer_push(const mca_ring_producer_t *p, const void *rec);
 
+/** A byte range of a record: offset and length, both multiples of 8. */
+typedef struct mca_ring_part {
+    size_t offset, len;
+} mca_ring_part_t;
+
+/** mca_ring_producer_push() of only @p parts of the record (n_parts ranges inside the record; a range past
+ *  its end is cut there): the slot's other words keep what an earlier record in that slot left (zero at
+ *  first), and a pop copies them as they are. For records of which a varying part is in use (the DDS
+ *  snapshot: the arms and pairs there are), so that the unused rest is not copied on the rt path. The
+ *  sequence words and the ordering are those of a whole push. Context: rt (the single producer). */
+void mca_ring_producer_push_parts(const mca_ring_producer_t *p, const void *rec, const mca_ring_part_t *parts,
+                                  int n_parts);
+
 /** Capacity in records. */
 static inline size_t mca_ring_capacity(const mca_ring_t *ring) {
     return (size_t)ring->mask + 1u;

@@ -218,7 +218,8 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
 
 /**
  * Hand one snapshot to the publisher: copies it into the ring (every call: decimation is the caller's,
- * so that a tick that does not publish fills nothing) and, if the publisher is parked, wakes it with
+ * so that a tick that does not publish fills nothing; only arm[0..n_arms), pair[0..n_pairs) and the rest
+ * of the record: the entries past them are not published) and, if the publisher is parked, wakes it with
  * one FUTEX_WAKE (non-blocking); never waits, never fails. Context: rt, from ONE thread only (the loop).
  */
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
