@@ -133,7 +133,7 @@ typedef struct mca_daemon_csv_rec {
  *  that most pushes find the publisher asleep on the grid (no system call; the loop woke it on 1-4 % of the
  *  publishing ticks in 10-s runs) and the sample leaves soon after the tick. 60, 40, 30 and 20 us, three
  *  interleaved rounds of 10 s (p50 tick -> mca-monitor): 205/91/97, 120/97/77, 62/90/57, 48/57/61 us, the
- *  loop's wakes 12/3/5, 8/12/6, 9/44/9, 22/55/84 per 1001 (docs/bench-runs/2026-12-05-issue13-*.md). */
+ *  loop's wakes 12/3/5, 8/12/6, 9/44/9, 22/55/84 per 1001 (docs/bench-runs/2026-12-05-issue13.md). */
 #define MCA_DAEMON_DDS_WAKE_OFFSET_NS 30000
 
 /** Controller ticks the loop runs on a scratch copy before its first command (the code runs cold once). */
