@@ -20,6 +20,20 @@
 #include "mca/can_sock.h"
 #include "mca/err.h"
 
+/* One 64-byte CAN FD frame; the sender's own queue full (ENOBUFS): wait and send it again. 0 or -1 (said). */
+static int send_frame(int tx, uint32_t id, uint8_t first_byte) {
+    struct canfd_frame f = {.can_id = id, .len = 64};
+    f.data[0] = first_byte;
+    while (write(tx, &f, sizeof f) != (ssize_t)sizeof f) {
+        if (errno != ENOBUFS && errno != EAGAIN) {
+            fprintf(stderr, "mca-can-drops: write: %s\n", strerror(errno));
+            return -1;
+        }
+        usleep(100); /* the sender's queue, not the reader's */
+    }
+    return 0;
+}
+
 int main(int argc, char **argv) {
     if (argc < 2 || argc > 3) {
         fprintf(stderr, "usage: mca-can-drops IFACE [N]\n");
@@ -46,17 +60,10 @@ int main(int argc, char **argv) {
     }
     int sent = 0;
     for (int i = 0; i < n; i++) {
-        struct canfd_frame f = {.can_id = base + MCA_CAN_OFF_FEEDBACK, .len = 64};
-        f.data[0] = (uint8_t)i;
-        if (write(tx, &f, sizeof f) == (ssize_t)sizeof f) {
-            sent++;
-        } else if (errno == ENOBUFS || errno == EAGAIN) {
-            usleep(100); /* the sender's own queue, not the reader's: try this frame again */
-            i--;
-        } else {
-            fprintf(stderr, "mca-can-drops: write: %s\n", strerror(errno));
+        if (send_frame(tx, base + MCA_CAN_OFF_FEEDBACK, (uint8_t)i) != 0) {
             return 2;
         }
+        sent++;
     }
     /* A frame carries the count as it was when the frame was queued: the frames in the full queue say 0,
      * the first one queued after the drops says how many. So: drain, send one more, drain again. */
@@ -64,9 +71,7 @@ int main(int argc, char **argv) {
     uint32_t drops = 0;
     for (int round = 0; round < 2; round++) {
         if (round == 1) {
-            struct canfd_frame f = {.can_id = base + MCA_CAN_OFF_FEEDBACK, .len = 64};
-            if (write(tx, &f, sizeof f) != (ssize_t)sizeof f) {
-                fprintf(stderr, "mca-can-drops: write: %s\n", strerror(errno));
+            if (send_frame(tx, base + MCA_CAN_OFF_FEEDBACK, 0) != 0) {
                 return 2;
             }
             sent++;
