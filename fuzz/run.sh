@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # make fuzz: run every libFuzzer target of BUILD (a -DMCA_FUZZ=ON build) for SECONDS each, one after the
-# other (one core each: -workers 1), starting from the seed corpus and the regression inputs in the tree.
+# other (one core each: -workers 1), starting from the seed corpus, the merged corpus (fuzz/merge.sh) and the
+# regression inputs in the tree.
 # New corpus entries go to BUILD/fuzz-work/TARGET (the tree's corpus is read, never written); a crash,
 # leak or timeout leaves its input in BUILD/fuzz-artifacts/TARGET/ and fails the run.
 # Prints one line per target: executions, exec/s, coverage, corpus size, result. Each run is also appended to
@@ -28,6 +29,7 @@ for t in "${targets[@]}"; do
   art="$build/fuzz-artifacts/$t"
   mkdir -p "$work" "$art"
   dirs=("$work" "$src/corpus/$t")
+  [ -d "$src/corpus-merged/$t" ] && dirs+=("$src/corpus-merged/$t")
   [ -d "$src/regress/$t" ] && dirs+=("$src/regress/$t")
   log="$build/fuzz-work/$t.log"
   echo "fuzz: $t for ${secs} s (log $log)"
