@@ -72,8 +72,7 @@ struct mca_dds_bridge {
     publisher_t *pub;
     pthread_t thread;
     int thread_started;
-    int sched_priority; /* cfg->sched_priority: SCHED_FIFO of the publisher, 0: the caller's policy */
-    int sched_refused;  /* 1: that was not permitted */
+    int sched_refused; /* in-process: cfg->sched_priority was not permitted */
     /* process mode (the owner's supervising thread only) */
     int memfd;
     char exe[PATH_MAX];
@@ -525,6 +524,7 @@ int mca_dds_shm_init(mca_dds_shm_t *shm, size_t size, const mca_dds_config_t *cf
     copy_str(c->partition, sizeof c->partition, cfg->partition);
     c->wake_period_ns = cfg->wake_period_ns;
     c->wake_offset_ns = cfg->wake_offset_ns;
+    c->sched_priority = cfg->sched_priority;
     c->has_ros2 = cfg->ros2 != NULL && cfg->ros2->enabled;
     if (c->has_ros2) {
         c->ros2 = *cfg->ros2;
@@ -546,6 +546,14 @@ int mca_dds_shm_check(const mca_dds_shm_t *shm, size_t size) {
     return MCA_OK;
 }
 
+/* The publisher thread SCHED_FIFO at @p prio; only that thread: Cyclone's receive and timed-event threads
+ * handle what peers send, and a flood of it at real-time priority would take the CPU from everything else
+ * there (mcad's supervisor). 0 or the errno (EPERM without CAP_SYS_NICE / RLIMIT_RTPRIO). */
+static int publisher_priority(pthread_t t, int prio) {
+    const struct sched_param sp = {.sched_priority = prio};
+    return pthread_setschedparam(t, SCHED_FIFO, &sp);
+}
+
 int mca_dds_publisher_process(mca_dds_shm_t *shm) {
     publisher_t *b = calloc(1, sizeof *b);
     if (b == NULL) {
@@ -556,6 +564,12 @@ int mca_dds_publisher_process(mca_dds_shm_t *shm) {
     b->process = 1;
     shm->open_err[0] = '\0';
     const int rc = publisher_open(b, shm->open_err, sizeof shm->open_err); /* the owner reports it */
+    if (rc == MCA_OK && shm->cfg.sched_priority > 0) {
+        /* this thread publishes; Cyclone's threads, created above, keep the caller's policy */
+        atomic_store_explicit(&shm->sched_refused,
+                              publisher_priority(pthread_self(), shm->cfg.sched_priority) != 0,
+                              memory_order_relaxed);
+    }
     atomic_store_explicit(&shm->open_rc, rc, memory_order_release);
     atomic_store_explicit(&shm->ready_gen, atomic_load_explicit(&shm->start_gen, memory_order_acquire),
                           memory_order_release);
@@ -606,26 +620,6 @@ static int config_ok(const mca_dds_config_t *cfg, char *err, size_t errlen) {
     return MCA_OK;
 }
 
-/* In-process: the publisher thread, SCHED_FIFO at sched_priority if asked and permitted. */
-static int start_publisher_thread(mca_dds_bridge_t *b) {
-    int e = -1;
-    if (b->sched_priority > 0) {
-        pthread_attr_t at;
-        pthread_attr_init(&at);
-        const struct sched_param sp = {.sched_priority = b->sched_priority};
-        pthread_attr_setinheritsched(&at, PTHREAD_EXPLICIT_SCHED);
-        pthread_attr_setschedpolicy(&at, SCHED_FIFO);
-        pthread_attr_setschedparam(&at, &sp);
-        e = pthread_create(&b->thread, &at, publisher_thread, b->pub);
-        pthread_attr_destroy(&at);
-        b->sched_refused = e == EPERM;
-    }
-    if (e != 0) {
-        e = pthread_create(&b->thread, NULL, publisher_thread, b->pub);
-    }
-    return e;
-}
-
 /* Start one publisher process over the region: the memfd as fd 3, every other descriptor of the owner closed
  * (its CAN sockets, CSV, cpu_dma_latency), default signal mask and dispositions (the owner blocks its
  * signals in every thread). posix_spawn runs the child on the caller's stack until exec (CLONE_VFORK): no
@@ -649,23 +643,10 @@ static int spawn_publisher(mca_dds_bridge_t *b, char *err, size_t errlen) {
     sigdelset(&all, SIGSTOP);
     posix_spawnattr_setsigmask(&at, &none);
     posix_spawnattr_setsigdefault(&at, &all);
-    short flags = POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF;
-    if (b->sched_priority > 0 && !b->sched_refused) {
-        /* set in the child before exec: every thread it creates (Cyclone's too) inherits it */
-        const struct sched_param sp = {.sched_priority = b->sched_priority};
-        posix_spawnattr_setschedpolicy(&at, SCHED_FIFO);
-        posix_spawnattr_setschedparam(&at, &sp);
-        flags |= POSIX_SPAWN_SETSCHEDULER;
-    }
-    posix_spawnattr_setflags(&at, flags);
+    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
     atomic_fetch_add_explicit(&b->shm->start_gen, 1u, memory_order_release);
     pid_t pid = 0;
-    int e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
-    if (e == EPERM && (flags & POSIX_SPAWN_SETSCHEDULER)) {
-        b->sched_refused = 1; /* not permitted: the caller's policy (the stats say so) */
-        posix_spawnattr_setflags(&at, (short)(flags & ~POSIX_SPAWN_SETSCHEDULER));
-        e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
-    }
+    const int e = posix_spawn(&pid, b->exe, &fa, &at, argv, environ);
     posix_spawn_file_actions_destroy(&fa);
     posix_spawnattr_destroy(&at);
     if (e != 0) {
@@ -791,7 +772,6 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
     }
     b->memfd = -1;
     b->process = cfg->process_exe != NULL;
-    b->sched_priority = cfg->sched_priority;
     b->shm_size = mca_dds_shm_size(cfg->ring_capacity);
     int rc = MCA_OK;
     if (b->process) {
@@ -824,9 +804,12 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
         b->pub->fault_text = cfg->fault_text;
         b->pub->fault_text_arg = cfg->fault_text_arg;
         rc = publisher_open(b->pub, err, errlen);
-        if (rc == MCA_OK && start_publisher_thread(b) != 0) {
+        if (rc == MCA_OK && pthread_create(&b->thread, NULL, publisher_thread, b->pub) != 0) {
             publisher_close(b->pub);
             rc = MCA_ENOMEM;
+        }
+        if (rc == MCA_OK && cfg->sched_priority > 0) {
+            b->sched_refused = publisher_priority(b->thread, cfg->sched_priority) != 0;
         }
         if (rc == MCA_OK) {
             b->thread_started = 1;
@@ -885,7 +868,8 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     mca_ring_stats(&shm->ring, &rs);
     memset(out, 0, sizeof *out);
     out->offered = atomic_load_explicit(&shm->offered, memory_order_relaxed);
-    out->sched_refused = bridge->sched_refused;
+    out->sched_refused = bridge->process ? atomic_load_explicit(&shm->sched_refused, memory_order_relaxed)
+                                         : bridge->sched_refused;
     out->queued = rs.pushed;
     out->dropped = rs.dropped;
     out->pending = rs.pending;

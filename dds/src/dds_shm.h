@@ -22,7 +22,7 @@
 #include "mca/ros2.h"
 
 #define MCA_DDS_SHM_MAGIC 0x316d73736464616dULL /* "mddssm1" */
-#define MCA_DDS_SHM_VERSION 2u
+#define MCA_DDS_SHM_VERSION 3u
 #define MCA_DDS_CONFIG_PATH_MAX 1023
 
 /** One arm's latest accepted stream target: a seqlock (the publisher's DDS listener writes, the loop reads;
@@ -46,6 +46,7 @@ typedef struct mca_dds_shm_config {
     char frame_id[MCA_DDS_FRAME_ID_MAX + 1];
     char partition[MCA_DDS_PARTITION_MAX + 1];
     uint64_t wake_period_ns, wake_offset_ns;
+    int32_t sched_priority; /* > 0: the publisher thread SCHED_FIFO at it (mca_dds_config_t) */
     mca_ros2_config_t ros2; /* plain data: names, URDF paths (the publisher reads the URDFs itself) */
 } mca_dds_shm_config_t;
 
@@ -68,6 +69,7 @@ typedef struct mca_dds_shm {
     _Atomic uint64_t published, samples, write_errors, invalid, max_pending, stale;
     _Atomic int64_t max_publish_ns;
     _Atomic int open_rc;        /* process mode: the publisher's set-up result (MCA_OK or an error) */
+    _Atomic int sched_refused;  /* process mode: its sched_priority was not permitted (before ready_gen) */
     char open_err[256];         /* process mode: why its set-up failed (written before ready_gen) */
     _Atomic uint32_t ready_gen; /* process mode: = start_gen once its DDS entities exist */
     /* owner, non-rt */

@@ -15,8 +15,9 @@ one restart_syscall (the sleep strace's attach interrupted). Allowed only after 
 
 With two or more CPUs the cell sets rt.cpu: 1, and the test also checks the threads' CPU affinity: the loop
 on CPU 1 alone, every other thread (supervisor/drainer, DDS publisher, Cyclone's) off CPU 1. The cell also
-sets dds.priority: 10, and every thread of the DDS bridge process must run SCHED_FIFO 10 (SCHED_OTHER with
---no-rt, which mcad passes on to the publisher).
+sets dds.priority: 10: the DDS bridge process's publisher (its main thread) must run SCHED_FIFO 10 and every
+other thread of it (Cyclone's, which handle what peers send) SCHED_OTHER; with --no-rt, which mcad passes on
+to the publisher, all SCHED_OTHER.
 
 --can ARMSIM (in the vcan guest, tests/daemon/rt_syscalls_can.sh): the same on the CAN backend, cell
 negative_vcan (no DDS): each arm's CAN FD bus a vcan answered by mca-armsim in lockstep (no watchdog, so the
@@ -198,7 +199,7 @@ def main():
     text = re.sub(r"domain: *\d+", f"domain: {domain}", text)
     if pin:
         text = re.sub(r"cpu: *-?\d+", "cpu: 1", text)
-    # dds.priority: the publisher process (all its threads) SCHED_FIFO 10, below the loop's 80
+    # dds.priority: the publisher thread SCHED_FIFO 10, below the loop's 80; Cyclone's threads SCHED_OTHER
     dds_fifo = not armsim and "--no-rt" not in extra
     text = re.sub(r"(\n  publish_divisor: *\d+[^\n]*)", r"\1\n  priority: 10", text, count=1)
     if armsim:
@@ -243,7 +244,8 @@ def main():
     policies = {}
     for child in children:
         affinity.update({tid: ("bridge:" + name, cpus) for tid, (name, cpus) in threads(int(child)).items()})
-        policies.update({tid: (name, sched_of(int(child), tid)) for tid, (name, _) in threads(int(child)).items()})
+        policies.update({tid: (name, sched_of(int(child), tid), tid == int(child))
+                         for tid, (name, _) in threads(int(child)).items()})
     mcad_ns = ns_of(p.pid)  # while it runs (diagnostics when strace traces nothing)
     rc = p.wait(timeout=300)
     lost = 0
@@ -273,13 +275,14 @@ def main():
                 bad.append(f"thread {name} on CPUs {cpus} (rt.cpu 1: the loop alone on 1, every other thread off it)")
 
     if not armsim:
-        want = (1, 10) if dds_fifo else (0, 0)
-        if not policies:
-            bad.append("no thread of the DDS bridge process found")
-        for tid, (name, sp) in sorted(policies.items()):
-            print(f"bridge thread {tid} {name:16s} policy/priority {sp}{'' if sp == want else '   <- wrong'}")
+        if len(policies) < 2:
+            bad.append(f"{len(policies)} threads of the DDS bridge process found (the publisher and Cyclone's)")
+        for tid, (name, sp, publisher) in sorted(policies.items()):
+            want = (1, 10) if dds_fifo and publisher else (0, 0)
+            what = "publisher" if publisher else "other"
+            print(f"bridge thread {tid} {name:16s} ({what}) policy/priority {sp}{'' if sp == want else '   <- wrong'}")
             if sp != want:
-                bad.append(f"bridge thread {name}: policy/priority {sp}, expected {want} (dds.priority 10"
+                bad.append(f"bridge thread {name} ({what}): policy/priority {sp}, expected {want} (dds.priority 10"
                            f"{'' if dds_fifo else ', but --no-rt'})")
 
     calls = []

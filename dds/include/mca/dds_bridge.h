@@ -148,10 +148,11 @@ typedef struct mca_dds_config {
      *  alone talks DDS; NULL (default): a thread of the caller. In process mode fault_text is not called
      *  (the owner hands the text over with mca_dds_bridge_fault_text()) and wait_readers is not available. */
     const char *process_exe;
-    /** > 0: the publisher runs SCHED_FIFO at this priority (1..98), so that a loaded CPU delays its samples
-     *  no more than its own work does (process mode: all of mca-dds-bridge, Cyclone's threads too;
-     *  in-process: the publisher thread). Not permitted (no CAP_SYS_NICE / RLIMIT_RTPRIO): it runs with the
-     *  caller's policy and mca_dds_stats_t.sched_refused says so. 0 (default): the caller's policy. */
+    /** > 0: the publisher thread runs SCHED_FIFO at this priority (1..98), so that a loaded CPU delays its
+     *  samples no more than its own work does. Only that thread (it writes the samples): Cyclone's receive
+     *  and timed-event threads handle what peers send, and keep the caller's policy so that a flood from the
+     *  network cannot take a CPU at real-time priority. Not permitted (no CAP_SYS_NICE / RLIMIT_RTPRIO): the
+     *  caller's policy, and mca_dds_stats_t.sched_refused says so. 0 (default): the caller's policy. */
     int sched_priority;
 } mca_dds_config_t;
 
