@@ -562,7 +562,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         if (rc == MCA_OK) {
             mca_dds_stats_t ds;
             mca_dds_bridge_stats(d->dds, &ds);
-            if (dc.sched_priority > 0 && ds.sched_refused) {
+            if (ds.sched_refused) {
                 fprintf(d->opts.log,
                         "<4>mcad: dds.priority %d (SCHED_FIFO) not permitted: the publisher runs SCHED_OTHER "
                         "and a busy CPU delays its samples\n",

@@ -72,7 +72,6 @@ struct mca_dds_bridge {
     publisher_t *pub;
     pthread_t thread;
     int thread_started;
-    int sched_refused; /* in-process: cfg->sched_priority was not permitted */
     /* process mode (the owner's supervising thread only) */
     int memfd;
     char exe[PATH_MAX];
@@ -809,7 +808,9 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
             rc = MCA_ENOMEM;
         }
         if (rc == MCA_OK && cfg->sched_priority > 0) {
-            b->sched_refused = publisher_priority(b->thread, cfg->sched_priority) != 0;
+            atomic_store_explicit(&b->shm->sched_refused,
+                                  publisher_priority(b->thread, cfg->sched_priority) != 0,
+                                  memory_order_relaxed);
         }
         if (rc == MCA_OK) {
             b->thread_started = 1;
@@ -868,8 +869,7 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     mca_ring_stats(&shm->ring, &rs);
     memset(out, 0, sizeof *out);
     out->offered = atomic_load_explicit(&shm->offered, memory_order_relaxed);
-    out->sched_refused = bridge->process ? atomic_load_explicit(&shm->sched_refused, memory_order_relaxed)
-                                         : bridge->sched_refused;
+    out->sched_refused = atomic_load_explicit(&shm->sched_refused, memory_order_relaxed);
     out->queued = rs.pushed;
     out->dropped = rs.dropped;
     out->pending = rs.pending;

@@ -68,9 +68,9 @@ typedef struct mca_dds_shm {
     _Alignas(64) _Atomic uint64_t parks, grid_sleeps;
     _Atomic uint64_t published, samples, write_errors, invalid, max_pending, stale;
     _Atomic int64_t max_publish_ns;
-    _Atomic int open_rc;        /* process mode: the publisher's set-up result (MCA_OK or an error) */
-    _Atomic int sched_refused;  /* process mode: its sched_priority was not permitted (before ready_gen) */
-    char open_err[256];         /* process mode: why its set-up failed (written before ready_gen) */
+    _Atomic int open_rc;       /* process mode: the publisher's set-up result (MCA_OK or an error) */
+    _Atomic int sched_refused; /* sched_priority was not permitted (process mode: written before ready_gen) */
+    char open_err[256];        /* process mode: why its set-up failed (written before ready_gen) */
     _Atomic uint32_t ready_gen; /* process mode: = start_gen once its DDS entities exist */
     /* owner, non-rt */
     _Alignas(64) _Atomic int stop;
