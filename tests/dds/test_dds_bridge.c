@@ -319,12 +319,12 @@ static void test_every_snapshot_arrives_intact(void **state) {
     dds_delete(r.pp);
 }
 
-/* Context switches (voluntary + involuntary) of this process's thread named @p name; -1 if none. */
-static long thread_switches(const char *name) {
+/* /proc/self/task/TID/@p file of this process's thread named @p name, opened for reading; NULL if none. */
+static FILE *thread_file(const char *name, const char *file) {
     char path[300], line[128];
     DIR *dir = opendir("/proc/self/task");
-    long n = -1;
-    for (struct dirent *e; dir != NULL && n < 0 && (e = readdir(dir)) != NULL;) {
+    FILE *out = NULL;
+    for (struct dirent *e; dir != NULL && out == NULL && (e = readdir(dir)) != NULL;) {
         snprintf(path, sizeof path, "/proc/self/task/%s/comm", e->d_name);
         FILE *f = fopen(path, "r");
         if (f == NULL) {
@@ -332,26 +332,32 @@ static long thread_switches(const char *name) {
         }
         const int same = fgets(line, sizeof line, f) != NULL && strncmp(line, name, strlen(name)) == 0;
         fclose(f);
-        if (!same) {
-            continue;
-        }
-        snprintf(path, sizeof path, "/proc/self/task/%s/status", e->d_name);
-        f = fopen(path, "r");
-        long v;
-        n = 0;
-        while (f != NULL && fgets(line, sizeof line, f) != NULL) {
-            if (sscanf(line, "voluntary_ctxt_switches: %ld", &v) == 1 ||
-                sscanf(line, "nonvoluntary_ctxt_switches: %ld", &v) == 1) {
-                n += v;
-            }
-        }
-        if (f != NULL) {
-            fclose(f);
+        if (same) {
+            snprintf(path, sizeof path, "/proc/self/task/%s/%s", e->d_name, file);
+            out = fopen(path, "r");
         }
     }
     if (dir != NULL) {
         closedir(dir);
     }
+    return out;
+}
+
+/* Context switches (voluntary + involuntary) of this process's thread named @p name; -1 if none. */
+static long thread_switches(const char *name) {
+    char line[128];
+    FILE *f = thread_file(name, "status");
+    if (f == NULL) {
+        return -1;
+    }
+    long n = 0, v;
+    while (fgets(line, sizeof line, f) != NULL) {
+        if (sscanf(line, "voluntary_ctxt_switches: %ld", &v) == 1 ||
+            sscanf(line, "nonvoluntary_ctxt_switches: %ld", &v) == 1) {
+            n += v;
+        }
+    }
+    fclose(f);
     return n;
 }
 
@@ -411,35 +417,20 @@ static void test_publisher_parks_and_wakes(void **state) {
 
 /* Scheduling policy and priority of this process's thread named @p name (/proc stat fields 41, 40); -1. */
 static int thread_sched(const char *name, int *prio) {
-    char path[300], line[1024];
-    DIR *dir = opendir("/proc/self/task");
-    int policy = -1;
-    for (struct dirent *e; dir != NULL && policy < 0 && (e = readdir(dir)) != NULL;) {
-        snprintf(path, sizeof path, "/proc/self/task/%s/comm", e->d_name);
-        FILE *f = fopen(path, "r");
-        if (f == NULL) {
-            continue;
-        }
-        const int same = fgets(line, sizeof line, f) != NULL && strncmp(line, name, strlen(name)) == 0;
-        fclose(f);
-        snprintf(path, sizeof path, "/proc/self/task/%s/stat", e->d_name);
-        if (!same || (f = fopen(path, "r")) == NULL) {
-            continue;
-        }
-        const char *p = fgets(line, sizeof line, f) != NULL ? strrchr(line, ')') : NULL;
-        fclose(f);
-        for (int field = 2; p != NULL && field < 41; field++) { /* ") S ..." : field 3 follows */
-            p = strchr(p + 1, ' ');
-            if (p != NULL && field == 39) {
-                *prio = atoi(p + 1);
-            }
-        }
-        policy = p != NULL ? atoi(p + 1) : -1;
+    char line[1024];
+    FILE *f = thread_file(name, "stat");
+    if (f == NULL) {
+        return -1;
     }
-    if (dir != NULL) {
-        closedir(dir);
+    const char *p = fgets(line, sizeof line, f) != NULL ? strrchr(line, ')') : NULL;
+    fclose(f);
+    for (int field = 2; p != NULL && field < 41; field++) { /* ") S ..." : field 3 follows */
+        p = strchr(p + 1, ' ');
+        if (p != NULL && field == 39) {
+            *prio = atoi(p + 1);
+        }
     }
-    return policy;
+    return p != NULL ? atoi(p + 1) : -1;
 }
 
 /* sched_priority: the in-process publisher thread runs SCHED_FIFO at it (as root; else it is refused and
