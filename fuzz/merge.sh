@@ -7,16 +7,16 @@
 # is checked on every commit. usage: fuzz/merge.sh [BUILD (build-fuzz)] [TARGET...]
 set -u
 src=$(cd "$(dirname "$0")" && pwd)
+. "$src/common.sh"
 build=${1:-build-fuzz}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(can_link armsim_rx cell scenario urdf inject ros2_target canopen)
+[ ${#targets[@]} -eq 0 ] && targets=("${MCA_FUZZ_ALL_TARGETS[@]}")
 export TMPDIR=${MCA_FUZZ_TMPDIR:-/dev/shm}
 for t in "${targets[@]}"; do
   new=$(mktemp -d)
-  case $t in cell | scenario | urdf) maxlen=16384 ;; *) maxlen=65536 ;; esac # as fuzz/run.sh
-  dirs=("$src/corpus/$t")
-  [ -d "$src/corpus-merged/$t" ] && dirs+=("$src/corpus-merged/$t")
+  maxlen=$(mca_fuzz_maxlen "$t")
+  mapfile -t dirs < <(mca_fuzz_corpus_dirs "$t")
   [ -d "$build/fuzz-work/$t" ] && dirs+=("$build/fuzz-work/$t")
   if ! ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 "$build/fuzz/fuzz_$t" -merge=1 -max_len=$maxlen \
     -timeout=10 -rss_limit_mb=2048 "$new" "${dirs[@]}" >"$build/fuzz-work/$t.merge.log" 2>&1; then

@@ -14,8 +14,9 @@ build=$1
 secs=$2
 shift 2
 src=$(cd "$(dirname "$0")" && pwd)
+. "$src/common.sh"
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(can_link armsim_rx cell scenario urdf inject ros2_target canopen)
+[ ${#targets[@]} -gt 0 ] || targets=("${MCA_FUZZ_ALL_TARGETS[@]}")
 # The file targets write every input to a file (fuzz/fuzz_file.h): on this ext4 (mounted with discard) each
 # rewrite freed blocks with a synchronous discard, 31 % of a cell run's time in the kernel. tmpfs doubled the
 # rate (cell 2040 -> 4044, urdf 1725 -> 3092 exec/s). MCA_FUZZ_TMPDIR overrides.
@@ -28,17 +29,14 @@ for t in "${targets[@]}"; do
   work="$build/fuzz-work/$t"
   art="$build/fuzz-artifacts/$t"
   mkdir -p "$work" "$art"
-  dirs=("$work" "$src/corpus/$t")
-  [ -d "$src/corpus-merged/$t" ] && dirs+=("$src/corpus-merged/$t")
+  mapfile -t dirs < <(mca_fuzz_corpus_dirs "$t")
+  dirs=("$work" "${dirs[@]}")
   [ -d "$src/regress/$t" ] && dirs+=("$src/regress/$t")
   log="$build/fuzz-work/$t.log"
   echo "fuzz: $t for ${secs} s (log $log)"
   # the tree as the run starts (the ledger's git column; a commit during a long run must not relabel it)
   rev=$(git -C "$src" rev-parse --short HEAD 2>/dev/null || echo ?)
-  # the file parsers read every input from scratch (libcyaml, TinyXML + urdfdom): inputs of 60 kB made them
-  # crawl (348 exec/s for urdf); the largest shipped file is a 4.4 kB URDF, and 16 kB still nests any depth
-  # bound thousands of times over. The frame sequences keep 64 kB.
-  case $t in cell | scenario | urdf) maxlen=16384 ;; *) maxlen=65536 ;; esac
+  maxlen=$(mca_fuzz_maxlen "$t")
   ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     "$exe" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=$maxlen -print_final_stats=1 \
     -artifact_prefix="$art/" "${dirs[@]}" >"$log" 2>&1
