@@ -1574,6 +1574,10 @@ void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
     }
 }
 
+const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d) {
+    return &d->jitter;
+}
+
 void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
     fprintf(f,
             "<6>mcad: summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "

@@ -16,6 +16,7 @@
 #include <string.h>
 #include <systemd/sd-daemon.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "mca/cell.h"
 #include "mca/daemon.h"
@@ -38,6 +39,8 @@ static void usage(FILE *f) {
             "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
             "  --clear-faults     clear a FAULT an arm reports at start-up (latched from an earlier run;\n"
             "                     logged); without it mcad refuses to start (exit 1)\n"
+            "  --histogram FILE   at exit, write the loop's wake-up latency histogram to FILE, as\n"
+            "                     cyclictest -h does (bench/rt compares the two)\n"
             "  --dds-ab N         DDS cost benchmark: publish only in every other block of N ticks and\n"
             "                     print the whole tick's time with publishing off and on (one run)\n"
             "  -h, --help\n"
@@ -105,6 +108,14 @@ static void print_cell(const mca_cell_t *c) {
     }
 }
 
+/* start-up failed: no half-written result file */
+static void drop_histogram(FILE *hist, const char *path) {
+    if (hist) {
+        fclose(hist);
+        unlink(path);
+    }
+}
+
 int main(int argc, char **argv) {
     static const struct option longopts[] = {
         {"check", no_argument, NULL, 'k'},
@@ -114,11 +125,13 @@ int main(int argc, char **argv) {
         {"no-rt", no_argument, NULL, 'R'},
         {"clear-faults", no_argument, NULL, 'F'},
         {"dds-ab", required_argument, NULL, 'A'},
+        {"histogram", required_argument, NULL, 'H'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
     mca_daemon_opts_t opts = {.log = stderr};
     int check = 0;
+    const char *hist_path = NULL;
     for (;;) {
         const int o = getopt_long(argc, argv, "h", longopts, NULL);
         if (o < 0) {
@@ -161,6 +174,9 @@ int main(int argc, char **argv) {
             opts.dds_ab_block = (uint32_t)b;
             break;
         }
+        case 'H':
+            hist_path = optarg;
+            break;
         case 'h':
             usage(stdout);
             return 0;
@@ -224,6 +240,14 @@ int main(int argc, char **argv) {
         free(cell);
         return 0;
     }
+    /* opened before anything starts: a path that cannot be written is a usage error, not a lost result */
+    FILE *hist = NULL;
+    if (hist_path && !(hist = fopen(hist_path, "w"))) {
+        fprintf(stderr, "<3>mcad: --histogram: cannot open '%s' for writing: %s\n", hist_path,
+                strerror(errno));
+        free(cell);
+        return 2;
+    }
     fprintf(stderr, "<6>mcad: cell '%s' (%s): %d arms, task '%s'\n", cell->name, cell_path, cell->scn.n_arms,
             cell->scn.name);
     sd_notify(0, "STATUS=opening arms and DDS");
@@ -233,6 +257,7 @@ int main(int argc, char **argv) {
     if (rc != MCA_OK) {
         fprintf(stderr, "<3>mcad: start-up failed: %s\n", err);
         sd_notifyf(0, "STATUS=start-up failed: %s", err);
+        drop_histogram(hist, hist_path);
         free(cell);
         return 1;
     }
@@ -241,6 +266,7 @@ int main(int argc, char **argv) {
     rc = mca_daemon_start(d);
     if (rc != MCA_OK) {
         mca_daemon_close(d);
+        drop_histogram(hist, hist_path);
         free(cell);
         return 1;
     }
@@ -323,6 +349,12 @@ int main(int argc, char **argv) {
     mca_daemon_summary_t s;
     mca_daemon_summary(d, &s);
     mca_daemon_print_summary(&s, stderr);
+    if (hist) {
+        if (mca_hist_write(mca_daemon_wake_histogram(d), "mcad wake-up latency", hist) != MCA_OK) {
+            fprintf(stderr, "<4>mcad: --histogram: cannot write '%s'\n", hist_path);
+        }
+        fclose(hist);
+    }
     sd_notifyf(0, "STATUS=%s: ticks %llu, overruns %llu%s%s", mca_daemon_state_name(s.state),
                (unsigned long long)s.ticks, (unsigned long long)s.overruns, s.fault ? ", fault: " : "",
                s.fault ? s.fault_text : "");

@@ -2,6 +2,9 @@
 /* Fixed-size latency histogram (see mca/rtstats.h). */
 #include "mca/rtstats.h"
 
+#include "mca/err.h"
+
+#include <inttypes.h>
 #include <math.h>
 #include <string.h>
 
@@ -75,4 +78,23 @@ int64_t mca_hist_percentile(const mca_hist_t *h, double p) {
 
 double mca_hist_mean(const mca_hist_t *h) {
     return h->count ? h->sum_ns / (double)h->count : 0.0;
+}
+
+int mca_hist_write(const mca_hist_t *h, const char *title, FILE *f) {
+    if (title) {
+        fprintf(f, "# %s\n", title);
+    }
+    for (int b = 0; b < MCA_HIST_BINS - 1; b++) {
+        if (h->bin[b]) {
+            const int64_t lower_us =
+                b < MCA_HIST_FINE_BINS ? (int64_t)b * MCA_HIST_FINE_NS / 1000 : bin_upper(b - 1) / 1000;
+            fprintf(f, "%06" PRId64 " %06" PRIu32 "\n", lower_us, h->bin[b]);
+        }
+    }
+    fprintf(f, "# Total: %09" PRIu64 "\n", h->count);
+    fprintf(f, "# Min Latencies: %05" PRId64 "\n", h->min_ns / 1000);
+    fprintf(f, "# Avg Latencies: %05.0f\n", mca_hist_mean(h) / 1000.0);
+    fprintf(f, "# Max Latencies: %05" PRId64 "\n", h->max_ns / 1000);
+    fprintf(f, "# Histogram Overflows: %05" PRIu32 "\n", h->bin[MCA_HIST_BINS - 1]);
+    return fflush(f) == 0 && !ferror(f) ? MCA_OK : MCA_EIO;
 }

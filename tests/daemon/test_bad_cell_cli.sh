@@ -244,6 +244,17 @@ if ! "$MCAD" --check "$tmp/two_buses.yaml" > "$tmp/two_buses.out" 2>&1; then
     echo "FAIL: two socketcan arms, one id block on two buses, rejected:"; cat "$tmp/two_buses.out"; fail=1
 fi
 
+# usage: a --histogram path that cannot be written is refused before anything starts (exit 2, one line
+# naming the path, no file left)
+"$MCAD" --no-rt --histogram "$tmp/no/such/dir/h.txt" "$tmp/good.yaml" > "$tmp/hist.out" 2> "$tmp/hist.err"
+rc=$?
+want="<3>mcad: --histogram: cannot open '$tmp/no/such/dir/h.txt' for writing: No such file or directory"
+if [ $rc -eq 2 ] && [ "$(cat "$tmp/hist.err")" = "$want" ] && [ ! -s "$tmp/hist.out" ]; then
+    echo "ok   --histogram into a missing folder: exit 2, one line, nothing started"
+else
+    echo "FAIL: --histogram into a missing folder: exit $rc, stderr:"; cat "$tmp/hist.err"; fail=1
+fi
+
 # the good cell itself passes the check (so the failures above are the variants')
 if ! "$MCAD" --check "$tmp/good.yaml" > "$tmp/good.out" 2>&1; then
     echo "FAIL: good cell rejected:"; cat "$tmp/good.out"; fail=1

@@ -980,6 +980,55 @@ static void test_histogram_vs_sorted(void **state) {
         sum += (double)v[i];
     }
     assert_true(fabs(mca_hist_mean(&h) - sum / N) < 1e-6 * sum / N);
+
+    /* mca_hist_write (mcad --histogram), read back as bench/rt reads cyclictest's: a bin's lower edge at or
+     * below the exact order statistic and within one bin of it; every sample in a line or the overflows */
+    FILE *f = tmpfile();
+    assert_non_null(f);
+    assert_int_equal(mca_hist_write(&h, "test", f), MCA_OK);
+    rewind(f);
+    static long long edge_us[MCA_HIST_BINS], cnt[MCA_HIST_BINS];
+    int n_lines = 0;
+    long long total = -1, overflows = -1, min_us = -1, max_us = -1;
+    char line[128];
+    while (fgets(line, sizeof line, f)) {
+        long long a, b;
+        if (sscanf(line, "%lld %lld", &a, &b) == 2) {
+            assert_true(n_lines == 0 || a > edge_us[n_lines - 1]); /* ascending, one line per bin */
+            edge_us[n_lines] = a;
+            cnt[n_lines++] = b;
+        } else {
+            sscanf(line, "# Total: %lld", &total);
+            sscanf(line, "# Histogram Overflows: %lld", &overflows);
+            sscanf(line, "# Min Latencies: %lld", &min_us);
+            sscanf(line, "# Max Latencies: %lld", &max_us);
+        }
+    }
+    fclose(f);
+    long long in_lines = 0;
+    for (int i = 0; i < n_lines; i++) {
+        in_lines += cnt[i];
+    }
+    long long beyond = 0; /* the samples of 100 ms and more */
+    for (int i = 0; i < N; i++) {
+        beyond += v[i] >= 100000000;
+    }
+    assert_true(total == N && overflows == beyond && in_lines + overflows == N);
+    assert_true(min_us == v[0] / 1000 && max_us == v[N - 1] / 1000);
+    for (size_t i = 0; i < sizeof ps / sizeof ps[0]; i++) {
+        const int64_t exact = v[(size_t)ceil(ps[i] * N) - 1];
+        if (exact >= 100000000) {
+            continue; /* in the overflows */
+        }
+        const long long need = (long long)ceil(ps[i] * N);
+        long long cum = 0, lower_ns = -1;
+        for (int k = 0; k < n_lines && lower_ns < 0; k++) {
+            cum += cnt[k];
+            lower_ns = cum >= need ? edge_us[k] * 1000 : -1;
+        }
+        const int64_t width = exact < 2000000 ? 1000 : 100000;
+        assert_true(lower_ns >= 0 && lower_ns <= exact && exact - lower_ns < width);
+    }
     mca_hist_record(&h, -5); /* clock step backwards: counted as 0 */
     assert_true(h.min_ns == 0);
 }

@@ -224,6 +224,8 @@ int mca_daemon_join(mca_daemon_t *d);
 void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s);
 /** Print the summary block on f ("<6>mcad: ..." lines). */
 void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f);
+/** The loop's wake-up latency histogram (mcad --histogram writes it). Once the loop has ended. */
+const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d);
 
 /** Close arms, DDS (publishing the final status) and free (shut-down). NULL is allowed. */
 void mca_daemon_close(mca_daemon_t *d);

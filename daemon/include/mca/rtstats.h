@@ -14,6 +14,7 @@
 #define MCA_RTSTATS_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -43,6 +44,13 @@ int64_t mca_hist_percentile(const mca_hist_t *h, double p);
 
 /** Mean [ns]; 0 when empty. */
 double mca_hist_mean(const mca_hist_t *h);
+
+/** Write the histogram as cyclictest -h does, so one reader takes both (bench/rt): a line "US COUNT" per
+ *  non-empty bin (US the bin's lower edge: 1-us bins to 2 ms, then 100-us bins to 100 ms), then
+ *  "# Total:", "# Min Latencies:", "# Avg Latencies:", "# Max Latencies:" [us] and "# Histogram
+ *  Overflows:" (values of 100 ms and more). @p title: a first "# " line, or NULL. 0 or MCA_EIO.
+ *  Context: non-rt. */
+int mca_hist_write(const mca_hist_t *h, const char *title, FILE *f);
 
 #ifdef __cplusplus
 }
