@@ -7,6 +7,10 @@
 #      same loopback config beside it (one-way = RTT / 2);
 #   3. mcad's whole tick with DDS publishing vs without (mcad --dds-ab 500: publishing only in every other
 #      block of 500 ticks), one run as shipped (publish_divisor 10, 100 Hz) and one publishing every tick.
+# Rows 1 and 2 run MCA_BENCH_ROUNDS times (default 3) per mode: this VM's host disturbs the guest at a fixed
+# phase for tens of seconds (late wake-ups every 10 ms, wherever mcad's or cyclictest's wake-up falls), so
+# one 20-s run says which of the two it hit; each round's ratio is printed, and the ratio of the rounds'
+# histograms pooled (mcad --histogram and cyclictest -h, read by one reader).
 # usage: bench/rt/issue13.sh BUILD_DIR [SECONDS (20)] [OUT_DIR (out/bench-issue13)] [MODES ("quiet busy")]
 # Needs root (SCHED_FIFO, mlockall) and 2 CPUs; prints one table (markdown) on stdout, raw outputs in OUT_DIR.
 set -u
@@ -15,6 +19,7 @@ B=$(cd "${1:?usage: issue13.sh BUILD_DIR [SECONDS] [OUT_DIR] [MODES]}" && pwd) |
 DUR=${2:-20}
 OUT=${3:-$ROOT/out/bench-issue13}
 MODES=${4:-quiet busy}
+ROUNDS=${MCA_BENCH_ROUNDS:-3}
 MCAD=$B/daemon/mcad
 MON=$B/tools/mca-monitor/mca-monitor
 XML=$ROOT/config/dds/loopback.xml
@@ -50,25 +55,30 @@ for mode in $MODES; do
     # at the same time on the loop's CPU at its priority, a quarter period before mcad's grid (mcad wakes at
     # whole ms + 500 us of CLOCK_MONOTONIC, cyclictest --secaligned at whole seconds + 250 us: both clear of
     # the kernel's tick on whole ms): both see the same stalls of this VM, and neither wakes while the other
-    # runs
+    # runs. cyclictest starts first and ends last, and prints every wake-up (-v); the table takes those due
+    # in the span of mcad's --histogram (its first to its last wake-up): the same milliseconds for both.
     cell "$R/cell.yaml" 10
-    aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 12)) >/dev/null 2>"$R/monitor.err" &
-    mon=$!
-    aux ddsperf -i $((DOM + 1)) -D $((DUR + 10)) pong >"$R/pong.txt" 2>&1 &
-    pong=$!
-    aux ddsperf -i $((DOM + 1)) -D $((DUR + 8)) ping 100Hz >"$R/ping.txt" 2>&1 &
-    ping=$!
-    sleep 2
-    "$MCAD" --stop-after $((DUR + 3)) "$R/cell.yaml" >/dev/null 2>"$R/mcad.err" &
-    mcad=$!
-    for _ in $(seq 100); do
-        grep -q "mcad: running" "$R/mcad.err" && break
-        sleep 0.1
+    for round in $(seq "$ROUNDS"); do
+        Q=$R/round$round
+        mkdir -p "$Q"
+        aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 14)) >/dev/null 2>"$Q/monitor.err" &
+        mon=$!
+        aux ddsperf -i $((DOM + 1)) -D $((DUR + 12)) pong >"$Q/pong.txt" 2>&1 &
+        pong=$!
+        aux ddsperf -i $((DOM + 1)) -D $((DUR + 10)) ping 100Hz >"$Q/ping.txt" 2>&1 &
+        ping=$!
+        sleep 2
+        # launched between whole seconds, so that its first wake-up is due at the next whole second + 250 us
+        python3 -c 'import time; t = time.clock_gettime(time.CLOCK_MONOTONIC) % 1; time.sleep((1.1 - t) % 1)'
+        python3 -c 'import time; print(time.clock_gettime_ns(time.CLOCK_MONOTONIC))' >"$Q/cyclictest_launch_ns.txt"
+        cyclictest -m -p 80 -a 1 -i 1000 --secaligned=250 -l $(((DUR + 7) * 1000)) -q -v >"$Q/cyclictest_v.txt" 2>&1 &
+        cyc=$!
+        sleep 1
+        "$MCAD" --stop-after $((DUR + 3)) --histogram "$Q/mcad_hist.txt" "$R/cell.yaml" >/dev/null 2>"$Q/mcad.err"
+        wait $cyc
+        kill -INT $mon 2>/dev/null
+        wait $mon $ping $pong 2>/dev/null
     done
-    cyclictest -m -p 80 -a 1 -i 1000 --secaligned=250 -l $((DUR * 1000)) -q -h 200000 >"$R/cyclictest.txt" 2>&1
-    wait $mcad
-    kill -INT $mon 2>/dev/null
-    wait $mon $ping $pong 2>/dev/null
     # 3: publishing on/off in one run, as shipped (every 10th tick, 100 Hz) and every tick (1 kHz)
     for div in 10 1; do
         cell "$R/cell_ab$div.yaml" $div
@@ -82,61 +92,106 @@ for mode in $MODES; do
     [ -n "$busy" ] && kill "$busy" && wait "$busy" 2>/dev/null
 done
 
-python3 - "$OUT" $MODES <<'PYEOF'
+python3 - "$OUT" "$ROUNDS" $MODES <<'PYEOF'
 import re, sys
-out, modes = sys.argv[1], sys.argv[2:]
+out, rounds, modes = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
 def f(path):
     try:
         return open(path, errors="replace").read()
     except OSError:
         return ""
-def cyc(txt):
-    hist, over = {}, 0
+def hist(txt):
+    """cyclictest -h output or mcad --histogram: {lower bin edge us: count}, overflows, max us"""
+    h, over = {}, 0
     for line in txt.splitlines():
         m = re.match(r"^(\d+)\s+(\d+)\s*$", line)
         if m:
-            hist[int(m.group(1))] = int(m.group(2))
+            h[int(m.group(1))] = h.get(int(m.group(1)), 0) + int(m.group(2))
         m = re.match(r"# Histogram Overflows:\s*(\d+)", line)
         if m:
             over = int(m.group(1))
-    n = sum(hist.values()) + over
+    mx = re.search(r"# Max Latencies:\s*(\d+)", txt)
+    return h, over, int(mx.group(1)) if mx else 0
+def cyc_in_span(Q):
+    """cyclictest -v's wake-ups due within mcad's span, as a histogram; wake-up i was due at the whole
+    second after the launch + 250 us + i ms"""
+    span = re.search(r"due from (\d+) to (\d+) ns", f(Q + "/mcad_hist.txt"))
+    launch = f(Q + "/cyclictest_launch_ns.txt").strip()
+    if not span or not launch:
+        return {}, 0, 0
+    first, last = int(span.group(1)), int(span.group(2))
+    t0 = (int(launch) // 10**9 + 1) * 10**9 + 250000
+    h, n_all, lo, hi = {}, 0, None, None
+    for line in f(Q + "/cyclictest_v.txt").splitlines():
+        m = re.match(r"^\s*0:\s*(\d+):\s*(\d+)\s*$", line)
+        if not m:
+            continue
+        due = t0 + int(m.group(1)) * 10**6
+        lo, hi = due if lo is None else lo, due
+        if first - 10**6 < due <= last:
+            h[int(m.group(2))] = h.get(int(m.group(2)), 0) + 1
+            n_all += 1
+    if lo is None or lo > first - 10**6 or hi < last:
+        print(f"<!-- {Q}: cyclictest's wake-ups ({lo}..{hi}) do not cover mcad's span ({first}..{last}) -->")
+        return {}, 0, 0
+    return h, 0, max(h) if h else 0
+def pooled(hs):
+    h, over, mx = {}, 0, 0
+    for hh, o, m in hs:
+        for k, v in hh.items():
+            h[k] = h.get(k, 0) + v
+        over, mx = over + o, max(mx, m)
+    return h, over, mx
+def stats(hs):
+    """p50, p99, p99.9 (lower bin edges, overflows count as the largest), max, n"""
+    h, over, mx = hs
+    n = sum(h.values()) + over
     def pct(p):
         k, acc = int(p * n), 0
-        for us in sorted(hist):
-            acc += hist[us]
+        for us in sorted(h):
+            acc += h[us]
             if acc > k:
                 return us
-        return float("nan")
-    mx = re.search(r"# Max Latencies:\s*(\d+)", txt)
-    return pct(0.5), pct(0.99), pct(0.999), int(mx.group(1)) if mx else float("nan"), n
+        return float("inf")
+    return pct(0.5), pct(0.99), pct(0.999), mx, n
+def row1(label, mode, m, c, note):
+    print(f"| 1. wake-up jitter{label} | {mode} | mcad: p50 {m[0]} / p99 {m[1]} / p99.9 {m[2]} / max {m[3]} us | "
+          f"cyclictest -a 1 -p 80: p50 {c[0]} / p99 {c[1]} / p99.9 {c[2]} / max {c[3]} us | "
+          f"p99 {m[1] / c[1]:.2f}, p99.9 {m[2] / c[2]:.2f} | {note} |")
 print("| row | other CPU | measured | against | ratio | notes |")
 print("|---|---|---|---|---|---|")
 for mode in modes:
     R = f"{out}/{mode}"
-    m = f(R + "/mcad.err")
-    j = re.search(r"jitter p50 ([\d.]+) us, p99 ([\d.]+) us, p99.9 ([\d.]+) us, max ([\d.]+) us", m)
-    tk = re.search(r"ticks (\d+), overruns (\d+) \(skipped periods (\d+)\)", m)
-    c = cyc(f(R + "/cyclictest.txt"))
-    if j:
-        mj = [float(x) for x in j.groups()]
-        print(f"| 1. wake-up jitter, mcad (CPU 1, FIFO 80, DDS 100 Hz + monitor) | {mode} | p50 {mj[0]:.0f} / p99 {mj[1]:.0f} / "
-              f"p99.9 {mj[2]:.0f} / max {mj[3]:.0f} us | cyclictest -a 1 -p 80: p50 {c[0]} / p99 {c[1]} / p99.9 {c[2]} / max {c[3]} us | "
-              f"p99 {mj[1] / c[1]:.2f}, p99.9 {mj[2] / c[2]:.2f} | mcad {tk.group(1) if tk else '?'} ticks, overruns {tk.group(2) if tk else '?'}; cyclictest {c[4]} wake-ups |")
-    lat = re.search(r"p50 ([\d.]+) us.*?p99 ([\d.]+) us.*?max ([\d.]+) us", f(R + "/monitor.err").replace("\n", " "))
-    ping = f(R + "/ping.txt")
-    # ddsperf ping lines: "... rtt mean XXus min XXus 50% XXus 90% XXus 99% XXus max XXus"
-    rtts = re.findall(r"50%\s+([\d.]+)us\s+90%\s+([\d.]+)us\s+99%\s+([\d.]+)us", ping)
-    dp = ""
-    if rtts:
-        p50 = sorted(float(r[0]) for r in rtts)[len(rtts) // 2]
-        p99 = sorted(float(r[2]) for r in rtts)[len(rtts) // 2]
-        dp = f"ddsperf ping/pong 100 Hz: RTT p50 {p50:.0f} / p99 {p99:.0f} us (median of {len(rtts)} 1-s lines), one-way ~{p50 / 2:.0f} / {p99 / 2:.0f} us"
-    mon_line = " ".join(l for l in f(R + "/monitor.err").splitlines() if "latency" in l)
-    if lat:
-        print(f"| 2. DDS latency tick -> mca-monitor | {mode} | p50 {float(lat.group(1)):.0f} / p99 {float(lat.group(2)):.0f} / max {float(lat.group(3)):.0f} us | "
-              f"{dp or 'ddsperf: no figures (see ping.txt)'} | - | {mon_line[:160]} |")
-    else:
-        print(f"| 2. DDS latency tick -> mca-monitor | {mode} | (no latency line: see monitor.err) | {dp} | - | |")
+    all_m, all_c = [], []
+    for r in range(1, rounds + 1):
+        Q = f"{R}/round{r}"
+        me = f(Q + "/mcad.err")
+        tk = re.search(r"ticks (\d+), overruns (\d+) \(skipped periods (\d+)\)", me)
+        hm, hc = hist(f(Q + "/mcad_hist.txt")), cyc_in_span(Q)
+        if hm[0] and hc[0]:
+            all_m.append(hm)
+            all_c.append(hc)
+            m, c = stats(hm), stats(hc)
+            row1(f", round {r} of {rounds} (CPU 1, FIFO 80, DDS 100 Hz + monitor)", mode, m, c,
+                 f"{m[4]} vs {c[4]} wake-ups; mcad overruns {tk.group(2) if tk else '?'}")
+        else:
+            print(f"| 1. wake-up jitter, round {r} | {mode} | (no histogram: see {Q}/mcad.err, cyclictest.txt) | | | |")
+        lat = re.search(r"p50 ([\d.]+) us.*?p99 ([\d.]+) us.*?max ([\d.]+) us", f(Q + "/monitor.err").replace("\n", " "))
+        # ddsperf ping lines: "... rtt mean XXus min XXus 50% XXus 90% XXus 99% XXus max XXus"
+        rtts = re.findall(r"50%\s+([\d.]+)us\s+90%\s+([\d.]+)us\s+99%\s+([\d.]+)us", f(Q + "/ping.txt"))
+        dp = "ddsperf: no figures (see ping.txt)"
+        if rtts:
+            p50 = sorted(float(x[0]) for x in rtts)[len(rtts) // 2]
+            p99 = sorted(float(x[2]) for x in rtts)[len(rtts) // 2]
+            dp = f"ddsperf ping/pong 100 Hz: RTT p50 {p50:.0f} / p99 {p99:.0f} us (median of {len(rtts)} 1-s lines), one-way ~{p50 / 2:.0f} / {p99 / 2:.0f} us"
+        if lat:
+            print(f"| 2. DDS latency tick -> mca-monitor, round {r} | {mode} | p50 {float(lat.group(1)):.0f} / p99 {float(lat.group(2)):.0f} / "
+                  f"max {float(lat.group(3)):.0f} us | {dp} | - | |")
+        else:
+            print(f"| 2. DDS latency tick -> mca-monitor, round {r} | {mode} | (no latency line: see {Q}/monitor.err) | {dp} | - | |")
+    if all_m:
+        m, c = stats(pooled(all_m)), stats(pooled(all_c))
+        row1(f", {len(all_m)} rounds pooled", mode, m, c, f"{m[4]} vs {c[4]} wake-ups")
     for div, what in (("10", "as shipped (100 Hz)"), ("1", "every tick (1 kHz)")):
         ab = re.search(r"off p50 ([\d.]+) us, p99 ([\d.]+) us, mean ([\d.]+) us \((\d+) ticks\); on p50 ([\d.]+) us, p99 ([\d.]+) us, "
                        r"mean ([\d.]+) us \((\d+) ticks\); ratio on/off p50 ([\d.]+), p99 ([\d.]+), mean ([\d.]+)", f(f"{R}/mcad_ab{div}.err"))

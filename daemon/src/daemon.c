@@ -109,6 +109,7 @@ struct mca_daemon {
     int64_t wake_late_ns; /* this tick woke this late (the loop sets it; 0 in virtual time) */
     double t_tick;        /* this tick's task time */
     mca_hist_t jitter, compute, ctrl_time;
+    int64_t jitter_first_due_ns, jitter_last_due_ns; /* the wake-ups in jitter were due in this span */
     mca_hist_t compute_ab[2]; /* --dds-ab: whole tick with publishing [0] off, [1] on */
     double min_d, min_d_t;
     int64_t min_d_stamp;
@@ -1318,6 +1319,8 @@ static void *rt_main(void *arg) {
         }
 #endif
         mca_hist_record(&d->jitter, wake - next);
+        d->jitter_first_due_ns = d->jitter_first_due_ns ? d->jitter_first_due_ns : next;
+        d->jitter_last_due_ns = next;
         /* task time advances one period per tick: a missed deadline delays the task instead of skipping
          * path points (a sim or lockstep arm did not move meanwhile; real arms' drift is fed back) */
         const double t = (double)ticks * (double)period * 1e-9;
@@ -1574,7 +1577,10 @@ void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
     }
 }
 
-const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d) {
+const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d, int64_t *first_due_ns,
+                                            int64_t *last_due_ns) {
+    *first_due_ns = d->jitter_first_due_ns;
+    *last_due_ns = d->jitter_last_due_ns;
     return &d->jitter;
 }
 

@@ -350,7 +350,13 @@ int main(int argc, char **argv) {
     mca_daemon_summary(d, &s);
     mca_daemon_print_summary(&s, stderr);
     if (hist) {
-        if (mca_hist_write(mca_daemon_wake_histogram(d), "mcad wake-up latency", hist) != MCA_OK) {
+        /* the span lets a reader take another tool's samples of exactly these milliseconds (bench/rt) */
+        int64_t first, last;
+        const mca_hist_t *h = mca_daemon_wake_histogram(d, &first, &last);
+        char title[160];
+        snprintf(title, sizeof title, "mcad wake-up latency: due from %lld to %lld ns of CLOCK_MONOTONIC",
+                 (long long)first, (long long)last);
+        if (mca_hist_write(h, title, hist) != MCA_OK) {
             fprintf(stderr, "<4>mcad: --histogram: cannot write '%s'\n", hist_path);
         }
         fclose(hist);

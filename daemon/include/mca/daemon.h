@@ -224,8 +224,10 @@ int mca_daemon_join(mca_daemon_t *d);
 void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s);
 /** Print the summary block on f ("<6>mcad: ..." lines). */
 void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f);
-/** The loop's wake-up latency histogram (mcad --histogram writes it). Once the loop has ended. */
-const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d);
+/** The loop's wake-up latency histogram (mcad --histogram writes it), and when the first and the last of
+ *  those wake-ups were due [ns of CLOCK_MONOTONIC; 0 without any]. Once the loop has ended. */
+const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d, int64_t *first_due_ns,
+                                            int64_t *last_due_ns);
 
 /** Close arms, DDS (publishing the final status) and free (shut-down). NULL is allowed. */
 void mca_daemon_close(mca_daemon_t *d);
