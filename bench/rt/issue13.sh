@@ -80,14 +80,19 @@ for mode in $MODES; do
         wait $mon $ping $pong 2>/dev/null
     done
     # 3: publishing on/off in one run, as shipped (every 10th tick, 100 Hz) and every tick (1 kHz)
+    # 3 as shipped in ROUNDS runs (pooled: the rounds' means of on and of off), every tick in one
     for div in 10 1; do
         cell "$R/cell_ab$div.yaml" $div
-        aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor_ab$div.err" &
-        mon=$!
-        sleep 1
-        "$MCAD" --dds-ab 500 --stop-after "$DUR" "$R/cell_ab$div.yaml" >/dev/null 2>"$R/mcad_ab$div.err"
-        kill -INT $mon 2>/dev/null
-        wait $mon 2>/dev/null
+        n=$ROUNDS
+        [ "$div" = 1 ] && n=1
+        for round in $(seq "$n"); do
+            aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor_ab${div}_$round.err" &
+            mon=$!
+            sleep 1
+            "$MCAD" --dds-ab 500 --stop-after "$DUR" "$R/cell_ab$div.yaml" >/dev/null 2>"$R/mcad_ab${div}_$round.err"
+            kill -INT $mon 2>/dev/null
+            wait $mon 2>/dev/null
+        done
     done
     [ -n "$busy" ] && kill "$busy" && wait "$busy" 2>/dev/null
 done
@@ -192,13 +197,22 @@ for mode in modes:
     if all_m:
         m, c = stats(pooled(all_m)), stats(pooled(all_c))
         row1(f", {len(all_m)} rounds pooled", mode, m, c, f"{m[4]} vs {c[4]} wake-ups")
-    for div, what in (("10", "as shipped (100 Hz)"), ("1", "every tick (1 kHz)")):
-        ab = re.search(r"off p50 ([\d.]+) us, p99 ([\d.]+) us, mean ([\d.]+) us \((\d+) ticks\); on p50 ([\d.]+) us, p99 ([\d.]+) us, "
-                       r"mean ([\d.]+) us \((\d+) ticks\); ratio on/off p50 ([\d.]+), p99 ([\d.]+), mean ([\d.]+)", f(f"{R}/mcad_ab{div}.err"))
-        if ab:
-            g = ab.groups()
-            print(f"| 3. whole tick, DDS publishing {what} vs none (mcad --dds-ab 500) | {mode} | on p50 {g[4]} / p99 {g[5]} / mean {g[6]} us | "
-                  f"off p50 {g[0]} / p99 {g[1]} / mean {g[2]} us | mean {g[10]}, p50 {g[8]}, p99 {g[9]} | {g[7]} vs {g[3]} ticks, 1 us bins: read the mean |")
-        else:
-            print(f"| 3. whole tick, DDS publishing {what} vs none | {mode} | (no dds-ab line: see mcad_ab{div}.err) | | | |")
+    for div, what, n in (("10", "as shipped (100 Hz)", rounds), ("1", "every tick (1 kHz)", 1)):
+        on_sum = off_sum = 0.0
+        on_n = off_n = 0
+        for r in range(1, n + 1):
+            ab = re.search(r"off p50 ([\d.]+) us, p99 ([\d.]+) us, mean ([\d.]+) us \((\d+) ticks\); on p50 ([\d.]+) us, p99 ([\d.]+) us, "
+                           r"mean ([\d.]+) us \((\d+) ticks\); ratio on/off p50 ([\d.]+), p99 ([\d.]+), mean ([\d.]+)", f(f"{R}/mcad_ab{div}_{r}.err"))
+            label = f", round {r} of {n}" if n > 1 else ""
+            if ab:
+                g = ab.groups()
+                off_sum, off_n = off_sum + float(g[2]) * int(g[3]), off_n + int(g[3])
+                on_sum, on_n = on_sum + float(g[6]) * int(g[7]), on_n + int(g[7])
+                print(f"| 3. whole tick, DDS publishing {what} vs none (mcad --dds-ab 500){label} | {mode} | on p50 {g[4]} / p99 {g[5]} / mean {g[6]} us | "
+                      f"off p50 {g[0]} / p99 {g[1]} / mean {g[2]} us | mean {g[10]}, p50 {g[8]}, p99 {g[9]} | {g[7]} vs {g[3]} ticks, 1 us bins: read the mean |")
+            else:
+                print(f"| 3. whole tick, DDS publishing {what}{label} | {mode} | (no dds-ab line: see mcad_ab{div}_{r}.err) | | | |")
+        if n > 1 and on_n and off_n:
+            print(f"| 3. whole tick, DDS publishing {what} vs none, {n} rounds pooled | {mode} | on mean {on_sum / on_n:.2f} us | "
+                  f"off mean {off_sum / off_n:.2f} us | mean {on_sum / on_n / (off_sum / off_n):.3f} | {on_n} vs {off_n} ticks |")
 PYEOF
