@@ -198,21 +198,33 @@ for mode in modes:
         m, c = stats(pooled(all_m)), stats(pooled(all_c))
         row1(f", {len(all_m)} rounds pooled", mode, m, c, f"{m[4]} vs {c[4]} wake-ups")
     for div, what, n in (("10", "as shipped (100 Hz)", rounds), ("1", "every tick (1 kHz)", 1)):
-        on_sum = off_sum = 0.0
-        on_n = off_n = 0
+        on_sum = off_sum = son_sum = soff_sum = 0.0
+        on_n = off_n = son_n = soff_n = 0
         for r in range(1, n + 1):
             ab = re.search(r"off p50 ([\d.]+) us, p99 ([\d.]+) us, mean ([\d.]+) us \((\d+) ticks\); on p50 ([\d.]+) us, p99 ([\d.]+) us, "
                            r"mean ([\d.]+) us \((\d+) ticks\); ratio on/off p50 ([\d.]+), p99 ([\d.]+), mean ([\d.]+)", f(f"{R}/mcad_ab{div}_{r}.err"))
+            # the same ticks without those of half a period or more (this machine's stalls)
+            sab = re.search(r"shorter than half a period: off mean ([\d.]+) us \((\d+) ticks\), on mean ([\d.]+) us \((\d+) ticks\); "
+                            r"ratio on/off mean ([\d.]+)", f(f"{R}/mcad_ab{div}_{r}.err"))
             label = f", round {r} of {n}" if n > 1 else ""
             if ab:
                 g = ab.groups()
                 off_sum, off_n = off_sum + float(g[2]) * int(g[3]), off_n + int(g[3])
                 on_sum, on_n = on_sum + float(g[6]) * int(g[7]), on_n + int(g[7])
+                stall_free = "?"
+                if sab:
+                    h = sab.groups()
+                    soff_sum, soff_n = soff_sum + float(h[0]) * int(h[1]), soff_n + int(h[1])
+                    son_sum, son_n = son_sum + float(h[2]) * int(h[3]), son_n + int(h[3])
+                    stall_free = f"{h[4]} ({int(g[3]) + int(g[7]) - int(h[1]) - int(h[3])} stalled ticks left out)"
                 print(f"| 3. whole tick, DDS publishing {what} vs none (mcad --dds-ab 500){label} | {mode} | on p50 {g[4]} / p99 {g[5]} / mean {g[6]} us | "
-                      f"off p50 {g[0]} / p99 {g[1]} / mean {g[2]} us | mean {g[10]}, p50 {g[8]}, p99 {g[9]} | {g[7]} vs {g[3]} ticks, 1 us bins: read the mean |")
+                      f"off p50 {g[0]} / p99 {g[1]} / mean {g[2]} us | mean {g[10]}, p50 {g[8]}, p99 {g[9]}; stall-free mean {stall_free} | "
+                      f"{g[7]} vs {g[3]} ticks, 1 us bins: read the means |")
             else:
                 print(f"| 3. whole tick, DDS publishing {what}{label} | {mode} | (no dds-ab line: see mcad_ab{div}_{r}.err) | | | |")
-        if n > 1 and on_n and off_n:
-            print(f"| 3. whole tick, DDS publishing {what} vs none, {n} rounds pooled | {mode} | on mean {on_sum / on_n:.2f} us | "
-                  f"off mean {off_sum / off_n:.2f} us | mean {on_sum / on_n / (off_sum / off_n):.3f} | {on_n} vs {off_n} ticks |")
+        if n > 1 and on_n and off_n and son_n and soff_n:
+            print(f"| 3. whole tick, DDS publishing {what} vs none, {n} rounds pooled | {mode} | on mean {on_sum / on_n:.2f} us, "
+                  f"stall-free {son_sum / son_n:.2f} us | off mean {off_sum / off_n:.2f} us, stall-free {soff_sum / soff_n:.2f} us | "
+                  f"mean {on_sum / on_n / (off_sum / off_n):.3f}, stall-free {son_sum / son_n / (soff_sum / soff_n):.3f} | "
+                  f"{on_n} vs {off_n} ticks; {on_n + off_n - son_n - soff_n} of half a period or more left out of the stall-free means |")
 PYEOF

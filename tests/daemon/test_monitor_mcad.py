@@ -177,6 +177,20 @@ with tempfile.TemporaryDirectory(prefix="mca-monitor-ab-") as tmp:
         want = sum(1 for k in range(ticks) if (k // AB_BLOCK) % 2 == 1)
         check(not wrong, f"--dds-ab run: monitor saw only odd-block ticks ({len(wrong)} others, e.g. {wrong[:5]})")
         check(len(in_loop) >= 0.99 * want - 100, f"--dds-ab run: monitor saw {len(in_loop)} of the {want} published ticks")
+        # the stall-free means: of the same ticks, those under half a period; leaving out the longest ones
+        # can only lower a mean
+        means = re.search(r"dds on/off .*mean ([\d.]+) us \(\d+ ticks\); on .*mean ([\d.]+) us \(\d+ ticks\); ratio", run.stderr)
+        short = re.search(r"dds on/off, ticks shorter than half a period: off mean ([\d.]+) us \((\d+) ticks\), "
+                          r"on mean ([\d.]+) us \((\d+) ticks\); ratio on/off mean ([\d.]+)", run.stderr)
+        check(short is not None and means is not None, "--dds-ab run: summary has the stall-free line")
+        if short and means:
+            s_off, s_n_off, s_on, s_n_on, s_ratio = (float(short.group(1)), int(short.group(2)), float(short.group(3)),
+                                                     int(short.group(4)), float(short.group(5)))
+            check(0 < s_n_off <= n_off and 0 < s_n_on <= n_on and s_n_off + s_n_on >= 0.95 * (n_off + n_on),
+                  f"--dds-ab run: stall-free ticks {s_n_off} of {n_off} off, {s_n_on} of {n_on} on")
+            check(s_off <= float(means.group(1)) + 0.005 and s_on <= float(means.group(2)) + 0.005,
+                  f"--dds-ab run: stall-free means {s_off} / {s_on} us at most the plain ones {means.group(1)} / {means.group(2)}")
+            check(abs(s_ratio - s_on / s_off) <= 0.002 + 0.01 * s_ratio, f"--dds-ab run: stall-free ratio {s_ratio} = {s_on} / {s_off}")
     if failures:
         print(run.stderr)
 

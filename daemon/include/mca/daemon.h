@@ -157,6 +157,8 @@ typedef struct mca_daemon_summary {
     uint64_t dds_ab_n[2];                          /**< ticks timed with publishing [0] off, [1] on */
     int64_t dds_ab_p50_ns[2], dds_ab_p99_ns[2];    /**< whole tick, publishing [0] off, [1] on */
     double dds_ab_mean_ns[2];                      /**< the same, mean (exact, not binned) */
+    uint64_t dds_ab_short_n[2];                    /**< of those, ticks shorter than half a period */
+    double dds_ab_short_mean_ns[2];                /**< their mean: a machine's stall left out */
     double min_distance, min_distance_t;
     int fault;          /**< mca_daemon_fault_t */
     int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */
