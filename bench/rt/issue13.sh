@@ -20,6 +20,9 @@ DUR=${2:-20}
 OUT=${3:-$ROOT/out/bench-issue13}
 MODES=${4:-quiet busy}
 ROUNDS=${MCA_BENCH_ROUNDS:-3}
+# mca-monitor's priority: above the DDS publisher's (10, on the same CPU), so its receive thread takes a
+# sample when it arrives rather than when the publisher has written the tick's other topics (0: SCHED_OTHER)
+MON_PRIO=${MCA_BENCH_MONITOR_PRIORITY:-20}
 MCAD=$B/daemon/mcad
 MON=$B/tools/mca-monitor/mca-monitor
 XML=$ROOT/config/dds/loopback.xml
@@ -61,7 +64,7 @@ for mode in $MODES; do
     for round in $(seq "$ROUNDS"); do
         Q=$R/round$round
         mkdir -p "$Q"
-        aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 14)) >/dev/null 2>"$Q/monitor.err" &
+        aux "$MON" --priority "$MON_PRIO" --domain $DOM --config "$XML" --duration $((DUR + 14)) >/dev/null 2>"$Q/monitor.err" &
         mon=$!
         aux ddsperf -i $((DOM + 1)) -D $((DUR + 12)) pong >"$Q/pong.txt" 2>&1 &
         pong=$!
@@ -86,7 +89,7 @@ for mode in $MODES; do
         n=$ROUNDS
         [ "$div" = 1 ] && n=1
         for round in $(seq "$n"); do
-            aux "$MON" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor_ab${div}_$round.err" &
+            aux "$MON" --priority "$MON_PRIO" --domain $DOM --config "$XML" --duration $((DUR + 6)) >/dev/null 2>"$R/monitor_ab${div}_$round.err" &
             mon=$!
             sleep 1
             "$MCAD" --dds-ab 500 --stop-after "$DUR" "$R/cell_ab$div.yaml" >/dev/null 2>"$R/mcad_ab${div}_$round.err"
@@ -97,8 +100,8 @@ for mode in $MODES; do
     [ -n "$busy" ] && kill "$busy" && wait "$busy" 2>/dev/null
 done
 
-python3 - "$OUT" "$ROUNDS" $MODES <<'PYEOF'
-import re, sys
+MON_PRIO=$MON_PRIO python3 - "$OUT" "$ROUNDS" $MODES <<'PYEOF'
+import os, re, sys
 out, rounds, modes = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
 def f(path):
     try:
@@ -190,7 +193,7 @@ for mode in modes:
             p99 = sorted(float(x[2]) for x in rtts)[len(rtts) // 2]
             dp = f"ddsperf ping/pong 100 Hz: RTT p50 {p50:.0f} / p99 {p99:.0f} us (median of {len(rtts)} 1-s lines), one-way ~{p50 / 2:.0f} / {p99 / 2:.0f} us"
         if lat:
-            print(f"| 2. DDS latency tick -> mca-monitor, round {r} | {mode} | p50 {float(lat.group(1)):.0f} / p99 {float(lat.group(2)):.0f} / "
+            print(f"| 2. DDS latency tick -> mca-monitor (--priority {os.environ.get('MON_PRIO', '?')}), round {r} | {mode} | p50 {float(lat.group(1)):.0f} / p99 {float(lat.group(2)):.0f} / "
                   f"max {float(lat.group(3)):.0f} us | {dp} | - | |")
         else:
             print(f"| 2. DDS latency tick -> mca-monitor, round {r} | {mode} | (no latency line: see {Q}/monitor.err) | {dp} | - | |")

@@ -2,7 +2,9 @@
 """mca-monitor shows what a running publisher sends: run mca-dds-synth and `mca-monitor --csv FILE
 --count N`, then check every CSV row against the published pattern (recomputed here, mca_types.py):
 distances, margins to d1/d2, S(d), critical links and points, strictly increasing ticks, >= 99.9 % of
-the N consecutive ticks. Also the monitor's command-line errors and its clean exit on SIGINT.
+the N consecutive ticks. Also the monitor's command-line errors and its clean exit on SIGINT; as root,
+--priority: every thread of the recording monitor (Cyclone's too) SCHED_FIFO at that priority, and as
+nobody (setpriv) a refusal that says so.
 usage: test_monitor_csv.py --synth PATH --monitor PATH --config XML --domain N"""
 import argparse
 import csv
@@ -12,6 +14,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mca_types as m  # noqa: E402
@@ -60,6 +63,41 @@ def check_rows(rows):
     return errors
 
 
+PRIORITY = 5
+MONITOR = None  # the binary under test (main)
+
+
+def check_threads_fifo(pid, prio):
+    """Every thread of pid SCHED_FIFO at prio once Cyclone's threads exist (its receive thread takes the
+    samples); /proc/PID/task/TID/stat fields 40 and 41 are rt_priority and policy (1: SCHED_FIFO)."""
+    threads = {}
+    for _ in range(100):  # up to 10 s for the participant's threads on a loaded machine
+        threads = {}
+        for tid in os.listdir(f"/proc/{pid}/task"):
+            try:
+                with open(f"/proc/{pid}/task/{tid}/stat") as f:
+                    stat = f.read()
+                with open(f"/proc/{pid}/task/{tid}/comm") as f:
+                    name = f.read().strip()
+            except OSError:
+                continue
+            fields = stat[stat.rindex(")") + 2:].split()  # from field 3 on
+            threads[name] = (int(fields[40 - 3]), int(fields[41 - 3]))
+        if any(n.startswith("recv") for n in threads):
+            break
+        time.sleep(0.1)
+    print(f"monitor threads (rt_priority, policy): {threads}")
+    if not any(n.startswith("recv") for n in threads):
+        return [f"no Cyclone receive thread in the monitor after 10 s: {threads}"]
+    wrong = {n: v for n, v in threads.items() if v != (prio, 1)}
+    errors = [f"--priority {prio}: threads not SCHED_FIFO {prio}: {wrong}"] if wrong else []
+    refused = subprocess.run(["setpriv", "--reuid", "65534", "--regid", "65534", "--clear-groups", "--inh-caps=-all",
+                              MONITOR, "--priority", str(prio), "--duration", "1"], capture_output=True, text=True, timeout=20)
+    if refused.returncode != 1 or "cannot run SCHED_FIFO" not in refused.stderr:
+        errors.append(f"--priority as nobody: exit {refused.returncode}, stderr {refused.stderr!r}")
+    return errors
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--synth", required=True)
@@ -67,6 +105,8 @@ def main():
     ap.add_argument("--config", required=True)
     ap.add_argument("--domain", type=int, required=True)
     a = ap.parse_args()
+    global MONITOR
+    MONITOR = a.monitor
     dom = ["--domain", str(a.domain), "--config", a.config]
     # A partition of our own: other tests' publishers (mcad, ...) may share the domain.
     part = ["--partition", f"mca-test-monitor-{os.getpid()}"]
@@ -76,7 +116,8 @@ def main():
     for args, code, text in ((["--domain", "999"], 2, "--domain"), (["--count", "x"], 2, "--count"),
                              (["--bogus"], 2, "usage"), (["--duration", "-1"], 2, "--duration"),
                              (dom + ["--csv", "/nonexistent/dir/x.csv"], 1, "/nonexistent/dir/x.csv"),
-                             (["--config", "/nonexistent.xml", "--count", "1"], 1, "/nonexistent.xml")):
+                             (["--config", "/nonexistent.xml", "--count", "1"], 1, "/nonexistent.xml"),
+                             (["--priority", "99"], 2, "--priority"), (["--priority", "x"], 2, "--priority")):
         p = subprocess.run([a.monitor] + args, capture_output=True, text=True, timeout=20)
         if p.returncode != code or text not in p.stderr:
             errors.append(f"mca-monitor {' '.join(args)}: exit {p.returncode} (want {code}), stderr {p.stderr!r}")
@@ -85,8 +126,14 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "d.csv")
-        mon = subprocess.Popen([a.monitor, "--csv", path, "--count", str(COUNT), "--no-color"] + dom + part,
+        root = os.geteuid() == 0
+        prio = ["--priority", str(PRIORITY)] if root else []
+        mon = subprocess.Popen([a.monitor, "--csv", path, "--count", str(COUNT), "--no-color"] + prio + dom + part,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        if root:
+            errors += check_threads_fifo(mon.pid, PRIORITY)
+        else:
+            print("SKIP: --priority (not root): the recording monitor runs SCHED_OTHER")
         pub = subprocess.Popen([a.synth, "--ticks", str(COUNT + 1000), "--wait-readers", "1", "--wait-topic",
                                 "mca/distances", "--wait-timeout", "20000", "--ring", "4096"] + dom + part,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

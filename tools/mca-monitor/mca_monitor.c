@@ -10,6 +10,7 @@
 #include <getopt.h>
 #include <math.h>
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -114,17 +115,21 @@ static int64_t now_ns(void) {
 }
 
 static void usage(FILE *f) {
-    fprintf(f, "usage: mca-monitor [options]\n"
-               "Live view of the mca distances and controller state published on DDS.\n"
-               "  --domain N      DDS domain id (default 0)\n"
-               "  --config FILE   Cyclone DDS XML (default: CYCLONEDDS_URI or built-in)\n"
-               "  --partition P   subscribe in DDS partition P (default: the default partition)\n"
-               "  --csv FILE      write every Distances sample to FILE (CSV, header line first)\n"
-               "  --count N       exit after N Distances samples\n"
-               "  --duration S    exit after S seconds\n"
-               "  --no-color      no ANSI colours (default when stdout is not a terminal)\n"
-               "  --help\n"
-               "Alarm word: OK above d2, WARN below d2, ALARM below d1. Ctrl-C exits cleanly.\n");
+    fprintf(
+        f, "usage: mca-monitor [options]\n"
+           "Live view of the mca distances and controller state published on DDS.\n"
+           "  --domain N      DDS domain id (default 0)\n"
+           "  --config FILE   Cyclone DDS XML (default: CYCLONEDDS_URI or built-in)\n"
+           "  --partition P   subscribe in DDS partition P (default: the default partition)\n"
+           "  --csv FILE      write every Distances sample to FILE (CSV, header line first)\n"
+           "  --count N       exit after N Distances samples\n"
+           "  --duration S    exit after S seconds\n"
+           "  --priority N    run SCHED_FIFO N (1..98; 0, the default: SCHED_OTHER), Cyclone's threads too:\n"
+           "                  samples are taken on its receive thread, which a real-time publisher on the\n"
+           "                  same CPU (mcad's dds.priority) would otherwise hold off until it sleeps\n"
+           "  --no-color      no ANSI colours (default when stdout is not a terminal)\n"
+           "  --help\n"
+           "Alarm word: OK above d2, WARN below d2, ALARM below d1. Ctrl-C exits cleanly.\n");
 }
 
 static const char *alarm_word(const mca_dds_Distances *d, const char **color) {
@@ -250,20 +255,16 @@ static int parse_u64(const char *s, const char *name, unsigned long long max, un
 }
 
 int main(int argc, char **argv) {
-    unsigned long long domain = 0, count = 0;
+    unsigned long long domain = 0, count = 0, priority = 0;
     double duration = 0.0;
     const char *config = NULL, *csv_path = NULL, *partition = NULL;
     int no_color = 0;
     static const struct option opts[] = {
-        {"domain", required_argument, NULL, 'd'},
-        {"config", required_argument, NULL, 'c'},
-        {"csv", required_argument, NULL, 'o'},
-        {"count", required_argument, NULL, 'n'},
-        {"duration", required_argument, NULL, 't'},
-        {"no-color", no_argument, NULL, 'C'},
-        {"help", no_argument, NULL, 'h'},
-        {"partition", required_argument, NULL, 'P'},
-        {NULL, 0, NULL, 0},
+        {"domain", required_argument, NULL, 'd'},   {"config", required_argument, NULL, 'c'},
+        {"csv", required_argument, NULL, 'o'},      {"count", required_argument, NULL, 'n'},
+        {"duration", required_argument, NULL, 't'}, {"no-color", no_argument, NULL, 'C'},
+        {"help", no_argument, NULL, 'h'},           {"partition", required_argument, NULL, 'P'},
+        {"priority", required_argument, NULL, 'p'}, {NULL, 0, NULL, 0},
     };
     int c;
     while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -300,6 +301,11 @@ int main(int argc, char **argv) {
         case 'P':
             partition = optarg;
             break;
+        case 'p':
+            if (parse_u64(optarg, "--priority", 98, &priority) != 0) {
+                return 2;
+            }
+            break;
         case 'h':
             usage(stdout);
             return 0;
@@ -310,6 +316,18 @@ int main(int argc, char **argv) {
     }
     if (mca_prog_no_operands("mca-monitor", argc, argv, optind, usage) != 0) {
         return 2;
+    }
+
+    /* before any DDS entity: the threads Cyclone creates inherit this thread's policy */
+    if (priority > 0) {
+        const struct sched_param sp = {.sched_priority = (int)priority};
+        if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+            fprintf(stderr,
+                    "mca-monitor: --priority %llu: cannot run SCHED_FIFO (%s): run as root or with "
+                    "LimitRTPRIO / CAP_SYS_NICE\n",
+                    priority, strerror(errno));
+            return 1;
+        }
     }
 
     static monitor_t m;
