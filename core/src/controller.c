@@ -67,6 +67,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->fault_distance = 1;
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e3;
+    cfg->ts.w_path = 1e4;
     cfg->ts.sigma_max = 1.5;
     cfg->ts.deadlock_time = 0.5;
     cfg->ts.deadlock_sigma = 0.05;
@@ -88,8 +89,8 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
         !(cfg->sp.K >= 0.0) || !(cfg->sp.big > 0.0) || cfg->scheme < MCA_SCHEME_MCA ||
         cfg->scheme > MCA_SCHEME_MCA_TS ||
         (cfg->scheme == MCA_SCHEME_MCA_TS &&
-         (!(cfg->ts.w_sigma > 0.0) || !(cfg->ts.w_slack > 0.0) || !(cfg->ts.sigma_max >= 1.0) ||
-          !(cfg->ts.deadlock_time > 0.0) || !(cfg->ts.deadlock_sigma >= 0.0) ||
+         (!(cfg->ts.w_sigma > 0.0) || !(cfg->ts.w_slack > 0.0) || !(cfg->ts.w_path >= 0.0) ||
+          !(cfg->ts.sigma_max >= 1.0) || !(cfg->ts.deadlock_time > 0.0) || !(cfg->ts.deadlock_sigma >= 0.0) ||
           !(cfg->ts.back_off_time >= 0.0) || !(cfg->ts.d1_margin >= 0.0)))) {
         return MCA_EINVAL;
     }
@@ -134,6 +135,12 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->deadlock = MCA_DEADLOCK_NONE;
     ctrl->deadlock_arm = -1;
     ctrl->deadlocks = 0;
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        ctrl->exact_next[a] = 0;
+        ctrl->exact_bad[a] = 0;
+    }
+    ctrl->exact_met = ctrl->exact_missed = 0;
+    ctrl->exact_error_max = 0.0;
     ctrl->brake_pdnn.h = 0;
     ctrl->n_row_key = ctrl->n_brake_row_key = 0;
 }
@@ -752,6 +759,40 @@ static void accel_box(mca_controller_t *ctrl, const mca_scheme_info_t *si, int n
     }
 }
 
+/* mca-ts: the tube also admits the slack of one braking step along the arm's present direction (the
+ * keep-direction stop, inside the acceleration box) with the path rate that fits it best. Standing still is
+ * a point of the tube only once the arm is slow enough to stop in one tick; before that, this step is what
+ * the stoppability bound keeps inside the rows, and with it the QP keeps an answer while the arm brakes on a
+ * curved path (a tube of 0 alone made the box, the rows and the tube disjoint: the PDNN at its cap).
+ * Runs after accel_box, before mca_scheme_add_timescale (alpha is still rdot + K err). */
+static void tube_keep_brake(const mca_controller_t *ctrl, const mca_scheme_info_t *si, int a,
+                            const double rdot[3], double sig_lo, double sig_hi, double lo[3], double hi[3]) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const mca_qp_t *qp = &ctrl->qp;
+    const int vo = si->var_off[a], dof = cfg->chain[a].dof;
+    double c[MCA_MAX_DOF], qb[MCA_MAX_DOF], dec[MCA_MAX_DOF];
+    for (int j = 0; j < dof; j++) {
+        c[j] = fmax(qp->lb[vo + j], fmin(qp->ub[vo + j], ctrl->box_center[vo + j]));
+        dec[j] = cfg->ts.dec_limit[a];
+    }
+    mca_brake_scale_arm(c, dec, cfg->dt, dof, qb);
+    double v[3]; /* J qb - K err: the path velocity the step needs */
+    for (int i = 0; i < 3; i++) {
+        const int row = MCA_TASK_DIM * a + i;
+        v[i] = -(qp->alpha[row] - rdot[i]);
+        for (int j = 0; j < dof; j++) {
+            v[i] += qp->G[row][vo + j] * qb[j];
+        }
+    }
+    const double r2 = mca_v3_dot(rdot, rdot);
+    const double sigma = fmax(sig_lo, fmin(sig_hi, r2 > 1e-12 ? mca_v3_dot(v, rdot) / r2 : 0.0));
+    for (int i = 0; i < 3; i++) {
+        const double e = v[i] - sigma * rdot[i];
+        lo[i] = fmin(lo[i], e);
+        hi[i] = fmax(hi[i], e);
+    }
+}
+
 /* Catching up: the rate an arm aims at grows with its lag behind task time (1/s per s of lag). */
 #define MCA_TS_CATCH_UP_GAIN 1.0
 
@@ -806,7 +847,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const mca_timescale_params_t *tp = &cfg->ts;
     const int na = cfg->n_arms;
-    const double re = 1.0 / sqrt(tp->w_slack);
+    const mca_timescale_weights_t w = {tp->w_sigma, tp->w_slack, tp->w_path};
     int unfinished = 0, progressing = 0, victim = -1;
     double slack = 0.0;
     for (int a = 0; a < na; a++) {
@@ -814,7 +855,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
         sigma = fmax(lo[a], fmin(hi[a], sigma));
         const double speed = mca_v3_norm(rdot_d[a]);
         for (int i = 0; i < MCA_TASK_DIM; i++) {
-            slack = fmax(slack, fabs(re * ctrl->phi[ts_off[a] + 1 + i]));
+            slack = fmax(slack, fabs(mca_scheme_ts_slack(ctrl->phi, ts_off[a], i, &w)));
         }
         ctrl->sigma[a] = sigma;
         ctrl->tau[a] = fmax(0.0, fmin(ctrl->path_end[a], ctrl->tau[a] + sigma * cfg->dt));
@@ -829,17 +870,52 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
         }
     }
     info->slack = slack;
-    if (ctrl->deadlock == MCA_DEADLOCK_NONE && unfinished > 0 && progressing == 0) {
+    if (ctrl->deadlock != MCA_DEADLOCK_BACK_OFF && unfinished > 0 && progressing == 0) {
         ctrl->stall_time += cfg->dt;
         if (ctrl->stall_time >= tp->deadlock_time && victim >= 0) {
+            /* waiting and the others still blocked: the same arm backs off further (paths that keep the
+             * tool tips on them free no room otherwise) */
+            ctrl->deadlock_arm = ctrl->deadlock == MCA_DEADLOCK_WAIT ? ctrl->deadlock_arm : victim;
             ctrl->deadlock = MCA_DEADLOCK_BACK_OFF;
-            ctrl->deadlock_arm = victim;
             ctrl->deadlock_until = info->task_t + tp->back_off_time;
             ctrl->deadlocks++;
+            ctrl->stall_time = 0.0;
         }
     } else if (progressing > 0) {
         ctrl->stall_time = 0.0;
     }
+}
+
+/* Exact waypoints of arm a at path time tau: each is checked from the first tick whose clock has reached it
+ * to the end of the dwell that follows it (a point without a dwell: that one tick). */
+static void exact_check(mca_controller_t *ctrl, int a, double tau) {
+    const mca_path_t *path = &ctrl->cfg.path[a];
+    if (path->kind != MCA_PATH_WAYPOINTS) {
+        return;
+    }
+    for (int i = ctrl->exact_next[a]; i < path->n_points; i++) {
+        ctrl->exact_next[a] = i;
+        if (!path->exact[i]) {
+            continue;
+        }
+        const double t_at = mca_path_point_time(path, i);
+        if (tau < t_at) {
+            return;
+        }
+        double x[3];
+        mca_path_point(path, i, x);
+        const double e = mca_v3_dist(x, ctrl->kin[a].ee);
+        ctrl->exact_error_max = fmax(ctrl->exact_error_max, e);
+        ctrl->exact_bad[a] |= e > path->exact_tol;
+        const int dwell = i + 1 < path->n_points && mca_v3_dist(path->p[i], path->p[i + 1]) == 0.0;
+        if (dwell && tau < mca_path_point_time(path, i + 1)) {
+            return; /* held: checked again next tick */
+        }
+        ctrl->exact_met += !ctrl->exact_bad[a];
+        ctrl->exact_missed += ctrl->exact_bad[a];
+        ctrl->exact_bad[a] = 0;
+    }
+    ctrl->exact_next[a] = path->n_points;
 }
 
 /* Path-time figures of the tick report (the schemes without path-time scaling run on task time). */
@@ -886,6 +962,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->min_distance = INFINITY;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         info->ee_error[a] = 0.0;
+        info->path_error[a] = 0.0;
         for (int l = 0; l < MCA_MAX_LINKS; l++) {
             info->link_distance[a][l] = INFINITY;
         }
@@ -935,7 +1012,13 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         mca_v3_set(info->ee[a], ctrl->kin[a].ee);
         mca_v3_set(info->ee_desired[a], r_d[a]);
         info->ee_error[a] = mca_v3_dist(r_d[a], ctrl->kin[a].ee);
+        info->path_error[a] = mca_path_distance(&cfg->path[a], ctrl->kin[a].ee);
+        info->tube[a] = INFINITY;
+        exact_check(ctrl, a, ts ? ctrl->tau[a] : info->task_t);
     }
+    info->exact_met = ctrl->exact_met;
+    info->exact_missed = ctrl->exact_missed;
+    info->exact_error_max = ctrl->exact_error_max;
 
     /* 3. distances */
     if (distances(ctrl, info) != MCA_OK) {
@@ -981,10 +1064,28 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (ts) {
             ts_plan(ctrl, info->task_t, target, lo, hi);
             accel_box(ctrl, &si, na); /* first: the lists keep the pairs this box can bring to a bound */
-            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack};
+            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack, cfg->ts.w_path};
+            double slack_lo[MCA_MAX_ARMS][3], slack_hi[MCA_MAX_ARMS][3];
+            int path_first[MCA_MAX_ARMS];
+            for (int a = 0; a < na; a++) {
+                path_first[a] = cfg->path[a].path_first;
+                if (!path_first[a]) {
+                    for (int i = 0; i < 3; i++) {
+                        slack_lo[a][i] = -INFINITY;
+                        slack_hi[a][i] = INFINITY;
+                    }
+                    continue;
+                }
+                double err[3];
+                mca_v3_sub(err, r_d[a], ctrl->kin[a].ee);
+                info->tube[a] = mca_path_tolerance(&cfg->path[a], ctrl->tau[a]);
+                mca_scheme_tube_bounds(err, info->tube[a], cfg->sp.K, cfg->dt, slack_lo[a], slack_hi[a]);
+                tube_keep_brake(ctrl, &si, a, rdot_d[a], lo[a], hi[a], slack_lo[a], slack_hi[a]);
+            }
             /* the path rates' columns before the rows: the rows are written at the QP's full width */
-            rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi, &w,
-                                          ts_off, ctrl->ts_scale);
+            rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi,
+                                          (const double(*)[3])slack_lo, (const double(*)[3])slack_hi, &w,
+                                          path_first, ts_off, ctrl->ts_scale);
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
                             (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});

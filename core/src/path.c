@@ -3,6 +3,7 @@
 #include "mca/path.h"
 
 #include <math.h>
+#include <string.h>
 
 #include "mca/err.h"
 #include "mca/vec3.h"
@@ -23,7 +24,7 @@ void mca_path_anchor(mca_path_t *path, const double ee_start[3]) {
     }
 }
 
-static void path_point(const mca_path_t *path, int i, double out[3]) {
+void mca_path_point(const mca_path_t *path, int i, double out[3]) {
     if (path->relative) {
         mca_v3_add(out, path->anchor, path->p[i]);
     } else {
@@ -103,7 +104,7 @@ int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
             return MCA_OK;
         }
         if (s <= 0.0 || path->n_points == 1) {
-            path_point(path, 0, r);
+            mca_path_point(path, 0, r);
             return MCA_OK;
         }
         for (int i = 0; i + 1 < path->n_points; i++) {
@@ -115,8 +116,8 @@ int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
                 const double h = u3 * (10.0 - 15.0 * u + 6.0 * u2);
                 const double hd = 30.0 * u2 * (1.0 - 2.0 * u + u2) / T;
                 double a[3], b[3];
-                path_point(path, i, a);
-                path_point(path, i + 1, b);
+                mca_path_point(path, i, a);
+                mca_path_point(path, i + 1, b);
                 for (int k = 0; k < 3; k++) {
                     r[k] = a[k] + h * (b[k] - a[k]);
                     rdot[k] = hd * (b[k] - a[k]);
@@ -125,11 +126,108 @@ int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
             }
             s -= T;
         }
-        path_point(path, path->n_points - 1, r);
+        mca_path_point(path, path->n_points - 1, r);
         return MCA_OK;
     }
     default:
         mca_v3_set(r, path->anchor);
         return MCA_OK;
+    }
+}
+
+double mca_path_point_time(const mca_path_t *path, int i) {
+    double t = path->t0;
+    for (int k = 0; k < i && k + 1 < path->n_points; k++) {
+        t += path->dur[k];
+    }
+    return t;
+}
+
+/* A dwell: segment i stays at its point. */
+static int is_dwell(const mca_path_t *path, int i) {
+    return i + 1 < path->n_points && memcmp(path->p[i], path->p[i + 1], sizeof path->p[i]) == 0;
+}
+
+double mca_path_tolerance(const mca_path_t *path, double t) {
+    if (path->kind != MCA_PATH_WAYPOINTS || path->n_points < 2) {
+        return path->seg_tol[0];
+    }
+    double s = t - path->t0;
+    const int last = path->n_points - 1;
+    if (s <= 0.0) {
+        return path->exact[0] ? fmin(path->exact_tol, path->seg_tol[0]) : path->seg_tol[0];
+    }
+    for (int i = 0; i < last; i++) {
+        const double T = path->dur[i];
+        if (s < T) {
+            const double tol = path->seg_tol[i], ex = fmin(path->exact_tol, tol);
+            const int a = path->exact[i], b = path->exact[i + 1];
+            if (a && (b || is_dwell(path, i))) {
+                return ex; /* held at an exact point, or between two */
+            }
+            const double u = s / T;
+            if (b) {
+                return ex + (tol - ex) * (1.0 - u);
+            }
+            if (a) {
+                return ex + (tol - ex) * u;
+            }
+            return tol;
+        }
+        s -= T;
+    }
+    const double tol = path->seg_tol[last - 1];
+    return path->exact[last] ? fmin(path->exact_tol, tol) : tol;
+}
+
+static double point_segment(const double x[3], const double a[3], const double b[3]) {
+    double ab[3], ax[3];
+    mca_v3_sub(ab, b, a);
+    mca_v3_sub(ax, x, a);
+    const double l2 = mca_v3_dot(ab, ab);
+    const double u = l2 > 0.0 ? fmax(0.0, fmin(1.0, mca_v3_dot(ax, ab) / l2)) : 0.0;
+    double c[3];
+    for (int k = 0; k < 3; k++) {
+        c[k] = a[k] + u * ab[k];
+    }
+    return mca_v3_dist(x, c);
+}
+
+double mca_path_distance(const mca_path_t *path, const double x[3]) {
+    switch (path->kind) {
+    case MCA_PATH_STREAM:
+        return mca_v3_dist(x, path->stream_r);
+    case MCA_PATH_CIRCLE: {
+        /* the circle's plane through its centre, then the ring in it */
+        double c[3], w[3], n[3];
+        for (int k = 0; k < 3; k++) {
+            c[k] = path->anchor[k] - path->radius * path->u[k];
+        }
+        mca_v3_sub(w, x, c);
+        mca_v3_cross(n, path->u, path->v);
+        const double h = mca_v3_dot(w, n);
+        double wp[3];
+        for (int k = 0; k < 3; k++) {
+            wp[k] = w[k] - h * n[k];
+        }
+        const double radial = mca_v3_norm(wp) - path->radius;
+        return sqrt(h * h + radial * radial);
+    }
+    case MCA_PATH_WAYPOINTS: {
+        if (path->n_points < 1) {
+            return mca_v3_dist(x, path->anchor);
+        }
+        double a[3], b[3];
+        mca_path_point(path, 0, a);
+        double d = mca_v3_dist(x, a);
+        for (int i = 0; i + 1 < path->n_points; i++) {
+            mca_path_point(path, i + 1, b);
+            d = fmin(d, point_segment(x, a, b));
+            mca_v3_set(a, b);
+        }
+        return d;
+    }
+    default:
+        return mca_v3_dist(x, path->anchor);
     }
 }

@@ -447,16 +447,26 @@ int mca_scheme_compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, int
 }
 
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
-                             const double *sigma_lo, const double *sigma_hi, const mca_timescale_weights_t *w,
-                             int ts_off[], double sigma_scale[]) {
-    if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !w || !ts_off || !sigma_scale ||
-        !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
+                             const double *sigma_lo, const double *sigma_hi, const double slack_lo[][3],
+                             const double slack_hi[][3], const mca_timescale_weights_t *w,
+                             const int *path_first, int ts_off[], double sigma_scale[]) {
+    if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !slack_lo || !slack_hi || !w || !ts_off ||
+        !sigma_scale || !path_first || !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || !(w->w_path >= 0.0) ||
+        n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
         return MCA_EINVAL;
     }
     if (qp->n + MCA_TS_VARS * n_arms > MCA_QP_MAX_VARS) {
         return MCA_ERANGE;
     }
-    const double re = 1.0 / sqrt(w->w_slack);
+    for (int a = 0; a < n_arms; a++) {
+        for (int i = 0; i < MCA_TASK_DIM; i++) {
+            if (!(slack_lo[a][i] <= 0.0) || !(slack_hi[a][i] >= 0.0) ||
+                (!path_first[a] && (slack_lo[a][i] > -INFINITY || slack_hi[a][i] < INFINITY))) {
+                return MCA_EINVAL;
+            }
+        }
+    }
+    const double sw = sqrt(w->w_slack), re = 1.0 / sw, k = w->w_path / sw;
     for (int a = 0; a < n_arms; a++) {
         const int o = qp->n;
         /* u = m (sigma - target), m = sqrt(w_sigma). (Scaling m with |rdot|, so that the column has the same
@@ -468,20 +478,54 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
         qp->n += MCA_TS_VARS;
         for (int i = 0; i < MCA_TASK_DIM; i++) {
             const int row = MCA_TASK_DIM * a + i;
+            const int yp = o + 1 + i, yn = o + 1 + MCA_TASK_DIM + i;
             /* the assembly wrote alpha = rdot + K (r_d - r): the path term now runs at the target rate */
             qp->alpha[row] += (target[a] - 1.0) * rdot_d[a][i];
             qp->G[row][o] = -rdot_d[a][i] * rs;
-            qp->G[row][o + 1 + i] = -re;
-            qp->lb[o + 1 + i] = -INFINITY;
-            qp->ub[o + 1 + i] = INFINITY;
+            qp->G[row][yp] = -re;
+            if (!path_first[a]) {
+                /* elastic tracking (an L2 slack, no tube): y_p = s is the whole slack, y_n a fixed 0 that
+                 * enters no row, so the QP and the PDNN's answer are those of the 4-variable layout */
+                qp->G[row][yn] = 0.0;
+                qp->lb[yp] = -INFINITY;
+                qp->ub[yp] = INFINITY;
+                qp->lb[yn] = qp->ub[yn] = 0.0;
+                continue;
+            }
+            qp->G[row][yn] = re;
+            /* the parts start at k (their shift makes the L1 weight); the tube bounds their growth */
+            qp->lb[yp] = k;
+            qp->ub[yp] = k + sw * slack_hi[a][i];
+            qp->lb[yn] = k;
+            qp->ub[yn] = k - sw * slack_lo[a][i];
         }
-        for (int k = 0; k < qp->n_ineq; k++) {
+        for (int kk = 0; kk < qp->n_ineq; kk++) {
             for (int v = 0; v < MCA_TS_VARS; v++) {
-                qp->U[k][o + v] = 0.0;
+                qp->U[kk][o + v] = 0.0;
             }
         }
         qp->lb[o] = (sigma_lo[a] - target[a]) / rs;
         qp->ub[o] = (sigma_hi[a] - target[a]) / rs;
     }
     return MCA_OK;
+}
+
+double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w) {
+    return (phi[ts_off + 1 + i] - phi[ts_off + 1 + MCA_TASK_DIM + i]) / sqrt(w->w_slack);
+}
+
+void mca_scheme_tube_bounds(const double err[3], double radius, double K, double dt, double lo[3],
+                            double hi[3]) {
+    for (int i = 0; i < 3; i++) {
+        if (!(radius < INFINITY)) {
+            lo[i] = -INFINITY;
+            hi[i] = INFINITY;
+            continue;
+        }
+        const double R = fmax(radius / sqrt(3.0), fabs(err[i]));
+        const double keep = (1.0 - K * dt) * err[i];
+        /* rounding must not put 0 outside: standing still is the point the feasibility argument needs */
+        lo[i] = fmin(0.0, (keep - R) / dt);
+        hi[i] = fmax(0.0, (keep + R) / dt);
+    }
 }

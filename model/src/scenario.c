@@ -47,6 +47,8 @@ static const cyaml_schema_value_t point_entry = {
 
 #define OPT MCA_YAML_OPT
 
+static const cyaml_schema_value_t int_entry = {CYAML_VALUE_INT(CYAML_FLAG_DEFAULT, int)};
+
 const cyaml_schema_field_t mca_scenario_path_fields[] = {
     CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, mca_path_keys_t, kind, kind_strings,
                      CYAML_ARRAY_LEN(kind_strings)),
@@ -60,6 +62,12 @@ const cyaml_schema_field_t mca_scenario_path_fields[] = {
     CYAML_FIELD_SEQUENCE("points", OPT, mca_path_keys_t, points, &point_entry, 1, MCA_PATH_MAX_POINTS),
     CYAML_FIELD_SEQUENCE("durations", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, durations,
                          &mca_yaml_float_entry, 1, MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_FLOAT_PTR("tolerance", OPT, mca_path_keys_t, tolerance),
+    CYAML_FIELD_SEQUENCE("tolerances", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, tolerances,
+                         &mca_yaml_float_entry, 1, MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_SEQUENCE("exact", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, exact, &int_entry, 1,
+                         MCA_PATH_MAX_POINTS),
+    CYAML_FIELD_FLOAT_PTR("exact_tolerance", OPT, mca_path_keys_t, exact_tolerance),
     CYAML_FIELD_END,
 };
 
@@ -119,6 +127,8 @@ static const mca_range_t scn_ranges[] = {
     {"turns", 0.0, 1000.0, 1, 0, ""},
     {"points", -100.0, 100.0, 0, 0, "m"},
     {"durations", 0.0, 3600.0, 1, 0, "s"},
+    {"tolerance", 0.0, 10.0, 0, 0, "m"},
+    {"exact_tolerance", 0.0, 1.0, 1, 0, "m"},
 };
 
 int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
@@ -278,6 +288,30 @@ static int waypoints(const mca_check_ctx_t *c, const char *at, const mca_path_ke
         }
         np->dur[i] = k->durations[i];
     }
+    if (k->tolerances) {
+        if (k->tolerances_count != k->points_count) {
+            snprintf(f, sizeof f, "%s.tolerances", at);
+            return mca_check_fail(c, MCA_ECONFIG, f,
+                                  "%s: need one tolerance per point (%u points, %u tolerances)", f,
+                                  k->points_count, k->tolerances_count);
+        }
+        for (unsigned i = 0; i < k->tolerances_count; i++) {
+            int rc = mca_check_range(c, mca_scenario_range("tolerance"), k->tolerances[i],
+                                     "%s.tolerances[%u]", at, i);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+            np->seg_tol[i] = k->tolerances[i];
+        }
+    }
+    for (unsigned i = 0; k->exact && i < k->exact_count; i++) {
+        if (k->exact[i] < 0 || k->exact[i] >= (int)k->points_count) {
+            snprintf(f, sizeof f, "%s.exact[%u]", at, i);
+            return mca_check_fail(c, MCA_ECONFIG, f, "%s: %d is not a point's index (0..%u)", f, k->exact[i],
+                                  k->points_count - 1);
+        }
+        np->exact[k->exact[i] + 1] = 1; /* p[0] is the start */
+    }
     return MCA_OK;
 }
 
@@ -290,6 +324,23 @@ static int path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_k
     np.t0 = k->t0 ? *k->t0 : 0.0;
     char f[MCA_YAML_MARKS_PATH_MAX];
     int rc = mca_check_range(c, mca_scenario_range("t0"), np.t0, "%s.t0", at);
+    const double tol = k->tolerance ? *k->tolerance : MCA_PATH_DEFAULT_TOL;
+    np.exact_tol = k->exact_tolerance ? *k->exact_tolerance : MCA_PATH_DEFAULT_EXACT_TOL;
+    if (rc == MCA_OK) {
+        rc = mca_check_range(c, mca_scenario_range("tolerance"), tol, "%s.tolerance", at);
+    }
+    if (rc == MCA_OK) {
+        rc =
+            mca_check_range(c, mca_scenario_range("exact_tolerance"), np.exact_tol, "%s.exact_tolerance", at);
+    }
+    for (int i = 0; i < MCA_PATH_MAX_POINTS; i++) {
+        np.seg_tol[i] = tol;
+    }
+    np.path_first = k->tolerance || k->tolerances || k->exact;
+    if (rc == MCA_OK && k->kind != MCA_PATH_WAYPOINTS && (k->tolerances || k->exact)) {
+        snprintf(f, sizeof f, "%s.%s", at, k->tolerances ? "tolerances" : "exact");
+        rc = mca_check_fail(c, MCA_ECONFIG, f, "%s: waypoints only", f);
+    }
     if (rc == MCA_OK && k->kind == MCA_PATH_WAYPOINTS) {
         np.relative = k->relative ? (*k->relative ? 1 : 0) : 1;
         rc = waypoints(c, at, k, &np);

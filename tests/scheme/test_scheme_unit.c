@@ -1194,6 +1194,75 @@ static void test_controller_brake(void **state) {
     free(c);
 }
 
+/* The path tube (mca_scheme_tube_bounds): standing still (e = -K err) and 0 are inside it, the first-order
+ * error after one tick at either bound is exactly R_i, and an infinite radius gives no tube. */
+static void test_tube_bounds(void **state) {
+    (void)state;
+    const double K = 20.0, dt = 0.001;
+    const double errs[4][3] = {{0, 0, 0}, {1e-3, -2e-3, 5e-4}, {0.05, 0, -0.03}, {-1e-6, 1e-6, 0}};
+    const double radii[3] = {0.0, 0.01, 0.05};
+    for (int e = 0; e < 4; e++) {
+        for (int r = 0; r < 3; r++) {
+            double lo[3], hi[3];
+            mca_scheme_tube_bounds(errs[e], radii[r], K, dt, lo, hi);
+            for (int i = 0; i < 3; i++) {
+                const double R = fmax(radii[r] / sqrt(3.0), fabs(errs[e][i]));
+                assert_true(lo[i] <= 0.0 && hi[i] >= 0.0);
+                assert_true(-K * errs[e][i] >= lo[i] - 1e-12 && -K * errs[e][i] <= hi[i] + 1e-12);
+                const double next_lo = (1.0 - K * dt) * errs[e][i] - dt * lo[i];
+                const double next_hi = (1.0 - K * dt) * errs[e][i] - dt * hi[i];
+                assert_true(fabs(fabs(next_lo) - R) < 1e-12 || lo[i] == 0.0);
+                assert_true(fabs(fabs(next_hi) - R) < 1e-12 || hi[i] == 0.0);
+            }
+        }
+    }
+    double lo[3], hi[3];
+    mca_scheme_tube_bounds(errs[1], INFINITY, K, dt, lo, hi);
+    assert_true(isinf(lo[0]) && lo[0] < 0 && isinf(hi[2]) && hi[2] > 0);
+}
+
+/* mca_path_distance against closed forms, and mca_path_tolerance's narrowing at an exact point. */
+static void test_path_distance_tolerance(void **state) {
+    (void)state;
+    mca_path_t p;
+    memset(&p, 0, sizeof p);
+    p.kind = MCA_PATH_WAYPOINTS;
+    p.n_points = 4; /* start (0,0,0) -> (1,0,0) -> (1,0,0) dwell -> (1,1,0) */
+    const double pts[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 0}, {1, 1, 0}};
+    memcpy(p.p, pts, sizeof pts);
+    p.dur[0] = 2.0;
+    p.dur[1] = 1.0;
+    p.dur[2] = 2.0;
+    for (int i = 0; i < MCA_PATH_MAX_POINTS; i++) {
+        p.seg_tol[i] = 0.05;
+    }
+    p.exact_tol = 0.001;
+    p.exact[1] = p.exact[2] = 1;
+    const double x1[3] = {0.5, 0.3, 0.4}; /* above the first segment's middle: sqrt(0.09 + 0.16) */
+    assert_float_equal(mca_path_distance(&p, x1), 0.5, 1e-15);
+    const double x2[3] = {2.0, 0.5, 0.0}; /* beside the last segment */
+    assert_float_equal(mca_path_distance(&p, x2), 1.0, 1e-15);
+    const double x3[3] = {-3.0, -4.0, 0.0}; /* nearest the start point */
+    assert_float_equal(mca_path_distance(&p, x3), 5.0, 1e-15);
+    assert_float_equal(mca_path_tolerance(&p, 1.0), 0.001 + 0.049 * 0.5, 1e-15); /* narrowing */
+    assert_float_equal(mca_path_tolerance(&p, 2.5), 0.001, 1e-15);               /* the dwell */
+    assert_float_equal(mca_path_tolerance(&p, 4.0), 0.001 + 0.049 * 0.5, 1e-15); /* widening */
+    assert_float_equal(mca_path_tolerance(&p, 9.0), 0.05, 1e-15);                /* after the end */
+    assert_float_equal(mca_path_point_time(&p, 2), 3.0, 1e-15);
+
+    mca_path_t c;
+    memset(&c, 0, sizeof c);
+    c.kind = MCA_PATH_CIRCLE;
+    c.radius = 0.2;
+    c.u[0] = 1.0;
+    c.v[1] = 1.0;
+    c.anchor[0] = 1.0; /* centre (0.8, 0, 0) */
+    const double centre[3] = {0.8, 0.0, 0.0};
+    assert_float_equal(mca_path_distance(&c, centre), 0.2, 1e-15);
+    const double above[3] = {0.8, 0.2, 0.3}; /* on the ring's axis-parallel line above a ring point */
+    assert_float_equal(mca_path_distance(&c, above), 0.3, 1e-15);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_brake_values),
@@ -1212,6 +1281,8 @@ int main(void) {
         cmocka_unit_test(test_pdnn_time_budget),
         cmocka_unit_test(test_near_rows_parallel),
         cmocka_unit_test(test_controller_brake),
+        cmocka_unit_test(test_tube_bounds),
+        cmocka_unit_test(test_path_distance_tolerance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

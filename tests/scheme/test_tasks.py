@@ -7,6 +7,9 @@ usage: test_tasks.py MCA_SIM SCENARIO_DIR WORK_DIR
     binding, no fault, the whole task;
     tasks 1-3: MCA's end-effector error <= 1e-4 m while no collision row binds, and overall;
  4. negative example: MCA ends in a braked stop with a named fault, no distance below d1 (MVN collides).
+ 5. path first (issue 29): tasks 1-3 under mca-ts with `tolerance: 0` on every path: every pair >= d1, the
+    task completed, the tool tips' distance to their paths' curves <= 2e-5 m; under mca-ts with elastic
+    tracking (no tolerance key) the same tasks leave the path by more (the exact penalty is what holds it).
 Prints the figures (min distance, tracking errors, PDNN steps, tick compute time).
 """
 import json
@@ -36,6 +39,37 @@ def run(sim, scn, work, schemes, extra=()):
         return None
     s = json.load(open(summ))
     return {r["scheme"]: r for r in s["runs"]}, s["d1"]
+
+
+def path_first_copy(src, work):
+    """The scenario with `tolerance: 0.0` on every path (robot paths made absolute for the copy's folder)."""
+    out = []
+    for line in open(src):
+        stripped = line.lstrip()
+        if stripped.startswith("urdf: ../"):
+            line = line.replace("../", os.path.dirname(os.path.dirname(os.path.abspath(src))) + "/", 1)
+        out.append(line)
+        if stripped.startswith("kind: ") and stripped.split()[1] in ("circle", "waypoints", "hold"):
+            out.append(line[: len(line) - len(stripped)] + "tolerance: 0.0\n")
+    dst = os.path.join(work, "pathfirst-" + os.path.basename(src))
+    with open(dst, "w") as f:
+        f.writelines(out)
+    return dst
+
+
+def path_first(sim, sdir, work):
+    for name in ("cross_circles", "hui", "cup_stacking"):
+        el, d1 = run(sim, os.path.join(sdir, name + ".yaml"), work, "mca-ts")
+        pf, _ = run(sim, path_first_copy(os.path.join(sdir, name + ".yaml"), work), work, "mca-ts")
+        el, pf = el["mca-ts"], pf["mca-ts"]
+        check(pf["min_distance"] >= d1 and pf["fault"] == 0 and pf["completed"] == 1,
+              "%s path first: completed %d, no fault (%s), min distance %.5f m >= d1 %.3f" %
+              (name, pf["completed"], pf["fault_name"], pf["min_distance"], d1))
+        check(pf["path_error_max"] <= 2e-5, "%s path first: path error max %.3e m <= 2e-5 (elastic: %.3e m)" %
+              (name, pf["path_error_max"], el["path_error_max"]))
+        check(el["path_error_max"] > pf["path_error_max"],
+              "%s: elastic tracking leaves the path by more (%.3e > %.3e m)" %
+              (name, el["path_error_max"], pf["path_error_max"]))
 
 
 def main():
@@ -77,6 +111,7 @@ def main():
     check(m["stopped"] == 1, "task 4: arms braked to a stop (at %.3f s)" % m["stop_t"])
     check(m["min_distance"] > d14, "task 4: no distance below d1 in the whole run, braking included (%.5f m)" %
           m["min_distance"])
+    path_first(sim, sdir, work)
     if FAILS:
         print("\n%d check(s) failed" % len(FAILS))
         return 1

@@ -305,6 +305,10 @@ int main(int argc, char **argv) {
                    r->scheme, mca_ctrl_fault_name(r->fault), r->fault_t, r->fault_distance, r->fault_text,
                    r->stopped ? "arms stopped" : "arms NOT stopped", r->stop_t, r->min_distance_after_fault);
         }
+        printf("%s: path error max %.3e m, p99 %.3e m; exact points %d, missed %d (max %.3e m); PDNN steps "
+               "p50 %d, p99.9 %d\n",
+               r->scheme, r->path_error_max, r->path_error_p99, r->exact_points, r->exact_missed,
+               r->exact_error_max, r->pdnn_steps_p50, r->pdnn_steps_p999);
         if (r->pdnn_capped) {
             printf("%s: %d ticks with the PDNN at its step cap (residual <= fault_residual, accepted)\n",
                    r->scheme, r->pdnn_capped);
@@ -348,6 +352,12 @@ int main(int argc, char **argv) {
             }
             fprintf(f, "],\"completed\":%d,\"path_time_lost_s\":%.6g,\"deadlocks\":%d,\"max_slack\":%.3g",
                     r->completed, r->path_time_lost_s, r->deadlocks, r->max_slack);
+            fprintf(
+                f,
+                ",\"path_error_max\":%.6g,\"path_error_p99\":%.6g,\"exact_points\":%d,\"exact_missed\":%d,"
+                "\"exact_error_max\":%.6g,\"pdnn_steps_p50\":%d,\"pdnn_steps_p999\":%d",
+                r->path_error_max, r->path_error_p99, r->exact_points, r->exact_missed, r->exact_error_max,
+                r->pdnn_steps_p50, r->pdnn_steps_p999);
             fprintf(
                 f,
                 ",\"fault_text\":\"%s\",\"stop_requested\":%d,\"brake_t\":%.6g,\"brake_fallback_ticks\":%d,"

@@ -74,7 +74,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     snprintf(r->scheme, sizeof r->scheme, "%s", mca_scheme_name(o->scheme));
     mca_cell_t *cell = calloc(1, sizeof *cell);
     mca_daemon_t *d = NULL;
-    int64_t *cns = NULL, *cpu = NULL;
+    int64_t *cns = NULL, *cpu = NULL, *perr = NULL, *steps = NULL;
     FILE *csv = NULL;
     mca_tick_csv_layout_t csv_layout = {.pair_cols = 1}; /* mca-sim's digits; every pair's distance */
     int rc = MCA_OK;
@@ -125,7 +125,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     nominal_end = fmin(nominal_end, duration);
     cns = calloc((size_t)max_ticks, sizeof *cns);
     cpu = calloc((size_t)max_ticks, sizeof *cpu);
-    if (!cns || !cpu) {
+    perr = calloc((size_t)max_ticks, sizeof *perr);
+    steps = calloc((size_t)max_ticks, sizeof *steps);
+    if (!cns || !cpu || !perr || !steps) {
         rc = MCA_ENOMEM;
         goto out;
     }
@@ -152,7 +154,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         r->sample_d[i] = NAN;
     }
     double steps_sum = 0.0;
-    int steps_n = 0, stopped_ticks = 0, ended = 0;
+    int steps_n = 0, stopped_ticks = 0, ended = 0, n_perr = 0;
     int k;
     for (k = 0; k < max_ticks; k++) {
         const double t = k * dt;
@@ -228,12 +230,21 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
                 }
             }
             r->binding_ticks += ip->binding_rows > 0;
+            double pe = 0.0;
+            for (int a = 0; a < na; a++) {
+                pe = fmax(pe, ip->path_error[a]);
+            }
+            r->path_error_max = fmax(r->path_error_max, pe);
+            perr[n_perr++] = (int64_t)llround(pe * 1e9); /* nm, sorted with the other samples */
+            r->exact_points = ip->exact_met + ip->exact_missed;
+            r->exact_missed = ip->exact_missed;
+            r->exact_error_max = ip->exact_error_max;
             if (o->scheme != MCA_SCHEME_APF) {
                 r->pdnn_steps_max = ip->pdnn_steps > r->pdnn_steps_max ? ip->pdnn_steps : r->pdnn_steps_max;
                 r->pdnn_residual_max = fmax(r->pdnn_residual_max, ip->pdnn_residual);
                 r->eq_residual_max = fmax(r->eq_residual_max, ip->eq_residual);
                 steps_sum += ip->pdnn_steps;
-                steps_n++;
+                steps[steps_n++] = ip->pdnn_steps;
             }
         }
         if (csv) {
@@ -291,6 +302,16 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     }
     r->ticks = k;
     r->pdnn_steps_mean = steps_n ? steps_sum / steps_n : 0.0;
+    r->completed &= r->exact_missed == 0;
+    if (n_perr > 0) {
+        qsort(perr, (size_t)n_perr, sizeof *perr, cmp_i64);
+        r->path_error_p99 = perr[(int)(0.99 * (n_perr - 1))] * 1e-9;
+    }
+    if (steps_n > 0) {
+        qsort(steps, (size_t)steps_n, sizeof *steps, cmp_i64);
+        r->pdnn_steps_p50 = (int)steps[steps_n / 2];
+        r->pdnn_steps_p999 = (int)steps[(int)(0.999 * (steps_n - 1))];
+    }
     {
         mca_daemon_summary_t s;
         mca_daemon_summary(d, &s);
@@ -316,6 +337,8 @@ out:
     mca_daemon_close(d);
     free(cns);
     free(cpu);
+    free(perr);
+    free(steps);
     free(cell);
     return rc;
 }

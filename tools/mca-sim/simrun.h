@@ -68,13 +68,20 @@ typedef struct mca_simrun_result {
     int64_t cpu_p50, cpu_p99, cpu_max;             /**< thread CPU time of the tick call (no preemption) */
     int dumped, dumped_binding;
     int dump_skipped_capped; /**< ticks --dump-every picked but not dumped: PDNN at its cap (not converged) */
-    int completed;           /**< 1: every arm's path clock reached its path's end (no fault) */
-    double path_time_lost_s; /**< task time at completion (or at the end) minus the paths' nominal end */
-    int deadlocks;           /**< mca-ts deadlocks detected */
-    double max_slack;        /**< mca-ts: largest tracking slack [m/s] */
-    int stop_requested;      /**< 1: --stop-at fired */
-    double brake_t;          /**< task time braking began (stop or fault; -1: none) */
-    double stop_duration_s;  /**< from brake_t until every simulated joint is at rest (-1: not at rest) */
+    int completed; /**< 1: every arm's path clock reached its path's end (no fault) and every exact waypoint
+                        was met */
+    double path_error_max;  /**< the tool tips' largest distance to their paths' curves while running [m] */
+    double path_error_p99;  /**< its 99th percentile over the running ticks (each tick: the arms' largest) */
+    int exact_points;       /**< exact waypoints reached (met or missed) */
+    int exact_missed;       /**< of those, missed (farther than exact_tolerance while on the point) */
+    double exact_error_max; /**< the largest distance to an exact point while on it [m] */
+    int pdnn_steps_p50, pdnn_steps_p999; /**< PDNN steps per running tick */
+    double path_time_lost_s;   /**< task time at completion (or at the end) minus the paths' nominal end */
+    int deadlocks;             /**< mca-ts deadlocks detected */
+    double max_slack;          /**< mca-ts: largest tracking slack [m/s] */
+    int stop_requested;        /**< 1: --stop-at fired */
+    double brake_t;            /**< task time braking began (stop or fault; -1: none) */
+    double stop_duration_s;    /**< from brake_t until every simulated joint is at rest (-1: not at rest) */
     int brake_fallback_ticks;  /**< braking ticks with the keep-direction fallback */
     int brake_forced_ticks;    /**< of those, past the stop's deadline */
     double max_dv_over_dt_dec; /**< braking: largest per-tick |commanded velocity change| / (dec dt) */

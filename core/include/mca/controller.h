@@ -64,8 +64,10 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out);
 
 /** Path-time scaling parameters (mca-ts only; defaults in mca_controller_default_config()). */
 typedef struct mca_timescale_params {
-    double w_sigma;   /**< weight of (sigma - target)^2 against |qdot|^2 (1e2) */
-    double w_slack;   /**< weight of the tracking slack |e|^2 (1e3) */
+    double w_sigma; /**< weight of (sigma - target)^2 against |qdot|^2 (1e2) */
+    double w_slack; /**< quadratic weight of the tracking slack |e|^2 (1e3) */
+    double w_path;  /**< exact (L1) weight of the slack |e|_1: the path before its timing (1e4; docs/scheme.md
+                         "The path first" derives the bound it must exceed) */
     double sigma_max; /**< most path rate when catching up (1.5; 1: never faster than the path) */
     double priority[MCA_MAX_ARMS]; /**< higher keeps its path; lower yields first and backs off (1) */
     double deadlock_time;  /**< every moving arm's sigma below deadlock_sigma this long: deadlock [s] (0.5) */
@@ -185,10 +187,17 @@ typedef struct mca_tick_info {
     double tau[MCA_MAX_ARMS];   /**< path clock of each arm [s] */
     double sigma[MCA_MAX_ARMS]; /**< path rate commanded this tick */
     double slack;               /**< largest |tracking slack| this tick [m/s] */
-    int paths_done;             /**< 1: every arm's path clock has reached its path's end */
-    int deadlock;               /**< mca_deadlock_state_t */
-    int deadlock_arm;           /**< the arm that backs off (-1: none) */
-    int deadlocks;              /**< deadlocks detected since the task started */
+    double
+        path_error[MCA_MAX_ARMS]; /**< the tool tip's distance to its path's curve [m] (mca_path_distance) */
+    double tube[MCA_MAX_ARMS];    /**< the path tube's radius at the arm's clock [m] (mca-ts) */
+    int exact_met;                /**< exact waypoints met so far (all arms) */
+    int exact_missed;             /**< exact waypoints missed so far: the tool tip was farther than
+                                       exact_tol while the clock was on the point */
+    double exact_error_max;       /**< the largest tool-tip distance to an exact point while on it [m] */
+    int paths_done;               /**< 1: every arm's path clock has reached its path's end */
+    int deadlock;                 /**< mca_deadlock_state_t */
+    int deadlock_arm;             /**< the arm that backs off (-1: none) */
+    int deadlocks;                /**< deadlocks detected since the task started */
     /* outcome */
     int fault;                      /**< mca_ctrl_fault_t */
     mca_ctrl_fault_why_t fault_why; /**< its cause (text: mca_ctrl_fault_format) */
@@ -223,6 +232,10 @@ typedef struct mca_controller {
     double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
     double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
     int deadlock, deadlock_arm, deadlocks;
+    int exact_next[MCA_MAX_ARMS]; /**< the next exact waypoint to check (path point index) */
+    int exact_bad[MCA_MAX_ARMS];  /**< 1: the point being checked was missed */
+    int exact_met, exact_missed;
+    double exact_error_max;
     double deadlock_until;              /**< back-off ends at this task time */
     double wait_tau[MCA_MAX_ARMS];      /**< WAIT: the others' clocks when it began */
     double ts_scale[MCA_MAX_ARMS];      /**< u = ts_scale (sigma - target) in the last QP */

@@ -17,9 +17,9 @@
 /** Task-space dimension of the end-effector constraint (position only). */
 #define MCA_TASK_DIM 3
 
-/** Extra QP variables per arm under path-time scaling (mca-ts): the path rate and a 3-vector tracking slack.
- */
-#define MCA_TS_VARS (1 + MCA_TASK_DIM)
+/** Extra QP variables per arm under path-time scaling (mca-ts): the path rate and the tracking slack's
+ *  positive and negative parts (3 + 3: the slack's cost is exact, L1, see mca_scheme_add_timescale). */
+#define MCA_TS_VARS (1 + 2 * MCA_TASK_DIM)
 /** Collision rows per link under mca-ts and in braking: one per each of the link's nearest witness pairs
  *  against the other arms (mca_scheme_near_rows). */
 #define MCA_NEAR_PAIRS 6

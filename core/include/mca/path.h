@@ -47,6 +47,14 @@ typedef struct mca_path {
      * wall stops there while the velocity pushes outwards) */
     double stream_r[3], stream_v[3];
     double box_lo[3], box_hi[3];
+    /* the path tube (mca-ts): how far the tool tip may leave the path where staying on it would break a
+     * hard row. seg_tol[i]: segment i of a waypoint path; seg_tol[0]: the whole path of the other kinds. */
+    double seg_tol[MCA_PATH_MAX_POINTS];      /**< [m], >= 0; INFINITY: no tube */
+    unsigned char exact[MCA_PATH_MAX_POINTS]; /**< waypoints: 1 for p[i] reached within exact_tol and held
+                                                   through a dwell that follows it (grasp, release) */
+    double exact_tol;                         /**< [m] */
+    int path_first; /**< 1: the task declared a tube (tolerance or exact points): mca-ts keeps this path
+                       before its timing (an exact penalty and the tube); 0: elastic tracking, no tube */
 } mca_path_t;
 
 /** Fix a path's anchor (the end effector's position at task start). Start-up/rt safe. */
@@ -61,6 +69,26 @@ int mca_path_eval(const mca_path_t *path, double t, double r[3], double rdot[3])
 
 /** Task time at which the path ends (+INFINITY for a stream). */
 double mca_path_end_time(const mca_path_t *path);
+
+/**
+ * The path tube's radius at path time t (real-time safe): the segment's tolerance; next to an exact waypoint
+ * it narrows linearly over the segment to exact_tol at the point (a dwell between exact points: exact_tol
+ * throughout). Before the start and after the end: the first / last point's.
+ */
+double mca_path_tolerance(const mca_path_t *path, double t);
+
+/** Path time at which a waypoint path reaches its point p[i] (t0 + the durations before it). */
+double mca_path_point_time(const mca_path_t *path, int i);
+
+/** Point p[i] of a waypoint path in the world frame (after mca_path_anchor). */
+void mca_path_point(const mca_path_t *path, int i, double out[3]);
+
+/**
+ * Distance of x to the path's curve (real-time safe): waypoints the nearest of their straight segments,
+ * circles the whole circle, a stream its reference point, a hold its point. The path error a user sees
+ * (mca-sim's and mcad's path_error_max).
+ */
+double mca_path_distance(const mca_path_t *path, const double x[3]);
 
 /** Stream: move the reference by rate * stream_v * dt, kept inside the box (real-time safe; other kinds:
  *  nothing). */

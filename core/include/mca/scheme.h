@@ -182,24 +182,48 @@ int mca_scheme_compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, int
 /** Path-time scaling weights (see mca_scheme_add_timescale). */
 typedef struct mca_timescale_weights {
     double w_sigma; /**< weight of (sigma - sigma_target)^2 */
-    double w_slack; /**< weight of |e|^2 */
+    double w_slack; /**< quadratic weight of |e|^2 (keeps the slack's columns well scaled) */
+    double w_path;  /**< exact weight of |e|_1: no slack while slowing down costs less (docs/scheme.md) */
 } mca_timescale_weights_t;
 
 /**
  * Append the mca-ts variables of every arm (real-time safe): after the joint velocities, per arm a
- * u_a = m (sigma_a - target_a), m = sqrt(w_sigma), and s_a = sqrt(w_slack) e_a (3 values), so the identity
- * Hessian of the PDNN is the objective |qdot|^2 + w_sigma (sigma - target)^2 + w_slack |e|^2. Tracking
- * row (26) becomes J_a qdot_a - sigma_a rdot_a - e_a = K (r_a - f(q_a)):
- *   J_a qdot_a - rdot_a / m u_a - s_a / sqrt(w_slack) = target_a rdot_a + K (r_a - f(q_a)).
- * sigma_a is bounded to [sigma_lo[a], sigma_hi[a]]; the slack is free.
+ * u_a = m (sigma_a - target_a), m = sqrt(w_sigma), then the tracking slack e_a = p_a - n_a (p, n >= 0) as
+ * y_p = sqrt(w_slack) p + k and y_n = sqrt(w_slack) n + k, k = w_path / sqrt(w_slack) (3 values each), so
+ * that the PDNN's identity Hessian is the objective
+ *     1/2 |qdot|^2 + w_sigma / 2 (sigma - target)^2 + w_slack / 2 |e|^2 + w_path |e|_1   (+ a constant).
+ * The L1 term is an exact penalty: the slack stays 0 whenever the same QP with e = 0 has an answer whose
+ * tracking multipliers are below w_path (docs/scheme.md, "The path first"). Tracking row (26) becomes
+ * J_a qdot_a - sigma_a rdot_a - e_a = K (r_a - f(q_a)):
+ *   J_a qdot_a - rdot_a / m u_a - (y_p - y_n) / sqrt(w_slack) = target_a rdot_a + K (r_a - f(q_a)).
+ * sigma_a is bounded to [sigma_lo[a], sigma_hi[a]], the slack to [slack_lo[a], slack_hi[a]] per component
+ * (slack_lo <= 0 <= slack_hi, +-INFINITY allowed: the path tube, mca_scheme_tube_bounds).
+ * path_first[a] 0: arm a's tracking stays elastic as before the tube (an L2 slack, weight w_slack, y_n fixed
+ * at 0 and out of every row; its slack bounds must be infinite): a path without a tolerance key.
  * @param rdot_d  path velocity of each arm at its path clock (d r / d tau)
  * @param[out] ts_off       first added variable of each arm
  * @param[out] sigma_scale  m of each arm (sigma = target + u / m)
- * @retval MCA_OK, MCA_ERANGE (too many variables), MCA_EINVAL
+ * @retval MCA_OK, MCA_ERANGE (too many variables), MCA_EINVAL (NULL, weights, a slack bound of the wrong
+ * sign)
  */
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
-                             const double *sigma_lo, const double *sigma_hi, const mca_timescale_weights_t *w,
-                             int ts_off[], double sigma_scale[]);
+                             const double *sigma_lo, const double *sigma_hi, const double slack_lo[][3],
+                             const double slack_hi[][3], const mca_timescale_weights_t *w,
+                             const int *path_first, int ts_off[], double sigma_scale[]);
+
+/** The tracking slack e_i (i < 3) of the arm whose mca-ts variables start at phi[ts_off]. */
+double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w);
+
+/**
+ * The path tube as bounds on the slack (real-time safe). With err = r(tau) - f(q), the error after one tick
+ * of dt is err + dt (sigma rdot - J qdot) = (1 - K dt) err - dt e to first order; each component is kept
+ * within R_i = max(radius / sqrt(3), |err_i|) (so |err| <= radius, or no growth where it is already outside):
+ *   slack_lo_i = ((1 - K dt) err_i - R_i) / dt <= 0 <= slack_hi_i = ((1 - K dt) err_i + R_i) / dt.
+ * At rest (qdot = 0, sigma = 0, e = -K err) the error stays err: a point of the tube, always.
+ * radius = INFINITY: no tube (bounds +-INFINITY).
+ */
+void mca_scheme_tube_bounds(const double err[3], double radius, double K, double dt, double lo[3],
+                            double hi[3]);
 
 #ifdef __cplusplus
 }

@@ -164,7 +164,19 @@ typedef struct mca_path_keys {
     unsigned points_count;
     double *durations;
     unsigned durations_count;
+    double *tolerance;  /**< the path tube [m] (MCA_PATH_DEFAULT_TOL) */
+    double *tolerances; /**< waypoints: one per point, the segment that ends there (over tolerance) */
+    unsigned tolerances_count;
+    int *exact; /**< waypoints: indices into points of the exact ones (grasp, release) */
+    unsigned exact_count;
+    double *exact_tolerance; /**< [m] (MCA_PATH_DEFAULT_EXACT_TOL) */
 } mca_path_keys_t;
+
+/** A path's tube when the file gives exact points but no tolerance [m]: it waits rather than leave it. A
+ *  path with neither key keeps the elastic tracking of before (mca_path_t.path_first 0). */
+#define MCA_PATH_DEFAULT_TOL 0.0
+/** How near an exact waypoint the tool tip must be [m]. */
+#define MCA_PATH_DEFAULT_EXACT_TOL 0.001
 
 /** One arm's model as a file gives it (NULL where it does not): every arm of a scenario, and a cell's arm
  * over its scenario's; both read it with MCA_YAML_ARM_FIELDS (mca/yaml_load.h). */
