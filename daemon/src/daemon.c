@@ -637,8 +637,6 @@ static int ctrl_fault_code(int f) {
         return MCA_EINVAL;
     case MCA_CTRL_FAULT_NOT_CONVERGED:
         return MCA_ENOTCONV;
-    case MCA_CTRL_FAULT_TIME_BUDGET:
-        return MCA_ETIMEDOUT;
     case MCA_CTRL_FAULT_INFEASIBLE:
     case MCA_CTRL_FAULT_FAKE_ATTRACTOR:
         return MCA_EINFEASIBLE;
