@@ -4,6 +4,8 @@
  *
  *   bench_tick task --scenario FILE [--ticks N] [--out JSON] [--qp-dir DIR] [--qp-every E] [--qp-block L]
  *   bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--gap M]
+ *   bench_tick steps --scenario FILE [--scheme mca|mca-ts] [--form normal|componentwise] [--every E]
+ *                    [--steps S]
  *   common: [--fifo PRIO] (SCHED_FIFO + mlockall for the measuring thread; fewer preemptions on a busy host)
  *
  * Per tick it records the tick's own compute_ns (CLOCK_MONOTONIC inside mca_controller_tick), then, OUTSIDE
@@ -13,6 +15,10 @@
  * count must equal the tick's; mismatches are counted). --qp-dir writes blocks of L consecutive converged
  * QPs (mca_qp_dump_json) every E ticks with DIR/pdnn.csv: file, block, idx, warm ns, steps, and for the first
  * QP of a block the COLD solve time (fresh solver state) for the OSQP comparison in bench/report.py.
+ * steps: the wall time of one PDNN step on the QPs a task really builds (the calibration of the controller's
+ * step budget, MCA_PDNN_STEP_NS): every E-th tick's QP as the solver got it (mca-ts: the active rows only) is
+ * solved again from cold with a tolerance nothing meets, so it runs S steps (or stops for lack of progress),
+ * 3 times; the least time, set-up included, is divided by its steps. One line of text.
  * Output: one JSON document (--out, default stdout). Not a test: the figures depend on the machine. */
 #include <errno.h>
 #include <math.h>
@@ -394,6 +400,81 @@ static int synth_config(mca_controller_config_t *cfg, double q0[MCA_MAX_ARMS][MC
     return MCA_OK;
 }
 
+/* steps mode: ns per PDNN step (the step count the cap and budget count) over every E-th tick's QP. */
+static int run_step_cost(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_DOF], int ticks,
+                         int every, int steps, FILE *of, const char *name) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const int na = cfg->n_arms;
+    static double q[MCA_MAX_ARMS][MCA_MAX_DOF], qd[MCA_MAX_ARMS][MCA_MAX_DOF], phi[MCA_QP_MAX_VARS];
+    const double *qs[MCA_MAX_ARMS];
+    double *qds[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qs[a] = q[a];
+        qds[a] = qd[a];
+    }
+    memcpy(q, q0, sizeof q);
+    double *ns = calloc((size_t)ticks / (size_t)every + 1, sizeof *ns);
+    if (!ns) {
+        return MCA_ENOMEM;
+    }
+    mca_pdnn_params_t prm = cfg->pdnn;
+    prm.tol = 1e-300; /* never met: the solve runs to its cap */
+    prm.max_steps = steps;
+    int n = 0, faults = 0, max_n = 0, max_ineq = 0;
+    mca_tick_info_t info;
+    for (int k = 0; k < ticks; k++) {
+        if (mca_controller_tick(ctrl, k * cfg->dt, qs, qds, &info) != MCA_OK) {
+            faults++;
+            mca_controller_reset(ctrl); /* the task again from q0 */
+            memcpy(q, q0, sizeof q);
+            continue;
+        }
+        if (k % every == 0) {
+            const double *cphi;
+            const mca_qp_t *qp = mca_controller_last_qp(ctrl, &cphi);
+            mca_pdnn_result_t pr;
+            int64_t best = INT64_MAX;
+            for (int r = 0; r < 3; r++) {
+                /* the least of 3: the CPU's cost, not a stall of the host (that is the wall clock's part) */
+                mca_pdnn_init(&cold);
+                const int64_t t0 = now_ns();
+                mca_pdnn_solve(&cold, qp, &prm, phi, &pr);
+                const int64_t t1 = now_ns();
+                best = t1 - t0 < best ? t1 - t0 : best;
+            }
+            if (pr.steps >= steps / 2) {
+                ns[n++] = (double)best / pr.steps;
+                max_n = qp->n > max_n ? qp->n : max_n;
+                max_ineq = qp->n_ineq > max_ineq ? qp->n_ineq : max_ineq;
+            }
+        }
+        for (int a = 0; a < na; a++) {
+            for (int j = 0; j < cfg->chain[a].dof; j++) {
+                q[a][j] += qd[a][j] * cfg->dt;
+            }
+        }
+    }
+    int64_t *v = calloc((size_t)n + 1, sizeof *v);
+    if (!v) {
+        free(ns);
+        return MCA_ENOMEM;
+    }
+    for (int i = 0; i < n; i++) {
+        v[i] = (int64_t)llround(ns[i]);
+    }
+    qsort(v, (size_t)n, sizeof *v, cmp_i64);
+    fprintf(
+        of,
+        "%s %s form %s: %d QPs (n <= %d, n_ineq <= %d, %d faults restarted), ns per step p50 %lld p99 %lld "
+        "p99.9 %lld max %lld\n",
+        name, mca_scheme_name(cfg->scheme), cfg->sp.form == MCA_FORM_NORMAL ? "normal" : "componentwise", n,
+        max_n, max_ineq, faults, (long long)pct_i64(v, n, 0.5), (long long)pct_i64(v, n, 0.99),
+        (long long)pct_i64(v, n, 0.999), (long long)(n ? v[n - 1] : 0));
+    free(v);
+    free(ns);
+    return MCA_OK;
+}
+
 static int set_fifo(int prio) {
     if (prio <= 0) {
         return 0;
@@ -415,7 +496,9 @@ static void usage(FILE *f) {
             "usage: bench_tick task --scenario FILE [--ticks N] [--out JSON] [--qp-dir DIR] [--qp-every E]\n"
             "                       [--qp-block L] [--fifo PRIO]\n"
             "       bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--gap M]\n"
-            "                          [--fifo PRIO]\n");
+            "                          [--fifo PRIO]\n"
+            "       bench_tick steps --scenario FILE [--scheme mca|mca-ts] [--form normal|componentwise]\n"
+            "                        [--every E] [--steps S] [--ticks N] [--fifo PRIO]\n");
 }
 
 static int parse_pos(const char *opt, const char *v, int *out) {
@@ -436,7 +519,7 @@ int main(int argc, char **argv) {
         return argc < 2 ? 2 : 0;
     }
     const char *mode = argv[1];
-    if (strcmp(mode, "task") && strcmp(mode, "scaling")) {
+    if (strcmp(mode, "task") && strcmp(mode, "scaling") && strcmp(mode, "steps")) {
         fprintf(stderr, "bench_tick: unknown mode '%s'\n", mode);
         usage(stderr);
         return 2;
@@ -444,6 +527,8 @@ int main(int argc, char **argv) {
     const char *scenario = NULL, *out = NULL, *urdf_dir = NULL;
     int ticks = 0, fifo = 0, quick = 0;
     double gap = 0.22;
+    int every = 20, steps = 1000, form = -1;
+    mca_scheme_kind_t scheme = MCA_SCHEME_MCA;
     qp_dump_t dump = {.dir = NULL, .every = 1000, .block_len = 10, .block = -1, .idx = -1};
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -458,6 +543,27 @@ int main(int argc, char **argv) {
             out = v;
         } else if (!strcmp(a, "--urdf-dir") && v) {
             urdf_dir = v;
+        } else if (!strcmp(a, "--scheme") && v) {
+            if (mca_scheme_from_name(v, &scheme) != MCA_OK) {
+                fprintf(stderr, "bench_tick: --scheme: unknown '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--form") && v) {
+            form = !strcmp(v, "normal")          ? MCA_FORM_NORMAL
+                   : !strcmp(v, "componentwise") ? MCA_FORM_COMPONENTWISE
+                                                 : -2;
+            if (form == -2) {
+                fprintf(stderr, "bench_tick: --form: unknown '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--every")) {
+            if (parse_pos(a, v, &every)) {
+                return 2;
+            }
+        } else if (!strcmp(a, "--steps")) {
+            if (parse_pos(a, v, &steps)) {
+                return 2;
+            }
         } else if (!strcmp(a, "--qp-dir") && v) {
             dump.dir = v;
         } else if (!strcmp(a, "--gap") && v) {
@@ -503,7 +609,33 @@ int main(int argc, char **argv) {
     if (!cfg || !ctrl) {
         return 1;
     }
-    if (!strcmp(mode, "task")) {
+    if (!strcmp(mode, "steps")) {
+        static mca_scenario_t scn;
+        if (!scenario) {
+            fprintf(stderr, "bench_tick: steps needs --scenario FILE\n");
+            return 2;
+        }
+        if ((rc = mca_scenario_load(scenario, &scn, err, sizeof err)) != MCA_OK ||
+            (rc = mca_controller_config_from_scenario(cfg, &scn, scheme, err, sizeof err)) != MCA_OK) {
+            fprintf(stderr, "bench_tick: %s\n", err);
+            return 1;
+        }
+        if (form >= 0) {
+            cfg->sp.form = (mca_collision_form_t)form;
+        }
+        for (int a = 0; a < scn.n_arms; a++) {
+            memcpy(q0[a], scn.arm[a].q0, sizeof q0[a]);
+        }
+        if (ticks <= 0) {
+            ticks = (int)llround(scn.duration / cfg->dt);
+        }
+        if ((rc = mca_controller_init(ctrl, cfg)) != MCA_OK ||
+            (rc = run_step_cost(ctrl, (const double(*)[MCA_MAX_DOF])q0, ticks, every, steps, of, scn.name)) !=
+                MCA_OK) {
+            fprintf(stderr, "bench_tick: %s\n", mca_strerror(rc));
+            return 1;
+        }
+    } else if (!strcmp(mode, "task")) {
         static mca_scenario_t scn;
         if (!scenario) {
             fprintf(stderr, "bench_tick: task needs --scenario FILE\n");

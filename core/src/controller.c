@@ -19,7 +19,6 @@ static const char *const fault_names[] = {
     [MCA_CTRL_FAULT_DISTANCE] = "distance-below-d1",
     [MCA_CTRL_FAULT_FAKE_ATTRACTOR] = "fake-attractor",
     [MCA_CTRL_FAULT_INPUT] = "bad-input",
-    [MCA_CTRL_FAULT_TIME_BUDGET] = "pdnn-time-budget",
 };
 
 const char *mca_ctrl_fault_name(int fault) {
@@ -233,10 +232,6 @@ const char *mca_ctrl_fault_format(const mca_ctrl_fault_why_t *w, char *buf, size
         break;
     case MCA_WHY_PDNN_INPUT:
         snprintf(buf, len, "PDNN rejected the QP (non-finite data)");
-        break;
-    case MCA_WHY_PDNN_BUDGET:
-        snprintf(buf, len, "PDNN time budget %.3g us used up after %d steps (residual %.2e)", x[0], i[0],
-                 x[1]);
         break;
     case MCA_WHY_PDNN_OUTPUT:
         snprintf(buf, len, "PDNN output not finite");
@@ -702,12 +697,88 @@ static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, i
     }
 }
 
-/* The solver's parameters for a solve in the tick that began at t_enter: the step cap and, with a budget,
- * the deadline (mcad's rt.pdnn_budget_us). */
+/* mca, an answer stopped by its budget (not its cap): the iterate scaled by the largest lambda in [0, 1] for
+ * which lambda phi keeps every collision row and the joint box. 0 keeps the rows (every mca bound is >= 0)
+ * and the box wherever the box holds 0 (a joint inside its limits). The arms slow down along the
+ * direction the solver was heading; tracking is given up for the tick, never a row. Returns lambda, or -1
+ * when no lambda in [0, 1] keeps them all (the caller faults as at the cap). */
+static double repair_scaled(mca_controller_t *ctrl) {
+    const mca_qp_t *qp = &ctrl->qp;
+    const double big = ctrl->cfg.sp.big;
+    double lo = 0.0, hi = 1.0;
+    for (int i = 0; i < qp->n_ineq; i++) {
+        if (!(qp->beta[i] < big)) {
+            continue;
+        }
+        double s = 0.0;
+        for (int j = 0; j < qp->n; j++) {
+            s += qp->U[i][j] * ctrl->phi[j];
+        }
+        if (s > 0.0) {
+            hi = fmin(hi, qp->beta[i] / s);
+        } else if (s < 0.0) {
+            lo = fmax(lo, qp->beta[i] / s);
+        } else if (qp->beta[i] < 0.0) {
+            return -1.0;
+        }
+    }
+    for (int j = 0; j < qp->n; j++) {
+        const double p = ctrl->phi[j];
+        if (p > 0.0) {
+            hi = fmin(hi, qp->ub[j] / p);
+            lo = fmax(lo, qp->lb[j] / p);
+        } else if (p < 0.0) {
+            hi = fmin(hi, qp->lb[j] / p);
+            lo = fmax(lo, qp->ub[j] / p);
+        } else if (qp->lb[j] > 0.0 || qp->ub[j] < 0.0) {
+            return -1.0;
+        }
+    }
+    if (!(lo <= hi)) {
+        return -1.0;
+    }
+    for (int j = 0; j < qp->n; j++) {
+        ctrl->phi[j] *= hi;
+    }
+    return hi;
+}
+
+int mca_pdnn_budget_steps(int64_t budget_ns) {
+    if (budget_ns <= 0) {
+        return 0;
+    }
+    const int64_t k = budget_ns / MCA_PDNN_STEP_NS;
+    return k < 1 ? 1 : k > 1000000000 ? 1000000000 : (int)k;
+}
+
+/* The step budget that applies below the step cap (0: none). Not under the paper's scheme mca: its cap is its
+ * step limit, so its figures (the negative task's fault at its cap) stay as published; the wall clock still
+ * bounds it in mcad. With the budget at 714 steps the negative task's fault moved by a tick (a repaired
+ * budget tick first) and three arms' changed kind and time. */
+int mca_controller_step_budget(const mca_controller_config_t *cfg) {
+    const int steps = cfg->pdnn_budget_steps;
+    return cfg->scheme != MCA_SCHEME_MCA && steps > 0 && steps < cfg->pdnn.max_steps ? steps : 0;
+}
+
+/* The solver's parameters for a solve in the tick that began at t_enter: the step cap or the step budget,
+ * the smaller, and with a time budget the deadline (mcad's rt.pdnn_budget_us). */
 static mca_pdnn_params_t pdnn_params(const mca_controller_config_t *cfg, int64_t t_enter) {
     mca_pdnn_params_t prm = cfg->pdnn;
+    if (mca_controller_step_budget(cfg) > 0) {
+        prm.max_steps = mca_controller_step_budget(cfg);
+    }
     prm.deadline_ns = cfg->pdnn_budget_ns > 0 ? t_enter + cfg->pdnn_budget_ns : 0;
     return prm;
+}
+
+/* Whether a solve that did not converge stopped at the budget (time, or steps below the cap) rather than at
+ * its cap or for lack of progress. */
+static int budget_hit(const mca_controller_config_t *cfg, int rc, const mca_pdnn_result_t *pr) {
+    if (rc == MCA_ETIMEDOUT) {
+        return MCA_BUDGET_TIME;
+    }
+    const int steps = mca_controller_step_budget(cfg);
+    return rc == MCA_ENOTCONV && steps > 0 && pr->steps >= steps ? MCA_BUDGET_STEPS : MCA_BUDGET_NONE;
 }
 
 /* mca-ts and braking: only the active rows go to the PDNN (mca_scheme_compact_rows); each keeps its
@@ -955,6 +1026,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->pdnn_steps = 0;
     info->pdnn_residual = 0.0;
     info->pdnn_converged = 0;
+    info->pdnn_budget_hit = MCA_BUDGET_NONE;
     info->eq_residual = 0.0;
     info->slack = 0.0;
     info->brake_fallback = 0;
@@ -1115,14 +1187,11 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             raise_fault(ctrl, MCA_CTRL_FAULT_NAN, (mca_ctrl_fault_why_t){.why = MCA_WHY_PDNN_INPUT});
             goto fault;
         }
-        if (rc == MCA_ETIMEDOUT) {
-            /* out of time before its step cap: a named fault, never an overrun of the loop */
-            raise_fault(ctrl, MCA_CTRL_FAULT_TIME_BUDGET,
-                        (mca_ctrl_fault_why_t){.why = MCA_WHY_PDNN_BUDGET,
-                                               .i = {pr.steps},
-                                               .x = {(double)cfg->pdnn_budget_ns * 1e-3, pr.residual}});
-            goto fault;
-        }
+        /* out of budget (time or steps) before the cap: no fault by itself, a repaired answer below */
+        const int hit = budget_hit(cfg, rc, &pr);
+        info->pdnn_budget_hit = hit;
+        const int short_answer = rc != MCA_OK && !(pr.residual <= cfg->fault_residual);
+        int repaired = 0;
         const mca_qp_t *qp = &ctrl->qp;
         for (int j = 0; j < qp->n; j++) {
             if (!isfinite(ctrl->phi[j])) {
@@ -1142,11 +1211,16 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (ts) {
             /* Tracking is elastic here, so only the hard rows decide: an answer that misses the PDNN's
              * tolerance is still used when it keeps every collision row (the box holds by projection). */
-            if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
-                repair_capped(ctrl, &si, na);
+            if (short_answer) {
+                repair_capped(ctrl, &si, na); /* at the cap and at the budget alike */
             }
             ts_advance(ctrl, info, ts_off, (const double(*)[3])rdot_d, target, lo, hi);
-        } else if (rc == MCA_ENOTCONV && !(pr.residual <= cfg->fault_residual)) {
+        } else if (short_answer && hit != MCA_BUDGET_NONE && !(eq > cfg->eq_tol) &&
+                   repair_scaled(ctrl) >= 0.0) {
+            /* mca out of budget: the scaled iterate unless the equality residual says the QP is infeasible
+             * as at the cap; at the cap itself the paper's faults below (its figures do not move) */
+            repaired = 1;
+        } else if (short_answer) {
             /* an infeasible QP (tracking against avoidance) never converges: name it as the paper does */
             if (eq > cfg->eq_tol) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
@@ -1161,7 +1235,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             }
             goto fault;
         }
-        if (!ts && eq > cfg->eq_tol) {
+        if (!ts && !repaired && eq > cfg->eq_tol) {
             raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
                         (mca_ctrl_fault_why_t){.why = MCA_WHY_EQ_RESIDUAL, .x = {eq, cfg->eq_tol}});
             goto fault;

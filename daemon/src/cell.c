@@ -808,6 +808,8 @@ int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *
     if (cell->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = cell->pdnn_max_steps;
     }
+    /* one budget everywhere: the time budget's steps, in virtual time too (mca-sim, the sweep) */
+    cfg->pdnn_budget_steps = mca_pdnn_budget_steps(cell->rt.pdnn_budget_ns);
     if (cell->pdnn_tol > 0.0) {
         cfg->pdnn.tol = cell->pdnn_tol;
     }

@@ -102,6 +102,10 @@ struct mca_daemon {
     int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
     int consecutive_overruns;
     uint64_t overruns, skipped;
+    /* running ticks whose PDNN ran out of its budget (mca_budget_hit_t: [0] the clock, [1] the step budget):
+     * repaired answers, no fault; logged the first, then once a second how many more */
+    uint64_t budget_hits[2];
+    uint64_t budget_unlogged;
     uint64_t stalls;      /* ticks whose commands came > MCA_DAEMON_STALL_PERIODS periods after the last */
     int64_t stall_max_ns; /* the longest such gap */
     int64_t sent_ns;      /* when the last tick's commands went out (0: none yet) */
@@ -637,8 +641,6 @@ static int ctrl_fault_code(int f) {
         return MCA_EINVAL;
     case MCA_CTRL_FAULT_NOT_CONVERGED:
         return MCA_ENOTCONV;
-    case MCA_CTRL_FAULT_TIME_BUDGET:
-        return MCA_ETIMEDOUT;
     case MCA_CTRL_FAULT_INFEASIBLE:
     case MCA_CTRL_FAULT_FAKE_ATTRACTOR:
         return MCA_EINFEASIBLE;
@@ -1016,6 +1018,7 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     st->ticks = s->tick;
     st->overruns = d->overruns;
     st->skipped_periods = d->skipped;
+    st->pdnn_budget_hits = d->budget_hits[0] + d->budget_hits[1];
     st->compute_p50_ns = d->pct_cache[0];
     st->compute_p99_ns = d->pct_cache[1];
     st->compute_max_ns = d->compute.max_ns;
@@ -1045,6 +1048,34 @@ static void push_csv(mca_daemon_t *d, double t, int state) {
     r->info = d->info;
     r->cmd_gap_ns = d->cmd_gap_ns;
     mca_ring_push(&d->csv_ring, r);
+}
+
+/* A running tick whose PDNN ran out of its budget: counted; the first logged with its figures, the ones
+ * after it as a count once a second (budget_log_count), so a stalling host does not flood the log ring. */
+static void budget_event(mca_daemon_t *d, double t) {
+    const int time = d->info.pdnn_budget_hit == MCA_BUDGET_TIME;
+    d->budget_hits[time ? 0 : 1]++;
+    if (d->budget_hits[0] + d->budget_hits[1] == 1) {
+        LOGN(d, MCA_LOG_NOTICE,
+             "PDNN out of its budget at t = %.3f s after %g steps, residual %.2e: no fault (an answer short "
+             "of "
+             "fault_residual is repaired; the ones after it counted once a second): %s",
+             3, t, d->info.pdnn_steps, d->info.pdnn_residual, 0,
+             time ? "rt.pdnn_budget_us ran out" : "its step budget ran out");
+    } else {
+        d->budget_unlogged++;
+    }
+}
+
+static void budget_log_count(mca_daemon_t *d, double t) {
+    if (d->budget_unlogged > 0) {
+        LOGN(
+            d, MCA_LOG_NOTICE,
+            "PDNN out of its budget in %g more ticks by t = %.3f s (%g by the clock, %g by steps in all): no "
+            "fault",
+            4, (double)d->budget_unlogged, t, (double)d->budget_hits[0], (double)d->budget_hits[1], NULL);
+        d->budget_unlogged = 0;
+    }
 }
 
 /* mca-ts: log deadlocks as they start, change and end (the state is in the summary, STATUS and CSV). */
@@ -1144,6 +1175,9 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         mca_controller_set_velocity(&d->ctrl, vm); /* mca-ts: the next command starts from the real motion */
         const int rc = mca_controller_tick(&d->ctrl, t, qp, qdp, &d->info);
         mca_hist_record(&d->ctrl_time, d->info.compute_ns);
+        if (d->info.pdnn_budget_hit != MCA_BUDGET_NONE) {
+            budget_event(d, t);
+        }
         if (isfinite(d->info.min_distance) && d->info.min_distance < d->min_d) {
             d->min_d = d->info.min_distance;
             d->min_d_t = t;
@@ -1199,6 +1233,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     if (n % 1000 == 0) {
         /* once a second: figures for the DDS status and for the supervisor (STATUS= lines) */
         compute_summary(d, &d->sum_rt);
+        budget_log_count(d, t);
         d->pct_cache[0] = d->sum_rt.compute_p50_ns;
         d->pct_cache[1] = d->sum_rt.compute_p99_ns;
         d->pct_cache[3] = d->sum_rt.jitter_p50_ns;
@@ -1512,6 +1547,11 @@ static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->state = mca_daemon_state(d);
     s->ticks = mca_daemon_ticks(d);
     s->overruns = d->overruns;
+    s->pdnn_budget_time = d->budget_hits[0];
+    s->pdnn_budget_steps = d->budget_hits[1];
+    s->pdnn_budget_us = (double)d->ctrl.cfg.pdnn_budget_ns * 1e-3;
+    s->pdnn_step_budget = mca_controller_step_budget(&d->ctrl.cfg);
+    s->pdnn_max_steps = d->ctrl.cfg.pdnn.max_steps;
     s->skipped_periods = d->skipped;
     s->stalls = d->stalls;
     s->stall_max_ns = d->stall_max_ns;
@@ -1615,6 +1655,17 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
             "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
             (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3, (double)s->compute_max_ns / 1e3,
             (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3, (double)s->ctrl_max_ns / 1e3);
+    char steps[64];
+    if (s->pdnn_step_budget > 0) {
+        snprintf(steps, sizeof steps, "%d steps (cap %d)", s->pdnn_step_budget, s->pdnn_max_steps);
+    } else {
+        snprintf(steps, sizeof steps, "the cap %d steps", s->pdnn_max_steps);
+    }
+    fprintf(f,
+            "<%d>mcad: summary: PDNN out of its budget (%.3g us, %s): %llu ticks by the clock, %llu by steps "
+            "(no faults: short answers repaired)\n",
+            s->pdnn_budget_time + s->pdnn_budget_steps ? 5 : 6, s->pdnn_budget_us, steps,
+            (unsigned long long)s->pdnn_budget_time, (unsigned long long)s->pdnn_budget_steps);
     if (s->dds_ab_block && s->dds_ab_n[0] && s->dds_ab_n[1] && s->dds_ab_p50_ns[0] && s->dds_ab_p99_ns[0]) {
         fprintf(
             f,
@@ -1708,6 +1759,7 @@ void mca_daemon_close(mca_daemon_t *d) {
         st->jitter_p999_ns = s.jitter_p999_ns;
         st->jitter_max_ns = s.jitter_max_ns;
         st->overruns = s.overruns;
+        st->pdnn_budget_hits = s.pdnn_budget_time + s.pdnn_budget_steps;
         st->skipped_periods = s.skipped_periods;
         d->snap.tick = s.ticks;
         st->ticks = s.ticks;

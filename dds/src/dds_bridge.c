@@ -229,6 +229,7 @@ static void write_status(publisher_t *b) {
     m.min_distance_so_far = st->min_distance_so_far;
     m.min_distance_stamp_ns = st->min_distance_stamp_ns;
     m.snapshots_dropped = rs.dropped;
+    m.pdnn_budget_hits = st->pdnn_budget_hits;
     write_one(b, W_STATUS, &m);
     if (b->ros2 != NULL) {
         uint64_t errors = 0;

@@ -22,7 +22,7 @@ enum { MARKER_CYLINDER = 3, MARKER_SPHERE_LIST = 7, MARKER_LINE_LIST = 5, MARKER
 enum { DIAG_OK = 0, DIAG_WARN = 1, DIAG_ERROR = 2 };
 
 #define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2)
-#define N_KV 24
+#define N_KV 25
 #define URDF_MAX (4 * 1024 * 1024)
 
 typedef sensor_msgs_msg_dds__JointState_ JointState;
@@ -696,6 +696,7 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, u
     KV("ticks", "%llu", (unsigned long long)st->ticks);
     KV("overruns", "%llu", (unsigned long long)st->overruns);
     KV("skipped_periods", "%llu", (unsigned long long)st->skipped_periods);
+    KV("pdnn_budget_hits", "%llu", (unsigned long long)st->pdnn_budget_hits);
     KV("compute_p50_us", "%.1f", (double)st->compute_p50_ns / 1e3);
     KV("compute_p99_us", "%.1f", (double)st->compute_p99_ns / 1e3);
     KV("compute_max_us", "%.1f", (double)st->compute_max_ns / 1e3);

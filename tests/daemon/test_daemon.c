@@ -940,6 +940,78 @@ static int cmp_i64(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
+/* The PDNN's budget (issue 29): a tick that runs out of it is no fault, and the summary counts it, by the
+ * clock and by steps apart. The budget is set through the config hook mca-sim uses (no seam): a 1 ns clock
+ * with a tolerance no solve meets (every tick runs out at its first clock check), then a step budget of 2
+ * under mca-ts (the cell's arms far apart: no row binds, the repair keeps the answer inside the box). */
+static void budget_hook(mca_controller_config_t *cfg, void *arg) {
+    const int steps = *(const int *)arg;
+    if (steps > 0) {
+        cfg->pdnn_budget_steps = steps;
+    } else {
+        cfg->pdnn_budget_ns = 1;
+        cfg->pdnn.tol = 1e-300;
+    }
+}
+
+static void budget_run(const char *scheme, int steps, uint64_t *by_time, uint64_t *by_steps, char *line,
+                       size_t len) {
+    write_cell(NULL, "[0.0, 0.6, 0.0]");
+    FILE *cf = fopen(cell_path, "a");
+    assert_non_null(cf);
+    fprintf(cf, "scheme: %s\n", scheme);
+    fclose(cf);
+    mca_cell_t *cell = calloc(1, sizeof *cell);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
+    mca_daemon_opts_t o = {
+        .no_dds = 1, .no_rt = 1, .log = stderr, .config_hook = budget_hook, .config_hook_arg = &steps};
+    mca_daemon_t *d = NULL;
+    assert_int_equal(mca_daemon_open(&d, cell, &o, err, sizeof err), MCA_OK);
+    uint64_t hits[3] = {0, 0, 0};
+    double t = 0.0;
+    for (int k = 0; k < 500; k++, t += 0.001) {
+        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        const mca_tick_info_t *in = mca_daemon_tick_info(d);
+        assert_int_equal(in->fault, MCA_CTRL_FAULT_NONE);
+        hits[in->pdnn_budget_hit]++;
+    }
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    assert_int_equal(s.fault, MCA_DAEMON_FAULT_NONE);
+    assert_true(s.pdnn_budget_time == hits[MCA_BUDGET_TIME]);
+    assert_true(s.pdnn_budget_steps == hits[MCA_BUDGET_STEPS]);
+    *by_time = s.pdnn_budget_time;
+    *by_steps = s.pdnn_budget_steps;
+    char *buf = NULL;
+    size_t n = 0;
+    FILE *mf = open_memstream(&buf, &n);
+    assert_non_null(mf);
+    mca_daemon_print_summary(&s, mf);
+    fclose(mf);
+    const char *l = strstr(buf, "mcad: summary: PDNN out of its budget");
+    assert_non_null(l);
+    snprintf(line, len, "%.*s", (int)strcspn(l, "\n"), l);
+    print_message("  %s: %s\n", scheme, line);
+    free(buf);
+    mca_daemon_close(d);
+    free(cell);
+    unlink(cell_path);
+}
+
+static void test_pdnn_budget_counted(void **state) {
+    (void)state;
+    uint64_t tm, st;
+    char line[256];
+    budget_run("mca", 0, &tm, &st, line, sizeof line);
+    assert_true(tm >= 490 && st == 0); /* every tick but an exact first one, none a fault */
+    assert_non_null(strstr(line, "(0.001 us, the cap 2000 steps)"));
+    assert_non_null(strstr(line, " ticks by the clock, 0 by steps"));
+    budget_run("mca-ts", 2, &tm, &st, line, sizeof line);
+    assert_true(tm == 0 && st > 100);
+    assert_non_null(strstr(line, "2 steps (cap 2000)"));
+}
+
 static void test_histogram_vs_sorted(void **state) {
     (void)state;
     enum { N = 20000 };
@@ -1081,6 +1153,7 @@ int main(void) {
         cmocka_unit_test(test_implausible_velocity),
         cmocka_unit_test(test_plausible_bounds_and_after_fault),
         cmocka_unit_test(test_distances_while_braking),
+        cmocka_unit_test(test_pdnn_budget_counted),
         cmocka_unit_test(test_histogram_vs_sorted),
         cmocka_unit_test(test_rtlog),
     };

@@ -102,9 +102,10 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-status-") as tmp:
     jit = fig(r"wake-up jitter p50 ([\d.]+) us, p99 ([\d.]+) us, p99.9 ([\d.]+) us, max ([\d.]+) us")
     comp = fig(r"compute time \(whole tick\) p50 ([\d.]+) us, p99 ([\d.]+) us, max ([\d.]+) us")
     dmin = fig(r"minimum distance ([\d.]+) m")
-    check(None not in (ticks, jit, comp, dmin), "summary figures on stderr")
+    budget = fig(r"PDNN out of its budget \(.*?\): (\d+) ticks by the clock, (\d+) by steps", int)
+    check(None not in (ticks, jit, comp, dmin, budget), "summary figures on stderr")
     check(len(status) > 0, f"{len(status)} ControllerStatus samples")
-    if status and None not in (ticks, jit, comp, dmin):
+    if status and None not in (ticks, jit, comp, dmin, budget):
         last = status[-1]
         print("final status:", last)
         check(last.state == m.ControllerState.STATE_STOPPED, f"final state {last.state} is STOPPED")
@@ -114,6 +115,8 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-status-") as tmp:
         check(last.ticks == ticks and last.overruns == overruns and last.skipped_periods == skipped,
               f"final status ticks/overruns/skipped periods {last.ticks}/{last.overruns}/{last.skipped_periods}"
               f" = summary {ticks}/{overruns}/{skipped}")
+        check(last.pdnn_budget_hits == sum(budget),
+              f"final status PDNN budget hits {last.pdnn_budget_hits} = summary {budget[0]} + {budget[1]}")
         for name, want, fields in (("jitter", jit, ("p50", "p99", "p999", "max")),
                                    ("compute", comp, ("p50", "p99", "max"))):
             got = [getattr(last, f"{name}_{f}_ns") for f in fields]

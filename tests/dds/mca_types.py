@@ -104,6 +104,7 @@ class ControllerStatus(IdlStruct, typename="mca::dds::ControllerStatus"):
     min_distance_so_far: t.float64
     min_distance_stamp_ns: t.int64
     snapshots_dropped: t.uint64
+    pdnn_budget_hits: t.uint64
 
 
 def stream_qos():

@@ -934,15 +934,45 @@ static void test_near_witnesses(void **state) {
     assert_true(seen.ends_unbindable > 1000);
 }
 
-/* The PDNN's time budget (issue 13): a tick whose solve runs out of it is the named fault pdnn-time-budget
- * (zero command, latched), never a tick that runs on; a braking tick that runs out of it has no answer and
- * takes the keep-direction fallback. A budget of 1 ns runs out at the first clock check (after 16 steps):
- * on the negative task under mca-ts the fault comes exactly at the first tick whose solve needs more. */
-static void test_pdnn_time_budget(void **state) {
-    (void)state;
+/* Every collision row of the last QP and the joint box hold at the command (the controller's phi). */
+static void assert_rows_hold(const mca_controller_t *c, double *const qds[MCA_MAX_ARMS], int box) {
+    const double *phi;
+    const mca_qp_t *qp = mca_controller_last_qp(c, &phi);
+    int rows = 0;
+    for (int i = 0; i < qp->n_ineq; i++) {
+        if (qp->beta[i] < c->cfg.sp.big) {
+            double s = 0.0;
+            for (int j = 0; j < qp->n; j++) {
+                s += qp->U[i][j] * phi[j];
+            }
+            assert_true(s <= qp->beta[i] + 1e-9);
+            rows++;
+        }
+    }
+    int off = 0;
+    for (int a = 0; a < c->cfg.n_arms; a++) {
+        for (int j = 0; j < c->cfg.chain[a].dof; j++) {
+            assert_true(qds[a][j] == phi[off + j]);
+            if (box) {
+                assert_true(phi[off + j] >= qp->lb[off + j] - 1e-12 &&
+                            phi[off + j] <= qp->ub[off + j] + 1e-12);
+            }
+        }
+        off += c->cfg.chain[a].dof;
+    }
+    print_message("  %d collision rows hold at the command\n", rows);
+}
+
+/* The PDNN's budget (issue 29): a tick whose solve runs out of its time is no fault. A budget of 1 ns runs
+ * out at each block's first clock check (after 16 steps): the first tick of the negative task whose solve
+ * needs over 100 steps (mca: its fault at the cap) is repeated with it. mca-ts commands repair_capped's answer, mca the iterate scaled into the rows and the
+ * box; both keep every collision row, and the task goes on. A braking tick that runs out of it has no answer
+ * and takes the keep-direction fallback. */
+static void budget_tick(mca_scheme_kind_t scheme) {
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
     load_ts(SCN("negative.yaml"), &s, &cfg);
+    cfg.scheme = scheme;
     mca_controller_t *c = malloc(sizeof *c), *b = malloc(sizeof *b);
     assert_non_null(c);
     assert_non_null(b);
@@ -966,8 +996,8 @@ static void test_pdnn_time_budget(void **state) {
     int k_long = -1;
     for (int k = 0; k < 8000 && k_long < 0; k++) {
         *b = *c;
-        assert_int_equal(mca_controller_tick(c, k * cfg.dt, qs, qds, &info), MCA_OK);
-        if (info.pdnn_steps > 16) {
+        mca_controller_tick(c, k * cfg.dt, qs, qds, &info);
+        if (info.pdnn_steps > 100 || info.fault) {
             k_long = k;
             break;
         }
@@ -979,32 +1009,50 @@ static void test_pdnn_time_budget(void **state) {
         }
     }
     assert_true(k_long > 0);
-    /* that tick again with 1 ns: the named fault, zero command */
+    const int full_steps = info.pdnn_steps, full_fault = info.fault;
+    /* that tick again with 1 ns: out of time, a repaired command, no fault */
     b->cfg.pdnn_budget_ns = 1;
     mca_controller_t *r = malloc(sizeof *r);
     assert_non_null(r);
     *r = *b; /* for the braking below */
-    assert_int_equal(mca_controller_tick(b, k_long * cfg.dt, qs, qds, &info), MCA_EFAULT);
-    char why[192];
-    mca_ctrl_fault_format(&info.fault_why, why, sizeof why);
-    print_message("1 ns budget: tick %d (%s): %s\n", k_long, mca_ctrl_fault_name(info.fault), why);
-    assert_int_equal(info.fault, MCA_CTRL_FAULT_TIME_BUDGET);
-    assert_string_equal(mca_ctrl_fault_name(info.fault), "pdnn-time-budget");
-    assert_int_equal(info.fault_why.why, MCA_WHY_PDNN_BUDGET);
-    assert_int_equal(info.fault_why.i[0], info.pdnn_steps);
-    assert_true(info.fault_why.x[0] == 1e-3); /* 1 ns in us */
-    assert_non_null(strstr(why, "PDNN time budget 0.001 us used up after"));
-    assert_true(info.pdnn_steps <= 16);
-    for (int a = 0; a < cfg.n_arms; a++) {
-        for (int j = 0; j < cfg.chain[a].dof; j++) {
-            assert_true(qd[a][j] == 0.0);
+    const int rc = mca_controller_tick(b, k_long * cfg.dt, qs, qds, &info);
+    print_message(
+        "%s, 1 ns budget: tick %d (%d steps without): rc %d, fault %s, budget hit %d after %d steps, "
+        "residual %.2e, eq %.2e\n",
+        mca_scheme_name(scheme), k_long, full_steps, rc, mca_ctrl_fault_name(info.fault),
+        info.pdnn_budget_hit, info.pdnn_steps, info.pdnn_residual, info.eq_residual);
+    assert_int_equal(rc, MCA_OK);
+    assert_int_equal(info.fault, MCA_CTRL_FAULT_NONE);
+    assert_int_equal(info.pdnn_budget_hit, MCA_BUDGET_TIME);
+    assert_true(info.pdnn_steps <= 64 && info.pdnn_steps < full_steps); /* 16 per block and pass */
+    assert_true(info.pdnn_residual > cfg.fault_residual); /* a short answer: the repair was needed */
+    assert_rows_hold(b, qds, scheme == MCA_SCHEME_MCA);
+    /* with the budget back (a stall passed), what the next ticks would have done without it */
+    b->cfg.pdnn_budget_ns = 0;
+    int k_next;
+    for (k_next = k_long + 1; k_next < k_long + 50; k_next++) {
+        for (int a = 0; a < cfg.n_arms; a++) {
+            for (int j = 0; j < cfg.chain[a].dof; j++) {
+                q[a][j] += qd[a][j] * cfg.dt;
+            }
         }
+        if (mca_controller_tick(b, k_next * cfg.dt, qs, qds, &info) != MCA_OK) {
+            break;
+        }
+    }
+    print_message("  then: %s at tick %d\n", mca_ctrl_fault_name(info.fault), k_next);
+    if (full_fault) {
+        /* the QP is infeasible: the cap's fault, a tick later */
+        assert_int_equal(info.fault, full_fault);
+        assert_int_equal(k_next, k_long + 1);
+    } else {
+        assert_int_equal(k_next, k_long + 50);
     }
     /* braking from there with 1 ns: every tick either converged within 16 steps or took the fallback */
     int fallback = 0;
     for (int k = 0; k < 50; k++) {
-        const int rc = mca_controller_brake(r, (k_long + k) * cfg.dt, qs, vls, decs, qds, &info);
-        assert_true(rc >= 0);
+        const int brc = mca_controller_brake(r, (k_long + k) * cfg.dt, qs, vls, decs, qds, &info);
+        assert_true(brc >= 0);
         assert_true(info.brake_fallback || info.pdnn_steps <= 16);
         fallback += info.brake_fallback;
         for (int a = 0; a < cfg.n_arms; a++) {
@@ -1017,6 +1065,93 @@ static void test_pdnn_time_budget(void **state) {
     free(r);
     free(b);
     free(c);
+}
+
+static void test_pdnn_time_budget(void **state) {
+    (void)state;
+    budget_tick(MCA_SCHEME_MCA_TS);
+    budget_tick(MCA_SCHEME_MCA);
+}
+
+/* Run the negative task (Euler) until its first fault or n ticks; counts budget hits. */
+static int run_negative(mca_controller_config_t *cfg, const mca_scenario_t *s, int n,
+                        mca_tick_info_t *fault_info, int *hits, double *qd_sum) {
+    mca_controller_t *c = malloc(sizeof *c);
+    assert_non_null(c);
+    assert_int_equal(mca_controller_init(c, cfg), MCA_OK);
+    double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
+    const double *qs[MCA_MAX_ARMS];
+    double *qds[MCA_MAX_ARMS];
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        qs[a] = q[a];
+        qds[a] = qd[a];
+        memcpy(q[a], s->arm[a].q0, sizeof q[a]);
+    }
+    mca_tick_info_t info;
+    int k;
+    *hits = 0;
+    *qd_sum = 0.0;
+    for (k = 0; k < n; k++) {
+        if (mca_controller_tick(c, k * cfg->dt, qs, qds, &info) != MCA_OK) {
+            *fault_info = info;
+            break;
+        }
+        *hits += info.pdnn_budget_hit != MCA_BUDGET_NONE;
+        assert_true(info.pdnn_budget_hit != MCA_BUDGET_TIME); /* no clock here */
+        for (int a = 0; a < cfg->n_arms; a++) {
+            for (int j = 0; j < cfg->chain[a].dof; j++) {
+                q[a][j] += qd[a][j] * cfg->dt;
+                *qd_sum += fabs(qd[a][j]);
+            }
+        }
+    }
+    free(c);
+    return k;
+}
+
+/* The step budget (issue 29): deterministic, below the cap a non-fault event under mca-ts (the same tick
+ * twice: the same commands); under the paper's scheme mca the cap stays its limit, so the negative task
+ * faults as published (pdnn-not-converged after 2000 steps, at the tick it did without a budget). */
+static void test_pdnn_step_budget(void **state) {
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    mca_tick_info_t fi;
+    int hits, hits2;
+    double sum, sum2;
+    assert_int_equal(mca_pdnn_budget_steps(0), 0);
+    assert_int_equal(mca_pdnn_budget_steps(1), 1);
+    assert_int_equal(mca_pdnn_budget_steps(500000), 500000 / MCA_PDNN_STEP_NS);
+
+    load_ts(SCN("negative.yaml"), &s, &cfg);
+    cfg.pdnn_budget_steps = 100;
+    const int n_ts = run_negative(&cfg, &s, 6000, &fi, &hits, &sum);
+    const int n_ts2 = run_negative(&cfg, &s, 6000, &fi, &hits2, &sum2);
+    print_message("mca-ts, step budget 100: %d ticks, %d out of budget\n", n_ts, hits);
+    assert_int_equal(n_ts, 6000); /* no fault */
+    assert_true(hits > 0);
+    assert_int_equal(n_ts2, n_ts);
+    assert_int_equal(hits, hits2);
+    assert_true(sum == sum2);
+
+    cfg.scheme = MCA_SCHEME_MCA;
+    cfg.pdnn_budget_steps = 0;
+    assert_int_equal(mca_controller_step_budget(&cfg), 0);
+    const int n0 = run_negative(&cfg, &s, 8000, &fi, &hits, &sum);
+    print_message("mca, no budget: fault %s at tick %d after %d steps\n", mca_ctrl_fault_name(fi.fault), n0,
+                  fi.pdnn_steps);
+    assert_true(n0 < 8000);
+    assert_int_equal(fi.fault, MCA_CTRL_FAULT_NOT_CONVERGED);
+    assert_int_equal(fi.pdnn_steps, 2000);
+    cfg.pdnn_budget_steps = mca_pdnn_budget_steps(500000); /* mcad's and mca-sim's default */
+    assert_int_equal(mca_controller_step_budget(&cfg), 0);
+    const int n1 = run_negative(&cfg, &s, 8000, &fi, &hits, &sum2);
+    assert_int_equal(n1, n0);
+    assert_int_equal(fi.fault, MCA_CTRL_FAULT_NOT_CONVERGED);
+    assert_int_equal(fi.pdnn_steps, 2000);
+    assert_int_equal(fi.pdnn_budget_hit, MCA_BUDGET_NONE);
+    assert_int_equal(hits, 0);
+    assert_true(sum == sum2);
 }
 
 /* Two parallel rows of one arm (the same point and direction, two distances) are one row, the tighter. */
@@ -1279,6 +1414,7 @@ int main(void) {
         cmocka_unit_test(test_near_rows),
         cmocka_unit_test(test_near_witnesses),
         cmocka_unit_test(test_pdnn_time_budget),
+        cmocka_unit_test(test_pdnn_step_budget),
         cmocka_unit_test(test_near_rows_parallel),
         cmocka_unit_test(test_controller_brake),
         cmocka_unit_test(test_tube_bounds),

@@ -25,7 +25,7 @@ static void usage(FILE *f) {
         "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm] [--stop-at T] [--fault-at T:KIND]\n"
-        "               [--dec-limit X]\n"
+        "               [--dec-limit X] [--pdnn-budget-us U]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows)\n"
@@ -37,7 +37,9 @@ static void usage(FILE *f) {
         "                 nan, infeasible, input), then brake as mcad does on that fault\n"
         "  --dec-limit X  every joint's deceleration limit [rad/s^2]: the daemon's braking and the sim "
         "arm's\n"
-        "                 (default 10)\n");
+        "                 (default 10)\n"
+        "  --pdnn-budget-us U  the PDNN's budget per tick as mcad's rt.pdnn_budget_us, applied as its step\n"
+        "                 budget (U / 0.7 us steps, below the step cap; 0: none; default half the period)\n");
 }
 
 static int parse_int(const char *s, int *out) {
@@ -130,6 +132,11 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--pdnn-max-steps")) {
             if (parse_int(v, &o.pdnn_max_steps)) {
                 fprintf(stderr, "mca-sim: --pdnn-max-steps: bad value '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--pdnn-budget-us")) {
+            if (parse_int(v, &o.pdnn_budget_us)) {
+                fprintf(stderr, "mca-sim: --pdnn-budget-us: bad value '%s'\n", v);
                 return 2;
             }
         } else if (!strcmp(a, "--v-normal") || !strcmp(a, "--v-floor")) {
@@ -309,6 +316,13 @@ int main(int argc, char **argv) {
                "p50 %d, p99.9 %d\n",
                r->scheme, r->path_error_max, r->path_error_p99, r->exact_points, r->exact_missed,
                r->exact_error_max, r->pdnn_steps_p50, r->pdnn_steps_p999);
+        if (r->budget_hits_steps + r->budget_hits_time) {
+            printf("%s: %d ticks out of the PDNN's budget (%d at its %d steps, %d by the clock): repaired "
+                   "answers, "
+                   "no fault\n",
+                   r->scheme, r->budget_hits_steps + r->budget_hits_time, r->budget_hits_steps,
+                   r->budget_steps, r->budget_hits_time);
+        }
         if (r->pdnn_capped) {
             printf("%s: %d ticks with the PDNN at its step cap (residual <= fault_residual, accepted)\n",
                    r->scheme, r->pdnn_capped);
@@ -337,7 +351,8 @@ int main(int argc, char **argv) {
                     "\"pdnn_steps_mean\":%.3f,\"pdnn_residual_max\":%.3g,\"eq_residual_max\":%.3g,"
                     "\"binding_ticks\":%d,\"pdnn_capped\":%d,\"compute_p50_ns\":%lld,\"compute_p99_ns\":%lld,"
                     "\"compute_max_ns\":%lld,\"cpu_p50_ns\":%lld,\"cpu_p99_ns\":%lld,\"cpu_max_ns\":%lld,"
-                    "\"dumped\":%d,\"dumped_binding\":%d,\"dump_skipped_capped\":%d,\"samples\":[",
+                    "\"dumped\":%d,\"dumped_binding\":%d,\"dump_skipped_capped\":%d,\"pdnn_budget_steps\":%d,"
+                    "\"budget_hits_steps\":%d,\"budget_hits_time\":%d,\"samples\":[",
                     s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
                     r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
                     isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
@@ -345,7 +360,8 @@ int main(int argc, char **argv) {
                     r->pdnn_steps_max, r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max,
                     r->binding_ticks, r->pdnn_capped, (long long)r->compute_p50, (long long)r->compute_p99,
                     (long long)r->compute_max, (long long)r->cpu_p50, (long long)r->cpu_p99,
-                    (long long)r->cpu_max, r->dumped, r->dumped_binding, r->dump_skipped_capped);
+                    (long long)r->cpu_max, r->dumped, r->dumped_binding, r->dump_skipped_capped,
+                    r->budget_steps, r->budget_hits_steps, r->budget_hits_time);
             for (int i = 0; i < r->n_samples; i++) {
                 fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
                         isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);

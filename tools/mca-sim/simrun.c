@@ -28,6 +28,7 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     o->v_floor = -1.0;
     o->stop_at = -1.0;
     o->fault_at = -1.0;
+    o->pdnn_budget_us = -1;
 }
 
 static int cmp_i64(const void *a, const void *b) {
@@ -53,10 +54,13 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     if (o->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = o->pdnn_max_steps;
     }
+    if (o->pdnn_budget_us >= 0) {
+        cfg->pdnn_budget_steps = mca_pdnn_budget_steps((int64_t)o->pdnn_budget_us * 1000);
+    }
 }
 
 int mca_simrun_fault_from_name(const char *name) {
-    for (int f = 1; f <= MCA_CTRL_FAULT_TIME_BUDGET; f++) {
+    for (int f = 1; f <= MCA_CTRL_FAULT_LAST; f++) {
         if (strcmp(name, mca_ctrl_fault_name(f)) == 0) {
             return f;
         }
@@ -109,6 +113,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const mca_tick_info_t *ip = mca_daemon_tick_info(d);
     const int na = cfg->n_arms;
+    r->budget_steps = mca_controller_step_budget(cfg);
     const double dt = cfg->dt;
     const double duration = o->duration > 0.0 ? o->duration : scn->duration;
     const int n_ticks = (int)llround(duration / dt) + 1;
@@ -259,7 +264,10 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         const int every = o->dump_every > 0 ? o->dump_every : 1;
         const int every_b = every / 5 > 0 ? every / 5 : 1;
         const int picked = k % every == 0 || (ip->binding_rows > 0 && k % every_b == 0);
-        if (running && o->scheme != MCA_SCHEME_APF && !ip->pdnn_converged) {
+        if (running && ip->pdnn_budget_hit) {
+            r->budget_hits_steps += ip->pdnn_budget_hit == MCA_BUDGET_STEPS;
+            r->budget_hits_time += ip->pdnn_budget_hit == MCA_BUDGET_TIME;
+        } else if (running && o->scheme != MCA_SCHEME_APF && !ip->pdnn_converged) {
             r->pdnn_capped++;
             r->dump_skipped_capped += o->dump_dir != NULL && picked;
         }

@@ -31,6 +31,8 @@ typedef struct mca_simrun_opts {
     double duration; /**< <= 0: the scenario's */
     double settle;   /**< seconds to run on after the arms stopped following a fault */
     int pdnn_max_steps; /**< > 0: override */
+    int pdnn_budget_us; /**< >= 0: the step budget of this time budget (mca_pdnn_budget_steps; 0: none); < 0:
+                             the cell's, half the period (mcad's default rt.pdnn_budget_us) */
     double v_normal;    /**< > 0: override the scenario's */
     double v_floor;     /**< >= 0: override the scenario's (< 0: keep) */
     int dist_lsdm;      /**< 1: the paper's LSDM for the distances instead of the closed form */
@@ -64,6 +66,8 @@ typedef struct mca_simrun_result {
     double eq_residual_max;
     int binding_ticks; /**< ticks with at least one binding collision row */
     int pdnn_capped;   /**< ticks where the PDNN hit its step cap but stayed below fault_residual */
+    int budget_steps;  /**< the step budget applied (0: none) */
+    int budget_hits_steps, budget_hits_time;       /**< running ticks out of budget (info.pdnn_budget_hit) */
     int64_t compute_p50, compute_p99, compute_max; /**< info.compute_ns (CLOCK_MONOTONIC, wall) */
     int64_t cpu_p50, cpu_p99, cpu_max;             /**< thread CPU time of the tick call (no preemption) */
     int dumped, dumped_binding;

@@ -96,8 +96,17 @@ typedef enum mca_ctrl_fault {
     MCA_CTRL_FAULT_DISTANCE = 4,       /**< distance below d1, or predicted below d1 next tick */
     MCA_CTRL_FAULT_FAKE_ATTRACTOR = 5, /**< equality residual above eq_tol: tracking contradicts avoidance */
     MCA_CTRL_FAULT_INPUT = 6,          /**< bad call (NULL pointers, solver error) */
-    MCA_CTRL_FAULT_TIME_BUDGET = 7,    /**< the PDNN ran out of its time budget (pdnn_budget_ns) */
+    /* 7 was pdnn-time-budget: running out of the budget is no fault (mca_budget_hit_t) */
+    MCA_CTRL_FAULT_LAST = MCA_CTRL_FAULT_INPUT, /**< the highest code */
 } mca_ctrl_fault_t;
+
+/** How the PDNN's budget ran out in a tick (info->pdnn_budget_hit). Not a fault: the tick commands a repaired
+ *  answer (mca-ts: repair_capped; mca: the iterate scaled into the collision rows and the joint box). */
+typedef enum mca_budget_hit {
+    MCA_BUDGET_NONE = 0,
+    MCA_BUDGET_TIME = 1,  /**< the wall clock: pdnn_budget_ns from the tick's start */
+    MCA_BUDGET_STEPS = 2, /**< the step budget pdnn_budget_steps, below the step cap */
+} mca_budget_hit_t;
 
 /** Short constant name of a fault code ("fake-attractor", ...). */
 const char *mca_ctrl_fault_name(int fault);
@@ -114,7 +123,6 @@ typedef enum mca_ctrl_why {
     MCA_WHY_BOUNDS,        /**< the joint bounds contradict (a joint beyond its limit) */
     MCA_WHY_ASSEMBLY,      /**< i[0] the MCA error code of the QP assembly */
     MCA_WHY_PDNN_INPUT,    /**< the PDNN rejected the QP (non-finite data) */
-    MCA_WHY_PDNN_BUDGET,   /**< x[0] budget [us], x[1] residual; i[0] steps */
     MCA_WHY_PDNN_OUTPUT,   /**< the PDNN's output is not finite */
     MCA_WHY_TRACKING, /**< not converged, tracking off: x[0] residual, x[1] ||G phi - alpha||, x[2] min d;
                          i[0] steps */
@@ -150,9 +158,25 @@ typedef struct mca_controller_config {
     int fault_distance;        /**< 1: distance < d1 (measured or predicted) is a fault (MCA) */
     mca_timescale_params_t ts; /**< mca-ts only */
     int64_t pdnn_budget_ns; /**< wall time the PDNN may use from the start of a tick (0: none); running out is
-                                 the fault MCA_CTRL_FAULT_TIME_BUDGET, a braking tick's the keep-direction
+                                 a budget event (MCA_BUDGET_TIME), a braking tick's the keep-direction
                                  fallback. mcad: rt.pdnn_budget_us (half the period); mca-sim: none */
+    int pdnn_budget_steps;  /**< the same budget in steps (0: none; mca_pdnn_budget_steps): a solve stops at
+                                 min(pdnn.max_steps, this); stopping here before the cap is a budget event
+                                 (MCA_BUDGET_STEPS), deterministic. mcad and mca-sim alike. Not under the
+                                 scheme mca, whose step limit stays its cap (the paper's figures) */
 } mca_controller_config_t;
+
+/** Wall time of one PDNN step [ns] on the largest QPs the shipped tasks build, measured on the development VM
+ *  (docs/pdnn.md "Step budget": bench_tick steps, the worst of every task, scheme and form, least of 3 runs:
+ *  707 ns, hui under mca-ts). The step budget is a time budget divided by this. */
+#define MCA_PDNN_STEP_NS 700
+
+/** The step budget of a time budget [ns]: budget_ns / MCA_PDNN_STEP_NS, at least 1 (0: none for 0). */
+int mca_pdnn_budget_steps(int64_t budget_ns);
+
+/** The step budget a solve under @p cfg stops at before its cap (0: none): cfg->pdnn_budget_steps when it
+ *  is below pdnn.max_steps, except under the scheme mca (its cap stays its step limit). */
+int mca_controller_step_budget(const mca_controller_config_t *cfg);
 
 /** The default tick period [s]: 1 kHz (mca_controller_default_config, mca_scenario_defaults). */
 #define MCA_CONTROLLER_DT 0.001
@@ -178,7 +202,10 @@ typedef struct mca_tick_info {
     int pdnn_steps;
     double pdnn_residual;
     int pdnn_converged;
-    double eq_residual; /**< ||G phi - alpha||_inf [m/s] */
+    int pdnn_budget_hit; /**< mca_budget_hit_t: the solve stopped at the budget (time or steps) this tick
+                              before its tolerance; the command is the repaired answer when the residual is
+                              above fault_residual. Never a fault by itself */
+    double eq_residual;  /**< ||G phi - alpha||_inf [m/s] (of the solver's answer, before any repair) */
     /* tracking */
     double ee[MCA_MAX_ARMS][3]; /**< actual end effector */
     double ee_desired[MCA_MAX_ARMS][3];

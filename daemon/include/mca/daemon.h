@@ -148,6 +148,12 @@ typedef struct mca_daemon_csv_rec {
 typedef struct mca_daemon_summary {
     int state;
     uint64_t ticks, overruns, skipped_periods;
+    uint64_t
+        pdnn_budget_time; /**< running ticks whose PDNN ran out of its time budget (repaired, no fault) */
+    uint64_t pdnn_budget_steps; /**< the same, out of its step budget (below the cap) */
+    double pdnn_budget_us;      /**< the time budget applied (0: none, a caller that steps the daemon) */
+    int pdnn_step_budget;       /**< the step budget applied (0: none: the cap, mca) */
+    int pdnn_max_steps;         /**< the step cap */
     uint64_t stalls;      /**< loop stalls: > MCA_DAEMON_STALL_PERIODS periods between two ticks' commands */
     int64_t stall_max_ns; /**< the longest gap between two ticks' commands of those */
     int64_t jitter_p50_ns, jitter_p99_ns, jitter_p999_ns, jitter_max_ns;

@@ -95,7 +95,8 @@ typedef struct mca_dds_status_snapshot {
     int32_t fault_code;                          /**< 0 or a negative MCA_E* code */
     char fault_text[MCA_DDS_FAULT_TEXT_MAX + 1]; /**< NUL-terminated (truncated if longer) */
     uint64_t ticks, overruns;
-    uint64_t skipped_periods; /**< periods missed in all (one overrun can skip several) */
+    uint64_t skipped_periods;  /**< periods missed in all (one overrun can skip several) */
+    uint64_t pdnn_budget_hits; /**< running ticks out of the PDNN's budget (time or steps; not faults) */
     int64_t compute_p50_ns, compute_p99_ns, compute_max_ns;
     int64_t jitter_p50_ns, jitter_p99_ns, jitter_p999_ns, jitter_max_ns;
     uint32_t pdnn_steps;
