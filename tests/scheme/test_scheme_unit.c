@@ -965,9 +965,9 @@ static void assert_rows_hold(const mca_controller_t *c, double *const qds[MCA_MA
 
 /* The PDNN's budget (issue 29): a tick whose solve runs out of its time is no fault. A budget of 1 ns runs
  * out at each block's first clock check (after 16 steps): the first tick of the negative task whose solve
- * needs over 100 steps (mca: its fault at the cap) is repeated with it. mca-ts commands repair_capped's answer, mca the iterate scaled into the rows and the
- * box; both keep every collision row, and the task goes on. A braking tick that runs out of it has no answer
- * and takes the keep-direction fallback. */
+ * needs over 100 steps (mca: its fault at the cap) is repeated with it. mca-ts commands repair_capped's
+ * answer, mca the iterate scaled into the rows and the box; both keep every collision row, and the task goes
+ * on. A braking tick that runs out of it has no answer and takes the keep-direction fallback. */
 static void budget_tick(mca_scheme_kind_t scheme) {
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
