@@ -135,6 +135,8 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->deadlock_arm = -1;
     ctrl->deadlocks = 0;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        ctrl->giving_way[a] = 0;
+        ctrl->held_time[a] = 0.0;
         ctrl->exact_next[a] = 0;
         ctrl->exact_bad[a] = 0;
     }
@@ -911,6 +913,27 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
     }
 }
 
+/* mca-ts, path first: an arm held on its path (sigma below deadlock_sigma while its path moves) for half the
+ * deadlock time gives way: its slack loses the exact weight and it may slide past within its tube (a tube
+ * of 0 leaves no room: it waits, and a deadlock is resolved by backing off). Back on its path (the error
+ * below a tenth of the tube, and 0.1 mm) and at speed, it keeps its path first again. */
+static void give_way(mca_controller_t *ctrl, int a, double sigma, double speed, double err) {
+    const mca_timescale_params_t *tp = &ctrl->cfg.ts;
+    if (!ctrl->cfg.path[a].path_first) {
+        return;
+    }
+    if (sigma < tp->deadlock_sigma && speed > 1e-6 && ctrl->tau[a] < ctrl->path_end[a]) {
+        ctrl->held_time[a] += ctrl->cfg.dt;
+        ctrl->giving_way[a] |= ctrl->held_time[a] >= 0.5 * tp->deadlock_time;
+    } else if (sigma > 0.9 || speed <= 1e-6) {
+        ctrl->held_time[a] = 0.0;
+        const double tube = mca_path_tolerance(&ctrl->cfg.path[a], ctrl->tau[a]);
+        if (err <= fmax(1e-4, 0.1 * tube)) {
+            ctrl->giving_way[a] = 0;
+        }
+    }
+}
+
 /* mca-ts, after the solve: read each arm's rate, advance its clock, watch for a deadlock. */
 static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int ts_off[],
                        const double rdot_d[][3], const double target[], const double lo[],
@@ -929,6 +952,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
             slack = fmax(slack, fabs(mca_scheme_ts_slack(ctrl->phi, ts_off[a], i, &w)));
         }
         ctrl->sigma[a] = sigma;
+        give_way(ctrl, a, sigma, speed, info->ee_error[a]);
         ctrl->tau[a] = fmax(0.0, fmin(ctrl->path_end[a], ctrl->tau[a] + sigma * cfg->dt));
         if (ctrl->tau[a] < ctrl->path_end[a]) {
             unfinished++;
@@ -1138,10 +1162,12 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             accel_box(ctrl, &si, na); /* first: the lists keep the pairs this box can bring to a bound */
             const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack, cfg->ts.w_path};
             double slack_lo[MCA_MAX_ARMS][3], slack_hi[MCA_MAX_ARMS][3];
-            int path_first[MCA_MAX_ARMS];
+            int mode[MCA_MAX_ARMS];
             for (int a = 0; a < na; a++) {
-                path_first[a] = cfg->path[a].path_first;
-                if (!path_first[a]) {
+                mode[a] = !cfg->path[a].path_first ? MCA_TRACK_ELASTIC
+                          : ctrl->giving_way[a]    ? MCA_TRACK_TUBE
+                                                   : MCA_TRACK_PATH_FIRST;
+                if (mode[a] == MCA_TRACK_ELASTIC) {
                     for (int i = 0; i < 3; i++) {
                         slack_lo[a][i] = -INFINITY;
                         slack_hi[a][i] = INFINITY;
@@ -1157,7 +1183,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             /* the path rates' columns before the rows: the rows are written at the QP's full width */
             rc = mca_scheme_add_timescale(&ctrl->qp, na, (const double(*)[3])rdot_d, target, lo, hi,
                                           (const double(*)[3])slack_lo, (const double(*)[3])slack_hi, &w,
-                                          path_first, ts_off, ctrl->ts_scale);
+                                          mode, ts_off, ctrl->ts_scale);
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
                             (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});

@@ -448,10 +448,10 @@ int mca_scheme_compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, int
 
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
                              const double *sigma_lo, const double *sigma_hi, const double slack_lo[][3],
-                             const double slack_hi[][3], const mca_timescale_weights_t *w,
-                             const int *path_first, int ts_off[], double sigma_scale[]) {
+                             const double slack_hi[][3], const mca_timescale_weights_t *w, const int *mode,
+                             int ts_off[], double sigma_scale[]) {
     if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !slack_lo || !slack_hi || !w || !ts_off ||
-        !sigma_scale || !path_first || !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || !(w->w_path >= 0.0) ||
+        !sigma_scale || !mode || !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || !(w->w_path >= 0.0) ||
         n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
         return MCA_EINVAL;
     }
@@ -461,17 +461,18 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
     for (int a = 0; a < n_arms; a++) {
         for (int i = 0; i < MCA_TASK_DIM; i++) {
             if (!(slack_lo[a][i] <= 0.0) || !(slack_hi[a][i] >= 0.0) ||
-                (!path_first[a] && (slack_lo[a][i] > -INFINITY || slack_hi[a][i] < INFINITY))) {
+                (mode[a] == MCA_TRACK_ELASTIC && (slack_lo[a][i] > -INFINITY || slack_hi[a][i] < INFINITY))) {
                 return MCA_EINVAL;
             }
         }
     }
-    const double sw = sqrt(w->w_slack), re = 1.0 / sw, k = w->w_path / sw;
+    const double sw = sqrt(w->w_slack), re = 1.0 / sw;
     for (int a = 0; a < n_arms; a++) {
         const int o = qp->n;
         /* u = m (sigma - target), m = sqrt(w_sigma). (Scaling m with |rdot|, so that the column has the same
          * length at any path speed, was tried: no fewer unsafe runs in the sweep and more deadlocks.) */
         const double m = sqrt(w->w_sigma);
+        const double k = mode[a] == MCA_TRACK_PATH_FIRST ? w->w_path / sw : 0.0;
         const double rs = 1.0 / m;
         sigma_scale[a] = m;
         ts_off[a] = o;
@@ -483,7 +484,7 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
             qp->alpha[row] += (target[a] - 1.0) * rdot_d[a][i];
             qp->G[row][o] = -rdot_d[a][i] * rs;
             qp->G[row][yp] = -re;
-            if (!path_first[a]) {
+            if (mode[a] == MCA_TRACK_ELASTIC) {
                 /* elastic tracking (an L2 slack, no tube): y_p = s is the whole slack, y_n a fixed 0 that
                  * enters no row, so the QP and the PDNN's answer are those of the 4-variable layout */
                 qp->G[row][yn] = 0.0;

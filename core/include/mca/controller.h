@@ -259,8 +259,11 @@ typedef struct mca_controller {
     double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
     double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
     int deadlock, deadlock_arm, deadlocks;
-    int exact_next[MCA_MAX_ARMS]; /**< the next exact waypoint to check (path point index) */
-    int exact_bad[MCA_MAX_ARMS];  /**< 1: the point being checked was missed */
+    int exact_next[MCA_MAX_ARMS];   /**< the next exact waypoint to check (path point index) */
+    int giving_way[MCA_MAX_ARMS];   /**< path first: 1 while the arm may slide within its tube (held too long)
+                                     */
+    double held_time[MCA_MAX_ARMS]; /**< how long its path rate has been held below deadlock_sigma [s] */
+    int exact_bad[MCA_MAX_ARMS];    /**< 1: the point being checked was missed */
     int exact_met, exact_missed;
     double exact_error_max;
     double deadlock_until;              /**< back-off ends at this task time */

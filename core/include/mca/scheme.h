@@ -179,6 +179,13 @@ int mca_scheme_prune_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si);
  */
 int mca_scheme_compact_rows(mca_qp_t *qp, double big, mca_scheme_info_t *si, int *src);
 
+/** How an arm's tracking slack is charged (mca_scheme_add_timescale). */
+typedef enum mca_tracking_mode {
+    MCA_TRACK_ELASTIC = 0,    /**< L2 slack (w_slack), no tube: a path without a tolerance key */
+    MCA_TRACK_PATH_FIRST = 1, /**< exact L1 (w_path) plus L2, inside the tube: the path before its timing */
+    MCA_TRACK_TUBE = 2,       /**< L2 inside the tube: a blocked arm may give way within its tolerance */
+} mca_tracking_mode_t;
+
 /** Path-time scaling weights (see mca_scheme_add_timescale). */
 typedef struct mca_timescale_weights {
     double w_sigma; /**< weight of (sigma - sigma_target)^2 */
@@ -198,8 +205,9 @@ typedef struct mca_timescale_weights {
  *   J_a qdot_a - rdot_a / m u_a - (y_p - y_n) / sqrt(w_slack) = target_a rdot_a + K (r_a - f(q_a)).
  * sigma_a is bounded to [sigma_lo[a], sigma_hi[a]], the slack to [slack_lo[a], slack_hi[a]] per component
  * (slack_lo <= 0 <= slack_hi, +-INFINITY allowed: the path tube, mca_scheme_tube_bounds).
- * path_first[a] 0: arm a's tracking stays elastic as before the tube (an L2 slack, weight w_slack, y_n fixed
- * at 0 and out of every row; its slack bounds must be infinite): a path without a tolerance key.
+ * mode[a] (mca_tracking_mode_t): MCA_TRACK_PATH_FIRST as above; MCA_TRACK_TUBE the same without the L1
+ * term (k = 0); MCA_TRACK_ELASTIC an L2 slack alone as before the tube (y_p the whole slack, y_n fixed at 0
+ * and out of every row; its slack bounds must be infinite): a path without a tolerance key.
  * @param rdot_d  path velocity of each arm at its path clock (d r / d tau)
  * @param[out] ts_off       first added variable of each arm
  * @param[out] sigma_scale  m of each arm (sigma = target + u / m)
@@ -208,8 +216,8 @@ typedef struct mca_timescale_weights {
  */
 int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3], const double *target,
                              const double *sigma_lo, const double *sigma_hi, const double slack_lo[][3],
-                             const double slack_hi[][3], const mca_timescale_weights_t *w,
-                             const int *path_first, int ts_off[], double sigma_scale[]);
+                             const double slack_hi[][3], const mca_timescale_weights_t *w, const int *mode,
+                             int ts_off[], double sigma_scale[]);
 
 /** The tracking slack e_i (i < 3) of the arm whose mca-ts variables start at phi[ts_off]. */
 double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w);
