@@ -67,6 +67,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e3;
     cfg->ts.w_path = 1e4;
+    cfg->ts.w_tube = 1e3;
     cfg->ts.sigma_max = 1.5;
     cfg->ts.deadlock_time = 0.5;
     cfg->ts.deadlock_sigma = 0.05;
@@ -89,8 +90,9 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
         cfg->scheme > MCA_SCHEME_MCA_TS ||
         (cfg->scheme == MCA_SCHEME_MCA_TS &&
          (!(cfg->ts.w_sigma > 0.0) || !(cfg->ts.w_slack > 0.0) || !(cfg->ts.w_path >= 0.0) ||
-          !(cfg->ts.sigma_max >= 1.0) || !(cfg->ts.deadlock_time > 0.0) || !(cfg->ts.deadlock_sigma >= 0.0) ||
-          !(cfg->ts.back_off_time >= 0.0) || !(cfg->ts.d1_margin >= 0.0)))) {
+          !(cfg->ts.w_tube > 0.0) || !(cfg->ts.sigma_max >= 1.0) || !(cfg->ts.deadlock_time > 0.0) ||
+          !(cfg->ts.deadlock_sigma >= 0.0) || !(cfg->ts.back_off_time >= 0.0) ||
+          !(cfg->ts.d1_margin >= 0.0)))) {
         return MCA_EINVAL;
     }
     for (int a = 0; a < cfg->n_arms; a++) {
@@ -838,8 +840,8 @@ static void accel_box(mca_controller_t *ctrl, const mca_scheme_info_t *si, int n
  * the stoppability bound keeps inside the rows, and with it the QP keeps an answer while the arm brakes on a
  * curved path (a tube of 0 alone made the box, the rows and the tube disjoint: the PDNN at its cap).
  * Runs after accel_box, before mca_scheme_add_timescale (alpha is still rdot + K err). */
-static void tube_keep_brake(const mca_controller_t *ctrl, const mca_scheme_info_t *si, int a,
-                            const double rdot[3], double sig_lo, double sig_hi, double lo[3], double hi[3]) {
+static void tube_keep_brake(mca_controller_t *ctrl, const mca_scheme_info_t *si, int a, const double rdot[3],
+                            double sig_lo, double sig_hi, double lo[3], double hi[3]) {
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const mca_qp_t *qp = &ctrl->qp;
     const int vo = si->var_off[a], dof = cfg->chain[a].dof;
@@ -859,6 +861,8 @@ static void tube_keep_brake(const mca_controller_t *ctrl, const mca_scheme_info_
     }
     const double r2 = mca_v3_dot(rdot, rdot);
     const double sigma = fmax(sig_lo, fmin(sig_hi, r2 > 1e-12 ? mca_v3_dot(v, rdot) / r2 : 0.0));
+    memcpy(ctrl->keep_q[a], qb, sizeof(double) * (size_t)dof);
+    ctrl->keep_sigma[a] = sigma;
     for (int i = 0; i < 3; i++) {
         const double e = v[i] - sigma * rdot[i];
         lo[i] = fmin(lo[i], e);
@@ -941,7 +945,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const mca_timescale_params_t *tp = &cfg->ts;
     const int na = cfg->n_arms;
-    const mca_timescale_weights_t w = {tp->w_sigma, tp->w_slack, tp->w_path};
+    const mca_timescale_weights_t w = {tp->w_sigma, tp->w_slack, tp->w_path, tp->w_tube};
     int unfinished = 0, progressing = 0, victim = -1;
     double slack = 0.0;
     for (int a = 0; a < na; a++) {
@@ -949,7 +953,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
         sigma = fmax(lo[a], fmin(hi[a], sigma));
         const double speed = mca_v3_norm(rdot_d[a]);
         for (int i = 0; i < MCA_TASK_DIM; i++) {
-            slack = fmax(slack, fabs(mca_scheme_ts_slack(ctrl->phi, ts_off[a], i, &w)));
+            slack = fmax(slack, fabs(mca_scheme_ts_slack(ctrl->phi, ts_off[a], i, &w, ctrl->track_mode[a])));
         }
         ctrl->sigma[a] = sigma;
         give_way(ctrl, a, sigma, speed, info->ee_error[a]);
@@ -1160,13 +1164,15 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (ts) {
             ts_plan(ctrl, info->task_t, target, lo, hi);
             accel_box(ctrl, &si, na); /* first: the lists keep the pairs this box can bring to a bound */
-            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack, cfg->ts.w_path};
+            const mca_timescale_weights_t w = {cfg->ts.w_sigma, cfg->ts.w_slack, cfg->ts.w_path,
+                                               cfg->ts.w_tube};
             double slack_lo[MCA_MAX_ARMS][3], slack_hi[MCA_MAX_ARMS][3];
             int mode[MCA_MAX_ARMS];
             for (int a = 0; a < na; a++) {
                 mode[a] = !cfg->path[a].path_first ? MCA_TRACK_ELASTIC
                           : ctrl->giving_way[a]    ? MCA_TRACK_TUBE
                                                    : MCA_TRACK_PATH_FIRST;
+                ctrl->track_mode[a] = mode[a];
                 if (mode[a] == MCA_TRACK_ELASTIC) {
                     for (int i = 0; i < 3; i++) {
                         slack_lo[a][i] = -INFINITY;
@@ -1239,6 +1245,15 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
              * tolerance is still used when it keeps every collision row (the box holds by projection). */
             if (short_answer) {
                 repair_capped(ctrl, &si, na); /* at the cap and at the budget alike */
+                for (int a = 0; a < na; a++) {
+                    if (ctrl->track_mode[a] != MCA_TRACK_ELASTIC) {
+                        /* a path with a tube: no drift towards an unfinished iterate, a braking step along
+                         * the present direction with the path rate that fits it (the tube admits it) */
+                        memcpy(&ctrl->phi[si.var_off[a]], ctrl->keep_q[a],
+                               sizeof(double) * (size_t)cfg->chain[a].dof);
+                        ctrl->phi[ts_off[a]] = ctrl->ts_scale[a] * (ctrl->keep_sigma[a] - target[a]);
+                    }
+                }
             }
             ts_advance(ctrl, info, ts_off, (const double(*)[3])rdot_d, target, lo, hi);
         } else if (short_answer && hit != MCA_BUDGET_NONE && !(eq > cfg->eq_tol) &&

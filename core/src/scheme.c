@@ -451,8 +451,8 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
                              const double slack_hi[][3], const mca_timescale_weights_t *w, const int *mode,
                              int ts_off[], double sigma_scale[]) {
     if (!qp || !rdot_d || !target || !sigma_lo || !sigma_hi || !slack_lo || !slack_hi || !w || !ts_off ||
-        !sigma_scale || !mode || !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || !(w->w_path >= 0.0) ||
-        n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
+        !sigma_scale || !mode || !(w->w_sigma > 0.0) || !(w->w_slack > 0.0) || !(w->w_tube > 0.0) ||
+        !(w->w_path >= 0.0) || n_arms < 1 || qp->n_eq != MCA_TASK_DIM * n_arms) {
         return MCA_EINVAL;
     }
     if (qp->n + MCA_TS_VARS * n_arms > MCA_QP_MAX_VARS) {
@@ -466,12 +466,12 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
             }
         }
     }
-    const double sw = sqrt(w->w_slack), re = 1.0 / sw;
     for (int a = 0; a < n_arms; a++) {
         const int o = qp->n;
         /* u = m (sigma - target), m = sqrt(w_sigma). (Scaling m with |rdot|, so that the column has the same
          * length at any path speed, was tried: no fewer unsafe runs in the sweep and more deadlocks.) */
         const double m = sqrt(w->w_sigma);
+        const double sw = sqrt(mode[a] == MCA_TRACK_ELASTIC ? w->w_slack : w->w_tube), re = 1.0 / sw;
         const double k = mode[a] == MCA_TRACK_PATH_FIRST ? w->w_path / sw : 0.0;
         const double rs = 1.0 / m;
         sigma_scale[a] = m;
@@ -511,8 +511,9 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
     return MCA_OK;
 }
 
-double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w) {
-    return (phi[ts_off + 1 + i] - phi[ts_off + 1 + MCA_TASK_DIM + i]) / sqrt(w->w_slack);
+double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w, int mode) {
+    const double s = sqrt(mode == MCA_TRACK_ELASTIC ? w->w_slack : w->w_tube);
+    return (phi[ts_off + 1 + i] - phi[ts_off + 1 + MCA_TASK_DIM + i]) / s;
 }
 
 void mca_scheme_tube_bounds(const double err[3], double radius, double K, double dt, double lo[3],

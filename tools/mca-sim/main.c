@@ -28,7 +28,8 @@ static void usage(FILE *f) {
         "               [--dec-limit X] [--pdnn-budget-us U]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
-        "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows)\n"
+        "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows);\n"
+        "                 --dump-capped adds the unconverged ones as NAME.json.capped (QPs to look at)\n"
         "  --euler        integrate qdot directly instead of the in-process sim backend\n"
         "  --summary F    JSON summary of every run (for tests)\n"
         "  --stop-at T    stop request at task time T s, as SIGTERM to mcad (brakes through the controller)\n"
@@ -102,6 +103,9 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--euler")) {
             o.use_backend = 0;
             continue;
+        } else if (!strcmp(a, "--dump-capped")) {
+            o.dump_capped = 1;
+            continue;
         }
         if (!v) {
             fprintf(stderr, "mca-sim: %s needs a value\n", a);
@@ -122,6 +126,20 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--dump-every")) {
             if (parse_int(v, &o.dump_every) || o.dump_every < 1) {
                 fprintf(stderr, "mca-sim: --dump-every: bad value '%s'\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--w-tube")) {
+            char *end;
+            o.w_tube = strtod(v, &end);
+            if (*end || !(o.w_tube > 0.0)) {
+                fprintf(stderr, "mca-sim: --w-tube: bad value '%s' (> 0)\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--w-path")) {
+            char *end;
+            o.w_path = strtod(v, &end);
+            if (*end || !(o.w_path > 0.0)) {
+                fprintf(stderr, "mca-sim: --w-path: bad value '%s' (> 0)\n", v);
                 return 2;
             }
         } else if (!strcmp(a, "--dump-max")) {

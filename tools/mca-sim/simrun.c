@@ -54,6 +54,12 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     if (o->pdnn_max_steps > 0) {
         cfg->pdnn.max_steps = o->pdnn_max_steps;
     }
+    if (o->w_tube > 0.0) {
+        cfg->ts.w_tube = o->w_tube;
+    }
+    if (o->w_path > 0.0) {
+        cfg->ts.w_path = o->w_path;
+    }
     if (o->pdnn_budget_us >= 0) {
         cfg->pdnn_budget_steps = mca_pdnn_budget_steps((int64_t)o->pdnn_budget_us * 1000);
     }
@@ -264,12 +270,20 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         const int every = o->dump_every > 0 ? o->dump_every : 1;
         const int every_b = every / 5 > 0 ? every / 5 : 1;
         const int picked = k % every == 0 || (ip->binding_rows > 0 && k % every_b == 0);
+        const int unconverged = running && o->scheme != MCA_SCHEME_APF && !ip->pdnn_converged;
         if (running && ip->pdnn_budget_hit) {
             r->budget_hits_steps += ip->pdnn_budget_hit == MCA_BUDGET_STEPS;
             r->budget_hits_time += ip->pdnn_budget_hit == MCA_BUDGET_TIME;
-        } else if (running && o->scheme != MCA_SCHEME_APF && !ip->pdnn_converged) {
+        } else if (unconverged) {
             r->pdnn_capped++;
-            r->dump_skipped_capped += o->dump_dir != NULL && picked;
+        }
+        r->dump_skipped_capped += unconverged && o->dump_dir != NULL && picked && !o->dump_capped;
+        if (unconverged && o->dump_dir && o->dump_capped && picked) {
+            char path[1024];
+            snprintf(path, sizeof path, "%s/%s-%s-%06d.json.capped", o->dump_dir, scn->name, r->scheme, k);
+            const double *phi;
+            const mca_qp_t *qpp = mca_controller_last_qp(ctrl, &phi);
+            mca_qp_dump_json(qpp, phi, ip->pdnn_steps, ip->pdnn_residual, "capped", path);
         }
         /* only converged answers are dumped: at the step cap the controller accepts residuals up to
          * fault_residual, whose phi may differ from the exact solution by more than the check's 1e-6 */

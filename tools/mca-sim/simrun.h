@@ -28,6 +28,10 @@ typedef struct mca_simrun_opts {
     const char *dump_dir; /**< QP dumps (mca_qp_dump_json), NULL: none */
     int dump_every;  /**< dump every Nth tick (default 1; and every max(1, N/5)th tick with binding rows) */
     int dump_max;    /**< most dumps per run (0: no limit) */
+    double w_tube;   /**< > 0: mca-ts's quadratic slack weight with a tube */
+    double w_path;   /**< > 0: mca-ts's exact slack weight (mca_timescale_params_t.w_path) */
+    int dump_capped; /**< 1: also the picked ticks whose PDNN ended unconverged, as NAME.json.capped (their
+                          phi is the solver's last iterate, not an answer: for a look at the QP itself) */
     double duration; /**< <= 0: the scenario's */
     double settle;   /**< seconds to run on after the arms stopped following a fault */
     int pdnn_max_steps; /**< > 0: override */

@@ -66,6 +66,7 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out);
 typedef struct mca_timescale_params {
     double w_sigma; /**< weight of (sigma - target)^2 against |qdot|^2 (1e2) */
     double w_slack; /**< quadratic weight of the tracking slack |e|^2 (1e3) */
+    double w_tube;  /**< quadratic weight of the slack of a path with a tube (1e3) */
     double w_path;  /**< exact (L1) weight of the slack |e|_1: the path before its timing (1e4; docs/scheme.md
                          "The path first" derives the bound it must exceed) */
     double sigma_max; /**< most path rate when catching up (1.5; 1: never faster than the path) */
@@ -259,7 +260,10 @@ typedef struct mca_controller {
     double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
     double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
     int deadlock, deadlock_arm, deadlocks;
-    int exact_next[MCA_MAX_ARMS];   /**< the next exact waypoint to check (path point index) */
+    int exact_next[MCA_MAX_ARMS];             /**< the next exact waypoint to check (path point index) */
+    int track_mode[MCA_MAX_ARMS];             /**< mca_tracking_mode_t of each arm in the last QP */
+    double keep_q[MCA_MAX_ARMS][MCA_MAX_DOF]; /**< path with a tube: one keep-direction braking step */
+    double keep_sigma[MCA_MAX_ARMS];          /**< and the path rate that fits it */
     int giving_way[MCA_MAX_ARMS];   /**< path first: 1 while the arm may slide within its tube (held too long)
                                      */
     double held_time[MCA_MAX_ARMS]; /**< how long its path rate has been held below deadlock_sigma [s] */

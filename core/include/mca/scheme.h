@@ -191,23 +191,25 @@ typedef struct mca_timescale_weights {
     double w_sigma; /**< weight of (sigma - sigma_target)^2 */
     double w_slack; /**< quadratic weight of |e|^2 (keeps the slack's columns well scaled) */
     double w_path;  /**< exact weight of |e|_1: no slack while slowing down costs less (docs/scheme.md) */
+    double w_tube;  /**< quadratic weight of |e|^2 for a path with a tube (in place of w_slack) */
 } mca_timescale_weights_t;
 
 /**
  * Append the mca-ts variables of every arm (real-time safe): after the joint velocities, per arm a
  * u_a = m (sigma_a - target_a), m = sqrt(w_sigma), then the tracking slack e_a = p_a - n_a (p, n >= 0) as
- * y_p = sqrt(w_slack) p + k and y_n = sqrt(w_slack) n + k, k = w_path / sqrt(w_slack) (3 values each), so
- * that the PDNN's identity Hessian is the objective
- *     1/2 |qdot|^2 + w_sigma / 2 (sigma - target)^2 + w_slack / 2 |e|^2 + w_path |e|_1   (+ a constant).
+ * y_p = s p + k and y_n = s n + k, s = sqrt(w_tube), k = w_path / s (3 values each), so that the PDNN's
+ * identity Hessian is the objective
+ *     1/2 |qdot|^2 + w_sigma / 2 (sigma - target)^2 + w_tube / 2 |e|^2 + w_path |e|_1   (+ a constant).
  * The L1 term is an exact penalty: the slack stays 0 whenever the same QP with e = 0 has an answer whose
  * tracking multipliers are below w_path (docs/scheme.md, "The path first"). Tracking row (26) becomes
  * J_a qdot_a - sigma_a rdot_a - e_a = K (r_a - f(q_a)):
- *   J_a qdot_a - rdot_a / m u_a - (y_p - y_n) / sqrt(w_slack) = target_a rdot_a + K (r_a - f(q_a)).
+ *   J_a qdot_a - rdot_a / m u_a - (y_p - y_n) / s = target_a rdot_a + K (r_a - f(q_a)).
  * sigma_a is bounded to [sigma_lo[a], sigma_hi[a]], the slack to [slack_lo[a], slack_hi[a]] per component
  * (slack_lo <= 0 <= slack_hi, +-INFINITY allowed: the path tube, mca_scheme_tube_bounds).
  * mode[a] (mca_tracking_mode_t): MCA_TRACK_PATH_FIRST as above; MCA_TRACK_TUBE the same without the L1
- * term (k = 0); MCA_TRACK_ELASTIC an L2 slack alone as before the tube (y_p the whole slack, y_n fixed at 0
- * and out of every row; its slack bounds must be infinite): a path without a tolerance key.
+ * term (k = 0); MCA_TRACK_ELASTIC an L2 slack alone as before the tube (s = sqrt(w_slack), y_p the whole
+ * slack, y_n fixed at 0 and out of every row; its slack bounds must be infinite): a path without a tolerance
+ * key.
  * @param rdot_d  path velocity of each arm at its path clock (d r / d tau)
  * @param[out] ts_off       first added variable of each arm
  * @param[out] sigma_scale  m of each arm (sigma = target + u / m)
@@ -219,8 +221,8 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
                              const double slack_hi[][3], const mca_timescale_weights_t *w, const int *mode,
                              int ts_off[], double sigma_scale[]);
 
-/** The tracking slack e_i (i < 3) of the arm whose mca-ts variables start at phi[ts_off]. */
-double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w);
+/** The tracking slack e_i (i < 3) of the arm whose mca-ts variables start at phi[ts_off] (its mode). */
+double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w, int mode);
 
 /**
  * The path tube as bounds on the slack (real-time safe). With err = r(tau) - f(q), the error after one tick
