@@ -863,7 +863,11 @@ static void tube_keep_brake(mca_controller_t *ctrl, const mca_scheme_info_t *si,
     const double sigma = fmax(sig_lo, fmin(sig_hi, r2 > 1e-12 ? mca_v3_dot(v, rdot) / r2 : 0.0));
     memcpy(ctrl->keep_q[a], qb, sizeof(double) * (size_t)dof);
     ctrl->keep_sigma[a] = sigma;
-    for (int i = 0; i < 3; i++) {
+    int can_stop = 1; /* 0 inside the box: standing still is a point of the tube already */
+    for (int j = 0; j < dof; j++) {
+        can_stop &= qp->lb[vo + j] <= 0.0 && qp->ub[vo + j] >= 0.0;
+    }
+    for (int i = 0; i < 3 && !can_stop; i++) {
         const double e = v[i] - sigma * rdot[i];
         lo[i] = fmin(lo[i], e);
         hi[i] = fmax(hi[i], e);
@@ -919,9 +923,9 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
 
 /* mca-ts, path first: an arm held on its path (sigma below deadlock_sigma while its path moves) for half the
  * deadlock time gives way: its slack loses the exact weight and it may slide past within its tube (a tube
- * of 0 leaves no room: it waits, and a deadlock is resolved by backing off). Back on its path (the error
- * below a tenth of the tube, and 0.1 mm) and at speed, it keeps its path first again. */
-static void give_way(mca_controller_t *ctrl, int a, double sigma, double speed, double err) {
+ * of 0 leaves no room: it waits, and a deadlock is resolved by backing off). At speed again it keeps its
+ * path first. */
+static void give_way(mca_controller_t *ctrl, int a, double sigma, double speed) {
     const mca_timescale_params_t *tp = &ctrl->cfg.ts;
     if (!ctrl->cfg.path[a].path_first) {
         return;
@@ -930,11 +934,10 @@ static void give_way(mca_controller_t *ctrl, int a, double sigma, double speed, 
         ctrl->held_time[a] += ctrl->cfg.dt;
         ctrl->giving_way[a] |= ctrl->held_time[a] >= 0.5 * tp->deadlock_time;
     } else if (sigma > 0.9 || speed <= 1e-6) {
+        /* moving again: the exact weight takes it back onto its path (the tube's L2 alone would keep it
+         * where the multiplier puts it, and what the arm does not follow of each command would creep out) */
         ctrl->held_time[a] = 0.0;
-        const double tube = mca_path_tolerance(&ctrl->cfg.path[a], ctrl->tau[a]);
-        if (err <= fmax(1e-4, 0.1 * tube)) {
-            ctrl->giving_way[a] = 0;
-        }
+        ctrl->giving_way[a] = 0;
     }
 }
 
@@ -956,7 +959,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
             slack = fmax(slack, fabs(mca_scheme_ts_slack(ctrl->phi, ts_off[a], i, &w, ctrl->track_mode[a])));
         }
         ctrl->sigma[a] = sigma;
-        give_way(ctrl, a, sigma, speed, info->ee_error[a]);
+        give_way(ctrl, a, sigma, speed);
         ctrl->tau[a] = fmax(0.0, fmin(ctrl->path_end[a], ctrl->tau[a] + sigma * cfg->dt));
         if (ctrl->tau[a] < ctrl->path_end[a]) {
             unfinished++;
