@@ -437,14 +437,14 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
     os.makedirs(wd, exist_ok=True)
     d2 = KINDS[kind]["d2"]
     vmax = KINDS[kind]["vmax"]
-    for tries in range(1, 21):
+    for tries in range(1, 51):  # the PA10+ pair starts 0.085 m apart at cross_circles' q0: often < d2
         arms = draw_arms(kind, rng)
         tips, d0, err = probe(sim, wd, name, kind, arms)
         if err:
-            if tries == 20:
+            if tries == 50:
                 return dict(id=tid, error="probe failed: " + err)
             continue
-        if d0 >= d2 or tries == 20:
+        if d0 >= d2 or tries == 50:
             break
     frame = pnp_frame(kind, arms)
     slots = pnp_slots(rng, kind, frame)
@@ -745,10 +745,14 @@ def pnp_target(tasks, schemes, lines):
         pe_ok = sum(1 for r in rs if r.get("path_error_max") is not None and r["path_error_max"] <= PNP_PATH_ERROR)
         both = sum(1 for r in done if r.get("path_error_max") is not None and r["path_error_max"] <= PNP_PATH_ERROR)
         met = have_pe and have_ex and both >= 0.95 * n
+        # until mca-sim writes path_error_max: max_err, the distance to the path's current point (>= the distance
+        # to the path's curve), so an upper bound
+        me_ok = sum(1 for r in rs if r.get("max_err") is not None and r["max_err"] <= PNP_PATH_ERROR)
         out[s] = dict(n=n, done=len(done), exact_fields=have_ex, path_error_fields=have_pe,
                       path_error_ok=pe_ok if have_pe else None,
                       path_error_ok_every_task=(pe_ok == n) if have_pe else None,
-                      done_and_path_error_ok=both if have_pe else None, target_met=met if have_pe and have_ex else None)
+                      done_and_path_error_ok=both if have_pe else None, target_met=met if have_pe and have_ex else None,
+                      max_err_ok=me_ok)
         lines.append("pick and place, %s: %d of %d done (completed or late%s) = %.1f %%; path_error_max <= %.2f m: %s; "
                      "both: %s -> issue 29 target (>= 95 %%): %s" % (
                          s, len(done), n, ", every exact point met" if have_ex else "; exact points: n/a",
@@ -757,6 +761,9 @@ def pnp_target(tasks, schemes, lines):
                          ("%d (%.1f %%)" % (both, 100.0 * both / n)) if have_pe else "n/a",
                          ("met" if met else "not met") if have_pe and have_ex else
                          "n/a (this mca-sim writes no path_error_max / exact_missed)"))
+        if not have_pe:
+            lines.append("pick and place, %s: max_err (to the path's current point, an upper bound on the path "
+                         "error) <= %.2f m on %d of %d" % (s, PNP_PATH_ERROR, me_ok, n))
     return out
 
 
