@@ -359,9 +359,10 @@ def pnp_timetable(rng, start, rounds, vmax):
             mins.append(0.0)
         prev = pt
     base = sum(mins)
-    if base > PNP_TOTAL[1]:
+    hi = PNP_TOTAL[1] - 0.01 * len(segs)  # room for rounding every duration up to 10 ms
+    if base > hi:
         return None
-    total = rng.uniform(max(base, PNP_TOTAL[0]), PNP_TOTAL[1])
+    total = rng.uniform(max(base, PNP_TOTAL[0] + 0.01), hi)
     slack = total - base
     stretch = rng.uniform(0.3, 0.8) * slack
     moves = [k for k, (_, w, _) in enumerate(segs) if w == "move"]
@@ -374,14 +375,16 @@ def pnp_timetable(rng, start, rounds, vmax):
     t0 = 0.0
     for k, w in zip(waits, ww):
         x = (slack - stretch) * w / sum(ww)
-        if k < 0:
-            t0 = round(x, 2) if x >= 0.3 else 0.0
+        if x < 0.3:
+            durs[k + 1] += x  # too short a wait or delay: the next move (a wait is followed by one) takes it
+        elif k < 0:
+            t0 = math.floor(x * 100) / 100.0
         else:
             durs[k] = x
     pts, out, exact, what = [], [], [], []
     for (pt, w, r), d in zip(segs, durs):
         if w == "wait" and d < 0.3:
-            continue  # too short a wait: left out
+            continue  # left out (its time went to the next move)
         if w == "dwell":
             exact += [len(pts) - 1, len(pts)]  # the point reached (grasp/release) and the dwell's end
         pts.append(list(pt))
