@@ -65,7 +65,8 @@ demo: build
 bench: build
 	bash bench/run.sh $(BUILD)
 
-# the random-task sweep of issue 11 alone (1000 two-arm + 200 three-arm tasks): out/bench/sweep.txt, sweep.json
+# the random-task sweep of issues 11 and 29 alone (1000 two-arm + 200 three-arm + 400 pick-and-place tasks):
+# out/bench/sweep.txt, sweep-{two,three,pnp}.json
 sweep: build
 	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
 

@@ -7,7 +7,7 @@
 #   env MCA_BENCH_VCAN  cached (default): reuse OUT/vcan.json from an earlier guest boot if there is one,
 #                       else boot; boot: always boot the QEMU guest; skip: no vcan figure
 #   env MCA_BENCH_JITTER_S  seconds of mcad and of cyclictest each (default 20; --quick 3)
-#   env MCA_BENCH_SWEEP=1   also the random-task sweep (tools/mca-sweep/run_full.sh): OUT/sweep.txt, sweep.json
+#   env MCA_BENCH_SWEEP=1   also the random-task sweep (tools/mca-sweep/run_full.sh): OUT/sweep.txt, sweep-{two,three,pnp}.json
 # Takes about 2 minutes on 2 cores (plus a guest boot when no vcan figure is cached); needs root for
 # SCHED_FIFO / mlockall / cpu_dma_latency (without it the jitter rows say SCHED_OTHER).
 set -u
@@ -261,10 +261,11 @@ JOB
 fi
 
 # 7. optional (MCA_BENCH_SWEEP=1, or `make sweep` alone): the seeded random-task sweep of issue 11,
-#    1000 two-arm tasks (500 two PA10+, 500 JACO2 + MICO2) and 200 three-arm tasks, every scheme mca-sim
-#    has of mvn,mca,mca-ts, each task again with a stop request; ~10-15 min on 2 cores
+#    1000 two-arm tasks (500 two PA10+, 500 JACO2 + MICO2) and 200 three-arm tasks, and issue 29's 400
+#    pick-and-place tasks (200 pnp-jaco-mico, 200 pnp-pa10), every scheme mca-sim has of mvn,mca,mca-ts, each
+#    task again with a stop request; ~15 min on 2 cores, plus the pick-and-place part (not yet timed in full)
 if [ "${MCA_BENCH_SWEEP:-0}" = 1 ] && have "$B/tools/mca-sim/mca-sim"; then
-    step "sweep: 500 pa10 + 500 jaco-mico + 200 three-arm random tasks (seed ${MCA_SWEEP_SEED:-1})"
+    step "sweep: 500 pa10 + 500 jaco-mico + 200 three-arm + 400 pick-and-place random tasks (seed ${MCA_SWEEP_SEED:-1})"
     bash "$ROOT/tools/mca-sweep/run_full.sh" "$B" "$OUT" >"$RAW/sweep.out" 2>"$RAW/sweep.err"
     echo "exit $?" >>"$RAW/sweep.out"
 fi

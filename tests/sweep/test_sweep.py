@@ -14,11 +14,18 @@ usage: test_sweep.py pa10|pa10-simarm MCA_SIM MCA_SWEEP_PY WORK_DIR
          closest points jumped from one end to the other (a row on the closest points only, 2 mm below d1);
        test_sweep.py three MCA_SIM THREE_ARMS_YAML WORK_DIR
          the three-arm task: MVN goes below d1; mca-ts keeps every pair (CSV d_<a>_<b>) >= d1 at every tick,
-         braking included, and completes.
+         braking included, and completes;
+       test_sweep.py pnp MCA_SIM MCA_SWEEP_PY WORK_DIR
+         issue 29's pick and place, 4 pnp-jaco-mico + 4 pnp-pa10 tasks (seed 3): every task reachable (MVN
+         tracks it alone), each arm's picks in its own pick area on its side of the zone, every place point in
+         the shared zone and >= sep from the other arm's, the exact indices exactly the grasp/release dwell
+         pairs, timetables 25-45 s, the issue-29 keys written iff this mca-sim takes them; MVN below d1 on some
+         task of each kind (the arms meet), mca-ts never; one task drawn again alone is the same scenario.
 Exit 77 (ctest SKIP) when this mca-sim has no scheme mca-ts.
 """
 import csv
 import json
+import math
 import os
 import re
 import subprocess
@@ -155,6 +162,84 @@ def three(sim, scn, work):
           "%s deadlocks)" % (ts.get("completed"), ts["fault_name"], ts.get("path_time_lost_s"), ts.get("deadlocks")))
 
 
+def pnp(sim, tool, work):
+    os.makedirs(work, exist_ok=True)
+    out = os.path.join(work, "pnp.json")
+    n = 4
+    cmd = [sys.executable, tool, "--sim", sim, "--kind", "pnp-jaco-mico,pnp-pa10", "--n", str(n), "--seed", "3",
+           "--jobs", "2", "--schemes", "mvn,mca-ts", "--no-stop", "--work", os.path.join(work, "tasks"), "--json", out]
+    print(" ".join(cmd))
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=400)
+    print(p.stdout)
+    if p.returncode != 0:
+        print(p.stderr)
+        sys.exit("mca_sweep.py failed (exit %d)" % p.returncode)
+    d = json.load(open(out))
+    keys = d["features"]["scenario_keys"]
+    tasks = d["tasks"]
+    check(len(tasks) == 2 * n, "%d tasks drawn (%d)" % (2 * n, len(tasks)))
+    bad = ["%s (%s)" % (t["id"], t.get("unreachable")) for t in tasks if not t.get("reachable")]
+    check(not bad, "every pick-and-place task reachable: MVN tracks each arm's path alone %s" % " ".join(bad))
+    for t in tasks:
+        if "pnp" not in t:
+            continue
+        g = t["pnp"]
+        o, e, nn = g["frame"]
+
+        def afz(pt):
+            dd = [a - b for a, b in zip(pt, o)]
+            return [sum(a * b for a, b in zip(dd, e)), sum(a * b for a, b in zip(dd, nn)), dd[2]]
+
+        def inside(c, box):
+            return all(lo - 1e-3 <= x <= hi + 1e-3 for x, (lo, hi) in zip(c, box))
+
+        zone = g["zone"]
+        arms = g["arms"]
+        check(len(arms) == 2 and all(2 <= a["rounds"] <= 3 for a in arms),
+              "%s: two arms, 2-3 rounds each (%s)" % (t["id"], [a["rounds"] for a in arms]))
+        for k, a in enumerate(arms):
+            cp = [afz(x) for x in a["picks"]]
+            cq = [afz(x) for x in a["places"]]
+            side = all(c[0] < zone[0][0] for c in cp) if k == 0 else all(c[0] > zone[0][1] for c in cp)
+            check(all(inside(c, g["pick_areas"][k]) for c in cp) and side,
+                  "%s %s: picks in its own pick area, on its side of the zone (along %s, zone %s)" % (
+                      t["id"], a["arm"], ["%.3f" % c[0] for c in cp], zone[0]))
+            check(all(inside(c, zone) for c in cq), "%s %s: every place point in the shared zone" % (t["id"], a["arm"]))
+            pts, ex = a["points"], a["exact"]
+            pairs = [(ex[j], ex[j + 1]) for j in range(0, len(ex), 2)]
+            dwell = [(j, j + 1) for j in range(len(pts) - 1) if pts[j] == pts[j + 1] and
+                     any(pts[j] == q for q in a["picks"] + a["places"])]
+            check(len(ex) == 4 * a["rounds"] and pairs == dwell,
+                  "%s %s: the exact indices are the %d grasp/release dwell pairs (%s)" % (
+                      t["id"], a["arm"], 2 * a["rounds"], ex))
+            check(25.0 - 0.05 <= a["total"] <= 45.0 + 0.05, "%s %s: timetable %.2f s in 25-45 s" % (
+                t["id"], a["arm"], a["total"]))
+        sep = min(math.hypot(p[0] - q[0], p[1] - q[1]) for p in arms[0]["places"] for q in arms[1]["places"])
+        check(sep >= g["sep"] - 1e-3, "%s: the arms' place points %.3f m >= %.2f m apart" % (t["id"], sep, g["sep"]))
+        txt = open(t["scenario"]).read()
+        check(("exact:" in txt) == keys["exact"] and ("exact_tolerance:" in txt) == keys["exact_tolerance"] and
+              "relative: false" in txt, "%s: scenario with absolute waypoints, exact keys iff mca-sim takes them (%s)"
+              % (t["id"], keys))
+    for kind in ("pnp-jaco-mico", "pnp-pa10"):
+        kt = [t for t in tasks if t["id"].startswith(kind + ":") and t.get("reachable")]
+        mvn = [t["runs"]["mvn"]["task"]["min_d"] for t in kt]
+        ts = [t["runs"]["mca-ts"]["task"] for t in kt]
+        check(sum(1 for t, m in zip(kt, mvn) if m < t["d1"]) >= 1,
+              "%s: MVN below d1 on %d of %d tasks (least %s m): the arms meet" % (
+                  kind, sum(1 for t, m in zip(kt, mvn) if m < t["d1"]), len(kt), min(mvn) if mvn else None))
+        check(all(r["cls"] != "unsafe" for r in ts), "%s: mca-ts keeps d1 on every task (least %.4f m; %s)" % (
+            kind, min(r["min_d"] for r in ts), [r["cls"] for r in ts]))
+    # task 1 of pnp-pa10 again, alone: the same scenario (drawn from "3:pnp-pa10:1" only)
+    again = os.path.join(work, "again")
+    p = subprocess.run([sys.executable, tool, "--sim", sim, "--kind", "pnp-pa10", "--n", "1", "--seed", "3", "--only",
+                        "pnp-pa10:1", "--schemes", "mvn", "--no-stop", "--work", again, "--json",
+                        os.path.join(work, "again.json")], capture_output=True, text=True, timeout=200)
+    first = [t for t in tasks if t["id"] == "pnp-pa10:1"][0]
+    same = p.returncode == 0 and open(os.path.join(again, "sweep_pnp_pa10_1", "scenario.yaml")).read() == \
+        open(first["scenario"]).read()
+    check(same, "pnp-pa10:1 drawn again alone: the same scenario")
+
+
 def main():
     mode, sim = sys.argv[1], sys.argv[2]
     if not has_ts(sim):
@@ -166,6 +251,8 @@ def main():
         regress(sim, sys.argv[3], sys.argv[4], sys.argv[5] if len(sys.argv) > 5 else None)
     elif mode == "three":
         three(sim, sys.argv[3], sys.argv[4])
+    elif mode == "pnp":
+        pnp(sim, sys.argv[3], sys.argv[4])
     else:
         sys.exit("unknown mode " + mode)
     if FAILS:

@@ -1,29 +1,44 @@
 #!/usr/bin/env python3
-"""Seeded random-task sweep through mca-sim (issue 11, "yield instead of fault").
+"""Seeded random-task sweep through mca-sim (issue 11, "yield instead of fault"; pick and place: issue 29).
 
-usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three[,...]] [--n N] [--seed S] [--only ID[,ID...]]
-                    [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT] [--table OUT]
-                    [--lost-threshold 0.1] [--no-stop] [--dec-limit X] [--max-err 0.005] [--keep]
+usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three|pnp-jaco-mico|pnp-pa10[,...]] [--n N] [--seed S]
+                    [--only ID[,ID...]] [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT]
+                    [--table OUT] [--lost-threshold 0.1] [--no-stop] [--dec-limit X] [--max-err 0.005]
+                    [--tolerance X] [--keep]
 
 For each kind (pa10: two PA10+ as in cross_circles.yaml; jaco-mico: JACO2 + MICO2 as in cup_stacking.yaml;
-three: JACO2, MICO2, JACO2 as in three_arms.yaml) N tasks are drawn, task i of kind K from the random
-generator seeded with "S:K:i" alone, so `--seed S --kind K --only K:i` repeats one task whatever N is.
-A task: base placements and initial configurations jittered around the shipped scenario's; a first short
-mca-sim run (hold paths, 2 ticks) gives the tool tips and the start distance (redrawn while < d2); then
+three: JACO2, MICO2, JACO2 as in three_arms.yaml; pnp-jaco-mico, pnp-pa10: pick and place at cup_stacking's and
+cross_circles' placements) N tasks are drawn, task i of kind K from the random generator seeded with "S:K:i"
+alone, so `--seed S --kind K --only K:i` repeats one task whatever N is (and whatever this mca-sim takes: the
+draws never depend on it, only which keys are written).
+A crossing task: base placements and initial configurations jittered around the shipped scenario's; a first
+short mca-sim run (hold paths, 2 ticks) gives the tool tips and the start distance (redrawn while < d2); then
 every arm gets a tool-tip path (a circle through its start, or relative waypoints out and back) whose far
 point lies towards another arm's tool tip (closer to it than the start).
+A pick-and-place task (PNP): the shipped placement, q0 jittered by 0.1 rad (redrawn while < d2 apart); each
+arm does 2-3 rounds from its own pick area (on its side of the cell) to its slot in the place zone between
+the bases (the two slots >= 0.10 m apart): above the pick point, down, grasp dwell, up, [wait], over the place
+point, down, release dwell, up; at the end back above its last pick point. Absolute waypoints; each arm's
+timetable drawn on its own (moves no faster than the kind's vmax, 25-45 s, a start delay t0); the grasp and
+release dwells' points are the path's exact points (`exact: [...]`, with `exact_tolerance: 0.001` at the top)
+when this mca-sim takes those keys. A round one arm alone cannot track under MVN (a single-arm run) is redrawn.
 Reachable: plain MVN (each arm's QP is its own: every arm alone) tracks every path with error < --max-err and
 no fault; the others are counted apart as unreachable (with MVN's fault name).
 Every reachable task runs under each scheme, and again with a stop request at a random instant
 (mca-sim --stop-at, when this mca-sim has it). Each run is classified:
-  unsafe     some tick below d1, during the task or while braking (for mvn the expected collision);
-  completed  every path clock reached its end (summary `completed`) with <= --lost-threshold s lost;
-  late       completed, more path time lost;
-  safe-stop  a named fault, the stop request or an unresolved deadlock, and >= d1 all the way.
-Prints one table (rows scheme x {task, with stop}; counts and % of the reachable tasks), the unreachable
-count, the deadlock count and the fault names, and writes --json OUT with every task's details.
-Summary fields this mca-sim does not write (completed, path_time_lost_s, deadlocks) are reported "n/a";
-without them a run "completes" when it ran its duration without fault.
+  unsafe        some tick below d1, during the task or while braking (for mvn the expected collision);
+  completed     every path clock reached its end (summary `completed`) with <= --lost-threshold s lost, and
+                every exact point met (summary exact_missed 0, where mca-sim writes it);
+  late          completed, more path time lost;
+  exact-missed  ran to its end without fault or stop, but missed an exact point;
+  safe-stop     a named fault, the stop request or an unresolved deadlock, and >= d1 all the way.
+Prints one table (rows scheme x {task, with stop}; counts and % of the reachable tasks, path_error_max p50/max
+over the runs), the unreachable count, the deadlock count and the fault names, the start and least distances,
+for pick and place issue 29's target (>= 95 % completed with every exact point met and path_error_max <=
+0.02 m), and writes --json OUT with every task's details. --tolerance X writes `tolerance: X` into every
+generated path (when this mca-sim takes the key). Summary fields this mca-sim does not write (completed,
+path_time_lost_s, deadlocks, path_error_max, exact_missed, ...) are reported "n/a"; without `completed` a run
+"completes" when it ran its duration without fault.
 """
 import argparse
 import concurrent.futures as cf
@@ -41,7 +56,8 @@ import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ROBOTS = os.path.join(ROOT, "config", "robots")
-CLASSES = ("completed", "late", "safe-stop", "unsafe")
+CLASSES = ("completed", "late", "exact-missed", "safe-stop", "unsafe")
+PNP_PATH_ERROR = 0.02  # issue 29's bound on path_error_max for pick and place [m]
 
 # Kinova home (deg [275, 167.5, 57.5, 240, 82.5, 75]); joint 1 turns the arm about its base
 KINOVA_HOME = [4.7997, 2.9234, 1.0036, 4.1888, 1.4399, 1.3090]
@@ -53,6 +69,9 @@ KINDS = {
     "pa10": dict(d1=0.05, d2=0.12, vmax=0.25, reach=0.40),
     "jaco-mico": dict(d1=0.07, d2=0.12, vmax=0.12, reach=0.30),
     "three": dict(d1=0.05, d2=0.12, vmax=0.12, reach=0.30),
+    # pick and place (PNP below): vmax of the moves; the Kinova pair's moves as fast as cup_stacking.yaml's
+    "pnp-jaco-mico": dict(d1=0.07, d2=0.12, vmax=0.18),
+    "pnp-pa10": dict(d1=0.05, d2=0.12, vmax=0.25),
 }
 
 
@@ -105,6 +124,21 @@ def draw_arms(kind, rng):
                  base=[round(0.78 + rng.uniform(-0.1, 0.05), 4), round(rng.uniform(-0.1, 0.1), 4), 0.0],
                  q0=jitter_q(rng, "mico2.urdf", mico, 0.15)),
         ]
+    if kind == "pnp-pa10":  # cross_circles.yaml's placement, q0 jittered by 0.1 rad
+        return [
+            dict(name="left", urdf="pa10plus.urdf", base=[0.0, 0.0, 0.0],
+                 q0=jitter_q(rng, "pa10plus.urdf", PA10_LEFT, 0.1)),
+            dict(name="right", urdf="pa10plus.urdf", base=[0.45, -0.5, 0.0],
+                 q0=jitter_q(rng, "pa10plus.urdf", PA10_RIGHT, 0.1)),
+        ]
+    if kind == "pnp-jaco-mico":  # cup_stacking.yaml's placement, q0 jittered by 0.1 rad
+        mico = list(KINOVA_HOME)
+        mico[0] = 6.4228
+        return [
+            dict(name="jaco2", urdf="jaco2.urdf", base=[0.0, 0.0, 0.0],
+                 q0=jitter_q(rng, "jaco2.urdf", KINOVA_HOME, 0.1)),
+            dict(name="mico2", urdf="mico2.urdf", base=[0.78, 0.0, 0.0], q0=jitter_q(rng, "mico2.urdf", mico, 0.1)),
+        ]
     if kind == "three":
         arms = []
         for i, (name, urdf) in enumerate((("jaco2_a", "jaco2.urdf"), ("mico2", "mico2.urdf"), ("jaco2_b", "jaco2.urdf"))):
@@ -123,22 +157,33 @@ def fmt(v):
     return "[" + ", ".join("%.6g" % x for x in v) + "]"
 
 
-def scenario_yaml(name, kind, arms, duration, paths=None):
+def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None):
+    """The scenario text. A path dict: kind, its keys, and optionally t0, relative (waypoints; default true),
+    tolerance and exact (written only when present: the caller leaves them out for an mca-sim without them)."""
     d = KINDS[kind]
     s = ["# generated by tools/mca-sweep/mca_sweep.py", "name: %s" % name, "duration: %.3f" % duration,
-         "dt: 0.001", "d1: %g" % d["d1"], "d2: %g" % d["d2"], "K: 20", "epsilon: 5", "arms:"]
+         "dt: 0.001", "d1: %g" % d["d1"], "d2: %g" % d["d2"], "K: 20", "epsilon: 5"]
+    if exact_tolerance is not None:
+        s.append("exact_tolerance: %g" % exact_tolerance)
+    s.append("arms:")
     for i, a in enumerate(arms):
         s += ["  - name: %s" % a["name"], "    urdf: %s" % os.path.join(ROBOTS, a["urdf"]), "    tip_link: tool_tip",
               "    base_xyz: %s" % fmt(a["base"]), "    q0: %s" % fmt(a["q0"]), "    path:"]
         p = paths[i] if paths else {"kind": "hold"}
         s.append("      kind: %s" % p["kind"])
+        if p.get("t0"):
+            s.append("      t0: %.3f" % p["t0"])
         if p["kind"] == "circle":
             s += ["      radius: %.4f" % p["radius"], "      period: %.3f" % p["period"], "      u: %s" % fmt(p["u"]),
                   "      v: %s" % fmt(p["v"])]
         elif p["kind"] == "waypoints":
-            s += ["      relative: true", "      points:"]
+            s += ["      relative: %s" % ("true" if p.get("relative", True) else "false"), "      points:"]
             s += ["        - %s" % fmt(pt) for pt in p["points"]]
             s.append("      durations: %s" % fmt(p["durations"]))
+        if p.get("tolerance") is not None:
+            s.append("      tolerance: %g" % p["tolerance"])
+        if p.get("exact"):
+            s.append("      exact: [%s]" % ", ".join(str(x) for x in p["exact"]))
     return "\n".join(s) + "\n"
 
 
@@ -196,6 +241,265 @@ def draw_path(rng, start, other_tip, vmax, max_reach):
     return dict(kind="waypoints", points=[[round(x, 4) for x in p] for p in pts], durations=durs), far, sum(durs)
 
 
+# summary fields that not every mca-sim writes (issue 11: completion; issue 29: path error and exact points)
+SUMMARY_FIELDS = ("completed", "path_time_lost_s", "deadlocks", "path_error_max", "path_error_p99", "exact_points",
+                  "exact_missed", "exact_error_max")
+
+
+def load_summary(path):
+    """mca-sim's JSON summary (a run without a second arm writes min_distance inf: read as Infinity)."""
+    with open(path) as f:
+        txt = f.read()
+    fix = {"inf": "Infinity", "nan": "NaN"}
+    return json.loads(re.sub(r'(?<=[:\[,])(-?)(inf|nan)\b', lambda m: m.group(1) + fix[m.group(2)], txt))
+
+
+# ---------------------------------------------------------------- pick and place (issue 29 item 3)
+
+# Boxes in the cell's frame: origin at arm 0's base, `along` the base line towards arm 1's base, `front` across
+# it to the side the arms work on, z up: ranges [m] of (along, front, z). The place zone lies between the bases
+# (both arms reach it), each arm's pick area on its own side. lift: height above a pick/place point of the
+# approach points; each arm places within `spread` (horizontally) of its own slot in the zone (a stack, a tray
+# cell), the two slots sep + 2 spread apart: every place point of one arm at least sep from the other's (the
+# zone is shared, its slots are not: two place points closer than d1 could never be served at once, and an arm
+# waiting above the other's slot would block it, a deadlock by construction); front: which normal of the base
+# line is the working side (the one the start tool tips lean to: -y for the Kinova pair, +x+y for the PA10+
+# pair). PNP_*: for every pnp kind.
+PNP = {
+    "pnp-jaco-mico": dict(zone=((0.26, 0.52), (0.24, 0.46), (0.08, 0.14)), sep=0.10, spread=0.03,
+                          pick=(((0.05, 0.25), (0.35, 0.58), (0.06, 0.14)), ((0.55, 0.72), (0.32, 0.52), (0.06, 0.14))),
+                          lift=(0.10, 0.16), front=1.0),
+    "pnp-pa10": dict(zone=((0.20, 0.48), (0.20, 0.48), (0.45, 0.65)), sep=0.10, spread=0.03,
+                     pick=(((-0.35, 0.0), (0.30, 0.60), (0.40, 0.65)), ((0.67, 1.02), (0.30, 0.60), (0.40, 0.65))),
+                     lift=(0.12, 0.20), front=-1.0),
+}
+PNP_ROUNDS = (2, 3)
+PNP_TOTAL = (25.0, 45.0)
+PNP_DWELL = (0.5, 1.5)
+PNP_TMIN = 1.0  # shortest move [s]
+PNP_EXACT_TOL = 0.001  # exact_tolerance written into the pnp scenarios (mca-sim's default: 1 mm)
+
+
+def pnp_frame(kind, arms):
+    """(origin, e, n) of kind's pick-and-place boxes: e along the base line, n its horizontal normal on the
+    working side."""
+    b0, b1 = arms[0]["base"], arms[1]["base"]
+    e = norm([b1[0] - b0[0], b1[1] - b0[1], 0.0])
+    f = PNP[kind]["front"]
+    return list(b0), e, [f * e[1], -f * e[0], 0.0]
+
+
+def pnp_point(frame, afz):
+    o, e, n = frame
+    return [round(o[k] + afz[0] * e[k] + afz[1] * n[k] + (afz[2] if k == 2 else 0.0), 4) for k in range(3)]
+
+
+def pnp_coords(frame, p):
+    """(along, front, z) of a world point."""
+    o, e, n = frame
+    d = sub(p, o)
+    return [sum(a * b for a, b in zip(d, e)), sum(a * b for a, b in zip(d, n)), d[2]]
+
+
+def in_box(afz, box, tol=1e-3):
+    return all(lo - tol <= x <= hi + tol for x, (lo, hi) in zip(afz, box))
+
+
+def draw_in(rng, box):
+    return [rng.uniform(lo, hi) for lo, hi in box]
+
+
+def hdist(p, q):
+    return math.hypot(p[0] - q[0], p[1] - q[1])
+
+
+def pnp_slots(rng, kind, frame):
+    """The two arms' slots in the place zone: (along, front) each, sep + 2 spread apart (None: none found)."""
+    g = PNP[kind]
+    box = [(lo + g["spread"], hi - g["spread"]) for lo, hi in g["zone"][:2]]
+    for _ in range(200):
+        c = [draw_in(rng, box), draw_in(rng, box)]
+        if math.hypot(c[0][0] - c[1][0], c[0][1] - c[1][1]) >= g["sep"] + 2 * g["spread"]:
+            return c
+    return None
+
+
+def pnp_round(rng, kind, a, frame, slot):
+    """One round's pick point (arm a's pick area), place point (within spread of slot, at a height in the zone)
+    and their approach points (above, by lift)."""
+    g = PNP[kind]
+    pick = pnp_point(frame, draw_in(rng, g["pick"][a]))
+    r, th = g["spread"] * math.sqrt(rng.random()), rng.uniform(0.0, 2.0 * math.pi)
+    place = pnp_point(frame, [slot[0] + r * math.cos(th), slot[1] + r * math.sin(th), rng.uniform(*g["zone"][2])])
+    hp, hq = rng.uniform(*g["lift"]), rng.uniform(*g["lift"])
+    return dict(pick=pick, pick_above=[pick[0], pick[1], round(pick[2] + hp, 4)],
+                place=place, place_above=[place[0], place[1], round(place[2] + hq, 4)])
+
+
+def pnp_timetable(rng, start, rounds, vmax):
+    """The waypoint path through the rounds: above the pick point, down, grasp dwell, up, [wait holding it],
+    over the place point, down, release dwell, up; at the end back above the last pick point (clear of the
+    zone). Each move lasts at least max(PNP_TMIN, 1.875 d / vmax) (quintic peak speed <= vmax); the time
+    left to a total drawn in PNP_TOTAL goes to longer moves, a start delay (t0) and waits holding the part.
+    Returns dict(points, durations, t0, exact, segs: [(round, what)], total) or None when the rounds need
+    more than PNP_TOTAL's upper end."""
+    segs = []  # (point, what, round): what in move/dwell/wait
+    for r, rd in enumerate(rounds):
+        segs += [(rd["pick_above"], "move", r), (rd["pick"], "move", r), (rd["pick"], "dwell", r),
+                 (rd["pick_above"], "move", r), (rd["pick_above"], "wait", r), (rd["place_above"], "move", r),
+                 (rd["place"], "move", r), (rd["place"], "dwell", r), (rd["place_above"], "move", r)]
+    segs.append((rounds[-1]["pick_above"], "move", len(rounds) - 1))
+    mins, prev = [], start
+    for pt, what, _ in segs:
+        if what == "move":
+            mins.append(max(PNP_TMIN, 1.875 * dist(prev, pt) / vmax))
+        elif what == "dwell":
+            mins.append(rng.uniform(*PNP_DWELL))
+        else:
+            mins.append(0.0)
+        prev = pt
+    base = sum(mins)
+    hi = PNP_TOTAL[1] - 0.01 * len(segs)  # room for rounding every duration up to 10 ms
+    if base > hi:
+        return None
+    total = rng.uniform(max(base, PNP_TOTAL[0] + 0.01), hi)
+    slack = total - base
+    stretch = rng.uniform(0.3, 0.8) * slack
+    moves = [k for k, (_, w, _) in enumerate(segs) if w == "move"]
+    waits = [k for k, (_, w, _) in enumerate(segs) if w == "wait"] + [-1]  # -1: the start delay
+    wm = [rng.expovariate(1.0) for _ in moves]
+    ww = [rng.expovariate(1.0) for _ in waits]
+    durs = list(mins)
+    for k, w in zip(moves, wm):
+        durs[k] += stretch * w / sum(wm)
+    t0 = 0.0
+    for k, w in zip(waits, ww):
+        x = (slack - stretch) * w / sum(ww)
+        if x < 0.3:
+            durs[k + 1] += x  # too short a wait or delay: the next move (a wait is followed by one) takes it
+        elif k < 0:
+            t0 = math.floor(x * 100) / 100.0
+        else:
+            durs[k] = x
+    pts, out, exact, what = [], [], [], []
+    for (pt, w, r), d in zip(segs, durs):
+        if w == "wait" and d < 0.3:
+            continue  # left out (its time went to the next move)
+        if w == "dwell":
+            exact += [len(pts) - 1, len(pts)]  # the point reached (grasp/release) and the dwell's end
+        pts.append(list(pt))
+        out.append(math.ceil(d * 100 - 1e-9) / 100.0)
+        what.append((r, w))
+    return dict(points=pts, durations=out, t0=t0, exact=exact, segs=what, total=round(t0 + sum(out), 2))
+
+
+def first_failure(sim, wd, name, kind, arm, path, max_err):
+    """MVN alone on one arm along its path: None when it tracks (error < max_err everywhere, no fault), else
+    the task time of the first tick off by max_err or more (or of the fault)."""
+    scn = os.path.join(wd, "arm.yaml")
+    end = path.get("t0", 0.0) + sum(path["durations"])
+    with open(scn, "w") as f:
+        f.write(scenario_yaml(name + "_arm", kind, [arm], round(end + 0.3, 3), [{k: v for k, v in path.items() if k in (
+            "kind", "relative", "t0", "points", "durations")}]))
+    out = os.path.join(wd, "arm.csv")
+    runs, errs = sim.run(scn, os.path.join(wd, "arm.json"), ["mvn"], csv_out=out)
+    if errs or "mvn" not in runs:
+        return 0.0
+    r = runs["mvn"]
+    if not r.get("fault") and r["max_err"] < max_err:
+        return None
+    t = r["fault_t"] if r.get("fault") else end
+    with open(out, newline="") as f:
+        for row in csv.DictReader(f):
+            if float(row["err0"]) >= max_err:
+                t = min(t, float(row["t"]))
+                break
+    return t
+
+
+def seg_at(path, t):
+    """(round, what) of the segment the path is in at task time t."""
+    tt = path.get("t0", 0.0)
+    if t < tt:
+        return path["segs"][0]
+    for sg, d in zip(path["segs"], path["durations"]):
+        tt += d
+        if t < tt:
+            return sg
+    return path["segs"][-1]
+
+
+def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
+    """Pick-and-place task i of kind (seeded by 'seed:kind:i'): both arms at the shipped scenario's placement
+    (q0 jittered), each with 2-3 rounds from its own pick area to the shared place zone. Rounds an arm alone
+    cannot track under MVN are redrawn (a single-arm run: with MVN every arm's QP is its own)."""
+    rng = random.Random("%d:%s:%d" % (seed, kind, i))
+    tid = "%s:%d" % (kind, i)
+    name = "sweep_%s_%d" % (kind.replace("-", "_"), i)
+    wd = os.path.join(work, name)
+    os.makedirs(wd, exist_ok=True)
+    d2 = KINDS[kind]["d2"]
+    vmax = KINDS[kind]["vmax"]
+    for tries in range(1, 51):  # the PA10+ pair starts 0.085 m apart at cross_circles' q0: often < d2
+        arms = draw_arms(kind, rng)
+        tips, d0, err = probe(sim, wd, name, kind, arms)
+        if err:
+            if tries == 50:
+                return dict(id=tid, error="probe failed: " + err)
+            continue
+        if d0 >= d2 or tries == 50:
+            break
+    frame = pnp_frame(kind, arms)
+    slots = pnp_slots(rng, kind, frame)
+    if slots is None:
+        return dict(id=tid, error="no two slots in the place zone")
+    paths, info = [], []
+    for a, arm in enumerate(arms):
+        rounds = [pnp_round(rng, kind, a, frame, slots[a]) for _ in range(rng.choice(PNP_ROUNDS))]
+        fails = 0
+        for attempt in range(40):
+            tt = pnp_timetable(rng, tips[a], rounds, vmax)
+            if tt is None:  # too many rounds for PNP_TOTAL
+                rounds = rounds[:-1] if len(rounds) > PNP_ROUNDS[0] else \
+                    [pnp_round(rng, kind, a, frame, slots[a]) for _ in rounds]
+                continue
+            path = dict(kind="waypoints", relative=False, **tt)
+            t = first_failure(sim, wd, name, kind, arm, path, max_err)
+            if t is None:
+                break
+            fails += 1
+            if fails % 10 == 0:
+                rounds = [pnp_round(rng, kind, a, frame, slots[a]) for _ in rounds]  # all new now and then
+            else:
+                rounds[seg_at(path, t)[0]] = pnp_round(rng, kind, a, frame, slots[a])
+        else:
+            return dict(id=tid, error="%s: no pick-and-place path MVN tracks alone in 40 draws" % arm["name"])
+        paths.append(path)
+        info.append(dict(arm=arm["name"], rounds=len(rounds), redraws=fails, t0=path["t0"], total=path["total"],
+                         picks=[r["pick"] for r in rounds], places=[r["place"] for r in rounds],
+                         points=path["points"], exact=path["exact"]))
+    duration = round(max(p["total"] for p in paths) + 0.5, 2)
+    out = []
+    for p in paths:
+        q = {k: v for k, v in p.items() if k in ("kind", "relative", "t0", "points", "durations")}
+        if tol is not None:
+            q["tolerance"] = tol
+        if sim.keys["exact"]:
+            q["exact"] = p["exact"]
+        out.append(q)
+    scn = os.path.join(wd, "scenario.yaml")
+    with open(scn, "w") as f:
+        f.write(scenario_yaml(name, kind, arms, duration, out,
+                              exact_tolerance=PNP_EXACT_TOL if sim.keys["exact_tolerance"] else None))
+    stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
+    g = PNP[kind]
+    return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
+                draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2, paths=["pick-and-place"] * len(arms),
+                pnp=dict(frame=[[round(x, 6) for x in v] for v in frame], zone=g["zone"], sep=g["sep"],
+                         slots=[[round(x, 4) for x in c] for c in slots],
+                         pick_areas=list(g["pick"]), arms=info))
+
+
 class Sim:
     def __init__(self, path):
         self.path = path
@@ -206,7 +510,33 @@ class Sim:
         self.stop_at = "--stop-at" in h
         self.fault_at = "--fault-at" in h
         self.dec_limit = "--dec-limit" in h
-        self.fields = set()  # the issue-11 summary fields this mca-sim writes
+        self.fields = set()  # the issue-11/29 summary fields this mca-sim writes
+        # issue-29 scenario keys, each accepted or not by a 2-tick run of a tiny scenario: per path
+        # `tolerance: X` and `exact: [i, ...]`, top level `exact_tolerance: X`
+        self.keys = self.probe_keys()
+
+    def probe_keys(self):
+        import tempfile
+        wd = tempfile.mkdtemp(prefix="mca-sweep-keys-")
+        arm = dict(name="a", urdf="jaco2.urdf", base=[0.0, 0.0, 0.0], q0=KINOVA_HOME)
+
+        def accepts(path_keys, top=None):
+            scn = os.path.join(wd, "keys.yaml")
+            path = dict(kind="waypoints", points=[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]], durations=[1.0, 1.0])
+            path.update(path_keys)
+            with open(scn, "w") as f:
+                f.write(scenario_yaml("keys_probe", "jaco-mico", [arm], 0.002, [path], exact_tolerance=top))
+            p = subprocess.run([self.path, "--scenario", scn, "--scheme", "mvn"], capture_output=True, text=True,
+                               timeout=60)
+            return p.returncode == 0
+
+        try:
+            if not accepts({}):
+                return dict(tolerance=False, exact=False, exact_tolerance=False)
+            return dict(tolerance=accepts(dict(tolerance=0.01)), exact=accepts(dict(exact=[0, 1])),
+                        exact_tolerance=accepts({}, top=0.001))
+        finally:
+            shutil.rmtree(wd, ignore_errors=True)
 
     def run(self, scn, summary, schemes, extra=(), csv_out=None):
         """mca-sim on schemes (in groups of 3); {scheme: run dict}, plus the error text of a failed run."""
@@ -220,11 +550,10 @@ class Sim:
             if p.returncode != 0:
                 errs.append("%s: exit %d: %s" % (" ".join(cmd[-6:]), p.returncode, p.stderr.strip()[-300:]))
                 continue
-            with open(summary) as f:
-                s = json.load(f)
+            s = load_summary(summary)
             for r in s["runs"]:
                 runs[r["scheme"]] = r
-                self.fields.update(k for k in ("completed", "path_time_lost_s", "deadlocks") if k in r)
+                self.fields.update(k for k in SUMMARY_FIELDS if k in r)
         return runs, errs
 
 
@@ -240,21 +569,26 @@ def min_distance_all(r):
 
 
 def classify(r, d1, duration, lost_thr, stop_t=None):
-    """(class, reason, details) of one run's summary."""
+    """(class, reason, details) of one run's summary. With the issue-29 fields a run completes only when every
+    exact point was met too (exact_missed 0); one that ran to its end without fault or stop but missed an exact
+    point is `exact-missed`."""
     dmin = min_distance_all(r)
     has_c = "completed" in r
     if has_c:
         completed = bool(r["completed"])
     else:
         completed = not r.get("fault") and r.get("ticks", 0) >= int(round(duration / 0.001))
+    missed = r.get("exact_missed")
     lost = r.get("path_time_lost_s")
     fault = r.get("fault_name", "none")
     det = dict(min_d=round(dmin, 6), fault=fault, fault_t=r.get("fault_t"), completed=int(completed) if has_c else None,
                lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
                max_err=r.get("max_err"))
+    det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "exact_points", "exact_missed",
+                                      "exact_error_max")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
-    if completed:
+    if completed and not missed:
         if lost is not None and lost > lost_thr:
             return "late", "lost %.2f s" % lost, det
         return "completed", "", det
@@ -264,6 +598,8 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
         return "safe-stop", "stop", det
     if r.get("deadlocks"):
         return "safe-stop", "deadlock-unresolved", det
+    if missed:
+        return "exact-missed", "exact-missed", det
     return "safe-stop", "not-completed", det
 
 
@@ -282,7 +618,7 @@ def probe(sim, wd, name, kind, arms):
     return tips, float(row["min_d"]), None
 
 
-def make_task(sim, kind, seed, i, work):
+def make_task(sim, kind, seed, i, work, tol=None):
     """Draw task i of kind (seeded by 'seed:kind:i'), write its scenario; a dict describing it."""
     rng = random.Random("%d:%s:%d" % (seed, kind, i))
     tid = "%s:%d" % (kind, i)
@@ -318,6 +654,9 @@ def make_task(sim, kind, seed, i, work):
     if not ok:
         return dict(id=tid, error="no path towards the other arm in 20 draws")
     duration = round(max(times) + 0.5, 2)
+    if tol is not None:
+        for p in paths:
+            p["tolerance"] = tol
     scn = os.path.join(wd, "scenario.yaml")
     with open(scn, "w") as f:
         f.write(scenario_yaml(name, kind, arms, duration, paths))
@@ -329,7 +668,11 @@ def make_task(sim, kind, seed, i, work):
 
 def run_task(sim, kind, seed, i, a):
     t0 = time.time()
-    task = make_task(sim, kind, seed, i, a.work)
+    tol = a.tolerance if sim.keys["tolerance"] else None
+    if kind in PNP:
+        task = make_pnp_task(sim, kind, seed, i, a.work, a.max_err, tol)
+    else:
+        task = make_task(sim, kind, seed, i, a.work, tol)
     if "error" in task:
         task.update(reachable=False, unreachable="generation: " + task["error"], runs={}, seconds=time.time() - t0)
         return task
@@ -382,12 +725,49 @@ def run_task(sim, kind, seed, i, a):
             task["errors"].append("mca-stopcheck exit %d: %s" % (p.returncode, p.stderr[-300:]))
     task["seconds"] = round(time.time() - t0, 3)
     if not a.keep and reach:
-        for f in ("probe.csv",):
+        for f in ("probe.csv", "arm.csv"):
             try:
                 os.remove(os.path.join(wd, f))
             except OSError:
                 pass
     return task
+
+
+def pnp_target(tasks, schemes, lines):
+    """Issue 29's target for pick and place, per scheme over the task runs: >= 95 % completed (late included)
+    with every exact point met, and path_error_max <= PNP_PATH_ERROR; a line each and a dict."""
+    out = {}
+    for s in schemes:
+        rs = [t["runs"][s]["task"] for t in tasks if t["runs"].get(s, {}).get("task", {}).get("cls", "n/a") != "n/a"]
+        if not rs:
+            continue
+        n = len(rs)
+        done = [r for r in rs if r["cls"] in ("completed", "late")]
+        have_pe = all(r.get("path_error_max") is not None for r in rs)
+        have_ex = all(r.get("exact_missed") is not None for r in rs)
+        pe_ok = sum(1 for r in rs if r.get("path_error_max") is not None and r["path_error_max"] <= PNP_PATH_ERROR)
+        both = sum(1 for r in done if r.get("path_error_max") is not None and r["path_error_max"] <= PNP_PATH_ERROR)
+        met = have_pe and have_ex and both >= 0.95 * n
+        # until mca-sim writes path_error_max: max_err, the distance to the path's current point (>= the distance
+        # to the path's curve), so an upper bound
+        me_ok = sum(1 for r in rs if r.get("max_err") is not None and r["max_err"] <= PNP_PATH_ERROR)
+        out[s] = dict(n=n, done=len(done), exact_fields=have_ex, path_error_fields=have_pe,
+                      path_error_ok=pe_ok if have_pe else None,
+                      path_error_ok_every_task=(pe_ok == n) if have_pe else None,
+                      done_and_path_error_ok=both if have_pe else None, target_met=met if have_pe and have_ex else None,
+                      max_err_ok=me_ok)
+        lines.append("pick and place, %s: %d of %d done (completed or late%s) = %.1f %%; path_error_max <= %.2f m: %s; "
+                     "both: %s -> issue 29 target (>= 95 %%): %s" % (
+                         s, len(done), n, ", every exact point met" if have_ex else "; exact points: n/a",
+                         100.0 * len(done) / n, PNP_PATH_ERROR,
+                         ("%d of %d (every task: %s)" % (pe_ok, n, "yes" if pe_ok == n else "no")) if have_pe else "n/a",
+                         ("%d (%.1f %%)" % (both, 100.0 * both / n)) if have_pe else "n/a",
+                         ("met" if met else "not met") if have_pe and have_ex else
+                         "n/a (this mca-sim writes no path_error_max / exact_missed)"))
+        if not have_pe:
+            lines.append("pick and place, %s: max_err (to the path's current point, an upper bound on the path "
+                         "error) <= %.2f m on %d of %d" % (s, PNP_PATH_ERROR, me_ok, n))
+    return out
 
 
 def table(tasks, schemes, sim, a):
@@ -398,7 +778,8 @@ def table(tasks, schemes, sim, a):
     lines.append("mca-sweep: seed %d, kinds %s, %d tasks, %d reachable, %d unreachable%s" % (
         a.seed, ",".join(kinds), len(tasks), nr, len(tasks) - nr,
         "" if sim.stop_at else "; this mca-sim has no --stop-at: the stop rows are n/a"))
-    hdr = "%-8s %-9s" % ("scheme", "run") + "".join(" %15s" % c for c in CLASSES) + " %10s %9s" % ("deadlocks", "lost p50")
+    hdr = "%-8s %-9s" % ("scheme", "run") + "".join(" %15s" % c for c in CLASSES) + " %10s %9s %17s" % (
+        "deadlocks", "lost p50", "path err p50/max")
     lines.append(hdr)
     lines.append("-" * len(hdr))
     summary = {}
@@ -407,7 +788,7 @@ def table(tasks, schemes, sim, a):
             rs = [t["runs"][s][mode] for t in reach if mode in t["runs"].get(s, {}) and t["runs"][s][mode]["cls"] != "n/a"]
             if not rs:
                 lines.append("%-8s %-9s" % (s, "task" if mode == "task" else "with stop") +
-                             "".join(" %15s" % "n/a" for _ in CLASSES) + " %10s %9s" % ("n/a", "n/a"))
+                             "".join(" %15s" % "n/a" for _ in CLASSES) + " %10s %9s %17s" % ("n/a", "n/a", "n/a"))
                 summary["%s/%s" % (s, mode)] = None
                 continue
             cnt = {c: sum(1 for r in rs if r["cls"] == c) for c in CLASSES}
@@ -415,14 +796,18 @@ def table(tasks, schemes, sim, a):
             dls = "n/a" if all(x is None for x in dl) else str(sum(1 for x in dl if x))
             lost = sorted(r["lost"] for r in rs if r.get("lost") is not None)
             lp = "n/a" if not lost else "%.2f s" % lost[len(lost) // 2]
+            pe = sorted(r["path_error_max"] for r in rs if r.get("path_error_max") is not None)
+            pes = "n/a" if not pe else "%.4f/%.4f m" % (pe[len(pe) // 2], pe[-1])
             lines.append("%-8s %-9s" % (s, "task" if mode == "task" else "with stop") +
-                         "".join(" %6d (%5.1f%%)" % (cnt[c], 100.0 * cnt[c] / nr) for c in CLASSES) + " %10s %9s" % (dls, lp))
+                         "".join(" %6d (%5.1f%%)" % (cnt[c], 100.0 * cnt[c] / nr) for c in CLASSES) +
+                         " %10s %9s %17s" % (dls, lp, pes))
             faults = {}
             for r in rs:
-                if r["cls"] in ("safe-stop", "unsafe") and r.get("reason"):
+                if r["cls"] in ("exact-missed", "safe-stop", "unsafe") and r.get("reason"):
                     faults[r["reason"]] = faults.get(r["reason"], 0) + 1
             summary["%s/%s" % (s, mode)] = dict(cnt, n=len(rs), reachable=nr, tasks_with_deadlocks=None if dls == "n/a" else int(dls),
-                                                reasons=faults)
+                                                reasons=faults, path_error_max_p50=pe[len(pe) // 2] if pe else None,
+                                                path_error_max_max=pe[-1] if pe else None)
     lines.append("")
     un = {}
     for t in tasks:
@@ -435,6 +820,20 @@ def table(tasks, schemes, sim, a):
             if v and v["reasons"]:
                 lines.append("reasons %-6s %-9s %s" % (s, "task" if mode == "task" else "with stop",
                                                      json.dumps(v["reasons"], sort_keys=True)))
+    # distances: where the tasks start and how near the arms come (does avoidance matter?)
+    d0 = sorted(t["start_distance"] for t in reach)
+    if d0:
+        parts = []
+        for s in schemes:
+            md = sorted(t["runs"][s]["task"]["min_d"] for t in reach if "min_d" in t["runs"].get(s, {}).get("task", {}))
+            if md:
+                below = sum(1 for t in reach if t["runs"][s]["task"].get("min_d", 1e9) < t["d1"])
+                parts.append("%s p50 %.4f min %.4f (%d below d1)" % (s, md[len(md) // 2], md[0], below))
+        lines.append("distance [m]: start p50 %.4f min %.4f; least in the task runs: %s" % (
+            d0[len(d0) // 2], d0[0], "; ".join(parts)))
+    pnp = [t for t in reach if t["id"].rsplit(":", 1)[0] in PNP]
+    if pnp:
+        summary["pnp_target"] = pnp_target(pnp, schemes, lines)
     sc = [r for t in tasks if t.get("reachable") and t.get("stopcheck") for r in t["stopcheck"]]
     if a.stopcheck:
         for dec in sorted({r["dec"] for r in sc}):
@@ -457,7 +856,7 @@ def table(tasks, schemes, sim, a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sim", default=os.path.join(ROOT, "build", "tools", "mca-sim", "mca-sim"))
-    ap.add_argument("--kind", default="pa10", help="pa10, jaco-mico, three, comma-separated")
+    ap.add_argument("--kind", default="pa10", help="pa10, jaco-mico, three, pnp-jaco-mico, pnp-pa10, comma-separated")
     ap.add_argument("--n", default="50", help="tasks per kind (one number, or one per kind: 500,500,200)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--only", default="", help="task ids KIND:I[,KIND:I...] (or plain I for the first kind)")
@@ -476,6 +875,9 @@ def main():
     ap.add_argument("--ideal-arms", action="store_true",
                     help="mca-sim --euler: arms realise each command exactly (default: the sim backend's "
                          "rate-limited firmware model)")
+    ap.add_argument("--tolerance", type=float, default=None,
+                    help="write `tolerance: X` (path error allowed outside exact points [m]) into every generated "
+                    "path, when this mca-sim takes the key")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
     if not os.access(a.sim, os.X_OK):
@@ -484,7 +886,7 @@ def main():
     kinds = [k for k in a.kind.split(",") if k]
     for k in kinds:
         if k not in KINDS:
-            sys.exit("mca-sweep: unknown kind '%s' (pa10, jaco-mico, three)" % k)
+            sys.exit("mca-sweep: unknown kind '%s' (%s)" % (k, ", ".join(KINDS)))
     ns = [int(x) for x in a.n.split(",")]
     if len(ns) == 1:
         ns = ns * len(kinds)
@@ -496,6 +898,8 @@ def main():
         print("mca-sweep: this mca-sim has no scheme %s (it has %s): left out" % (",".join(missing), "|".join(sim.schemes)))
         schemes = [s for s in schemes if s in sim.schemes]
     a.schemes = schemes
+    if a.tolerance is not None and not sim.keys["tolerance"]:
+        print("mca-sweep: this mca-sim takes no path key `tolerance`: --tolerance %g left out" % a.tolerance)
     todo = []
     if a.only:
         for x in a.only.split(","):
@@ -535,7 +939,8 @@ def main():
     if a.json:
         out = dict(seed=a.seed, kinds=kinds, n=ns, only=a.only, schemes=schemes, sim=a.sim,
                    features=dict(stop_at=sim.stop_at, fault_at=sim.fault_at, dec_limit=sim.dec_limit,
-                                 summary_fields=sorted(sim.fields)),
+                                 summary_fields=sorted(sim.fields), scenario_keys=sim.keys),
+                   tolerance=a.tolerance if sim.keys["tolerance"] else None,
                    lost_threshold=a.lost_threshold, max_err=a.max_err, summary=summ, summary_by_kind=by_kind,
                    reachable=sum(1 for t in tasks if t.get("reachable")), tasks=tasks, wall_s=round(time.time() - t0, 2))
         with open(a.json, "w") as f:
