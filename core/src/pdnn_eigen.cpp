@@ -3,7 +3,8 @@
  * M = [I -N^T; N 0] with N = [G; -U] is never formed: each step applies N and N^T twice
  * (4 m*n multiply-adds) instead of an h*h product. Nothing here allocates: matrices are maps over the
  * caller's workspace, vectors have compile-time maximum sizes (storage on the stack), products are
- * evaluated with noalias() into them. */
+ * evaluated with noalias() into them. The active-set polish (polish_try) solves small KKT systems with a
+ * pivoted QR written out by hand on the same kind of storage (docs/pdnn.md, "Active-set polish"). */
 /* Unoptimised Eigen is ~20x slower (every coefficient access a call): keep this file optimised in Debug
  * (and so ASan) builds too, or every test that runs the solver crawls there. Sanitizers still apply. */
 #if !defined(__OPTIMIZE__) && defined(__GNUC__) && !defined(__clang__)
@@ -34,25 +35,24 @@ using MapV = Eigen::Map<const Eigen::VectorXd>;
 // Polish constants (docs/pdnn.md, "Active-set polish"). Pivots below kRankTol of the largest count as zero
 // (unit rows: rows within ~1e-9 rad of the span of the others are dependent).
 constexpr double kRankTol = 1e-9;
-constexpr int kPolishEvery = 24;    // steps after a failed try before the next one, doubled each time
-constexpr double kPolishDrop = 0.1; // ... or when the residual has fallen by this factor
-constexpr int kPolishNewton = 4;    // active-set corrections per try (each one exact solve)
+constexpr int kPolishEvery = 24;     // steps after a failed try before the next one, doubled each time
+constexpr double kPolishDrop = 0.1;  // ... or when the residual has fallen by this factor
+constexpr int kPolishTrySolves = 12; // subproblem solves per try at most
 
-// Guess the active set at (x, w) from the projection itself (a = N^T w, b = N x + q): a variable whose a_j
-// the box clips, a row whose w_i - b_i > 0 (the projection is the identity there: multiplier or violation),
-// every equality row. Solve min 1/2 |x|^2 with those rows as equalities and those variables at their bound:
-// C x_F = d, x_F = C^T w_A (C = N[A, F], unit rows), through a column-pivoted QR of C^T: C^T P = Q R with
-// rank r from the pivots, u = R11^-T (P^T d)_r, x_F = Q [u; 0], (P^T w_A)_r = R11^-1 u and 0 for the
-// dependent rows (one multiplier per set of parallel rows). The dependent rows' own equations and every
-// sign are not assumed: the caller checks the candidate with the network's residual. Returns 0 when no
-// candidate could be formed (too many rows). No allocation: every Eigen object has fixed maximum sizes.
-template <typename AV, typename BV, typename WV>
-static int polish_candidate(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const MapV &low,
-                            const AV &a, const BV &b, const WV &w, VecX &xc, VecW &wc, unsigned char *set) {
+// Solve min 1/2 |x|^2 with the rows in `set` (set[n + i] = 1) as equalities and the variables with
+// set[j] = 1 / 2 at their lower / upper bound: C x_F = d, x_F = C^T w_A (C = N[A, F], unit rows), through a
+// column-pivoted QR of C^T: C^T P = Q R with rank r from the pivots, u = R11^-T (P^T d)_r, x_F = Q [u; 0],
+// (P^T w_A)_r = R11^-1 u and 0 for the dependent rows (one multiplier per set of parallel rows; their own
+// equations are left to the caller's checks). Returns 2 (full rank), 1 (rank deficient: the rows' free parts
+// are dependent) or 0 (more rows than kMaxN). With g: also the least-squares fit of g's free part by the
+// rows' free parts, g_F ~ C^T mu (mu per row, 0 off the set), and the misfit |g_F - C^T mu| in *gres. No
+// allocation: every Eigen object has fixed maximum sizes.
+static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const unsigned char *set,
+                     VecX &xc, VecW &wc, const VecX *g = nullptr, VecW *mu = nullptr,
+                     double *gres = nullptr) {
     const int n = (int)N.cols(), m = (int)N.rows();
     int fr[kMaxN], ar[kMaxN], nf = 0, k = 0;
     for (int j = 0; j < n; j++) {
-        set[j] = (unsigned char)(a(j) <= lox(j) ? 1 : a(j) >= hix(j) ? 2 : 0); // 0: free
         xc(j) = set[j] == 1 ? lox(j) : hix(j);
         if (set[j] == 0) {
             fr[nf++] = j;
@@ -60,7 +60,6 @@ static int polish_candidate(const MapN &N, const MapV &q, const MapV &lox, const
     }
     for (int i = 0; i < m; i++) {
         wc(i) = 0.0;
-        set[n + i] = (unsigned char)(low(i) < 0.0 || w(i) - b(i) > 0.0);
         if (set[n + i]) {
             if (k == kMaxN) {
                 return 0;
@@ -88,6 +87,7 @@ static int polish_candidate(const MapN &N, const MapV &q, const MapV &lox, const
         d(c) = di * sc(c);
     }
     VecX xf = VecX::Zero(nf);
+    int rank = 0;
     if (nf > 0 && k > 0) {
         // Column-pivoted Householder QR of C^T in place, by hand: Eigen's ColPivHouseholderQR, triangular
         // solves and Householder products go through GEMV kernels that keep a heap fallback for large sizes
@@ -145,11 +145,215 @@ static int polish_candidate(const MapN &N, const MapV &q, const MapV &lox, const
         for (int c = 0; c < k; c++) {
             wc(ar[perm[c]]) = c < r ? u(c) * sc(perm[c]) : 0.0;
         }
+        rank = r;
+        if (g != nullptr) {
+            VecX gq(nf);
+            for (int t = 0; t < nf; t++) {
+                gq(t) = (*g)(fr[t]);
+            }
+            for (int h = 0; h < r; h++) { // Q^T g_F = H_{r-1} ... H_0 g_F
+                const int len = nf - h - 1;
+                const double t = tau[h] * (gq(h) + ct.col(h).tail(len).dot(gq.tail(len)));
+                gq(h) -= t;
+                gq.tail(len) -= t * ct.col(h).tail(len);
+            }
+            *gres = gq.tail(nf - r).norm();
+            for (int i = r - 1; i >= 0; i--) { // R11 mu' = (Q^T g_F)_r
+                gq(i) = (gq(i) - ct.row(i).segment(i + 1, r - i - 1).dot(gq.segment(i + 1, r - i - 1))) /
+                        ct(i, i);
+            }
+            mu->setZero();
+            for (int c = 0; c < r; c++) {
+                (*mu)(ar[perm[c]]) = gq(c) * sc(perm[c]);
+            }
+        }
+    } else if (g != nullptr) {
+        mu->setZero();
+        *gres = 0.0;
+        for (int t = 0; t < nf; t++) {
+            *gres += (*g)(fr[t]) * (*g)(fr[t]);
+        }
+        *gres = std::sqrt(*gres);
     }
     for (int t = 0; t < nf; t++) {
         xc(fr[t]) = xf(t);
     }
-    return 1;
+    return rank == k ? 2 : 1;
+}
+
+// One polish try from the network's iterate (a = N^T w, b = N x + q). Seed: the active set the projection
+// sees (a variable whose a_j the box clips, a row with w_i - b_i > 0, every equality row). Then a dual
+// active-set method (Goldfarb-Idnani; with the objective 1/2 |x|^2 each subproblem is kkt_solve): first
+// drop seed members with a negative multiplier, most negative first, until the set is dual feasible; then
+// add the most violated constraint p and move along the segment to the solution with p in the set (the KKT
+// solution is affine in p's right-hand side), dropping a member whose multiplier reaches 0 on the way; done
+// when nothing is violated by more than eps. Each subproblem solve costs one unit of *budget. Returns 1 with
+// the candidate in (xc, wc), 0 if the budget ran out or p depends on the set (degenerate, or infeasible).
+// The caller still checks the candidate with the network's residual.
+template <typename AV, typename BV, typename WV>
+static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const MapV &low,
+                      const AV &a, const BV &b, const WV &w, double eps, int *budget, VecX &xc, VecW &wc) {
+    const int n = (int)N.cols(), m = (int)N.rows();
+    unsigned char set[kMaxN + kMaxM];
+    for (int j = 0; j < n; j++) {
+        set[j] = (unsigned char)(a(j) <= lox(j) ? 1 : a(j) >= hix(j) ? 2 : 0);
+    }
+    for (int i = 0; i < m; i++) {
+        set[n + i] = (unsigned char)(low(i) < 0.0 || w(i) - b(i) > 0.0);
+    }
+    VecX x1(n), at(n), a1(n);
+    VecW w1(m);
+    const auto solve = [&](VecX &xo, VecW &wo) {
+        if (*budget <= 0) {
+            return 0;
+        }
+        (*budget)--;
+        return kkt_solve(N, q, lox, hix, set, xo, wo);
+    };
+    // Multiplier of member k (k < n: a bound, lam = lo - a_k or a_k - hi; else a row, w) given a = N^T w; the
+    // members that may leave: bounds of a variable with lo < hi, inequality rows. Others: +inf.
+    const auto mult = [&](int k, const VecX &ak, const VecW &wk) {
+        if (k < n) {
+            return set[k] == 0 || lox(k) == hix(k) ? INFINITY : set[k] == 1 ? lox(k) - ak(k) : ak(k) - hix(k);
+        }
+        return set[k] == 0 || low(k - n) < 0.0 ? INFINITY : wk(k - n);
+    };
+    if (!solve(xc, wc)) {
+        return 0;
+    }
+    for (;;) { // dual feasibility of the seed
+        at.noalias() = N.transpose().lazyProduct(wc);
+        int worst = -1;
+        double lw = 0.0;
+        for (int k = 0; k < n + m; k++) {
+            const double l = mult(k, at, wc);
+            if (l < lw) {
+                lw = l;
+                worst = k;
+            }
+        }
+        if (worst < 0) {
+            break;
+        }
+        set[worst] = 0;
+        if (!solve(xc, wc)) {
+            return 0;
+        }
+    }
+    // Rows the rank-deficient solve left out (multiplier 0, equation not met) leave the set: with a zero
+    // multiplier the point stays a KKT point of the rest, and the loop below brings them back in properly.
+    VecW bt(m);
+    bt.noalias() = N.lazyProduct(xc);
+    bt += q;
+    for (int i = 0; i < m; i++) {
+        if (set[n + i] && low(i) >= 0.0 && wc(i) == 0.0 && std::fabs(bt(i)) > eps) {
+            set[n + i] = 0;
+        }
+    }
+    for (;;) {
+        // the most violated constraint outside the set
+        int p = -1;
+        double worst = eps;
+        bt.noalias() = N.lazyProduct(xc);
+        bt += q;
+        for (int j = 0; j < n; j++) {
+            const double v = std::max(lox(j) - xc(j), xc(j) - hix(j));
+            if (set[j] == 0 && v > worst) {
+                worst = v;
+                p = j;
+            }
+        }
+        for (int i = 0; i < m; i++) {
+            if (set[n + i] == 0 && -bt(i) > worst) {
+                worst = -bt(i);
+                p = n + i;
+            }
+        }
+        if (p < 0) {
+            return 1;
+        }
+        set[p] = p < n ? (unsigned char)(xc(p) < lox(p) ? 1 : 2) : 1;
+        for (;;) {
+            const int rc = solve(x1, w1);
+            if (rc == 0) {
+                return 0;
+            }
+            if (rc == 1 && *budget > 0) {
+                // Rank deficient: if p's normal g (in the >= form) is a combination sum mu_k g_k of the
+                // members', no step in x reaches p: a pure dual step. p's multiplier grows by s and the
+                // members' fall by s mu_k until the first one reaches 0; it leaves (then p is independent).
+                VecX g = VecX::Zero(n);
+                VecW mu(m);
+                double gres = 0.0;
+                if (p < n) {
+                    g(p) = set[p] == 1 ? 1.0 : -1.0;
+                } else {
+                    g = N.row(p - n).transpose();
+                }
+                const unsigned char sp = set[p];
+                set[p] = 0;
+                (*budget)--;
+                kkt_solve(N, q, lox, hix, set, x1, w1, &g, &mu, &gres);
+                set[p] = sp;
+                if (gres <= kRankTol * g.norm()) {
+                    at.noalias() = N.transpose().lazyProduct(wc);
+                    a1.noalias() = N.transpose().lazyProduct(mu); // rows' part of the combination
+                    double st = INFINITY;
+                    int blk = -1;
+                    for (int k = 0; k < n + m; k++) {
+                        if (k == p || set[k] == 0) {
+                            continue;
+                        }
+                        // bounds: the rest of g on the fixed variable, signed for its side
+                        const double mk = k < n ? (set[k] == 1 ? 1.0 : -1.0) * (g(k) - a1(k)) : mu(k - n);
+                        const double l = std::max(mult(k, at, wc), 0.0);
+                        if (mk > kRankTol && l < INFINITY && l / mk < st) {
+                            st = l / mk;
+                            blk = k;
+                        }
+                    }
+                    if (blk < 0) {
+                        return 0; // nothing can give way: p cannot be met with the set (infeasible)
+                    }
+                    wc -= st * mu;
+                    if (p >= n) {
+                        wc(p - n) += st;
+                    }
+                    set[blk] = 0;
+                    if (blk >= n) {
+                        wc(blk - n) = 0.0;
+                    }
+                    continue;
+                }
+                if (!solve(x1, w1)) { // p is independent: the deficiency is among the others
+                    return 0;
+                }
+            }
+            at.noalias() = N.transpose().lazyProduct(wc);
+            a1.noalias() = N.transpose().lazyProduct(w1);
+            double t = 1.0;
+            int blk = -1;
+            for (int k = 0; k < n + m; k++) {
+                const double l0 = k == p ? INFINITY : std::max(mult(k, at, wc), 0.0), l1 = mult(k, a1, w1);
+                if (k != p && l1 < 0.0 && l0 < INFINITY) {
+                    const double tk = l0 / (l0 - l1);
+                    if (tk < t) {
+                        t = tk;
+                        blk = k;
+                    }
+                }
+            }
+            xc += t * (x1 - xc);
+            wc += t * (w1 - wc);
+            if (blk < 0) {
+                break;
+            }
+            set[blk] = 0; // its multiplier reached 0: it leaves, p is still on its way in
+            if (blk >= n) {
+                wc(blk - n) = 0.0;
+            }
+        }
+    }
 }
 
 } // namespace
@@ -192,9 +396,6 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         }
         return std::max(exc.lpNorm<Eigen::Infinity>(), ewc.lpNorm<Eigen::Infinity>());
     };
-    VecX ag(n);
-    VecW bg(m), wg(m);
-    unsigned char set[2][kMaxN + kMaxM];
     int tries = 0, next_k = 0, every = kPolishEvery;
     double next_r = INFINITY;
     res->polished = 0;
@@ -225,32 +426,22 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
             break;
         }
         // Active-set polish: at the first step (a warm start's active set is usually still right), then
-        // every `every` steps (doubling) or once the residual fell by kPolishDrop. Accepted only if the
-        // candidate meets this loop's own test; else the iteration goes on from (x, w), untouched.
+        // every `every` steps (doubling) or once the residual fell by kPolishDrop; polish_max subproblem
+        // solves in all, kPolishTrySolves per try. Accepted only if the candidate meets this loop's own test;
+        // else the iteration goes on from (x, w), untouched.
         if (tries < polish_max && (steps >= next_k || r <= next_r)) {
-            // Guess from the iterate, then from each candidate in turn: the guess rule applied to a candidate
-            // drops rows with a negative multiplier and adds violated ones (a primal-dual active-set, i.e.
-            // semismooth Newton, step on e(y) = 0); stops when the set repeats.
-            ag = a;
-            bg = b;
-            wg = w;
-            for (int nt = 0; nt < kPolishNewton && tries < polish_max; nt++) {
-                tries++;
-                if (!polish_candidate(N, q, lox, hix, low, ag, bg, wg, xc, wc, set[nt & 1]) ||
-                    (nt > 0 && std::equal(set[0], set[0] + n + m, set[1]))) {
-                    break;
-                }
+            int budget = std::min(polish_max - tries, kPolishTrySolves);
+            const int left = budget;
+            const int got = polish_try(N, q, lox, hix, low, a, b, w, 0.1 * tol, &budget, xc, wc);
+            tries += left - budget;
+            if (got) {
                 const double rc = residual_at();
                 if (rc <= tol && xc.allFinite() && wc.allFinite()) { // a NaN could slip through the max norms
                     x = xc;
                     w = wc;
                     r = rc;
                     res->polished = 1;
-                    break;
                 }
-                ag = ac;
-                bg = bc;
-                wg = wc;
             }
             if (res->polished) {
                 break;

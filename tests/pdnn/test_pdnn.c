@@ -496,6 +496,7 @@ static void test_divergence_reported(void **state) {
     mca_pdnn_default_params(&prm);
     prm.kappa = 5.0;
     prm.max_steps = 5000;
+    prm.no_polish = 1; /* the polish would finish this QP at step 0, before the blow-up */
     double phi[16];
     mca_pdnn_result_t res;
     mca_pdnn_init(&solver);
@@ -728,6 +729,48 @@ static void test_polish_parallel_rows(void **state) {
     }
 }
 
+static void test_polish_dependent_row(void **state) {
+    (void)state;
+    /* min |phi|^2/2 s.t. phi1 + phi2 + phi3 = 3, phi1 <= 0, phi2 <= 0, phi1 + phi2 <= beta2. Tick A (beta2 =
+     * 5): (0, 0, 3), the first two rows active (multipliers 3, 3). Tick B (beta2 = -1), warm from A: the
+     * third row is violated and its normal is the sum of the two active ones, so no step in phi can reach it:
+     * the polish's dual step moves the multipliers until one of the two leaves, then the next one; answer
+     * (-0.5, -0.5, 4), v_e = 4, v_i = (0, 0, 4.5), exact at step 0. A polish that gives up on a dependent
+     * row leaves this tick to the network (steps > 0). */
+    mca_qp_t qp;
+    mca_qp_reset(&qp, 3, 1, 3);
+    free_box(&qp);
+    qp.G[0][0] = qp.G[0][1] = qp.G[0][2] = 1.0;
+    qp.alpha[0] = 3.0;
+    qp.U[0][0] = 1.0;
+    qp.U[1][1] = 1.0;
+    qp.U[2][0] = qp.U[2][1] = 1.0;
+    for (int v = 0; v < N_VARIANTS; v++) {
+        mca_pdnn_params_t prm;
+        variant(&prm, v);
+        prm.max_steps = 2000;
+        double phi[3];
+        mca_pdnn_result_t res;
+        qp.beta[2] = 5.0;
+        assert_int_equal(solve(&qp, &prm, phi, &res), MCA_OK);
+        assert_near(solver.y[4], 3.0, 1e-12);
+        assert_near(solver.y[5], 3.0, 1e-12);
+        qp.beta[2] = -1.0;
+        assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
+        assert_int_equal(res.warm, 2);
+        assert_int_equal(res.polished, 1);
+        assert_int_equal(res.steps, 0);
+        assert_near(phi[0], -0.5, 1e-12);
+        assert_near(phi[1], -0.5, 1e-12);
+        assert_near(phi[2], 4.0, 1e-12);
+        assert_near(solver.y[3], 4.0, 1e-12);
+        assert_near(solver.y[4], 0.0, 1e-12);
+        assert_near(solver.y[5], 0.0, 1e-12);
+        assert_near(solver.y[6], 4.5, 1e-12);
+        assert_true(kkt_error(&qp, phi, solver.y) <= 1e-12);
+    }
+}
+
 static void test_polish_wrong_guess(void **state) {
     (void)state;
     /* min |phi|^2/2 s.t. phi1 >= 1, phi1 + phi2 >= 3 (as -phi1 <= -1, -phi1 - phi2 <= -3). Both rows are
@@ -830,6 +873,7 @@ int main(void) {
         cmocka_unit_test(test_warm_restart_real_qp),
         cmocka_unit_test(test_bound_step_is_stable),
         cmocka_unit_test(test_polish_parallel_rows),
+        cmocka_unit_test(test_polish_dependent_row),
         cmocka_unit_test(test_polish_wrong_guess),
         cmocka_unit_test(test_polish_real_qp),
     };

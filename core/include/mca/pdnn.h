@@ -62,7 +62,7 @@ typedef struct mca_pdnn_params {
                               steps; timed_out says so); 0: none. The 1 kHz loop's time budget. */
     int no_polish;  /**< 1: the network alone. 0: active-set polish (docs/pdnn.md): now and then the network's
                          active set is guessed and solved exactly; the result is kept only if it meets tol */
-    int polish_max; /**< polish tries per block and run (warm, and the cold restart); <= 0: 6 */
+    int polish_max; /**< polish tries per block and run (warm, and the cold restart); <= 0: 24 */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
