@@ -17,7 +17,7 @@
  *          --rule adaptive|bound --far W (0.3; 1 = off) --max-steps S (20000) --seed K (1) --tight P (0.15)
  *          --gamma G (1.9) --form componentwise|normal (componentwise: 3 rows per link, 54; normal: 1, 18)
  *          --no-polish 0|1 (0) --polish-max N (0: the solver's default) --verbose 1 (replay: name the
- *          QPs not converged)
+ *          QPs not converged or over 300 steps)
  * Not a test: numbers depend on the machine. */
 #include <dirent.h>
 #include <errno.h>
@@ -313,9 +313,10 @@ static int run_replay(const opts_t *o) {
         st[ok] = res.steps;
         tr[ok++] = res.polish_tries;
         unconv += rc != MCA_OK;
-        if (o->verbose && rc != MCA_OK) {
-            printf("  not converged: %s: %d steps, residual %.3g, %d polish tries, warm %d\n", names[k],
-                   res.steps, res.residual, res.polish_tries, res.warm);
+        if (o->verbose && (rc != MCA_OK || res.steps > 300)) {
+            printf("  %s: %s: %d steps, residual %.3g, %d polish tries, warm %d\n",
+                   rc != MCA_OK ? "not converged" : "over 300 steps", names[k], res.steps, res.residual,
+                   res.polish_tries, res.warm);
         }
         polished += res.polished > 0;
         over300 += res.steps > 300;

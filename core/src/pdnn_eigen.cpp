@@ -42,14 +42,14 @@ constexpr int kPolishTrySolves = 12; // subproblem solves per try at most
 // Solve min 1/2 |x|^2 with the rows in `set` (set[n + i] = 1) as equalities and the variables with
 // set[j] = 1 / 2 at their lower / upper bound: C x_F = d, x_F = C^T w_A (C = N[A, F], unit rows), through a
 // column-pivoted QR of C^T: C^T P = Q R with rank r from the pivots, u = R11^-T (P^T d)_r, x_F = Q [u; 0],
-// (P^T w_A)_r = R11^-1 u and 0 for the dependent rows (one multiplier per set of parallel rows; their own
-// equations are left to the caller's checks). Returns 2 (full rank), 1 (rank deficient: the rows' free parts
-// are dependent) or 0 (more rows than kMaxN). With g: also the least-squares fit of g's free part by the
-// rows' free parts, g_F ~ C^T mu (mu per row, 0 off the set), and the misfit |g_F - C^T mu| in *gres. No
-// allocation: every Eigen object has fixed maximum sizes.
-static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const unsigned char *set,
-                     VecX &xc, VecW &wc, const VecX *g = nullptr, VecW *mu = nullptr,
-                     double *gres = nullptr) {
+// (P^T w_A)_r = R11^-1 u and 0 for the dependent rows (one multiplier per set of parallel rows, equality
+// rows pivoted first; the dependent rows' own equations are left to the caller). Returns 2 (full rank), 1
+// (rank deficient: the rows' free parts are dependent) or 0 (more rows than kMaxN). With g: also the
+// least-squares fit of g's free part by the rows' free parts, g_F ~ C^T mu (mu per row, 0 off the set), and
+// the misfit |g_F - C^T mu| in *gres. No allocation: every Eigen object has fixed maximum sizes.
+static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const MapV &low,
+                     const unsigned char *set, VecX &xc, VecW &wc, const VecX *g = nullptr,
+                     VecW *mu = nullptr, double *gres = nullptr) {
     const int n = (int)N.cols(), m = (int)N.rows();
     int fr[kMaxN], ar[kMaxN], nf = 0, k = 0;
     for (int j = 0; j < n; j++) {
@@ -100,14 +100,18 @@ static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &
         for (int c = 0; c < k; c++) {
             perm[c] = c;
         }
+        const double lim = kRankTol * kRankTol;
         for (int h = 0; h < p; h++) {
             int best = h;
             double bn = -1.0;
-            for (int c = h; c < k; c++) { // exact remaining norms (no downdating: sizes are small)
-                const double cn = ct.col(c).tail(nf - h).squaredNorm();
-                if (cn > bn) {
-                    bn = cn;
-                    best = c;
+            // equality rows first: a dependent row is left out, and an inequality row can leave the set
+            for (int pass = 0; pass < 2 && !(bn > lim); pass++) {
+                for (int c = h; c < k; c++) { // exact remaining norms (no downdating: sizes are small)
+                    const double cn = ct.col(c).tail(nf - h).squaredNorm();
+                    if ((pass == 1 || low(ar[perm[c]]) < 0.0) && cn > bn) {
+                        bn = cn;
+                        best = c;
+                    }
                 }
             }
             if (!(std::sqrt(bn) > kRankTol * (h > 0 ? std::fabs(ct(0, 0)) : 1.0))) {
@@ -182,7 +186,8 @@ static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &
 }
 
 // One polish try from the network's iterate (a = N^T w, b = N x + q). Seed: the active set the projection
-// sees (a variable whose a_j the box clips, a row with w_i - b_i > 0, every equality row). Then a dual
+// sees (a variable whose a_j the box clips, a row with w_i - b_i > 0, every equality row); cold: the
+// equality rows alone. Then a dual
 // active-set method (Goldfarb-Idnani; with the objective 1/2 |x|^2 each subproblem is kkt_solve): first
 // drop seed members with a negative multiplier, most negative first, until the set is dual feasible; then
 // add the most violated constraint p and move along the segment to the solution with p in the set (the KKT
@@ -192,14 +197,15 @@ static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &
 // The caller still checks the candidate with the network's residual.
 template <typename AV, typename BV, typename WV>
 static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const MapV &low,
-                      const AV &a, const BV &b, const WV &w, double eps, int *budget, VecX &xc, VecW &wc) {
+                      const AV &a, const BV &b, const WV &w, int cold, double eps, int *budget, VecX &xc,
+                      VecW &wc) {
     const int n = (int)N.cols(), m = (int)N.rows();
     unsigned char set[kMaxN + kMaxM];
     for (int j = 0; j < n; j++) {
-        set[j] = (unsigned char)(a(j) <= lox(j) ? 1 : a(j) >= hix(j) ? 2 : 0);
+        set[j] = (unsigned char)(cold ? 0 : a(j) <= lox(j) ? 1 : a(j) >= hix(j) ? 2 : 0);
     }
     for (int i = 0; i < m; i++) {
-        set[n + i] = (unsigned char)(low(i) < 0.0 || w(i) - b(i) > 0.0);
+        set[n + i] = (unsigned char)(low(i) < 0.0 || (!cold && w(i) - b(i) > 0.0));
     }
     VecX x1(n), at(n), a1(n);
     VecW w1(m);
@@ -208,7 +214,7 @@ static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV 
             return 0;
         }
         (*budget)--;
-        return kkt_solve(N, q, lox, hix, set, xo, wo);
+        return kkt_solve(N, q, lox, hix, low, set, xo, wo);
     };
     // Multiplier of member k (k < n: a bound, lam = lo - a_k or a_k - hi; else a row, w) given a = N^T w; the
     // members that may leave: bounds of a variable with lo < hi, inequality rows. Others: +inf.
@@ -293,7 +299,7 @@ static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV 
                 const unsigned char sp = set[p];
                 set[p] = 0;
                 (*budget)--;
-                kkt_solve(N, q, lox, hix, set, x1, w1, &g, &mu, &gres);
+                kkt_solve(N, q, lox, hix, low, set, x1, w1, &g, &mu, &gres);
                 set[p] = sp;
                 if (gres <= kRankTol * g.norm()) {
                     at.noalias() = N.transpose().lazyProduct(wc);
@@ -430,17 +436,23 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         // solves in all, kPolishTrySolves per try. Accepted only if the candidate meets this loop's own test;
         // else the iteration goes on from (x, w), untouched.
         if (tries < polish_max && (steps >= next_k || r <= next_r)) {
-            int budget = std::min(polish_max - tries, kPolishTrySolves);
-            const int left = budget;
-            const int got = polish_try(N, q, lox, hix, low, a, b, w, 0.1 * tol, &budget, xc, wc);
-            tries += left - budget;
-            if (got) {
-                const double rc = residual_at();
-                if (rc <= tol && xc.allFinite() && wc.allFinite()) { // a NaN could slip through the max norms
-                    x = xc;
-                    w = wc;
-                    r = rc;
-                    res->polished = 1;
+            // the first time, a failed try from the iterate's set is followed by one from the equalities
+            // alone (the textbook cold start of the dual method: finite for any feasible QP, budget
+            // permitting)
+            for (int cold = 0; cold < (steps == 0 ? 2 : 1) && !res->polished && tries < polish_max; cold++) {
+                int budget = std::min(polish_max - tries, kPolishTrySolves);
+                const int left = budget;
+                const int got = polish_try(N, q, lox, hix, low, a, b, w, cold, 0.1 * tol, &budget, xc, wc);
+                tries += left - budget;
+                if (got) {
+                    const double rc = residual_at();
+                    if (rc <= tol && xc.allFinite() &&
+                        wc.allFinite()) { // a NaN could slip through the max norms
+                        x = xc;
+                        w = wc;
+                        r = rc;
+                        res->polished = 1;
+                    }
                 }
             }
             if (res->polished) {
