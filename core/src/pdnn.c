@@ -12,7 +12,7 @@
 #define PDNN_DEFAULT_GAMMA 1.9
 #define PDNN_DEFAULT_FAR_WEIGHT 0.3
 #define PDNN_FAR_SLACK 0.02 /* rows are unit-norm: slack in phi units, relative to 1 + ||phi|| */
-#define PDNN_DEFAULT_POLISH_MAX 24
+#define PDNN_DEFAULT_POLISH_MAX 48
 
 void mca_pdnn_default_params(mca_pdnn_params_t *params) {
     if (params == NULL) {

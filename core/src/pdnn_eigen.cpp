@@ -37,7 +37,7 @@ using MapV = Eigen::Map<const Eigen::VectorXd>;
 constexpr double kRankTol = 1e-9;
 constexpr int kPolishEvery = 24;     // steps after a failed try before the next one, doubled each time
 constexpr double kPolishDrop = 0.1;  // ... or when the residual has fallen by this factor
-constexpr int kPolishTrySolves = 12; // subproblem solves per try at most
+constexpr int kPolishTrySolves = 24; // subproblem solves per try at most
 
 // Solve min 1/2 |x|^2 with the rows in `set` (set[n + i] = 1) as equalities and the variables with
 // set[j] = 1 / 2 at their lower / upper bound: C x_F = d, x_F = C^T w_A (C = N[A, F], unit rows), through a
