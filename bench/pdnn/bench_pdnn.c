@@ -9,10 +9,17 @@
  *   bench_pdnn edge [OPTIONS]        fixed Euler step kappa = f * kappa_bound for a range of f on cold
  *                                    solves: steps to converge (or capped, or diverged), and whether 5
  *                                    warm ticks (moves of --eps) after it converge too (the stability edge)
+ *   bench_pdnn replay DIR [OPTIONS]  the QPs of DIR (mca_qp_dump_json files, e.g. mca-sim --dump-qp) solved
+ *                                    in file-name order with one warm-started solver, as the loop would
+ *                                    (but without the loop's row remapping): steps, polish tries, unconverged
+ *                                    (--max-steps defaults to the controller's 2000 here)
  * OPTIONS: --runs R (100) --ticks T (10) --eps E (1e-3) --tol X (1e-9) --precond orth|scale|none
  *          --rule adaptive|bound --far W (0.3; 1 = off) --max-steps S (20000) --seed K (1) --tight P (0.15)
  *          --gamma G (1.9) --form componentwise|normal (componentwise: 3 rows per link, 54; normal: 1, 18)
+ *          --no-polish 0|1 (0) --polish-max N (0: the solver's default) --verbose 1 (replay: name the
+ *          QPs not converged or over 300 steps)
  * Not a test: numbers depend on the machine. */
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -29,7 +36,7 @@
 typedef struct opts {
     int runs, ticks, max_steps;
     double eps, tol, far, tight, gamma;
-    int precond, rule, normal;
+    int precond, rule, normal, no_polish, polish_max, verbose;
     unsigned long long seed;
     const char *dir;
 } opts_t;
@@ -58,10 +65,10 @@ static double pct(double *v, int n, double p) {
 
 static void usage(const char *argv0) {
     fprintf(stderr,
-            "usage: %s time|dump DIR|edge [--runs R] [--ticks T] [--eps E] [--tol X] [--precond "
+            "usage: %s time|dump DIR|edge|replay DIR [--runs R] [--ticks T] [--eps E] [--tol X] [--precond "
             "orth|scale|none]\n"
             "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n"
-            "       [--form componentwise|normal]\n",
+            "       [--form componentwise|normal] [--no-polish 0|1] [--polish-max N]\n",
             argv0);
 }
 
@@ -80,6 +87,12 @@ static int parse(int argc, char **argv, int first, opts_t *o) {
             o->ticks = (int)strtol(v, &end, 10);
         } else if (!strcmp(a, "--max-steps")) {
             o->max_steps = (int)strtol(v, &end, 10);
+        } else if (!strcmp(a, "--no-polish")) {
+            o->no_polish = (int)strtol(v, &end, 10);
+        } else if (!strcmp(a, "--verbose")) {
+            o->verbose = (int)strtol(v, &end, 10);
+        } else if (!strcmp(a, "--polish-max")) {
+            o->polish_max = (int)strtol(v, &end, 10);
         } else if (!strcmp(a, "--seed")) {
             o->seed = strtoull(v, &end, 10);
         } else if (!strcmp(a, "--eps")) {
@@ -132,6 +145,200 @@ static void params_of(const opts_t *o, mca_pdnn_params_t *prm) {
     prm->step_rule = o->rule;
     prm->far_weight = o->far;
     prm->gamma = o->gamma;
+    prm->no_polish = o->no_polish;
+    prm->polish_max = o->polish_max;
+}
+
+/* ---- replay: a reader for mca_qp_dump_json's output (model/src/qp_dump.c), that format only ---- */
+/* The value after "key": in s, or NULL. */
+static const char *json_key(const char *s, const char *key) {
+    char pat[64];
+    snprintf(pat, sizeof(pat), "\"%s\":", key);
+    const char *p = strstr(s, pat);
+    return p ? p + strlen(pat) : NULL;
+}
+
+/* [x, y, null, ...] into out (null -> null_val); the count, or -1 */
+static int json_vec(const char **pp, double *out, int max, double null_val) {
+    const char *p = *pp;
+    while (*p == ' ' || *p == '\n' || *p == ',') {
+        p++;
+    }
+    if (*p++ != '[') {
+        return -1;
+    }
+    int k = 0;
+    for (;;) {
+        while (*p == ' ' || *p == '\n' || *p == ',') {
+            p++;
+        }
+        if (*p == ']') {
+            *pp = p + 1;
+            return k;
+        }
+        if (k == max) {
+            return -1;
+        }
+        if (!strncmp(p, "null", 4)) {
+            out[k++] = null_val;
+            p += 4;
+        } else {
+            char *end;
+            out[k++] = strtod(p, &end);
+            if (end == p) {
+                return -1;
+            }
+            p = end;
+        }
+    }
+}
+
+static int json_int(const char *s, const char *key, int *v) {
+    const char *p = json_key(s, key);
+    return p && sscanf(p, "%d", v) == 1 ? 0 : -1;
+}
+
+/* [[row], [row], ...]: rows of len each */
+static int json_mat(const char *s, const char *key, double *m, int rows, int stride, int len) {
+    const char *p = json_key(s, key);
+    if (p == NULL || *p++ != '[') {
+        return -1;
+    }
+    for (int i = 0; i < rows; i++) {
+        if (json_vec(&p, m + (size_t)i * (size_t)stride, len, NAN) != len) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int json_vec_key(const char *s, const char *key, double *v, int len, double null_val) {
+    const char *p = json_key(s, key);
+    return p && json_vec(&p, v, len, null_val) == len ? 0 : -1;
+}
+
+static char *slurp(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) {
+        return NULL;
+    }
+    fseek(f, 0, SEEK_END);
+    const long len = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = len >= 0 ? malloc((size_t)len + 1) : NULL;
+    if (buf != NULL && fread(buf, 1, (size_t)len, f) != (size_t)len) {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    if (buf != NULL) {
+        buf[len] = '\0';
+    }
+    return buf;
+}
+
+/* One dumped QP (and the phi it was dumped with, when present: has_phi). 0 or -1. */
+static int read_qp(const char *path, mca_qp_t *qp, double *phi, int *has_phi) {
+    char *s = slurp(path);
+    if (s == NULL) {
+        return -1;
+    }
+    int n, ne, ni, rc = -1;
+    if (json_int(s, "n", &n) == 0 && json_int(s, "n_eq", &ne) == 0 && json_int(s, "n_ineq", &ni) == 0 &&
+        mca_qp_reset(qp, n, ne, ni) == MCA_OK &&
+        json_mat(s, "G", &qp->G[0][0], ne, MCA_QP_MAX_VARS, n) == 0 &&
+        json_vec_key(s, "alpha", qp->alpha, ne, NAN) == 0 &&
+        json_mat(s, "U", &qp->U[0][0], ni, MCA_QP_MAX_VARS, n) == 0 &&
+        json_vec_key(s, "beta", qp->beta, ni, NAN) == 0 && json_vec_key(s, "lb", qp->lb, n, -INFINITY) == 0 &&
+        json_vec_key(s, "ub", qp->ub, n, INFINITY) == 0) {
+        rc = 0;
+        /* the dumped phi as a reference only where it was converged (mca-sim dumps capped ticks too when
+           asked, tagged "capped") */
+        const char *tag = json_key(s, "tag");
+        *has_phi = json_vec_key(s, "phi", phi, n, NAN) == 0 && !(tag && strstr(tag, "capped"));
+    }
+    free(s);
+    return rc;
+}
+
+static int cmp_str(const void *a, const void *b) {
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static int run_replay(const opts_t *o) {
+    DIR *d = opendir(o->dir);
+    if (d == NULL) {
+        fprintf(stderr, "cannot open %s: %s\n", o->dir, strerror(errno));
+        return 2;
+    }
+    int nf = 0, cap = 0;
+    char **names = NULL;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        const size_t len = strlen(e->d_name);
+        if (len < 5 || strcmp(e->d_name + len - 5, ".json") != 0) {
+            continue;
+        }
+        if (nf == cap) {
+            cap = cap ? 2 * cap : 256;
+            names = realloc(names, sizeof(char *) * (size_t)cap);
+        }
+        names[nf++] = strdup(e->d_name);
+    }
+    closedir(d);
+    if (nf == 0) {
+        fprintf(stderr, "no .json files in %s\n", o->dir);
+        return 2;
+    }
+    qsort(names, (size_t)nf, sizeof(char *), cmp_str);
+    double *st = calloc((size_t)nf, sizeof(double)), *tr = calloc((size_t)nf, sizeof(double));
+    double *ns = calloc((size_t)nf, sizeof(double));
+    mca_pdnn_params_t prm;
+    params_of(o, &prm);
+    mca_pdnn_init(&solver);
+    static mca_qp_t qp;
+    double phi[MCA_QP_MAX_VARS], phi_d[MCA_QP_MAX_VARS], dphi = 0.0;
+    int ok = 0, unconv = 0, polished = 0, over300 = 0, cold = 0;
+    for (int k = 0; k < nf; k++) {
+        char path[4096];
+        int has_phi = 0;
+        snprintf(path, sizeof(path), "%s/%s", o->dir, names[k]);
+        if (read_qp(path, &qp, phi_d, &has_phi) != 0) {
+            fprintf(stderr, "cannot read %s\n", path);
+            return 2;
+        }
+        mca_pdnn_result_t res;
+        const double t0 = now_ns();
+        const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+        ns[ok] = now_ns() - t0;
+        st[ok] = res.steps;
+        tr[ok++] = res.polish_tries;
+        unconv += rc != MCA_OK;
+        if (o->verbose && (rc != MCA_OK || res.steps > 300)) {
+            printf("  %s: %s: %d steps, residual %.3g, %d polish tries, warm %d\n",
+                   rc != MCA_OK ? "not converged" : "over 300 steps", names[k], res.steps, res.residual,
+                   res.polish_tries, res.warm);
+        }
+        polished += res.polished > 0;
+        over300 += res.steps > 300;
+        cold += res.warm == 0;
+        for (int j = 0; has_phi && rc == MCA_OK && j < qp.n; j++) {
+            dphi = fmax(dphi, fabs(phi[j] - phi_d[j]));
+        }
+        free(names[k]);
+    }
+    free(names);
+    printf("replay %s: %d QPs in order, one warm solver (%d cold), tol %g, cap %d, polish %s\n", o->dir, ok,
+           cold, o->tol, o->max_steps, o->no_polish ? "off" : "on");
+    printf("  steps p50 %.0f p99 %.0f p99.9 %.0f max %.0f | > 300: %d | not converged: %d | polished: %d\n",
+           pct(st, ok, 50), pct(st, ok, 99), pct(st, ok, 99.9), pct(st, ok, 100), over300, unconv, polished);
+    printf("  polish tries (exact solves) p50 %.0f p99 %.0f max %.0f | us p50 %.1f p99 %.1f max %.1f | "
+           "max |phi - dumped phi| (converged) %.2g\n",
+           pct(tr, ok, 50), pct(tr, ok, 99), pct(tr, ok, 100), pct(ns, ok, 50) / 1e3, pct(ns, ok, 99) / 1e3,
+           pct(ns, ok, 100) / 1e3, dphi);
+    free(st);
+    free(tr);
+    free(ns);
+    return 0;
 }
 
 /* time and dump: runs of ticks */
@@ -314,7 +521,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     int first = 2;
-    if (!strcmp(argv[1], "dump")) {
+    if (!strcmp(argv[1], "dump") || !strcmp(argv[1], "replay")) {
         if (argc < 3) {
             usage(argv[0]);
             return 2;
@@ -328,6 +535,16 @@ int main(int argc, char **argv) {
     if (parse(argc, argv, first, &o) != 0) {
         usage(argv[0]);
         return 2;
+    }
+    int max_steps_given = 0;
+    for (int i = first; i < argc; i++) {
+        max_steps_given |= !strcmp(argv[i], "--max-steps");
+    }
+    if (!strcmp(argv[1], "replay")) {
+        if (!max_steps_given) {
+            o.max_steps = 2000; /* the controller's cap */
+        }
+        return run_replay(&o);
     }
     return !strcmp(argv[1], "edge") ? run_edge(&o) : run_ticks(&o);
 }

@@ -12,6 +12,7 @@
 #define PDNN_DEFAULT_GAMMA 1.9
 #define PDNN_DEFAULT_FAR_WEIGHT 0.3
 #define PDNN_FAR_SLACK 0.02 /* rows are unit-norm: slack in phi units, relative to 1 + ||phi|| */
+#define PDNN_DEFAULT_POLISH_MAX 48
 
 void mca_pdnn_default_params(mca_pdnn_params_t *params) {
     if (params == NULL) {
@@ -500,6 +501,7 @@ static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b, int64_t dea
 typedef struct pdnn_run {
     double r_true, kappa;
     int steps, total, diverged, timed_out;
+    int polished, tries;
 } pdnn_run_t;
 
 /* Integrate every block from ws_By until the QP as given meets tol (checked on the mapped-back y, the
@@ -509,7 +511,9 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
                        const double *kfix, int cap, pdnn_run_t *run) {
     const int n = qp->n;
     double tol_it = prm->tol, r_prev = INFINITY;
-    int bsteps[MCA_QP_MAX_VARS] = {0};
+    int bsteps[MCA_QP_MAX_VARS] = {0}, btries[MCA_QP_MAX_VARS] = {0};
+    unsigned char bpol[MCA_QP_MAX_VARS] = {0};
+    const int pmax = prm->no_polish ? 0 : prm->polish_max > 0 ? prm->polish_max : PDNN_DEFAULT_POLISH_MAX;
     run->r_true = INFINITY;
     for (int pass = 0; pass < 8; pass++) {
         for (int b = 0; b < s->ws_nblk; b++) {
@@ -517,8 +521,12 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
             const mca_pdnn__problem_t p = block_problem(s, b, prm->deadline_ns);
             mca_pdnn_result_t it = {0};
             mca_pdnn__iterate(&p, &s->ws_By[bl[0] + bl[2]], kfix[b], prm->gamma, tol_it, cap - bsteps[b],
-                              !prm->no_rescue, &it);
+                              !prm->no_rescue, pmax - btries[b], &it);
             bsteps[b] += it.steps;
+            btries[b] += it.polish_tries;
+            run->tries += it.polish_tries;
+            /* a block stays polished while later passes leave it where the polish put it */
+            bpol[b] = (unsigned char)(it.polished || (bpol[b] && it.steps == 0));
             run->total += it.steps;
             if (bsteps[b] >= run->steps) {
                 run->steps = bsteps[b];
@@ -531,6 +539,10 @@ static void run_passes(mca_pdnn_t *s, const mca_qp_t *qp, int pre, const mca_pdn
             run->timed_out |= it.timed_out;
         }
         gather(s, n, 0);
+        run->polished = 0;
+        for (int b = 0; b < s->ws_nblk; b++) {
+            run->polished += bpol[b];
+        }
         if (run->diverged) {
             return;
         }
@@ -637,10 +649,12 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
             memcpy(s->ws_t, s->ws_t2, sizeof(double) * (size_t)h);
             run.steps += run2.steps;
             run.total += run2.total;
+            run.tries += run2.tries;
             run.timed_out |= run2.timed_out;
         } else {
             run2.steps += run.steps;
             run2.total += run.total;
+            run2.tries += run.tries;
             run = run2;
             res.kappa = run2.kappa;
         }
@@ -655,6 +669,8 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
     res.timed_out = run.timed_out && !res.converged;
     res.warm = warm;
     res.precond = pre;
+    res.polished = res.converged ? run.polished : 0;
+    res.polish_tries = run.tries;
 
     for (int j = 0; j < n; j++) {
         phi[j] = s->ws_y[j];

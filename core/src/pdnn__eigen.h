@@ -29,11 +29,12 @@ double mca_pdnn__norm_sq_bound(const mca_pdnn__problem_t *p);
  * Explicit Euler steps y += kappa_k (I + M^T) e(y) from y (n + m values, updated in place) until the
  * residual, read through f in the QP as given, is <= tol, or max_steps updates were made; stops early on a
  * non-finite residual. keep_best: when the cap comes first, leave y at the least-residual point seen.
- * kappa_fixed > 0: constant step; else kappa_k = gamma ||e||^2 / ||(I + M^T) e||^2. Fills steps, residual,
- * converged, kappa. No allocation.
+ * kappa_fixed > 0: constant step; else kappa_k = gamma ||e||^2 / ||(I + M^T) e||^2. polish_max: at most that
+ * many active-set polish tries (an exact solve of a guessed active set, kept only if it meets tol). Fills
+ * steps, residual, converged, kappa, polish_tries and sets polished when a polish ended it. No allocation.
  */
 void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, double kappa_fixed, double gamma, double tol,
-                       int max_steps, int keep_best, mca_pdnn_result_t *res);
+                       int max_steps, int keep_best, int polish_max, mca_pdnn_result_t *res);
 
 #ifdef __cplusplus
 }

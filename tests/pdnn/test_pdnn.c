@@ -311,6 +311,7 @@ static void test_warm_start(void **state) {
     mca_pdnn_params_t prm;
     mca_pdnn_default_params(&prm);
     prm.max_steps = 200000;
+    prm.no_polish = 1; /* the network's own warm start (the polish would end most of these at step 0) */
     long cold_sum = 0, pert_sum = 0;
     for (int trial = 0; trial < 10; trial++) {
         qpgen_scene_t sc;
@@ -408,6 +409,22 @@ static void test_no_malloc(void **state) {
         assert_true(rc2 == MCA_OK || rc2 == MCA_ENOTCONV);
         assert_int_equal(trip_count, 0);
     }
+    /* the polish's pivoted QR on the real tick of test_polish_real_qp, warm and cold */
+    mca_pdnn_params_t prm;
+    mca_pdnn_default_params(&prm);
+    prm.max_steps = 2000;
+    fixture_tick7199(&qp);
+    mca_pdnn_init(&solver);
+    trip_count = 0;
+    trip_armed = 1;
+    const int rc1 = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+    fixture_tick7200(&qp);
+    const int rc2 = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+    trip_armed = 0;
+    assert_int_equal(rc1, MCA_OK);
+    assert_int_equal(rc2, MCA_OK);
+    assert_true(res.polished > 0 && res.polish_tries > 0);
+    assert_int_equal(trip_count, 0);
 }
 
 /* ---- 5. bad input, divergence, the stability bound ---- */
@@ -479,6 +496,7 @@ static void test_divergence_reported(void **state) {
     mca_pdnn_default_params(&prm);
     prm.kappa = 5.0;
     prm.max_steps = 5000;
+    prm.no_polish = 1; /* the polish would finish this QP at step 0, before the blow-up */
     double phi[16];
     mca_pdnn_result_t res;
     mca_pdnn_init(&solver);
@@ -577,6 +595,7 @@ static void test_warm_restart_real_qp(void **state) {
     mca_pdnn_params_t prm;
     mca_pdnn_default_params(&prm);
     prm.max_steps = 2000;
+    prm.no_polish = 1; /* the network's rescue (test_polish_real_qp: the polish finishes this tick) */
     fixture_tick7199(&qp);
     mca_pdnn_init(&solver);
     assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
@@ -629,6 +648,214 @@ static void test_bound_step_is_stable(void **state) {
     }
 }
 
+/* ---- 6. active-set polish ---- */
+/* KKT violation of (phi, y = [phi; v_e; v_i]) for the QP as given, computed here from the definitions and
+ * nothing of the solver's: primal feasibility (equalities, rows, box), dual signs (v_i >= 0), complementarity
+ * (v_i * slack), and stationarity with the box multipliers z = phi - (G^T v_e - U^T v_i) of the right sign
+ * (z_j > 0 only at lb_j, z_j < 0 only at ub_j). A strictly convex QP's KKT point is its unique solution. */
+static double kkt_error(const mca_qp_t *qp, const double *phi, const double *y) {
+    const int n = qp->n, ne = qp->n_eq, ni = qp->n_ineq;
+    const double *ve = y + n, *vi = y + n + ne;
+    double err = 0.0;
+    for (int i = 0; i < ne; i++) {
+        double r = -qp->alpha[i];
+        for (int j = 0; j < n; j++) {
+            r += qp->G[i][j] * phi[j];
+        }
+        err = fmax(err, fabs(r));
+    }
+    for (int i = 0; i < ni; i++) {
+        double slack = qp->beta[i];
+        for (int j = 0; j < n; j++) {
+            slack -= qp->U[i][j] * phi[j];
+        }
+        err = fmax(err, fmax(-slack, -vi[i]));
+        err = fmax(err, fabs(vi[i] * slack));
+    }
+    for (int j = 0; j < n; j++) {
+        double a = 0.0;
+        for (int i = 0; i < ne; i++) {
+            a += qp->G[i][j] * ve[i];
+        }
+        for (int i = 0; i < ni; i++) {
+            a -= qp->U[i][j] * vi[i];
+        }
+        const double z = phi[j] - a; /* phi = a + z: z > 0 pushes up from lb, z < 0 down from ub */
+        err = fmax(err, fmax(qp->lb[j] - phi[j], phi[j] - qp->ub[j]));
+        err = fmax(err, fmax(z, 0.0) * fmin(phi[j] - qp->lb[j], 1.0));
+        err = fmax(err, fmax(-z, 0.0) * fmin(qp->ub[j] - phi[j], 1.0));
+    }
+    return err;
+}
+
+static void test_polish_parallel_rows(void **state) {
+    (void)state;
+    /* min |phi|^2/2 s.t. phi1 + phi2 + phi3 = 3 and the same active row three times: 2 phi1 <= 0,
+     * 4 phi1 <= 0 (parallel), -phi1 >= 0 written as 0.5 phi1 <= 0. Answer (0, 1.5, 1.5) as in
+     * test_active_inequality; the multipliers are not unique (any split of 0.75 * 2 over the rows), so the
+     * KKT system is singular: the polish's pivoted QR must see rank 2 and put the multiplier on one row.
+     * Without the rank test the triangular solve divides by ~0 and the candidate is rejected (polished 0). */
+    mca_qp_t qp;
+    mca_qp_reset(&qp, 3, 1, 3);
+    free_box(&qp);
+    qp.G[0][0] = qp.G[0][1] = qp.G[0][2] = 1.0;
+    qp.alpha[0] = 3.0;
+    qp.U[0][0] = 2.0;
+    qp.U[1][0] = 4.0;
+    qp.U[2][0] = 0.5;
+    for (int v = 0; v < N_VARIANTS; v++) {
+        mca_pdnn_params_t prm;
+        variant(&prm, v);
+        prm.max_steps = 2000;
+        double phi[3];
+        mca_pdnn_result_t res;
+        assert_int_equal(solve(&qp, &prm, phi, &res), MCA_OK);
+        assert_int_equal(res.polished, 1);
+        assert_true(res.steps <= 1); /* cold: the guess at y = 0 (no row violated), then one correction */
+        assert_near(phi[0], 0.0, 1e-12);
+        assert_near(phi[1], 1.5, 1e-12);
+        assert_near(phi[2], 1.5, 1e-12);
+        assert_true(kkt_error(&qp, phi, solver.y) <= 1e-12);
+        assert_near(2.0 * solver.y[4] + 4.0 * solver.y[5] + 0.5 * solver.y[6], 1.5, 1e-12);
+        /* near-parallel (1e-12 rad off): numerically the same row; the dependent row's own equation then
+         * holds to ~1e-12 only, which the default tol accepts (the network cannot reach 1e-12 here either) */
+        mca_qp_t q2 = qp;
+        q2.U[1][1] = 4e-12;
+        prm.tol = 1e-9;
+        assert_int_equal(solve(&q2, &prm, phi, &res), MCA_OK);
+        assert_int_equal(res.polished, 1);
+        assert_true(kkt_error(&q2, phi, solver.y) <= 1e-11);
+        assert_near(phi[1], 1.5, 1e-11);
+    }
+}
+
+static void test_polish_dependent_row(void **state) {
+    (void)state;
+    /* min |phi|^2/2 s.t. phi1 + phi2 + phi3 = 3, phi1 <= 0, phi2 <= 0, phi1 + phi2 <= beta2. Tick A (beta2 =
+     * 5): (0, 0, 3), the first two rows active (multipliers 3, 3). Tick B (beta2 = -1), warm from A: the
+     * third row is violated and its normal is the sum of the two active ones, so no step in phi can reach it:
+     * the polish's dual step moves the multipliers until one of the two leaves, then the next one; answer
+     * (-0.5, -0.5, 4), v_e = 4, v_i = (0, 0, 4.5), exact at step 0. A polish that gives up on a dependent
+     * row leaves this tick to the network (steps > 0). */
+    mca_qp_t qp;
+    mca_qp_reset(&qp, 3, 1, 3);
+    free_box(&qp);
+    qp.G[0][0] = qp.G[0][1] = qp.G[0][2] = 1.0;
+    qp.alpha[0] = 3.0;
+    qp.U[0][0] = 1.0;
+    qp.U[1][1] = 1.0;
+    qp.U[2][0] = qp.U[2][1] = 1.0;
+    for (int v = 0; v < N_VARIANTS; v++) {
+        mca_pdnn_params_t prm;
+        variant(&prm, v);
+        prm.max_steps = 2000;
+        double phi[3];
+        mca_pdnn_result_t res;
+        qp.beta[2] = 5.0;
+        assert_int_equal(solve(&qp, &prm, phi, &res), MCA_OK);
+        assert_near(solver.y[4], 3.0, 1e-12);
+        assert_near(solver.y[5], 3.0, 1e-12);
+        qp.beta[2] = -1.0;
+        assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
+        assert_int_equal(res.warm, 2);
+        assert_int_equal(res.polished, 1);
+        assert_int_equal(res.steps, 0);
+        assert_near(phi[0], -0.5, 1e-12);
+        assert_near(phi[1], -0.5, 1e-12);
+        assert_near(phi[2], 4.0, 1e-12);
+        assert_near(solver.y[3], 4.0, 1e-12);
+        assert_near(solver.y[4], 0.0, 1e-12);
+        assert_near(solver.y[5], 0.0, 1e-12);
+        assert_near(solver.y[6], 4.5, 1e-12);
+        assert_true(kkt_error(&qp, phi, solver.y) <= 1e-12);
+    }
+}
+
+static void test_polish_wrong_guess(void **state) {
+    (void)state;
+    /* min |phi|^2/2 s.t. phi1 >= 1, phi1 + phi2 >= 3 (as -phi1 <= -1, -phi1 - phi2 <= -3). Both rows are
+     * violated at 0, so the guess at the cold start makes both active: candidate (1, 2) with multipliers
+     * (-1, 2), a wrong sign. The answer is (1.5, 1.5), the first row inactive (multipliers (0, 1.5)). */
+    mca_qp_t qp;
+    mca_qp_reset(&qp, 2, 0, 2);
+    free_box(&qp);
+    qp.U[0][0] = -1.0;
+    qp.beta[0] = -1.0;
+    qp.U[1][0] = qp.U[1][1] = -1.0;
+    qp.beta[1] = -3.0;
+    double phi[2];
+    mca_pdnn_result_t res;
+    mca_pdnn_params_t prm;
+    mca_pdnn_default_params(&prm);
+    prm.max_steps = 2000;
+    /* one try only: the wrong candidate must be rejected and the network's answer returned */
+    prm.polish_max = 1;
+    assert_int_equal(solve(&qp, &prm, phi, &res), MCA_OK);
+    assert_int_equal(res.polish_tries, 1);
+    assert_int_equal(res.polished, 0);
+    assert_true(res.steps > 0);
+    assert_near(phi[0], 1.5, 1e-8);
+    assert_near(phi[1], 1.5, 1e-8);
+    assert_true(kkt_error(&qp, phi, solver.y) <= 1e-8);
+    /* by default the correction drops the row with the negative multiplier: exact at step 0 */
+    prm.polish_max = 0;
+    assert_int_equal(solve(&qp, &prm, phi, &res), MCA_OK);
+    assert_int_equal(res.polished, 1);
+    assert_int_equal(res.polish_tries, 2);
+    assert_int_equal(res.steps, 0);
+    assert_near(phi[0], 1.5, 1e-14);
+    assert_near(phi[1], 1.5, 1e-14);
+    assert_near(solver.y[2], 0.0, 0.0);
+    assert_near(solver.y[3], 1.5, 1e-14);
+    /* the state is the polished answer: the same QP again takes no step and no try */
+    assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
+    assert_int_equal(res.steps, 0);
+    assert_int_equal(res.polish_tries, 0);
+    /* an infeasible QP is never "polished": phi1 >= 1 and phi1 <= 0 */
+    qp.U[1][0] = 1.0;
+    qp.U[1][1] = 0.0;
+    qp.beta[1] = 0.0;
+    assert_int_equal(solve(&qp, &prm, phi, &res), MCA_ENOTCONV);
+    assert_int_equal(res.polished, 0);
+    assert_true(res.polish_tries > 0);
+}
+
+static void test_polish_real_qp(void **state) {
+    (void)state;
+    /* The mca-sim tick of test_warm_restart_real_qp that the network cannot finish in 2000 steps (43000
+     * cold): with the polish, exact at once, and its KKT conditions hold in the QP as given. */
+    mca_qp_t qp;
+    double phi[16];
+    mca_pdnn_result_t res;
+    mca_pdnn_params_t prm;
+    mca_pdnn_default_params(&prm);
+    prm.max_steps = 2000;
+    fixture_tick7199(&qp);
+    mca_pdnn_init(&solver);
+    assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
+    fixture_tick7200(&qp);
+    assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
+    assert_int_equal(res.warm, 2);
+    assert_int_equal(res.polished, 2); /* both arms' blocks */
+    assert_true(res.steps <= 300);
+    const double kkt = kkt_error(&qp, phi, solver.y);
+    assert_true(kkt <= 1e-9);
+    /* and agrees with the network run to 1e-9 (43000 steps) within what its residual allows */
+    double phi_ref[16];
+    mca_pdnn_result_t ref;
+    prm.max_steps = 200000;
+    prm.no_polish = 1;
+    mca_pdnn_init(&solver);
+    assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi_ref, &ref), MCA_OK);
+    double err = 0.0;
+    for (int j = 0; j < 16; j++) {
+        err = fmax(err, fabs(phi[j] - phi_ref[j]));
+    }
+    assert_true(err < 1e-6);
+    print_message("sim t=7.200 polished: %d steps, %d tries, KKT error %.2g, |phi - phi_net(1e-9)| %.2g\n",
+                  res.steps, res.polish_tries, kkt, err);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_equality_closed_form),
@@ -645,6 +872,10 @@ int main(void) {
         cmocka_unit_test(test_inactive_zero_rows),
         cmocka_unit_test(test_warm_restart_real_qp),
         cmocka_unit_test(test_bound_step_is_stable),
+        cmocka_unit_test(test_polish_parallel_rows),
+        cmocka_unit_test(test_polish_dependent_row),
+        cmocka_unit_test(test_polish_wrong_guess),
+        cmocka_unit_test(test_polish_real_qp),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

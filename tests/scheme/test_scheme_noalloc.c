@@ -110,6 +110,9 @@ static int run(const char *path, const struct variant *v, long *ticks_faulted, l
     if (v->max_steps > 0) {
         cfg.pdnn.max_steps = v->max_steps;
     }
+    if (v->max_steps > 0 || v->eq_tol > 0.0) {
+        cfg.pdnn.no_polish = 1; /* the polish would finish these exactly at step 0: no fault, no cap */
+    }
     cfg.dist_method = v->dist;
     mca_controller_t *c = malloc(sizeof *c);
     if (!c || mca_controller_init(c, &cfg) != MCA_OK) {

@@ -60,6 +60,10 @@ typedef struct mca_pdnn_params {
                         steps is followed by a cold restart for the other half (the better answer is kept) */
     int64_t deadline_ns; /**< CLOCK_MONOTONIC instant at which the solve stops as if capped (checked every 16
                               steps; timed_out says so); 0: none. The 1 kHz loop's time budget. */
+    int no_polish;  /**< 1: the network alone. 0: active-set polish (docs/pdnn.md): at the first step and now
+                         and then, the active set read off the iterate is corrected by a dual active-set method
+                         and solved exactly; kept only if it meets tol, else the network goes on */
+    int polish_max; /**< polish subproblem solves per block and run (warm, and the cold restart); <= 0: 48 */
 } mca_pdnn_params_t;
 
 typedef struct mca_pdnn_result {
@@ -77,6 +81,8 @@ typedef struct mca_pdnn_result {
     int restarted;      /**< 1: the warm start missed tol in half the steps and a cold restart had the rest
                              (the result is the better of the two) */
     int timed_out;      /**< 1: stopped at params.deadline_ns before tol (mca_pdnn_solve: MCA_ETIMEDOUT) */
+    int polished;     /**< blocks whose answer is an accepted polish (the exact solution of an active set) */
+    int polish_tries; /**< polish subproblem solves (exact KKT solves), summed over the blocks */
 } mca_pdnn_result_t;
 
 /** Solver state: the primal-dual vector kept between ticks for warm starts. */
@@ -106,8 +112,8 @@ typedef struct mca_pdnn {
 } mca_pdnn_t;
 
 /** Defaults: kappa from the rule (adaptive), tol 1e-9, max_steps 20000, big 1e10, gamma 1.9, ORTH,
- *  far_weight 0.3, blocks split. For the 1 kHz loop set max_steps to the budget (~0.45 us per step for the
- *  dual-arm QP on the build machine, docs/pdnn.md). */
+ *  far_weight 0.3, blocks split, polish on (48 solves). For the 1 kHz loop set max_steps to the budget (~0.45
+ * us per step for the dual-arm QP on the build machine, docs/pdnn.md). */
 void mca_pdnn_default_params(mca_pdnn_params_t *params);
 
 /** Keep the warm start across a change of the inequality rows: the next QP's row i was row old_of_new[i] of
