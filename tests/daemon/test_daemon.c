@@ -946,6 +946,7 @@ static int cmp_i64(const void *a, const void *b) {
  * under mca-ts (the cell's arms far apart: no row binds, the repair keeps the answer inside the box). */
 static void budget_hook(mca_controller_config_t *cfg, void *arg) {
     const int steps = *(const int *)arg;
+    cfg->pdnn.no_polish = 1; /* the network's own steps and clock checks (the polish ends these at step 0) */
     if (steps > 0) {
         cfg->pdnn_budget_steps = steps;
     } else {
