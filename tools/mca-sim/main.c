@@ -392,6 +392,18 @@ int main(int argc, char **argv) {
                 "\"exact_error_max\":%.6g,\"pdnn_steps_p50\":%d,\"pdnn_steps_p999\":%d",
                 r->path_error_max, r->path_error_p99, r->exact_points, r->exact_missed, r->exact_error_max,
                 r->pdnn_steps_p50, r->pdnn_steps_p999);
+            fprintf(f, ",\"end_pair\":[%d,%d,%d,%d],\"end_distance\":%.6g,\"end_ee\":[", r->end_pair[0],
+                    r->end_pair[1], r->end_pair[2], r->end_pair[3],
+                    isfinite(r->end_distance) ? r->end_distance : -1.0);
+            for (int a = 0; a < scn.n_arms; a++) {
+                fprintf(f, "%s[%.5f,%.5f,%.5f]", a ? "," : "", r->end_ee[a][0], r->end_ee[a][1],
+                        r->end_ee[a][2]);
+            }
+            fprintf(f, "],\"end_tau\":[");
+            for (int a = 0; a < scn.n_arms; a++) {
+                fprintf(f, "%s%.4f", a ? "," : "", r->end_tau[a]);
+            }
+            fprintf(f, "]");
             fprintf(
                 f,
                 ",\"fault_text\":\"%s\",\"stop_requested\":%d,\"brake_t\":%.6g,\"brake_fallback_ticks\":%d,"

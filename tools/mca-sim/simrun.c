@@ -323,6 +323,15 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         }
     }
     r->ticks = k;
+    r->end_pair[0] = ip->min_arm_a;
+    r->end_pair[1] = ip->min_link_a;
+    r->end_pair[2] = ip->min_arm_b;
+    r->end_pair[3] = ip->min_link_b;
+    r->end_distance = ip->min_distance;
+    for (int a = 0; a < na; a++) {
+        memcpy(r->end_ee[a], ip->ee[a], sizeof r->end_ee[a]);
+        r->end_tau[a] = ip->tau[a];
+    }
     r->pdnn_steps_mean = steps_n ? steps_sum / steps_n : 0.0;
     r->completed &= r->exact_missed == 0;
     if (n_perr > 0) {

@@ -84,6 +84,11 @@ typedef struct mca_simrun_result {
     int exact_missed;       /**< of those, missed (farther than exact_tolerance while on the point) */
     double exact_error_max; /**< the largest distance to an exact point while on it [m] */
     int pdnn_steps_p50, pdnn_steps_p999; /**< PDNN steps per running tick */
+    /* where the run ended (an unfinished task named with its pair and positions) */
+    int end_pair[4];                /**< the closest pair: arm, link, arm, link */
+    double end_distance;            /**< its distance [m] */
+    double end_ee[MCA_MAX_ARMS][3]; /**< the tool tips */
+    double end_tau[MCA_MAX_ARMS];   /**< the path clocks [s] */
     double path_time_lost_s;   /**< task time at completion (or at the end) minus the paths' nominal end */
     int deadlocks;             /**< mca-ts deadlocks detected */
     double max_slack;          /**< mca-ts: largest tracking slack [m/s] */

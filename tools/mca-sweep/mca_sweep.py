@@ -585,7 +585,7 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
                lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
                max_err=r.get("max_err"))
     det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "exact_points", "exact_missed",
-                                      "exact_error_max")})
+                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
     if completed and not missed:
@@ -820,6 +820,16 @@ def table(tasks, schemes, sim, a):
             if v and v["reasons"]:
                 lines.append("reasons %-6s %-9s %s" % (s, "task" if mode == "task" else "with stop",
                                                      json.dumps(v["reasons"], sort_keys=True)))
+    # every unfinished task named: where it ended (the closest pair, its distance, the tool tips, the clocks)
+    for t in reach:
+        for s in schemes:
+            r = t["runs"].get(s, {}).get("task", {})
+            if r.get("cls") in ("safe-stop", "exact-missed") and r.get("end_pair") is not None:
+                p = r["end_pair"]
+                lines.append("unfinished %-6s %-16s %-20s pair arm%d.link%d-arm%d.link%d d %.4f m, tips %s, clocks %s s" % (
+                    s, t["id"], r.get("reason", ""), p[0], p[1], p[2], p[3], r["end_distance"],
+                    " ".join("[%.3f %.3f %.3f]" % tuple(e) for e in r["end_ee"]),
+                    "/".join("%.2f" % x for x in r["end_tau"])))
     # distances: where the tasks start and how near the arms come (does avoidance matter?)
     d0 = sorted(t["start_distance"] for t in reach)
     if d0:
