@@ -1055,6 +1055,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->active_rows = 0;
     info->binding_rows = 0;
     info->pdnn_steps = 0;
+    info->pdnn_exact_solves = 0;
     info->pdnn_residual = 0.0;
     info->pdnn_converged = 0;
     info->pdnn_budget_hit = MCA_BUDGET_NONE;
@@ -1216,6 +1217,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         const mca_pdnn_params_t prm = pdnn_params(cfg, t_enter);
         rc = mca_pdnn_solve(&ctrl->pdnn, &ctrl->qp, &prm, ctrl->phi, &pr);
         info->pdnn_steps = pr.steps;
+        info->pdnn_exact_solves = pr.polish_tries;
         info->pdnn_residual = pr.residual;
         info->pdnn_converged = pr.converged;
         if (rc == MCA_EINVAL) {
@@ -1418,6 +1420,7 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     const mca_pdnn_params_t prm = pdnn_params(cfg, t_enter); /* out of time: the keep-direction fallback */
     rc = mca_pdnn_solve(&ctrl->brake_pdnn, qp, &prm, phi, &pr);
     info->pdnn_steps = pr.steps;
+    info->pdnn_exact_solves = pr.polish_tries;
     info->pdnn_residual = pr.residual;
     info->pdnn_converged = pr.converged;
     if (rc == MCA_EINVAL || (rc != MCA_OK && !(pr.residual <= cfg->fault_residual))) {

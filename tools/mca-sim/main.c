@@ -404,6 +404,11 @@ int main(int argc, char **argv) {
                 fprintf(f, "%s%.4f", a ? "," : "", r->end_tau[a]);
             }
             fprintf(f, "]");
+            fprintf(f,
+                    ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"
+                    "\"exact_solves\":[%d,%d,%d]",
+                    r->solves, r->solves_unconverged, r->solve_steps_p50, r->solve_steps_p999,
+                    r->solve_steps_max, r->exact_p50, r->exact_p999, r->exact_max);
             fprintf(
                 f,
                 ",\"fault_text\":\"%s\",\"stop_requested\":%d,\"brake_t\":%.6g,\"brake_fallback_ticks\":%d,"

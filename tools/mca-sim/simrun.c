@@ -84,7 +84,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     snprintf(r->scheme, sizeof r->scheme, "%s", mca_scheme_name(o->scheme));
     mca_cell_t *cell = calloc(1, sizeof *cell);
     mca_daemon_t *d = NULL;
-    int64_t *cns = NULL, *cpu = NULL, *perr = NULL, *steps = NULL;
+    int64_t *cns = NULL, *cpu = NULL, *perr = NULL, *steps = NULL, *all_steps = NULL, *all_exact = NULL;
     FILE *csv = NULL;
     mca_tick_csv_layout_t csv_layout = {.pair_cols = 1}; /* mca-sim's digits; every pair's distance */
     int rc = MCA_OK;
@@ -138,7 +138,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     cpu = calloc((size_t)max_ticks, sizeof *cpu);
     perr = calloc((size_t)max_ticks, sizeof *perr);
     steps = calloc((size_t)max_ticks, sizeof *steps);
-    if (!cns || !cpu || !perr || !steps) {
+    all_steps = calloc((size_t)max_ticks, sizeof *all_steps);
+    all_exact = calloc((size_t)max_ticks, sizeof *all_exact);
+    if (!cns || !cpu || !perr || !steps || !all_steps || !all_exact) {
         rc = MCA_ENOMEM;
         goto out;
     }
@@ -271,6 +273,14 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         const int every_b = every / 5 > 0 ? every / 5 : 1;
         const int picked = k % every == 0 || (ip->binding_rows > 0 && k % every_b == 0);
         const int unconverged = running && o->scheme != MCA_SCHEME_APF && !ip->pdnn_converged;
+        if (o->scheme != MCA_SCHEME_APF && !r->stopped &&
+            (ip->pdnn_steps > 0 || ip->pdnn_exact_solves > 0 || ip->pdnn_converged)) {
+            /* a solve ran this tick (running or braking): its steps and exact solves */
+            all_steps[r->solves] = ip->pdnn_steps;
+            all_exact[r->solves] = ip->pdnn_exact_solves;
+            r->solves_unconverged += !ip->pdnn_converged;
+            r->solves++;
+        }
         if (running && ip->pdnn_budget_hit) {
             r->budget_hits_steps += ip->pdnn_budget_hit == MCA_BUDGET_STEPS;
             r->budget_hits_time += ip->pdnn_budget_hit == MCA_BUDGET_TIME;
@@ -338,6 +348,17 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         qsort(perr, (size_t)n_perr, sizeof *perr, cmp_i64);
         r->path_error_p99 = perr[(int)(0.99 * (n_perr - 1))] * 1e-9;
     }
+    if (r->solves > 0) {
+        qsort(all_steps, (size_t)r->solves, sizeof *all_steps, cmp_i64);
+        qsort(all_exact, (size_t)r->solves, sizeof *all_exact, cmp_i64);
+        const int n = r->solves;
+        r->solve_steps_p50 = (int)all_steps[n / 2];
+        r->solve_steps_p999 = (int)all_steps[(int)(0.999 * (n - 1))];
+        r->solve_steps_max = (int)all_steps[n - 1];
+        r->exact_p50 = (int)all_exact[n / 2];
+        r->exact_p999 = (int)all_exact[(int)(0.999 * (n - 1))];
+        r->exact_max = (int)all_exact[n - 1];
+    }
     if (steps_n > 0) {
         qsort(steps, (size_t)steps_n, sizeof *steps, cmp_i64);
         r->pdnn_steps_p50 = (int)steps[steps_n / 2];
@@ -370,6 +391,8 @@ out:
     free(cpu);
     free(perr);
     free(steps);
+    free(all_steps);
+    free(all_exact);
     free(cell);
     return rc;
 }

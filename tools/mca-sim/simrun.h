@@ -84,6 +84,11 @@ typedef struct mca_simrun_result {
     int exact_missed;       /**< of those, missed (farther than exact_tolerance while on the point) */
     double exact_error_max; /**< the largest distance to an exact point while on it [m] */
     int pdnn_steps_p50, pdnn_steps_p999; /**< PDNN steps per running tick */
+    /* every solve, running and braking (issue 29 item 2): steps and the polish's exact solves per tick */
+    int solves; /**< ticks that solved a QP */
+    int solve_steps_p50, solve_steps_p999, solve_steps_max;
+    int exact_p50, exact_p999, exact_max;
+    int solves_unconverged; /**< of them, ended without meeting the tolerance */
     /* where the run ended (an unfinished task named with its pair and positions) */
     int end_pair[4];                /**< the closest pair: arm, link, arm, link */
     double end_distance;            /**< its distance [m] */

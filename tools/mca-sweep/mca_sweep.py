@@ -585,7 +585,8 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
                lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
                max_err=r.get("max_err"))
     det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "exact_points", "exact_missed",
-                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau")})
+                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau",
+                                      "solves", "solves_unconverged", "solve_steps", "exact_solves")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
     if completed and not missed:
@@ -820,6 +821,19 @@ def table(tasks, schemes, sim, a):
             if v and v["reasons"]:
                 lines.append("reasons %-6s %-9s %s" % (s, "task" if mode == "task" else "with stop",
                                                      json.dumps(v["reasons"], sort_keys=True)))
+    # the solver's work per tick, running and braking, task and stop runs (issue 29 item 2)
+    for s in schemes:
+        rs = [t["runs"][s][m] for t in reach for m in ("task", "stop") if t["runs"].get(s, {}).get(m, {}).get("solves")]
+        if rs:
+            n = sum(r["solves"] for r in rs)
+            un = sum(r["solves_unconverged"] for r in rs)
+            lines.append("solver %-6s %d solves (running and braking): steps p50 <= %d, p99.9 <= %d, max %d; exact "
+                         "solves p50 <= %d, p99.9 <= %d, max %d (per-run percentiles, their largest); unconverged %d "
+                         "(%.3f %%)" % (s, n, max(r["solve_steps"][0] for r in rs), max(r["solve_steps"][1] for r in rs),
+                                        max(r["solve_steps"][2] for r in rs), max(r["exact_solves"][0] for r in rs),
+                                        max(r["exact_solves"][1] for r in rs), max(r["exact_solves"][2] for r in rs),
+                                        un, 100.0 * un / n))
+            summary["solver/%s" % s] = dict(solves=n, unconverged=un)
     # every unfinished task named: where it ended (the closest pair, its distance, the tool tips, the clocks)
     for t in reach:
         for s in schemes:

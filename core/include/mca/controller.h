@@ -201,6 +201,7 @@ typedef struct mca_tick_info {
     int binding_rows; /**< collision rows at their bound (U phi >= beta - 1e-9) */
     /* solver */
     int pdnn_steps;
+    int pdnn_exact_solves; /**< the polish's exact active-set solves (docs/pdnn.md) */
     double pdnn_residual;
     int pdnn_converged;
     int pdnn_budget_hit; /**< mca_budget_hit_t: the solve stopped at the budget (time or steps) this tick
