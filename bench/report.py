@@ -372,6 +372,36 @@ def main():
         rows.append(("2b. tools/qp-check/osqp_check.py on the dumped QPs", "pass" if rc == 0 else f"exit {rc}",
                      "OSQP 1e-10", "-", "every PDNN answer within 1e-6 of OSQP's (pdnn engineer's checker)"))
 
+    # 2c. PDNN vs DAQP (bench/daqp/run.sh)
+    dq = read(os.path.join(raw, "daqp.txt"))
+    if dq is not None and "skipped" in dq:
+        rows.append(("2c. PDNN vs DAQP, consecutive ticks of the hardest sweep tasks", "skipped: daqp not available",
+                     "PDNN p99 <= 2x DAQP p99", "-", "see raw/daqp.txt, raw/daqp_build.err"))
+    elif dq is not None and "ratio PDNN p99" in dq:
+        d = {"pdnn_p50_us": num(r"PDNN us p50 ([0-9.]+)", dq), "pdnn_p99_us": num(r"PDNN us p50 [0-9.]+ p99 ([0-9.]+)", dq),
+             "pdnn_max_us": num(r"PDNN us p50 [0-9.]+ p99 [0-9.]+ max ([0-9.]+)", dq),
+             "daqp_p50_us": num(r"DAQP us p50 ([0-9.]+)", dq), "daqp_p99_us": num(r"DAQP us p50 [0-9.]+ p99 ([0-9.]+)", dq),
+             "daqp_max_us": num(r"DAQP us p50 [0-9.]+ p99 [0-9.]+ max ([0-9.]+)", dq),
+             "ratio_p99": num(r"ratio PDNN p99 / DAQP p99 ([0-9.]+)", dq),
+             "dphi_pdnn_daqp": num(r"\(both solved\) ([0-9.eE+-]+)", dq),
+             "n": num(r"(\d+) QPs \(", dq.split("daqp ", 1)[-1], cast=int)}
+        oq = read(os.path.join(raw, "daqp_osqp.txt")) or ""
+        d["dphi_pdnn_osqp"] = num(r"max \|phi_pdnn - phi_osqp\| ([0-9.eE+-]+)", oq)
+        d["dphi_daqp_osqp"] = num(r"max \|phi_daqp - phi_osqp\| ([0-9.eE+-]+)", oq)
+        d["kkt_pdnn"] = num(r"KKT residual on all \d+: PDNN ([0-9.eE+-]+)", oq)
+        d["kkt_daqp"] = num(r"KKT residual on all \d+: PDNN [0-9.eE+-]+ \(.*?\), DAQP ([0-9.eE+-]+)", oq)
+        d["osqp_rc"] = num(r"exit (\d+)", oq, cast=int)
+        R["daqp"] = d
+        rows.append((
+            f"2c. PDNN vs DAQP, every tick of 3 hardest sweep tasks, both warm ({d['n']} QPs)",
+            f"PDNN p99 {fmt(d['pdnn_p99_us'], 2)} / max {fmt(d['pdnn_max_us'])} us; DAQP p99 "
+            f"{fmt(d['daqp_p99_us'], 2)} / max {fmt(d['daqp_max_us'])} us",
+            "PDNN p99 / DAQP p99 <= 2", f"{fmt(d['ratio_p99'], 2)}",
+            f"median of 3 passes; max |phi_pdnn - phi_daqp| {d['dphi_pdnn_daqp']}; every 50th QP: KKT residual "
+            f"PDNN {d['kkt_pdnn']}, DAQP {d['kkt_daqp']}; vs OSQP 1e-10 where it is a reference: PDNN "
+            f"{d['dphi_pdnn_osqp']}, DAQP {d['dphi_daqp_osqp']}; check "
+            f"{'pass' if d['osqp_rc'] == 0 else 'exit ' + str(d['osqp_rc'])} (raw/daqp_osqp.txt)"))
+
     # 3
     sd = read(os.path.join(raw, "segdist.txt"))
     seg = {}

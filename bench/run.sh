@@ -80,6 +80,13 @@ if have "$TICK"; then
     fi
 fi
 
+# 2c. PDNN (polish on) against DAQP on every tick of the hardest sweep tasks (issue 29 item 4; bench/daqp/run.sh:
+#     DAQP built from its PyPI sdist outside the repository; "skipped: daqp not available" without it)
+if have "$B/bench/pdnn/bench_pdnn" && have "$B/tools/mca-sim/mca-sim"; then
+    step "daqp: PDNN vs DAQP on consecutive ticks of 3 sweep tasks, then OSQP on every 50th"
+    PY=$PY bash "$ROOT/bench/daqp/run.sh" "$B" "$RAW" >"$RAW/daqp_run.err" 2>&1
+fi
+
 # 3. segment distances (bench/segdist of the dist engineer)
 SEG=$B/bench/segdist/segdist_bench
 if have "$SEG"; then

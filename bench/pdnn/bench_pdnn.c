@@ -18,8 +18,19 @@
  *          --gamma G (1.9) --form componentwise|normal (componentwise: 3 rows per link, 54; normal: 1, 18)
  *          --no-polish 0|1 (0) --polish-max N (0: the solver's default) --verbose 1 (replay: name the
  *          QPs not converged or over 300 steps)
+ *   bench_pdnn daqp DIR [--daqp-lib L] [--csv F] [OPTIONS]  PDNN (polish on unless --no-polish 1) against
+ *                                    DAQP on the same QPs: every subfolder of DIR (or DIR itself) is one task
+ *                                    whose QPs (NAME.json and the capped NAME.json.capped) are solved in
+ *                                    file-name order, each solver warm from the previous QP, both started
+ *                                    cold at each task; ns per solve of each, p50/p99/max, PDNN p99 / DAQP
+ *                                    p99, max |phi_pdnn - phi_daqp|. DAQP is dlopened from L (default
+ *                                    libmca_daqp.so; bench/daqp/build.sh builds it): without it one line
+ *                                    "skipped: daqp not available" and exit 0. --csv F: per QP file, ns, flags
+ *                                    and both answers (bench/daqp/osqp_daqp.py checks them against OSQP).
+ *                                    --runs R passes (default 3): the figures of the median-ratio pass
  * Not a test: numbers depend on the machine. */
 #include <dirent.h>
+#include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -38,7 +49,7 @@ typedef struct opts {
     double eps, tol, far, tight, gamma;
     int precond, rule, normal, no_polish, polish_max, verbose;
     unsigned long long seed;
-    const char *dir;
+    const char *dir, *lib, *csv;
 } opts_t;
 
 static mca_pdnn_t solver;
@@ -65,7 +76,7 @@ static double pct(double *v, int n, double p) {
 
 static void usage(const char *argv0) {
     fprintf(stderr,
-            "usage: %s time|dump DIR|edge|replay DIR [--runs R] [--ticks T] [--eps E] [--tol X] [--precond "
+            "usage: %s time|dump DIR|edge|replay DIR|daqp DIR [--daqp-lib L] [--csv F] [--runs R] [--ticks T] [--eps E] [--tol X] [--precond "
             "orth|scale|none]\n"
             "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n"
             "       [--form componentwise|normal] [--no-polish 0|1] [--polish-max N]\n",
@@ -81,6 +92,10 @@ static int parse(int argc, char **argv, int first, opts_t *o) {
         }
         char *end = NULL;
         i++;
+        if (!strcmp(a, "--daqp-lib") || !strcmp(a, "--csv")) {
+            *(!strcmp(a, "--csv") ? &o->csv : &o->lib) = v;
+            continue;
+        }
         if (!strcmp(a, "--runs")) {
             o->runs = (int)strtol(v, &end, 10);
         } else if (!strcmp(a, "--ticks")) {
@@ -265,17 +280,30 @@ static int cmp_str(const void *a, const void *b) {
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-static int run_replay(const opts_t *o) {
-    DIR *d = opendir(o->dir);
+static int has_suffix(const char *s, const char *suf) {
+    const size_t a = strlen(s), b = strlen(suf);
+    return a >= b && !strcmp(s + a - b, suf);
+}
+
+/* The QP files of dir in name order (with capped: NAME.json.capped too; mca-sim's names carry the tick
+   zero-padded, so name order is tick order); subdirs: the subfolders instead. The count, or -1. */
+static int list_dir(const char *dir, int capped, int subdirs, char ***out) {
+    DIR *d = opendir(dir);
     if (d == NULL) {
-        fprintf(stderr, "cannot open %s: %s\n", o->dir, strerror(errno));
-        return 2;
+        fprintf(stderr, "cannot open %s: %s\n", dir, strerror(errno));
+        return -1;
     }
     int nf = 0, cap = 0;
     char **names = NULL;
     for (struct dirent *e; (e = readdir(d)) != NULL;) {
-        const size_t len = strlen(e->d_name);
-        if (len < 5 || strcmp(e->d_name + len - 5, ".json") != 0) {
+        if (subdirs) {
+            char path[4096];
+            struct stat sb;
+            snprintf(path, sizeof(path), "%s/%s", dir, e->d_name);
+            if (e->d_name[0] == '.' || stat(path, &sb) != 0 || !S_ISDIR(sb.st_mode)) {
+                continue;
+            }
+        } else if (!has_suffix(e->d_name, ".json") && !(capped && has_suffix(e->d_name, ".json.capped"))) {
             continue;
         }
         if (nf == cap) {
@@ -285,11 +313,20 @@ static int run_replay(const opts_t *o) {
         names[nf++] = strdup(e->d_name);
     }
     closedir(d);
-    if (nf == 0) {
+    if (nf > 0) {
+        qsort(names, (size_t)nf, sizeof(char *), cmp_str);
+    }
+    *out = names;
+    return nf;
+}
+
+static int run_replay(const opts_t *o) {
+    char **names = NULL;
+    const int nf = list_dir(o->dir, 0, 0, &names);
+    if (nf <= 0) {
         fprintf(stderr, "no .json files in %s\n", o->dir);
         return 2;
     }
-    qsort(names, (size_t)nf, sizeof(char *), cmp_str);
     double *st = calloc((size_t)nf, sizeof(double)), *tr = calloc((size_t)nf, sizeof(double));
     double *ns = calloc((size_t)nf, sizeof(double));
     mca_pdnn_params_t prm;
@@ -338,6 +375,167 @@ static int run_replay(const opts_t *o) {
     free(st);
     free(tr);
     free(ns);
+    return 0;
+}
+
+/* daqp: PDNN against DAQP (dlopened; bench/daqp/daqp_shim.c) on consecutive ticks, both warm */
+typedef int (*daqp_solve_fn)(int, int, int, const double *, const double *, const double *, const double *,
+                             const double *, const double *, int, int, double *, int *, int *);
+
+typedef struct daqp_pass {
+    int nt, tot, capped, dcold, unconv, dfail;
+    double p[3], d[3], it[3], dphi; /* p50 p99 max (ns), iterations p50 p99 max */
+} daqp_pass_t;
+
+/* One pass over every task of o->dir (per-task lines printed on the first pass only); 0 or 2. */
+static int daqp_pass(const opts_t *o, daqp_solve_fn dsolve, int pass, daqp_pass_t *ps) {
+    char **tasks = NULL;
+    int nt = list_dir(o->dir, 1, 1, &tasks);
+    const int flat = nt <= 0;
+    if (flat) {
+        nt = 1;
+    }
+    FILE *csv = NULL;
+    if (pass == 0 && o->csv && (csv = fopen(o->csv, "w")) == NULL) {
+        fprintf(stderr, "cannot write %s: %s\n", o->csv, strerror(errno));
+        return 2;
+    }
+    int cap = 1 << 16, tot = 0, unconv = 0, dfail = 0, capped = 0, dcold = 0;
+    double *tp = malloc(sizeof(double) * (size_t)cap), *td = malloc(sizeof(double) * (size_t)cap);
+    double *it = malloc(sizeof(double) * (size_t)cap), dphi = 0.0;
+    mca_pdnn_params_t prm;
+    params_of(o, &prm);
+    static mca_qp_t qp;
+    for (int t = 0; t < nt; t++) {
+        char tdir[4096];
+        snprintf(tdir, sizeof(tdir), "%s%s%s", o->dir, flat ? "" : "/", flat ? "" : tasks[t]);
+        char **names = NULL;
+        const int nf = list_dir(tdir, 1, 0, &names);
+        if (nf <= 0) {
+            fprintf(stderr, "no QP files in %s\n", tdir);
+            return 2;
+        }
+        mca_pdnn_init(&solver); /* a task starts cold */
+        int t_unconv = 0, t_capped = 0;
+        double t_dphi = 0.0;
+        const int first = tot;
+        for (int k = 0; k < nf; k++) {
+            char path[8192];
+            double phi_d[MCA_QP_MAX_VARS], phi[MCA_QP_MAX_VARS], x[MCA_QP_MAX_VARS];
+            int has_phi = 0, iter = 0, cold = 0;
+            snprintf(path, sizeof(path), "%s/%s", tdir, names[k]);
+            if (read_qp(path, &qp, phi_d, &has_phi) != 0) {
+                fprintf(stderr, "cannot read %s\n", path);
+                return 2;
+            }
+            if (tot == cap) {
+                cap *= 2;
+                tp = realloc(tp, sizeof(double) * (size_t)cap);
+                td = realloc(td, sizeof(double) * (size_t)cap);
+                it = realloc(it, sizeof(double) * (size_t)cap);
+            }
+            mca_pdnn_result_t res;
+            double t0 = now_ns();
+            const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
+            tp[tot] = now_ns() - t0;
+            t0 = now_ns();
+            const int flag = dsolve(qp.n, qp.n_eq, qp.n_ineq, &qp.G[0][0], qp.alpha, &qp.U[0][0], qp.beta, qp.lb,
+                                    qp.ub, MCA_QP_MAX_VARS, k > 0, x, &iter, &cold);
+            td[tot] = now_ns() - t0;
+            it[tot++] = iter;
+            dcold += cold;
+            t_unconv += rc != MCA_OK;
+            dfail += flag <= 0;
+            t_capped += has_suffix(names[k], ".capped");
+            for (int j = 0; rc == MCA_OK && flag > 0 && j < qp.n; j++) {
+                t_dphi = fmax(t_dphi, fabs(phi[j] - x[j]));
+            }
+            if (csv) {
+                fprintf(csv, "%s,%.0f,%.0f,%d,%d,%d", path, tp[tot - 1], td[tot - 1], rc == MCA_OK, flag, iter);
+                for (int j = 0; j < qp.n; j++) {
+                    fprintf(csv, ",%.17g", phi[j]);
+                }
+                for (int j = 0; j < qp.n; j++) {
+                    fprintf(csv, ",%.17g", x[j]);
+                }
+                fputc('\n', csv);
+            }
+            free(names[k]);
+        }
+        free(names);
+        const int n = tot - first;
+        double *a = malloc(sizeof(double) * (size_t)n), *b = malloc(sizeof(double) * (size_t)n);
+        memcpy(a, tp + first, sizeof(double) * (size_t)n);
+        memcpy(b, td + first, sizeof(double) * (size_t)n);
+        if (pass == 0) printf("  %s: %d QPs (%d dumped capped), PDNN us p99 %.1f max %.1f (%d not converged) | DAQP us p99 "
+               "%.1f max %.1f | max |dphi| %.2g\n",
+               flat ? o->dir : tasks[t], n, t_capped, pct(a, n, 99) / 1e3, pct(a, n, 100) / 1e3, t_unconv,
+               pct(b, n, 99) / 1e3, pct(b, n, 100) / 1e3, t_dphi);
+        free(a);
+        free(b);
+        unconv += t_unconv;
+        capped += t_capped;
+        dphi = fmax(dphi, t_dphi);
+        if (!flat) {
+            free(tasks[t]);
+        }
+    }
+    free(tasks);
+    if (csv) {
+        fclose(csv);
+    }
+    *ps = (daqp_pass_t){.nt = nt, .tot = tot, .capped = capped, .dcold = dcold, .unconv = unconv,
+                        .dfail = dfail, .dphi = dphi};
+    for (int q = 0; q < 3; q++) {
+        const double pc = q == 0 ? 50 : q == 1 ? 99 : 100;
+        ps->p[q] = pct(tp, tot, pc);
+        ps->d[q] = pct(td, tot, pc);
+        ps->it[q] = pct(it, tot, pc);
+    }
+    printf("  pass %d: PDNN p99 %.2f us, DAQP p99 %.2f us, ratio %.2f\n", pass + 1, ps->p[1] / 1e3,
+           ps->d[1] / 1e3, ps->p[1] / ps->d[1]);
+    free(tp);
+    free(td);
+    free(it);
+    return 0;
+}
+
+static int cmp_ratio(const void *a, const void *b) {
+    const daqp_pass_t *x = a, *y = b;
+    return cmp_d(&(double){x->p[1] / x->d[1]}, &(double){y->p[1] / y->d[1]});
+}
+
+/* --runs passes (3 unless given) over the same QPs; the figures of the pass with the median ratio (the host's
+   load moves between passes) */
+static int run_daqp(const opts_t *o, int passes) {
+    const char *lib = o->lib ? o->lib : "libmca_daqp.so";
+    void *h = dlopen(lib, RTLD_NOW | RTLD_LOCAL);
+    daqp_solve_fn dsolve = h ? (daqp_solve_fn)dlsym(h, "mca_daqp_solve") : NULL;
+    if (dsolve == NULL) {
+        printf("daqp %s: skipped: daqp not available (%s)\n", o->dir, h ? "no mca_daqp_solve" : dlerror());
+        return 0;
+    }
+    daqp_pass_t *ps = calloc((size_t)passes, sizeof(daqp_pass_t));
+    for (int k = 0; k < passes; k++) {
+        if (daqp_pass(o, dsolve, k, &ps[k]) != 0) {
+            return 2;
+        }
+    }
+    qsort(ps, (size_t)passes, sizeof(daqp_pass_t), cmp_ratio);
+    const daqp_pass_t *m = &ps[(passes - 1) / 2];
+    printf("daqp %s: %d tasks, %d QPs (%d dumped capped), each solver warm from the previous tick; PDNN tol %g "
+           "cap %d polish %s; DAQP default settings, working set carried (%d cold setups); %d passes, the "
+           "median one's figures (ratio range %.2f - %.2f)\n",
+           o->dir, m->nt, m->tot, m->capped, o->tol, o->max_steps, o->no_polish ? "off" : "on", m->dcold, passes,
+           ps[0].p[1] / ps[0].d[1], ps[passes - 1].p[1] / ps[passes - 1].d[1]);
+    printf("  PDNN us p50 %.2f p99 %.2f max %.1f | not converged %d\n", m->p[0] / 1e3, m->p[1] / 1e3,
+           m->p[2] / 1e3, m->unconv);
+    printf("  DAQP us p50 %.2f p99 %.2f max %.1f | failed %d | iterations p50 %.0f p99 %.0f max %.0f\n",
+           m->d[0] / 1e3, m->d[1] / 1e3, m->d[2] / 1e3, m->dfail, m->it[0], m->it[1], m->it[2]);
+    printf("  ratio PDNN p99 / DAQP p99 %.2f | max |phi_pdnn - phi_daqp| (both solved) %.2g\n", m->p[1] / m->d[1],
+           m->dphi);
+    free(ps);
+    dlclose(h);
     return 0;
 }
 
@@ -521,7 +719,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     int first = 2;
-    if (!strcmp(argv[1], "dump") || !strcmp(argv[1], "replay")) {
+    if (!strcmp(argv[1], "dump") || !strcmp(argv[1], "replay") || !strcmp(argv[1], "daqp")) {
         if (argc < 3) {
             usage(argv[0]);
             return 2;
@@ -540,11 +738,15 @@ int main(int argc, char **argv) {
     for (int i = first; i < argc; i++) {
         max_steps_given |= !strcmp(argv[i], "--max-steps");
     }
-    if (!strcmp(argv[1], "replay")) {
+    if (!strcmp(argv[1], "replay") || !strcmp(argv[1], "daqp")) {
         if (!max_steps_given) {
             o.max_steps = 2000; /* the controller's cap */
         }
-        return run_replay(&o);
+        int runs_given = 0;
+        for (int i = first; i < argc; i++) {
+            runs_given |= !strcmp(argv[i], "--runs");
+        }
+        return !strcmp(argv[1], "daqp") ? run_daqp(&o, runs_given ? o.runs : 3) : run_replay(&o);
     }
     return !strcmp(argv[1], "edge") ? run_edge(&o) : run_ticks(&o);
 }
