@@ -25,8 +25,8 @@
  *                                    cold at each task; ns per solve of each, p50/p99/max, PDNN p99 / DAQP
  *                                    p99, max |phi_pdnn - phi_daqp|. DAQP is dlopened from L (default
  *                                    libmca_daqp.so; bench/daqp/build.sh builds it): without it one line
- *                                    "skipped: daqp not available" and exit 0. --csv F: per QP file, ns, flags
- *                                    and both answers (bench/daqp/osqp_daqp.py checks them against OSQP).
+ *                                    "skipped: daqp not available" and exit 0. --csv F: per QP file, ns,
+ * flags and both answers (bench/daqp/osqp_daqp.py checks them against OSQP).
  *                                    --runs R passes (default 3): the figures of the median-ratio pass
  * Not a test: numbers depend on the machine. */
 #include <dirent.h>
@@ -76,7 +76,8 @@ static double pct(double *v, int n, double p) {
 
 static void usage(const char *argv0) {
     fprintf(stderr,
-            "usage: %s time|dump DIR|edge|replay DIR|daqp DIR [--daqp-lib L] [--csv F] [--runs R] [--ticks T] [--eps E] [--tol X] [--precond "
+            "usage: %s time|dump DIR|edge|replay DIR|daqp DIR [--daqp-lib L] [--csv F] [--runs R] [--ticks "
+            "T] [--eps E] [--tol X] [--precond "
             "orth|scale|none]\n"
             "       [--rule adaptive|bound] [--far W] [--max-steps S] [--seed K] [--tight P] [--gamma G]\n"
             "       [--form componentwise|normal] [--no-polish 0|1] [--polish-max N]\n",
@@ -439,8 +440,8 @@ static int daqp_pass(const opts_t *o, daqp_solve_fn dsolve, int pass, daqp_pass_
             const int rc = mca_pdnn_solve(&solver, &qp, &prm, phi, &res);
             tp[tot] = now_ns() - t0;
             t0 = now_ns();
-            const int flag = dsolve(qp.n, qp.n_eq, qp.n_ineq, &qp.G[0][0], qp.alpha, &qp.U[0][0], qp.beta, qp.lb,
-                                    qp.ub, MCA_QP_MAX_VARS, k > 0, x, &iter, &cold);
+            const int flag = dsolve(qp.n, qp.n_eq, qp.n_ineq, &qp.G[0][0], qp.alpha, &qp.U[0][0], qp.beta,
+                                    qp.lb, qp.ub, MCA_QP_MAX_VARS, k > 0, x, &iter, &cold);
             td[tot] = now_ns() - t0;
             it[tot++] = iter;
             dcold += cold;
@@ -451,7 +452,8 @@ static int daqp_pass(const opts_t *o, daqp_solve_fn dsolve, int pass, daqp_pass_
                 t_dphi = fmax(t_dphi, fabs(phi[j] - x[j]));
             }
             if (csv) {
-                fprintf(csv, "%s,%.0f,%.0f,%d,%d,%d", path, tp[tot - 1], td[tot - 1], rc == MCA_OK, flag, iter);
+                fprintf(csv, "%s,%.0f,%.0f,%d,%d,%d", path, tp[tot - 1], td[tot - 1], rc == MCA_OK, flag,
+                        iter);
                 for (int j = 0; j < qp.n; j++) {
                     fprintf(csv, ",%.17g", phi[j]);
                 }
@@ -467,10 +469,12 @@ static int daqp_pass(const opts_t *o, daqp_solve_fn dsolve, int pass, daqp_pass_
         double *a = malloc(sizeof(double) * (size_t)n), *b = malloc(sizeof(double) * (size_t)n);
         memcpy(a, tp + first, sizeof(double) * (size_t)n);
         memcpy(b, td + first, sizeof(double) * (size_t)n);
-        if (pass == 0) printf("  %s: %d QPs (%d dumped capped), PDNN us p99 %.1f max %.1f (%d not converged) | DAQP us p99 "
-               "%.1f max %.1f | max |dphi| %.2g\n",
-               flat ? o->dir : tasks[t], n, t_capped, pct(a, n, 99) / 1e3, pct(a, n, 100) / 1e3, t_unconv,
-               pct(b, n, 99) / 1e3, pct(b, n, 100) / 1e3, t_dphi);
+        if (pass == 0)
+            printf(
+                "  %s: %d QPs (%d dumped capped), PDNN us p99 %.1f max %.1f (%d not converged) | DAQP us p99 "
+                "%.1f max %.1f | max |dphi| %.2g\n",
+                flat ? o->dir : tasks[t], n, t_capped, pct(a, n, 99) / 1e3, pct(a, n, 100) / 1e3, t_unconv,
+                pct(b, n, 99) / 1e3, pct(b, n, 100) / 1e3, t_dphi);
         free(a);
         free(b);
         unconv += t_unconv;
@@ -484,8 +488,13 @@ static int daqp_pass(const opts_t *o, daqp_solve_fn dsolve, int pass, daqp_pass_
     if (csv) {
         fclose(csv);
     }
-    *ps = (daqp_pass_t){.nt = nt, .tot = tot, .capped = capped, .dcold = dcold, .unconv = unconv,
-                        .dfail = dfail, .dphi = dphi};
+    *ps = (daqp_pass_t){.nt = nt,
+                        .tot = tot,
+                        .capped = capped,
+                        .dcold = dcold,
+                        .unconv = unconv,
+                        .dfail = dfail,
+                        .dphi = dphi};
     for (int q = 0; q < 3; q++) {
         const double pc = q == 0 ? 50 : q == 1 ? 99 : 100;
         ps->p[q] = pct(tp, tot, pc);
@@ -523,17 +532,18 @@ static int run_daqp(const opts_t *o, int passes) {
     }
     qsort(ps, (size_t)passes, sizeof(daqp_pass_t), cmp_ratio);
     const daqp_pass_t *m = &ps[(passes - 1) / 2];
-    printf("daqp %s: %d tasks, %d QPs (%d dumped capped), each solver warm from the previous tick; PDNN tol %g "
-           "cap %d polish %s; DAQP default settings, working set carried (%d cold setups); %d passes, the "
-           "median one's figures (ratio range %.2f - %.2f)\n",
-           o->dir, m->nt, m->tot, m->capped, o->tol, o->max_steps, o->no_polish ? "off" : "on", m->dcold, passes,
-           ps[0].p[1] / ps[0].d[1], ps[passes - 1].p[1] / ps[passes - 1].d[1]);
+    printf(
+        "daqp %s: %d tasks, %d QPs (%d dumped capped), each solver warm from the previous tick; PDNN tol %g "
+        "cap %d polish %s; DAQP default settings, working set carried (%d cold setups); %d passes, the "
+        "median one's figures (ratio range %.2f - %.2f)\n",
+        o->dir, m->nt, m->tot, m->capped, o->tol, o->max_steps, o->no_polish ? "off" : "on", m->dcold, passes,
+        ps[0].p[1] / ps[0].d[1], ps[passes - 1].p[1] / ps[passes - 1].d[1]);
     printf("  PDNN us p50 %.2f p99 %.2f max %.1f | not converged %d\n", m->p[0] / 1e3, m->p[1] / 1e3,
            m->p[2] / 1e3, m->unconv);
     printf("  DAQP us p50 %.2f p99 %.2f max %.1f | failed %d | iterations p50 %.0f p99 %.0f max %.0f\n",
            m->d[0] / 1e3, m->d[1] / 1e3, m->d[2] / 1e3, m->dfail, m->it[0], m->it[1], m->it[2]);
-    printf("  ratio PDNN p99 / DAQP p99 %.2f | max |phi_pdnn - phi_daqp| (both solved) %.2g\n", m->p[1] / m->d[1],
-           m->dphi);
+    printf("  ratio PDNN p99 / DAQP p99 %.2f | max |phi_pdnn - phi_daqp| (both solved) %.2g\n",
+           m->p[1] / m->d[1], m->dphi);
     free(ps);
     dlclose(h);
     return 0;

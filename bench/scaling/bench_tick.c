@@ -45,7 +45,7 @@ static const char *const st_name[ST_N] = {"tick", "fk", "distances", "assembly",
 
 typedef struct run_stats {
     int64_t *v[ST_N];
-    int *steps, *active;
+    int *steps, *active, *exact; /* exact: the polish's exact solves */
     int n, cap;
     int faults, resets, step_mismatch, capped;
 } run_stats_t;
@@ -77,7 +77,8 @@ static int stats_alloc(run_stats_t *s, int cap) {
     }
     s->steps = calloc((size_t)cap, sizeof(int));
     s->active = calloc((size_t)cap, sizeof(int));
-    return s->steps && s->active ? MCA_OK : MCA_ENOMEM;
+    s->exact = calloc((size_t)cap, sizeof(int));
+    return s->steps && s->active && s->exact ? MCA_OK : MCA_ENOMEM;
 }
 
 static void stats_free(run_stats_t *s) {
@@ -86,6 +87,7 @@ static void stats_free(run_stats_t *s) {
     }
     free(s->steps);
     free(s->active);
+    free(s->exact);
 }
 
 /* percentile p in [0, 1] of a sorted array: nearest rank */
@@ -139,6 +141,9 @@ static void stats_json(FILE *f, run_stats_t *s, const char *name, const mca_cont
     }
     qsort(s->steps, (size_t)s->n, sizeof(int), cmp_int);
     qsort(s->active, (size_t)s->n, sizeof(int), cmp_int);
+    qsort(s->exact, (size_t)s->n, sizeof(int), cmp_int);
+    fprintf(f, ", \"exact_solves\": {\"p50\": %d, \"p99\": %d, \"max\": %d}", pct_int(s->exact, s->n, 0.5),
+            pct_int(s->exact, s->n, 0.99), s->n ? s->exact[s->n - 1] : 0);
     fprintf(f,
             ", \"steps\": {\"p50\": %d, \"p99\": %d, \"max\": %d, \"mean\": %.2f}, \"active_rows\": "
             "{\"p50\": %d, "
@@ -241,6 +246,7 @@ static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats
         if (i < s->cap) {
             s->v[ST_TICK][i] = info.compute_ns;
             s->steps[i] = info.pdnn_steps;
+            s->exact[i] = info.pdnn_exact_solves;
             s->active[i] = info.active_rows;
             s->capped += !info.pdnn_converged;
 
