@@ -9,7 +9,7 @@ usage: sweep_rt.py --build BUILD [--n 25] [--kind pnp-jaco-mico,pnp-pa10,jaco-mi
 2. Every reachable task then runs once through mcad (--no-dds, sim arms, 1 kHz, SCHED_FIFO PRIORITY, loop pinned
    to CPU) with a cell written next to its scenario (the shipped sim cells' settings: dec_limit 10 as mca-sim's
    cell, overrun_limit 500, the default PDNN budget), --csv (per tick: compute_ns, the controller's time, and
-   wake_ns, the tick's wake-up on CLOCK_MONOTONIC), --histogram; cyclictest -m -p PRIORITY -a CPU -i 1000
+   wake_ns, the tick's wake-up on CLOCK_MONOTONIC), --histogram; cyclictest -m -p PRIORITY -a CPU -i 1000 -d 0
    --secaligned=250 -v on the same CPU at the same time (a quarter period before mcad's grid, as
    bench/rt/issue13.sh). mcad is stopped as mca-sim stops: SIGTERM once the task time reached the duration and
    every arm's path clock its path's end (mca-ts: at most 2x the duration; --stop-after caps it).
@@ -101,20 +101,24 @@ def run_cyclictest_launch(n_ms, cpu, prio, path):
     time.sleep((1.1 - time.clock_gettime(time.CLOCK_MONOTONIC) % 1) % 1)
     launch = time.clock_gettime_ns(time.CLOCK_MONOTONIC)
     f = open(path, "w")
-    p = subprocess.Popen(["cyclictest", "-m", "-p", str(prio), "-a", str(cpu), "-i", "1000", "--secaligned=250",
+    p = subprocess.Popen(["cyclictest", "-m", "-p", str(prio), "-a", str(cpu), "-i", "1000", "-d", "0", "--secaligned=250",
                           "-l", str(n_ms), "-q", "-v"], stdout=f, stderr=subprocess.STDOUT)
     return p, launch, f
 
 
 def cyc_wakeups(path, launch):
-    """[(due ns, latency us)] of cyclictest -v."""
+    """[(due ns, latency us)] of cyclictest -v: wake-up i due at t0 + i * its interval (the "Thread 0 Interval:"
+    line; cyclictest adds -d's distance, default 500 us, even to thread 0 in some versions: -d 0 is passed)."""
     t0 = (launch // 10**9 + 1) * 10**9 + 250000
-    out = []
+    out, step = [], 10**6
     with open(path, errors="replace") as f:
         for line in f:
+            m = re.match(r"^Thread 0 Interval:\s*(\d+)", line)
+            if m:
+                step = int(m.group(1)) * 1000
             m = re.match(r"^\s*0:\s*(\d+):\s*(\d+)\s*$", line)
             if m:
-                out.append((t0 + int(m.group(1)) * 10**6, int(m.group(2))))
+                out.append((t0 + int(m.group(1)) * step, int(m.group(2))))
     return out
 
 
