@@ -188,7 +188,6 @@ def run_rt(task, a, wd):
     for w, cns, t in slow:
         if not any(abs(d - w) <= CYC_WINDOW_NS for d in late):
             unexplained.append(dict(t=t, compute_us=round(cns / 1e3, 1)))
-    first_w = None
     m = re.search(r"due from (\d+) to (\d+) ns", open(hist).read()) if os.path.exists(hist) else None
     covered = bool(m and wk and wk[0][0] <= int(m.group(1)) and wk[-1][0] >= int(m.group(2)))
     se = open(err, errors="replace").read()
