@@ -14,7 +14,7 @@ DEB_PKGS  := $(shell grep -v '^\#' tools/deps/debian-packages.txt)
 STAMP_DEB := .deps-debian.stamp
 STAMP_PY  := $(VENV)/.deps-python.stamp
 
-.PHONY: all deps build test asan-test fuzz demo bench sweep deb format format-check clean
+.PHONY: all deps build test asan-test fuzz demo bench sweep sweep-rt deb format format-check clean
 
 all: build
 
@@ -69,6 +69,14 @@ bench: build
 # out/bench/sweep.txt, sweep-{two,three,pnp}.json
 sweep: build
 	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
+
+# issue 29 item 3: sweep tasks through mcad at 1 kHz (sim arms, --no-dds, SCHED_FIFO on CPU 1) with cyclictest
+# beside it, against the same tasks in virtual time (docs/sweep.md "Real time"); needs root; not in `make test`.
+# SWEEP_RT_N tasks per kind (default 25: 50 pick-and-place + 50 crossing), out/sweep-rt/sweep-rt.txt
+SWEEP_RT_N ?= 25
+sweep-rt: build
+	$(VENV)/bin/python3 tools/mca-sweep/sweep_rt.py --build $(BUILD) --n $(SWEEP_RT_N) \
+	  --out $${MCA_SWEEP_RT_OUT:-$(CURDIR)/out/sweep-rt} $(SWEEP_RT_ARGS)
 
 # the Debian package mca (docs/install.md): its own build with the prefix /usr in $(BUILD)/deb-build;
 # the .deb lands in $(BUILD)/deb-build/deb/ (sudo apt install ./$(BUILD)/deb-build/deb/mca_*.deb)

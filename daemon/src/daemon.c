@@ -1032,7 +1032,7 @@ static void fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     st->min_distance_stamp_ns = d->min_d_stamp;
 }
 
-static void push_csv(mca_daemon_t *d, double t, int state) {
+static void push_csv(mca_daemon_t *d, double t, int state, int64_t stamp_ns) {
     if (!d->csv) {
         return;
     }
@@ -1047,6 +1047,7 @@ static void push_csv(mca_daemon_t *d, double t, int state) {
     }
     r->info = d->info;
     r->cmd_gap_ns = d->cmd_gap_ns;
+    r->wake_ns = stamp_ns;
     mca_ring_push(&d->csv_ring, r);
 }
 
@@ -1246,7 +1247,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         fill_snapshot(d, stamp_ns, state);
         mca_dds_bridge_push(d->dds, &d->snap);
     }
-    push_csv(d, t, state);
+    push_csv(d, t, state, stamp_ns);
     atomic_store_explicit(&d->ticks, n + 1, memory_order_release);
     return state;
 }
@@ -1503,7 +1504,8 @@ static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
                                     .info = &r->info,
                                     .state = r->state,
                                     .qdot_cmd = r->qdot_cmd,
-                                    .cmd_gap_ns = r->cmd_gap_ns};
+                                    .cmd_gap_ns = r->cmd_gap_ns,
+                                    .wake_ns = r->wake_ns};
     mca_tick_csv_row(d->csv, &d->csv_layout, &row);
 }
 

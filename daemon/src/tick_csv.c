@@ -26,7 +26,7 @@ void mca_tick_csv_header(FILE *f, const mca_tick_csv_layout_t *l) {
         for (int a = 0; a < l->n_arms; a++) {
             fprintf(f, ",tau%d,sigma%d", a, a);
         }
-        fprintf(f, ",deadlock,deadlock_arm,deadlocks,brake_fallback,cmd_gap_us");
+        fprintf(f, ",deadlock,deadlock_arm,deadlocks,brake_fallback,cmd_gap_us,wake_ns");
     }
     for (int a = 0; l->pair_cols && l->n_arms >= 3 && a < l->n_arms; a++) {
         for (int b = a + 1; b < l->n_arms; b++) {
@@ -74,8 +74,8 @@ void mca_tick_csv_row(FILE *f, const mca_tick_csv_layout_t *l, const mca_tick_cs
         for (int a = 0; a < l->n_arms; a++) {
             fprintf(f, ",%.6f,%.6g", in->tau[a], in->sigma[a]);
         }
-        fprintf(f, ",%d,%d,%d,%d,%.1f", in->deadlock, in->deadlock_arm, in->deadlocks, in->brake_fallback,
-                (double)r->cmd_gap_ns * 1e-3);
+        fprintf(f, ",%d,%d,%d,%d,%.1f,%lld", in->deadlock, in->deadlock_arm, in->deadlocks,
+                in->brake_fallback, (double)r->cmd_gap_ns * 1e-3, (long long)r->wake_ns);
     }
     for (int a = 0; l->pair_cols && l->n_arms >= 3 && a < l->n_arms; a++) {
         for (int b = a + 1; b < l->n_arms; b++) {

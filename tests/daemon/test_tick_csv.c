@@ -60,20 +60,20 @@ static void test_mcad_layout(void **state) {
     fill(&in, q, qd);
     const mca_tick_csv_layout_t l = {.n_arms = 2, .dof = {1, 1}, .exact = 1, .daemon_cols = 1};
     const mca_tick_csv_row_t r = {
-        .t = 1.5, .q = q, .info = &in, .state = 2, .qdot_cmd = qd, .cmd_gap_ns = 1234};
+        .t = 1.5, .q = q, .info = &in, .state = 2, .qdot_cmd = qd, .cmd_gap_ns = 1234, .wake_ns = 5000000123};
     char *s = write_csv(&l, &r);
     assert_string_equal(
         s,
         "t,q0_0,q1_0,ee0_x,ee0_y,ee0_z,rd0_x,rd0_y,rd0_z,err0_x,err0_y,err0_z,err0,ee1_x,ee1_y,ee1_z,rd1_x,"
         "rd1_y,rd1_z,err1_x,err1_y,err1_z,err1,min_d,arm_a,link_a,arm_b,link_b,p_x,p_y,p_z,e_x,e_y,e_z,brake,"
         "active_rows,binding_rows,pdnn_steps,pdnn_residual,eq_residual,compute_ns,fault,state,qdot0_0,"
-        "qdot1_0,tau0,sigma0,tau1,sigma1,deadlock,deadlock_arm,deadlocks,brake_fallback,cmd_gap_us\n"
+        "qdot1_0,tau0,sigma0,tau1,sigma1,deadlock,deadlock_arm,deadlocks,brake_fallback,cmd_gap_us,wake_ns\n"
         "1.5000,0.10000000000000001,0.43333333333333335,0.33333333333333331,0.25,0.20000000000000001,"
         "0.334333333,0.251,0.201,0.001,0.001,0.001,0.001732,0.25,0.20000000000000001,0.16666666666666666,"
         "0.251,0.201,0.167666667,0.001,0.001,0.001,0.001732,0.2857142857142857,0,2,1,3,"
         "0.1111111111111111,1.1111111111111112,2.1111111111111112,0.090909090909090912,1.0909090909090908,"
         "2.0909090909090908,0.75,4,1,37,1.25e-07,3e-09,21000,0,2,-0.25,-0.5,0.000000,1,0.500000,1,0,0,0,0,"
-        "1.2\n");
+        "1.2,5000000123\n");
     free(s);
 }
 

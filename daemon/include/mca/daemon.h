@@ -124,6 +124,7 @@ typedef struct mca_daemon_csv_rec {
     double qdot_cmd[MCA_MAX_ARMS][MCA_MAX_DOF];
     mca_tick_info_t info;
     int64_t cmd_gap_ns; /**< this tick's commands after the last tick's (0 for the first) */
+    int64_t wake_ns;    /**< the tick's wake-up, CLOCK_MONOTONIC ns (virtual time: the virtual clock) */
 } mca_daemon_csv_rec_t;
 
 #define MCA_DAEMON_CSV_CAPACITY 4096

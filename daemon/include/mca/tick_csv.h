@@ -28,7 +28,7 @@ typedef struct mca_tick_csv_layout {
     int dof[MCA_MAX_ARMS];
     int exact;       /**< 1: q, ee, min_d, p, e in %.17g (mcad); 0: q, ee, min_d %.9g, p, e %.6g (mca-sim) */
     int daemon_cols; /**< 1: state, qdot<a>_<j> (commanded), tau<a>, sigma<a>, deadlock*, brake_fallback,
-                          cmd_gap_us after fault (mcad) */
+                          cmd_gap_us, wake_ns after fault (mcad) */
     int pair_cols;   /**< 1: with three or more arms, d_<a>_<b> of every pair last (min_d is only the
                           smallest of them; mca-sim) */
 } mca_tick_csv_layout_t;
@@ -41,6 +41,7 @@ typedef struct mca_tick_csv_row {
     int state;                             /**< daemon_cols: mca_daemon_state_t */
     const double (*qdot_cmd)[MCA_MAX_DOF]; /**< daemon_cols: commanded velocities [arm][joint] */
     int64_t cmd_gap_ns;                    /**< daemon_cols: this tick's commands after the last's */
+    int64_t wake_ns;                       /**< daemon_cols: the tick's wake-up, CLOCK_MONOTONIC ns */
     const mca_arm_distances_t (*dist)[MCA_MAX_ARMS]; /**< pair_cols: the controller's dist[a][b], a < b */
 } mca_tick_csv_row_t;
 
