@@ -1379,6 +1379,13 @@ static void *rt_main(void *arg) {
                 d->compute_ab_short_n[k]++;
             }
         }
+        if (state == MCA_DAEMON_STOPPED || (state == MCA_DAEMON_FAULT && atomic_load(&d->stop_request))) {
+            /* one more zero command so the arms see the servo released, then leave (before the overrun
+             * count: the last tick has no next period to miss, and the wake-up histogram's span ends at its
+             * wake-up, so periods skipped after it would count outside that span) */
+            mca_daemon_step(d, t + (double)period * 1e-9, now_ns());
+            break;
+        }
         next += period;
         if (end > next) {
             /* every period missed counts: one 20 ms stall is 20 consecutive overruns */
@@ -1395,11 +1402,6 @@ static void *rt_main(void *arg) {
             }
         } else {
             d->consecutive_overruns = 0;
-        }
-        if (state == MCA_DAEMON_STOPPED || (state == MCA_DAEMON_FAULT && atomic_load(&d->stop_request))) {
-            /* one more zero command so the arms see the servo released, then leave */
-            mca_daemon_step(d, t + (double)period * 1e-9, now_ns());
-            break;
         }
     }
     atomic_store(&d->finished, 1);
