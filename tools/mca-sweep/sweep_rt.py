@@ -108,7 +108,8 @@ def run_cyclictest_launch(n_ms, cpu, prio, path):
 
 def cyc_wakeups(path, launch):
     """[(due ns, latency us)] of cyclictest -v: wake-up i due at t0 + i * its interval (the "Thread 0 Interval:"
-    line; cyclictest adds -d's distance, default 500 us, even to thread 0 in some versions: -d 0 is passed)."""
+    line; cyclictest 2.40 prints thread 0's interval plus -d's distance, default 500 us, under -v though it runs
+    at the given one: -d 0 is passed so that the printed interval is the real one)."""
     t0 = (launch // 10**9 + 1) * 10**9 + 250000
     out, step = [], 10**6
     with open(path, errors="replace") as f:
