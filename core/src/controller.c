@@ -665,12 +665,20 @@ static double rows_lambda(const mca_qp_t *qp, const mca_scheme_info_t *si, int a
  * down along its present direction as fast as its deceleration allows (the smallest uniform factor it can
  * follow in one tick, as the braking fallback). Scaling the iterate into the rows instead leaves the
  * acceleration box: with rate-limited arms the sweep had twice the runs below d1 that way (17 against 8 of
- * 196 tasks), with arms that follow any command fewer. Tracking, elastic, gives. */
-static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, int na) {
+ * 196 tasks), with arms that follow any command fewer. Tracking, elastic, gives. An arm with a path tube
+ * takes no step towards the unfinished iterate: one keep-direction braking step with the path rate that fits
+ * it (tube_keep_brake; the tube admits it), so it stops on its path instead of drifting off it. */
+static void repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, int na, const int ts_off[],
+                          const double target[]) {
     const mca_controller_config_t *cfg = &ctrl->cfg;
     const mca_qp_t *qp = &ctrl->qp;
     for (int a = 0; a < na; a++) {
         const int vo = si->var_off[a], dof = cfg->chain[a].dof;
+        if (ctrl->track_mode[a] != MCA_TRACK_ELASTIC) {
+            memcpy(&ctrl->phi[vo], ctrl->keep_q[a], sizeof(double) * (size_t)dof);
+            ctrl->phi[ts_off[a]] = ctrl->ts_scale[a] * (ctrl->keep_sigma[a] - target[a]);
+            continue;
+        }
         double c[MCA_MAX_DOF], dir[MCA_MAX_DOF];
         for (int j = 0; j < dof; j++) {
             c[j] = fmax(qp->lb[vo + j], fmin(qp->ub[vo + j], ctrl->box_center[vo + j]));
@@ -1009,8 +1017,7 @@ static void exact_check(mca_controller_t *ctrl, int a, double tau) {
         const double e = mca_v3_dist(x, ctrl->kin[a].ee);
         ctrl->exact_error_max = fmax(ctrl->exact_error_max, e);
         ctrl->exact_bad[a] |= e > path->exact_tol;
-        const int dwell = i + 1 < path->n_points && mca_v3_dist(path->p[i], path->p[i + 1]) == 0.0;
-        if (dwell && tau < mca_path_point_time(path, i + 1)) {
+        if (mca_path_dwell(path, i) && tau < mca_path_point_time(path, i + 1)) {
             return; /* held: checked again next tick */
         }
         ctrl->exact_met += !ctrl->exact_bad[a];
@@ -1228,7 +1235,6 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         const int hit = budget_hit(cfg, rc, &pr);
         info->pdnn_budget_hit = hit;
         const int short_answer = rc != MCA_OK && !(pr.residual <= cfg->fault_residual);
-        int repaired = 0;
         const mca_qp_t *qp = &ctrl->qp;
         for (int j = 0; j < qp->n; j++) {
             if (!isfinite(ctrl->phi[j])) {
@@ -1249,23 +1255,13 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             /* Tracking is elastic here, so only the hard rows decide: an answer that misses the PDNN's
              * tolerance is still used when it keeps every collision row (the box holds by projection). */
             if (short_answer) {
-                repair_capped(ctrl, &si, na); /* at the cap and at the budget alike */
-                for (int a = 0; a < na; a++) {
-                    if (ctrl->track_mode[a] != MCA_TRACK_ELASTIC) {
-                        /* a path with a tube: no drift towards an unfinished iterate, a braking step along
-                         * the present direction with the path rate that fits it (the tube admits it) */
-                        memcpy(&ctrl->phi[si.var_off[a]], ctrl->keep_q[a],
-                               sizeof(double) * (size_t)cfg->chain[a].dof);
-                        ctrl->phi[ts_off[a]] = ctrl->ts_scale[a] * (ctrl->keep_sigma[a] - target[a]);
-                    }
-                }
+                repair_capped(ctrl, &si, na, ts_off, target); /* at the cap and at the budget alike */
             }
             ts_advance(ctrl, info, ts_off, (const double(*)[3])rdot_d, target, lo, hi);
         } else if (short_answer && hit != MCA_BUDGET_NONE && !(eq > cfg->eq_tol) &&
                    repair_scaled(ctrl) >= 0.0) {
             /* mca out of budget: the scaled iterate unless the equality residual says the QP is infeasible
              * as at the cap; at the cap itself the paper's faults below (its figures do not move) */
-            repaired = 1;
         } else if (short_answer) {
             /* an infeasible QP (tracking against avoidance) never converges: name it as the paper does */
             if (eq > cfg->eq_tol) {
@@ -1281,7 +1277,7 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             }
             goto fault;
         }
-        if (!ts && !repaired && eq > cfg->eq_tol) {
+        if (!ts && eq > cfg->eq_tol) { /* a repaired mca answer had eq <= eq_tol */
             raise_fault(ctrl, MCA_CTRL_FAULT_FAKE_ATTRACTOR,
                         (mca_ctrl_fault_why_t){.why = MCA_WHY_EQ_RESIDUAL, .x = {eq, cfg->eq_tol}});
             goto fault;

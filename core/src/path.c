@@ -3,9 +3,10 @@
 #include "mca/path.h"
 
 #include <math.h>
-#include <string.h>
+#include <stddef.h>
 
 #include "mca/err.h"
+#include "mca/segdist.h"
 #include "mca/vec3.h"
 
 void mca_path_anchor(mca_path_t *path, const double ee_start[3]) {
@@ -143,9 +144,9 @@ double mca_path_point_time(const mca_path_t *path, int i) {
     return t;
 }
 
-/* A dwell: segment i stays at its point. */
-static int is_dwell(const mca_path_t *path, int i) {
-    return i + 1 < path->n_points && memcmp(path->p[i], path->p[i + 1], sizeof path->p[i]) == 0;
+int mca_path_dwell(const mca_path_t *path, int i) {
+    return i + 1 < path->n_points && path->p[i][0] == path->p[i + 1][0] &&
+           path->p[i][1] == path->p[i + 1][1] && path->p[i][2] == path->p[i + 1][2];
 }
 
 double mca_path_tolerance(const mca_path_t *path, double t) {
@@ -162,7 +163,7 @@ double mca_path_tolerance(const mca_path_t *path, double t) {
         if (s < T) {
             const double tol = path->seg_tol[i], ex = fmin(path->exact_tol, tol);
             const int a = path->exact[i], b = path->exact[i + 1];
-            if (a && (b || is_dwell(path, i))) {
+            if (a && (b || mca_path_dwell(path, i))) {
                 return ex; /* held at an exact point, or between two */
             }
             const double u = s / T;
@@ -178,19 +179,6 @@ double mca_path_tolerance(const mca_path_t *path, double t) {
     }
     const double tol = path->seg_tol[last - 1];
     return path->exact[last] ? fmin(path->exact_tol, tol) : tol;
-}
-
-static double point_segment(const double x[3], const double a[3], const double b[3]) {
-    double ab[3], ax[3];
-    mca_v3_sub(ab, b, a);
-    mca_v3_sub(ax, x, a);
-    const double l2 = mca_v3_dot(ab, ab);
-    const double u = l2 > 0.0 ? fmax(0.0, fmin(1.0, mca_v3_dot(ax, ab) / l2)) : 0.0;
-    double c[3];
-    for (int k = 0; k < 3; k++) {
-        c[k] = a[k] + u * ab[k];
-    }
-    return mca_v3_dist(x, c);
 }
 
 double mca_path_distance(const mca_path_t *path, const double x[3]) {
@@ -222,7 +210,8 @@ double mca_path_distance(const mca_path_t *path, const double x[3]) {
         double d = mca_v3_dist(x, a);
         for (int i = 0; i + 1 < path->n_points; i++) {
             mca_path_point(path, i + 1, b);
-            d = fmin(d, point_segment(x, a, b));
+            double h[3];
+            d = fmin(d, mca_point_segment_paper(x, a, b, h, NULL));
             mca_v3_set(a, b);
         }
         return d;

@@ -25,7 +25,7 @@ static void usage(FILE *f) {
         "               [--dump-every N] [--dump-max N] [--form componentwise|normal] [--euler]\n"
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm] [--stop-at T] [--fault-at T:KIND]\n"
-        "               [--dec-limit X] [--pdnn-budget-us U]\n"
+        "               [--dec-limit X] [--pdnn-budget-us U] [--w-path W] [--w-tube W] [--dump-capped]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows);\n"
@@ -39,6 +39,8 @@ static void usage(FILE *f) {
         "  --dec-limit X  every joint's deceleration limit [rad/s^2]: the daemon's braking and the sim "
         "arm's\n"
         "                 (default 10)\n"
+        "  --w-path W, --w-tube W  mca-ts's exact and quadratic slack weights for paths with a tube\n"
+        "                 (docs/scheme.md section 11)\n"
         "  --pdnn-budget-us U  the PDNN's budget per tick as mcad's rt.pdnn_budget_us, applied as its step\n"
         "                 budget (U / 0.7 us steps, below the step cap; 0: none; default half the period)\n");
 }
@@ -128,19 +130,17 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "mca-sim: --dump-every: bad value '%s'\n", v);
                 return 2;
             }
-        } else if (!strcmp(a, "--w-tube")) {
+        } else if (!strcmp(a, "--w-tube") || !strcmp(a, "--w-path")) {
             char *end;
-            o.w_tube = strtod(v, &end);
-            if (*end || !(o.w_tube > 0.0)) {
-                fprintf(stderr, "mca-sim: --w-tube: bad value '%s' (> 0)\n", v);
+            const double x = strtod(v, &end);
+            if (*end || !(x > 0.0)) {
+                fprintf(stderr, "mca-sim: %s: bad value '%s' (> 0)\n", a, v);
                 return 2;
             }
-        } else if (!strcmp(a, "--w-path")) {
-            char *end;
-            o.w_path = strtod(v, &end);
-            if (*end || !(o.w_path > 0.0)) {
-                fprintf(stderr, "mca-sim: --w-path: bad value '%s' (> 0)\n", v);
-                return 2;
+            if (a[4] == 't') {
+                o.w_tube = x;
+            } else {
+                o.w_path = x;
             }
         } else if (!strcmp(a, "--dump-max")) {
             if (parse_int(v, &o.dump_max)) {

@@ -80,6 +80,9 @@ double mca_path_tolerance(const mca_path_t *path, double t);
 /** Path time at which a waypoint path reaches its point p[i] (t0 + the durations before it). */
 double mca_path_point_time(const mca_path_t *path, int i);
 
+/** 1: segment i of a waypoint path stays at its point (a dwell: p[i] equals p[i + 1]). */
+int mca_path_dwell(const mca_path_t *path, int i);
+
 /** Point p[i] of a waypoint path in the world frame (after mca_path_anchor). */
 void mca_path_point(const mca_path_t *path, int i, double out[3]);
 
