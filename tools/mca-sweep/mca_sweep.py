@@ -429,15 +429,19 @@ def seg_at(path, t):
     return path["segs"][-1]
 
 
+def task_start(kind, seed, i, work):
+    """Task i of kind: its random generator (seeded by 'seed:kind:i' alone), id, name and work folder."""
+    name = "sweep_%s_%d" % (kind.replace("-", "_"), i)
+    wd = os.path.join(work, name)
+    os.makedirs(wd, exist_ok=True)
+    return random.Random("%d:%s:%d" % (seed, kind, i)), "%s:%d" % (kind, i), name, wd
+
+
 def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
     """Pick-and-place task i of kind (seeded by 'seed:kind:i'): both arms at the shipped scenario's placement
     (q0 jittered), each with 2-3 rounds from its own pick area to the shared place zone. Rounds an arm alone
     cannot track under MVN are redrawn (a single-arm run: with MVN every arm's QP is its own)."""
-    rng = random.Random("%d:%s:%d" % (seed, kind, i))
-    tid = "%s:%d" % (kind, i)
-    name = "sweep_%s_%d" % (kind.replace("-", "_"), i)
-    wd = os.path.join(work, name)
-    os.makedirs(wd, exist_ok=True)
+    rng, tid, name, wd = task_start(kind, seed, i, work)
     d2 = KINDS[kind]["d2"]
     vmax = KINDS[kind]["vmax"]
     for tries in range(1, 51):  # the PA10+ pair starts 0.085 m apart at cross_circles' q0: often < d2
@@ -621,11 +625,7 @@ def probe(sim, wd, name, kind, arms):
 
 def make_task(sim, kind, seed, i, work, tol=None):
     """Draw task i of kind (seeded by 'seed:kind:i'), write its scenario; a dict describing it."""
-    rng = random.Random("%d:%s:%d" % (seed, kind, i))
-    tid = "%s:%d" % (kind, i)
-    name = "sweep_%s_%d" % (kind.replace("-", "_"), i)
-    wd = os.path.join(work, name)
-    os.makedirs(wd, exist_ok=True)
+    rng, tid, name, wd = task_start(kind, seed, i, work)
     d2 = KINDS[kind]["d2"]
     tries = 0
     while True:
