@@ -210,22 +210,26 @@ static void take_all(monitor_t *m, int64_t rx) {
     }
     memset(buf, 0, sizeof buf);
     n = dds_take(m->rd, buf, info, BATCH, BATCH);
+    /* a sample that arrived while this callback waited for the lock came after rx: it was received by the
+     * time of the take (never before its stamp; dds.monitor_csv saw "received before it was stamped") */
+    const int64_t taken = n > 0 ? now_ns() : rx;
     for (int i = 0; i < n && !m->done; ++i) {
         if (!info[i].valid_data) {
             continue;
         }
         const mca_dds_Distances *d = buf[i];
+        const int64_t rx_d = d->stamp_ns > rx ? taken : rx;
         apply_statuses(m, d->tick);
         pair_view_t *pv = &m->pair[d->pair_id];
         pv->seen = 1;
         pv->last = *d;
         pv->last.link_distance_a._buffer = NULL; /* loaned memory: do not keep pointers */
         pv->last.link_distance_b._buffer = NULL;
-        if (csv_row(m, d, rx) != 0) {
+        if (csv_row(m, d, rx_d) != 0) {
             m->write_error = 1;
         }
         if (m->n_lat < m->cap_lat) {
-            m->lat[m->n_lat++] = rx - d->stamp_ns;
+            m->lat[m->n_lat++] = rx_d - d->stamp_ns;
         }
         m->samples++;
         if (m->count > 0 && m->samples >= m->count) {
