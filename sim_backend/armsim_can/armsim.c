@@ -598,6 +598,9 @@ int main(int argc, char **argv) {
             break;
         }
     }
+    /* Count the frames already queued when the signal came (received, never applied: no cycle follows), so
+     * the counters describe every frame the bus delivered, not only those read before a slow last wake-up. */
+    drain(&s);
     print_counters(stderr, &s);
     if (stats) {
         FILE *f = fopen(stats, "w");
