@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
@@ -136,9 +137,12 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->deadlock = MCA_DEADLOCK_NONE;
     ctrl->deadlock_arm = -1;
     ctrl->deadlocks = 0;
+    ctrl->back_offs = 0;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         ctrl->giving_way[a] = 0;
         ctrl->held_time[a] = 0.0;
+        ctrl->rate_avg[a] = 1.0;
+        ctrl->at_tube_edge[a] = 0;
         ctrl->exact_next[a] = 0;
         ctrl->exact_bad[a] = 0;
     }
@@ -882,6 +886,18 @@ static void tube_keep_brake(mca_controller_t *ctrl, const mca_scheme_info_t *si,
     }
 }
 
+/* Held and deadlocked are judged on the path rate averaged over this time [s], not on one tick's: two arms
+ * pressed against each other's rows chatter (sigma 0 for a few hundred ticks, then one tick at 1.25), and
+ * each spike reset the hold and the deadlock timers, so 11 of 16 crossing tasks at tolerance 5 cm crawled
+ * for the rest of the run (0.005 s of path time per s) without ever being declared deadlocked. */
+#define MCA_TS_RATE_AVG_S 0.1
+
+/* Back-offs of one arm in a row before another blocked arm backs off instead. */
+#define MCA_TS_BACK_OFFS_PER_ARM 2
+
+/* Giving way ends where the error reaches this fraction of the tube's per-axis half width. */
+#define MCA_TUBE_EDGE 0.8
+
 /* Catching up: the rate an arm aims at grows with its lag behind task time (1/s per s of lag). */
 #define MCA_TS_CATCH_UP_GAIN 1.0
 
@@ -908,6 +924,7 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
         if (moved || task_t >= ctrl->deadlock_until) {
             ctrl->deadlock = MCA_DEADLOCK_NONE;
             ctrl->deadlock_arm = -1;
+            ctrl->back_offs = 0;
             ctrl->stall_time = 0.0;
         }
     }
@@ -933,15 +950,21 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
  * deadlock time gives way: its slack loses the exact weight and it may slide past within its tube (a tube
  * of 0 leaves no room: it waits, and a deadlock is resolved by backing off). At speed again it keeps its
  * path first. */
-static void give_way(mca_controller_t *ctrl, int a, double sigma, double speed) {
+static void give_way(mca_controller_t *ctrl, int a, double rate, double speed) {
     const mca_timescale_params_t *tp = &ctrl->cfg.ts;
     if (!ctrl->cfg.path[a].path_first) {
         return;
     }
-    if (sigma < tp->deadlock_sigma && speed > 1e-6 && ctrl->tau[a] < ctrl->path_end[a]) {
+    if (ctrl->at_tube_edge[a]) {
+        /* at the tube's edge: sliding on would creep out (what the arm does not follow of each command
+         * accumulates, and the tube only stops a first-order error from growing: 8.3 cm seen in a 5 cm tube).
+         * The exact weight takes it back while it is held; held long enough, it gives way again. */
+        ctrl->held_time[a] = 0.0;
+        ctrl->giving_way[a] = 0;
+    } else if (rate < tp->deadlock_sigma && speed > 1e-6 && ctrl->tau[a] < ctrl->path_end[a]) {
         ctrl->held_time[a] += ctrl->cfg.dt;
         ctrl->giving_way[a] |= ctrl->held_time[a] >= 0.5 * tp->deadlock_time;
-    } else if (sigma > 0.9 || speed <= 1e-6) {
+    } else if (rate > 0.9 || speed <= 1e-6) {
         /* moving again: the exact weight takes it back onto its path (the tube's L2 alone would keep it
          * where the multiplier puts it, and what the arm does not follow of each command would creep out) */
         ctrl->held_time[a] = 0.0;
@@ -957,7 +980,7 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
     const mca_timescale_params_t *tp = &cfg->ts;
     const int na = cfg->n_arms;
     const mca_timescale_weights_t w = {tp->w_sigma, tp->w_slack, tp->w_path, tp->w_tube};
-    int unfinished = 0, progressing = 0, victim = -1;
+    int unfinished = 0, progressing = 0, victim = -1, other = -1;
     double slack = 0.0;
     for (int a = 0; a < na; a++) {
         double sigma = target[a] + ctrl->phi[ts_off[a]] / ctrl->ts_scale[a];
@@ -967,15 +990,22 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
             slack = fmax(slack, fabs(mca_scheme_ts_slack(ctrl->phi, ts_off[a], i, &w, ctrl->track_mode[a])));
         }
         ctrl->sigma[a] = sigma;
-        give_way(ctrl, a, sigma, speed);
+        ctrl->rate_avg[a] += (sigma - ctrl->rate_avg[a]) * fmin(1.0, cfg->dt / MCA_TS_RATE_AVG_S);
+        const double rate = ctrl->rate_avg[a];
+        give_way(ctrl, a, rate, speed);
         ctrl->tau[a] = fmax(0.0, fmin(ctrl->path_end[a], ctrl->tau[a] + sigma * cfg->dt));
         if (ctrl->tau[a] < ctrl->path_end[a]) {
             unfinished++;
             /* an arm whose path does not move here (a dwell, the start of a circle) is not held up */
-            if (sigma >= tp->deadlock_sigma || speed < 1e-6) {
+            if (rate >= tp->deadlock_sigma || speed < 1e-6) {
                 progressing++;
-            } else if (victim < 0 || tp->priority[a] <= tp->priority[victim]) {
-                victim = a; /* the lowest priority of the blocked arms (the last one on a tie) */
+            } else {
+                if (victim < 0 || tp->priority[a] <= tp->priority[victim]) {
+                    victim = a; /* the lowest priority of the blocked arms (the last one on a tie) */
+                }
+                if (a != ctrl->deadlock_arm && (other < 0 || tp->priority[a] <= tp->priority[other])) {
+                    other = a; /* the same among the blocked arms that have not backed off */
+                }
             }
         }
     }
@@ -984,8 +1014,15 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
         ctrl->stall_time += cfg->dt;
         if (ctrl->stall_time >= tp->deadlock_time && victim >= 0) {
             /* waiting and the others still blocked: the same arm backs off further (paths that keep the
-             * tool tips on them free no room otherwise) */
-            ctrl->deadlock_arm = ctrl->deadlock == MCA_DEADLOCK_WAIT ? ctrl->deadlock_arm : victim;
+             * tool tips on them free no room otherwise), twice; then another blocked arm takes its turn
+             * (backing off along its own path had put the first one in the others' way again: pick and
+             * place, an arm backed off into its pick area, across the other's transfer) */
+            int arm = victim;
+            if (ctrl->deadlock == MCA_DEADLOCK_WAIT) {
+                arm = ctrl->back_offs < MCA_TS_BACK_OFFS_PER_ARM || other < 0 ? ctrl->deadlock_arm : other;
+            }
+            ctrl->back_offs = arm == ctrl->deadlock_arm ? ctrl->back_offs + 1 : 1;
+            ctrl->deadlock_arm = arm;
             ctrl->deadlock = MCA_DEADLOCK_BACK_OFF;
             ctrl->deadlock_until = info->task_t + tp->back_off_time;
             ctrl->deadlocks++;
@@ -1195,6 +1232,10 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                 mca_v3_sub(err, r_d[a], ctrl->kin[a].ee);
                 info->tube[a] = mca_path_tolerance(&cfg->path[a], ctrl->tau[a]);
                 mca_scheme_tube_bounds(err, info->tube[a], cfg->sp.K, cfg->dt, slack_lo[a], slack_hi[a]);
+                ctrl->at_tube_edge[a] = 0;
+                for (int i = 0; i < 3; i++) {
+                    ctrl->at_tube_edge[a] |= fabs(err[i]) >= MCA_TUBE_EDGE * info->tube[a] / sqrt(3.0);
+                }
                 tube_keep_brake(ctrl, &si, a, rdot_d[a], lo[a], hi[a], slack_lo[a], slack_hi[a]);
             }
             /* the path rates' columns before the rows: the rows are written at the QP's full width */

@@ -403,6 +403,10 @@ int main(int argc, char **argv) {
             for (int a = 0; a < scn.n_arms; a++) {
                 fprintf(f, "%s%.4f", a ? "," : "", r->end_tau[a]);
             }
+            fprintf(f, "],\"end_done\":[");
+            for (int a = 0; a < scn.n_arms; a++) {
+                fprintf(f, "%s%d", a ? "," : "", r->end_done[a]);
+            }
             fprintf(f, "]");
             fprintf(f,
                     ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"

@@ -341,6 +341,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     for (int a = 0; a < na; a++) {
         memcpy(r->end_ee[a], ip->ee[a], sizeof r->end_ee[a]);
         r->end_tau[a] = ip->tau[a];
+        r->end_done[a] = ip->tau[a] >= mca_path_end_time(&cfg->path[a]);
     }
     r->pdnn_steps_mean = steps_n ? steps_sum / steps_n : 0.0;
     r->completed &= r->exact_missed == 0;

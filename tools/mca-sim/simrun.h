@@ -94,6 +94,7 @@ typedef struct mca_simrun_result {
     double end_distance;            /**< its distance [m] */
     double end_ee[MCA_MAX_ARMS][3]; /**< the tool tips */
     double end_tau[MCA_MAX_ARMS];   /**< the path clocks [s] */
+    int end_done[MCA_MAX_ARMS];     /**< 1: the arm's clock had reached its path's end */
     double path_time_lost_s;   /**< task time at completion (or at the end) minus the paths' nominal end */
     int deadlocks;             /**< mca-ts deadlocks detected */
     double max_slack;          /**< mca-ts: largest tracking slack [m/s] */

@@ -589,7 +589,7 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
                lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
                max_err=r.get("max_err"))
     det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "exact_points", "exact_missed",
-                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau",
+                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau", "end_done",
                                       "solves", "solves_unconverged", "solve_steps", "exact_solves")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
@@ -834,16 +834,25 @@ def table(tasks, schemes, sim, a):
                                         max(r["exact_solves"][1] for r in rs), max(r["exact_solves"][2] for r in rs),
                                         un, 100.0 * un / n))
             summary["solver/%s" % s] = dict(solves=n, unconverged=un)
-    # every unfinished task named: where it ended (the closest pair, its distance, the tool tips, the clocks)
+    # every unfinished task named: where it ended (the closest pair, its distance, the tool tips, the clocks),
+    # and whether an arm that had finished was in the way (no path rate can move it: the paths conflict at rest)
+    blocked_by_done = {}
     for t in reach:
         for s in schemes:
             r = t["runs"].get(s, {}).get("task", {})
             if r.get("cls") in ("safe-stop", "exact-missed") and r.get("end_pair") is not None:
                 p = r["end_pair"]
-                lines.append("unfinished %-6s %-16s %-20s pair arm%d.link%d-arm%d.link%d d %.4f m, tips %s, clocks %s s" % (
+                done = [a for a, x in enumerate(r.get("end_done") or []) if x]
+                lines.append("unfinished %-6s %-16s %-20s pair arm%d.link%d-arm%d.link%d d %.4f m, tips %s, clocks %s s%s" % (
                     s, t["id"], r.get("reason", ""), p[0], p[1], p[2], p[3], r["end_distance"],
                     " ".join("[%.3f %.3f %.3f]" % tuple(e) for e in r["end_ee"]),
-                    "/".join("%.2f" % x for x in r["end_tau"])))
+                    "/".join("%.2f" % x for x in r["end_tau"]),
+                    "; blocked by %s at its path's end" % ", ".join("arm%d" % a for a in done) if done else ""))
+                if done:
+                    blocked_by_done[s] = blocked_by_done.get(s, 0) + 1
+    for s, n in sorted(blocked_by_done.items()):
+        lines.append("unfinished %s: %d blocked by an arm standing at its path's end" % (s, n))
+        summary["blocked_by_done/%s" % s] = n
     # distances: where the tasks start and how near the arms come (does avoidance matter?)
     d0 = sorted(t["start_distance"] for t in reach)
     if d0:

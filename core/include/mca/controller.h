@@ -268,11 +268,14 @@ typedef struct mca_controller {
     int giving_way[MCA_MAX_ARMS];   /**< path first: 1 while the arm may slide within its tube (held too long)
                                      */
     double held_time[MCA_MAX_ARMS]; /**< how long its path rate has been held below deadlock_sigma [s] */
-    int exact_bad[MCA_MAX_ARMS];    /**< 1: the point being checked was missed */
+    int at_tube_edge[MCA_MAX_ARMS]; /**< this tick's error reached its tube's edge (giving way ends) */
+    double rate_avg[MCA_MAX_ARMS]; /**< path rate averaged over MCA_TS_RATE_AVG_S: held and deadlock see it */
+    int exact_bad[MCA_MAX_ARMS];   /**< 1: the point being checked was missed */
     int exact_met, exact_missed;
     double exact_error_max;
     double deadlock_until;              /**< back-off ends at this task time */
     double wait_tau[MCA_MAX_ARMS];      /**< WAIT: the others' clocks when it began */
+    int back_offs;                      /**< back-offs of deadlock_arm since the deadlock began */
     double ts_scale[MCA_MAX_ARMS];      /**< u = ts_scale (sigma - target) in the last QP */
     double v_meas[MCA_QP_MAX_VARS];     /**< measured joint velocities for the next tick (phi layout) */
     double box_center[MCA_QP_MAX_VARS]; /**< the joint velocities the acceleration box was centred on */
