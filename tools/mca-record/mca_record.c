@@ -230,6 +230,8 @@ static int add_topic(recorder_t *r, const dds_builtintopic_endpoint_t *ep) {
     dds_qset_durability(q, dk == DDS_DURABILITY_VOLATILE ? DDS_DURABILITY_VOLATILE
                                                          : DDS_DURABILITY_TRANSIENT_LOCAL);
     dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    char yaml[1024];
+    qos_yaml(ep->qos != NULL ? ep->qos : q, yaml, sizeof yaml);
     const dds_entity_t topic = dds_create_topic(r->pp, t->desc, ep->topic_name, NULL, NULL);
     tp->reader = topic > 0 ? dds_create_reader(r->pp, topic, q, NULL) : topic;
     dds_delete_qos(q);
@@ -239,8 +241,6 @@ static int add_topic(recorder_t *r, const dds_builtintopic_endpoint_t *ep) {
         return 0;
     }
 
-    char yaml[1024];
-    qos_yaml(ep->qos != NULL ? ep->qos : q, yaml, sizeof yaml);
     const char *keys[] = {"offered_qos_profiles"};
     const char *vals[] = {yaml};
     const uint16_t sid = schema_of(r, t);
@@ -350,7 +350,7 @@ int main(int argc, char **argv) {
     static recorder_t r;
     static mca_cell_t cell;
     unsigned long long domain = 0;
-    int have_domain = 0, have_cell = 0;
+    int have_domain = 0;
     double duration = 0.0, every = 5.0;
     const char *config = NULL, *out = NULL, *cell_path = NULL;
     static char ns_pattern[64];
@@ -426,7 +426,6 @@ int main(int argc, char **argv) {
             fprintf(stderr, PROG ": %s: dds.enabled is false: the cell publishes nothing\n", cell_path);
             return 2;
         }
-        have_cell = 1;
         if (!have_domain) {
             domain = cell.dds.domain;
         }
@@ -441,8 +440,6 @@ int main(int argc, char **argv) {
             r.patterns[r.n_patterns++] = "mca/*";
         }
     }
-    (void)have_cell;
-
     mca_prog_on_stop_signals(on_signal);
     char err[320] = "";
     dds_entity_t dom = 0;

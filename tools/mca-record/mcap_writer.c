@@ -328,10 +328,16 @@ static int write_chunk(mcap_writer_t *w) {
     return w->error ? -1 : 0;
 }
 
+/* -1 with errno = the writer's first error */
+static int failed(const mcap_writer_t *w) {
+    errno = w->error;
+    return -1;
+}
+
 int mcap_writer_message(mcap_writer_t *w, uint16_t ch, uint32_t sequence, uint64_t log_time,
                         uint64_t publish_time, const void *data, size_t len) {
     if (w->error) {
-        return -1;
+        return failed(w);
     }
     if (ch == 0 || ch > w->n_ch) {
         errno = EINVAL;
@@ -343,7 +349,7 @@ int mcap_writer_message(mcap_writer_t *w, uint16_t ch, uint32_t sequence, uint64
         index_entry_t *p = realloc(c->index, cap * sizeof *p);
         if (p == NULL) {
             w->error = ENOMEM;
-            return -1;
+            return failed(w);
         }
         c->index = p;
         c->cap_index = cap;
@@ -360,7 +366,7 @@ int mcap_writer_message(mcap_writer_t *w, uint16_t ch, uint32_t sequence, uint64
     rec_end(&w->chunk, at);
     if (w->chunk.oom) {
         w->error = ENOMEM;
-        return -1;
+        return failed(w);
     }
     if (w->chunk_msgs == 0 || log_time < w->chunk_start) {
         w->chunk_start = log_time;
@@ -377,19 +383,19 @@ int mcap_writer_message(mcap_writer_t *w, uint16_t ch, uint32_t sequence, uint64
     w->chunk_msgs++;
     w->messages++;
     c->count++;
-    if (w->chunk.n >= w->chunk_bytes) {
-        return write_chunk(w);
+    if (w->chunk.n >= w->chunk_bytes && write_chunk(w) != 0) {
+        return failed(w);
     }
     return 0;
 }
 
 int mcap_writer_flush(mcap_writer_t *w) {
     if (write_chunk(w) != 0) {
-        return -1;
+        return failed(w);
     }
     if (fflush(w->f) != 0) {
         w->error = errno;
-        return -1;
+        return failed(w);
     }
     return 0;
 }
@@ -488,9 +494,11 @@ int mcap_writer_close(mcap_writer_t *w) {
     free(b.p);
 
     int rc = w->error ? -1 : 0;
-    if (fclose(w->f) != 0) {
+    if (fclose(w->f) != 0 && rc == 0) {
+        w->error = errno;
         rc = -1;
     }
+    const int error = w->error;
     for (uint16_t k = 0; k < w->n_ch; ++k) {
         free(w->ch[k].record.p);
         free(w->ch[k].index);
@@ -504,5 +512,6 @@ int mcap_writer_close(mcap_writer_t *w) {
     free(w->schemas.p);
     free(w->chunk.p);
     free(w);
+    errno = error;
     return rc;
 }
