@@ -208,6 +208,14 @@ def read_back(out, rows, cell):
     check(len(diag) >= 3 and [t for t in diag if t >= both] == [t for t in stat if t >= both],
           f"/diagnostics {len(diag)} and mca/controller_status {len(stat)}: the same statuses from tick {both} on")
 
+    # the last status is mcad's final one: its fields after the strings decode to the run's figures
+    fin = by["mca/controller_status"][-1] if by["mca/controller_status"] else None
+    min_d = min(float(x["min_d"]) for x in rows)
+    check(fin is not None and fin.ticks == n_ticks and fin.state == 4 and fin.fault_code == 0
+          and fin.min_distance_so_far == min_d and fin.snapshots_dropped == 0,
+          f"mca/controller_status, the final one: {n_ticks} ticks, STOPPED, min_distance_so_far {min_d} "
+          "= the CSV's smallest min_d, 0 snapshots dropped")
+
     # latched topics
     for ai, a in enumerate(ARMS):
         d = by[f"/{NS}/{a}/robot_description"]
