@@ -20,6 +20,7 @@ usage: test_record.py MCA_RECORD MCAD SOURCE_DIR
 """
 import csv
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -49,10 +50,11 @@ def check(cond, what):
 
 def make_cell(tmp):
     src = open(os.path.join(SRC, "config", "cells", "cross_circles_sim.yaml")).read()
-    for old, new in (("../", os.path.join(SRC, "config") + "/"), ("stop_after: 11 ", f"stop_after: {STOP_S} "),
-                     ("overrun_limit: 500 ", "overrun_limit: 100000 ")):
-        check(old in src, f"the shipped cell has '{old.strip()}'")
-        src = src.replace(old, new)
+    for what, old, new in (("relative paths (../)", r"\.\./", os.path.join(SRC, "config") + "/"),
+                           ("stop_after", r"(?m)^stop_after: *\d+", f"stop_after: {STOP_S}"),
+                           ("rt.overrun_limit", r"(?m)^  overrun_limit: *\d+", "  overrun_limit: 100000")):
+        check(re.search(old, src) is not None, f"the shipped cell has {what}")
+        src = re.sub(old, new, src)
     path = os.path.join(tmp, "cross_circles_sim.yaml")
     with open(path, "w") as f:
         f.write(src)
