@@ -67,10 +67,10 @@ def stamp_ns(h):
 
 def sequence_check(name, got, expected):
     """got: the sequence numbers received in order; expected: every one that was sent, in order. None
-    missing after the first received one, none out of order, none twice. Returns the missing ones."""
+    missing after the first received one, none out of order, none twice."""
     if not got:
         check(False, f"{name}: received nothing")
-        return None
+        return
     first = got[0]
     want = [k for k in expected if k >= first]
     missing = sorted(set(want) - set(got))
@@ -78,7 +78,6 @@ def sequence_check(name, got, expected):
     check(got == want and not extra,
           f"{name}: {len(got)} samples, from {first} on {len(missing)} missing, in order"
           + (f" (missing {missing[:10]}, not sent {extra[:10]}, got {got[:5]}...)" if got != want else ""))
-    return missing
 
 
 def main():
@@ -103,12 +102,12 @@ def main():
         progress = [ln for ln in rec_err.splitlines() if " s, " in ln and " messages, " in ln]
         check(len(progress) >= 3, f"{len(progress)} progress lines (one a second, and the last)")
         rows = list(csv.DictReader(open(out_csv)))
-        read_back(out, rows, cell)
+        read_back(out, rows)
     print(f"{len(failures)} failed" if failures else "all passed")
     return 1 if failures else 0
 
 
-def read_back(out, rows, cell):
+def read_back(out, rows):
     # the file's structure, independently of rosbags: the mcap package with CRC checks
     with open(out, "rb") as f:
         rd = make_reader(f, validate_crcs=True)
@@ -121,7 +120,6 @@ def read_back(out, rows, cell):
           f"mcap: {len(summary.channels)} channels of encoding cdr, {len(summary.schemas)} ros2msg schemas")
 
     jazzy = get_typestore(Stores.ROS2_JAZZY)
-    n_ros = 0
     for s in summary.schemas.values():
         if s.name.startswith("mca_dds/"):
             continue
@@ -129,7 +127,6 @@ def read_back(out, rows, cell):
         same = all(jazzy.fielddefs.get(t) is not None and jazzy.fielddefs[t][1] == d[1] and
                    sorted(jazzy.fielddefs[t][0]) == sorted(d[0]) for t, d in types.items())
         check(same, f"schema {s.name}: its {len(types)} definitions as ROS 2 Jazzy's")
-        n_ros += 1
 
     n_ticks = len(rows)
     final = n_ticks  # the final snapshot's tick: the ticks run; its state: the last row's
