@@ -2,7 +2,7 @@
 # every install rule. FHS paths from GNUInstallDirs:
 #   sbin/mcad                              the daemon (the test build mcad-test is never installed)
 #   libexec/mca/mca-dds-bridge             mcad's DDS publisher, a process of its own (docs/dds.md)
-#   bin/mca-*                              tools: mca-sim, mca-monitor, mca-geom, mca-armsim, mca-stopcheck, ...
+#   bin/mca-*                              tools: mca-sim, mca-monitor, mca-record, mca-geom, mca-armsim, ...
 #   include/mca/*.h                        the public headers of the exported libraries
 #   lib/libmca_*.a, lib/cmake/mca/         static libraries and the CMake package: find_package(mca) gives
 #                                          mca::core (real time), mca::model (URDF, scenarios), mca::arm,
@@ -54,8 +54,8 @@ install(FILES "${CMAKE_BINARY_DIR}/mcaConfig.cmake" "${CMAKE_BINARY_DIR}/mcaConf
 install(TARGETS mcad RUNTIME DESTINATION ${CMAKE_INSTALL_SBINDIR})
 # mcad's DDS publisher process (issue 16): found by mcad in libexec/mca (MCA_LIBEXECDIR, daemon/CMakeLists.txt)
 install(TARGETS mca-dds-bridge RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/mca)
-set(MCA_INSTALLED_TOOLS mca-sim mca-monitor mca-geom mca-armsim mca-drivesim mca-stopcheck mca-simarm-trace
-                        mca-dds-synth)
+set(MCA_INSTALLED_TOOLS mca-sim mca-monitor mca-record mca-geom mca-armsim mca-drivesim mca-stopcheck
+                        mca-simarm-trace mca-dds-synth)
 foreach(tool ${MCA_INSTALLED_TOOLS})
   if(TARGET ${tool})
     install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

@@ -5,6 +5,7 @@
 #  2. mcad drives task 1 (cross circles, dual PA10+) on the simulated arms in REAL time (1 kHz, SCHED_FIFO)
 #     and publishes on DDS while mca-monitor shows the distances live;
 #  3. plots from the daemon's CSV and the simulation CSVs.
+# mca-record records the daemon's run for ROS 2 tools (ros2 bag, Foxglove, PlotJuggler): out/demo/mcad_cross_circles.mcap.
 # Everything goes under out/demo/ (gitignored). Needs root (or rtprio/memlock limits) for SCHED_FIFO;
 # without them mcad warns and runs SCHED_OTHER.
 set -euo pipefail
@@ -17,6 +18,7 @@ PY="$ROOT/.venv/bin/python3"
 MCAD="$BUILD/daemon/mcad"
 SIM="$BUILD/tools/mca-sim/mca-sim"
 MON="$BUILD/tools/mca-monitor/mca-monitor"
+REC="$BUILD/tools/mca-record/mca-record"
 for exe in "$MCAD" "$SIM"; do
     [ -x "$exe" ] || { echo "demo: $exe not built (run make build)" >&2; exit 1; }
 done
@@ -47,11 +49,25 @@ if [ -x "$MON" ]; then
     MON_PID=$!
     sleep 1
 fi
+REC_PID=
+if [ -x "$REC" ]; then
+    # every topic of the cell into MCAP (docs/ros2.md); its progress lines go to out/demo/record.log
+    "$REC" --cell "$CELL" --output "$OUT/mcad_cross_circles.mcap" --quiet 2> "$OUT/record.log" &
+    REC_PID=$!
+    sleep 1
+fi
 set +e
 "$MCAD" --csv "$OUT/mcad_cross_circles.csv" "$CELL" 2> "$OUT/mcad.log"
 MCAD_RC=$?
 set -e
 [ -n "$MON_PID" ] && { kill -INT "$MON_PID" 2>/dev/null; wait "$MON_PID" 2>/dev/null || true; }
+if [ -n "$REC_PID" ]; then
+    sleep 0.5 # the last samples
+    kill -INT "$REC_PID" 2>/dev/null
+    wait "$REC_PID" 2>/dev/null || true
+    echo "--- mca-record (out/demo/record.log): out/demo/mcad_cross_circles.mcap"
+    tail -1 "$OUT/record.log"
+fi
 echo
 echo "--- mcad log (out/demo/mcad.log), exit status $MCAD_RC"
 cat "$OUT/mcad.log"

@@ -45,7 +45,7 @@ check "Maintainer, Section, Description" test -n "$(field Maintainer)" -a -n "$(
 # contents
 dpkg-deb --contents "$DEB" | awk '{print $6}' | sed 's|^\./|/|' >"$T/contents"
 has() { grep -qx "$1" "$T/contents"; }
-for f in /usr/sbin/mcad /usr/libexec/mca/mca-dds-bridge /usr/bin/mca-sim /usr/bin/mca-monitor \
+for f in /usr/sbin/mcad /usr/libexec/mca/mca-dds-bridge /usr/bin/mca-sim /usr/bin/mca-monitor /usr/bin/mca-record \
     /lib/systemd/system/mcad@.service /etc/mca/cells/cross_circles_sim.yaml /etc/mca/dds/loopback.xml \
     /usr/share/mca/robots/jaco2.urdf /usr/share/mca/scenarios/cross_circles.yaml /usr/include/mca/controller.h \
     /usr/share/doc/mca/daemon.md; do

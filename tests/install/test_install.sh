@@ -21,7 +21,7 @@ check() { # check DESCRIPTION COMMAND...
 cmake --install "$B" --prefix "$P" >"$T/install.log" 2>&1 || { cat "$T/install.log"; echo "FAIL cmake --install"; exit 1; }
 echo "installed $(find "$P" -type f | wc -l) files under $P"
 check "sbin/mcad" test -x "$P/sbin/mcad"
-check "bin/mca-sim, bin/mca-monitor, bin/mca-geom" test -x "$P/bin/mca-sim" -a -x "$P/bin/mca-monitor" -a -x "$P/bin/mca-geom"
+check "bin/mca-sim, bin/mca-monitor, bin/mca-record, bin/mca-geom" test -x "$P/bin/mca-sim" -a -x "$P/bin/mca-monitor" -a -x "$P/bin/mca-record" -a -x "$P/bin/mca-geom"
 check "libexec/mca/mca-dds-bridge (mcad's DDS publisher process)" test -x "$P/libexec/mca/mca-dds-bridge"
 check "no test build installed (mcad-test)" test ! -e "$P/sbin/mcad-test" -a ! -e "$P/bin/mcad-test"
 check "include/mca/controller.h, dds_bridge.h, ros2.h" test -f "$P/include/mca/controller.h" -a -f "$P/include/mca/dds_bridge.h" -a -f "$P/include/mca/ros2.h"
