@@ -35,9 +35,8 @@ using MapV = Eigen::Map<const Eigen::VectorXd>;
 // Polish constants (docs/pdnn.md, "Active-set polish"). Pivots below kRankTol of the largest count as zero
 // (unit rows: rows within ~1e-9 rad of the span of the others are dependent).
 constexpr double kRankTol = 1e-9;
-constexpr int kPolishEvery = 24;     // steps after a failed try before the next one, doubled each time
-constexpr double kPolishDrop = 0.1;  // ... or when the residual has fallen by this factor
-constexpr int kPolishTrySolves = 24; // subproblem solves per try at most
+constexpr int kPolishEvery = 24;    // steps after a failed try before the next one, doubled each time
+constexpr double kPolishDrop = 0.1; // ... or when the residual has fallen by this factor
 
 // Solve min 1/2 |x|^2 with the rows in `set` (set[n + i] = 1) as equalities and the variables with
 // set[j] = 1 / 2 at their lower / upper bound: C x_F = d, x_F = C^T w_A (C = N[A, F], unit rows), through a
@@ -433,14 +432,14 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         }
         // Active-set polish: at the first step (a warm start's active set is usually still right), then
         // every `every` steps (doubling) or once the residual fell by kPolishDrop; polish_max subproblem
-        // solves in all, kPolishTrySolves per try. Accepted only if the candidate meets this loop's own test;
-        // else the iteration goes on from (x, w), untouched.
+        // solves in all (a try may use what is left). Accepted only if the candidate meets this loop's own
+        // test; else the iteration goes on from (x, w), untouched.
         if (tries < polish_max && (steps >= next_k || r <= next_r)) {
             // the first time, a failed try from the iterate's set is followed by one from the equalities
             // alone (the textbook cold start of the dual method: finite for any feasible QP, budget
             // permitting)
             for (int cold = 0; cold < (steps == 0 ? 2 : 1) && !res->polished && tries < polish_max; cold++) {
-                int budget = std::min(polish_max - tries, kPolishTrySolves);
+                int budget = polish_max - tries; // a try may use what is left: it is one active-set run
                 const int left = budget;
                 const int got = polish_try(N, q, lox, hix, low, a, b, w, cold, 0.1 * tol, &budget, xc, wc);
                 tries += left - budget;
