@@ -623,6 +623,29 @@ def probe(sim, wd, name, kind, arms):
     return tips, float(row["min_d"]), None
 
 
+def rest_conflicts(sim, wd, name, kind, arms, paths, duration):
+    """Each arm on its path (MVN: no avoidance) with every other arm standing at its start: the pairs that come
+    below d1, as [arm on its path, arm at rest, least distance]. No path rate can complete such a task while
+    the arm at rest stays there (the crossing kinds' paths return home, so an arm's start is also its end);
+    the sweep reports completion with and without them. An a-priori test: it does not look at mca-ts. Not for
+    pick and place: there an arm's start is not its end, and leaving its start is what makes room."""
+    out = []
+    for a in range(len(arms)):
+        scn = os.path.join(wd, "rest%d.yaml" % a)
+        solo = [{"kind": "hold"} if b != a else {k: v for k, v in paths[a].items() if k not in ("tolerance", "exact")}
+                for b in range(len(arms))]
+        with open(scn, "w") as f:
+            f.write(scenario_yaml(name + "_rest%d" % a, kind, arms, duration, solo))
+        runs, errs = sim.run(scn, os.path.join(wd, "rest%d.json" % a), ["mvn"])
+        r = runs.get("mvn")
+        if r is None:
+            continue
+        if r["min_distance"] < KINDS[kind]["d1"]:
+            other = [b for b in range(len(arms)) if b != a]
+            out.append([a, other[0] if len(other) == 1 else -1, round(r["min_distance"], 4)])
+    return out
+
+
 def make_task(sim, kind, seed, i, work, tol=None):
     """Draw task i of kind (seeded by 'seed:kind:i'), write its scenario; a dict describing it."""
     rng, tid, name, wd = task_start(kind, seed, i, work)
@@ -664,7 +687,8 @@ def make_task(sim, kind, seed, i, work, tol=None):
     stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
     return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
                 draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2,
-                paths=[p["kind"] for p in paths], towards=fars)
+                paths=[p["kind"] for p in paths], towards=fars,
+                rest_conflicts=rest_conflicts(sim, wd, name, kind, arms, paths, duration))
 
 
 def run_task(sim, kind, seed, i, a):
@@ -815,6 +839,18 @@ def table(tasks, schemes, sim, a):
         if not t.get("reachable"):
             un[t.get("unreachable", "?")] = un.get(t.get("unreachable", "?"), 0) + 1
     lines.append("unreachable (MVN cannot track alone): %d %s" % (len(tasks) - nr, json.dumps(un, sort_keys=True)))
+    # paths that run into another arm standing at its start (rest_conflicts): reported apart, never dropped
+    clear = [t for t in reach if not t.get("rest_conflicts")]
+    if any("rest_conflicts" in t for t in reach):
+        for s in schemes:
+            def done(ts):
+                return sum(1 for t in ts if t["runs"].get(s, {}).get("task", {}).get("cls") in ("completed", "late"))
+            rest = [t for t in reach if t.get("rest_conflicts")]
+            lines.append("paths clear of the other arms at rest: %d of %d reachable; %s done (completed or late) on "
+                         "them %d (%.1f %%), on the %d others %d" % (
+                             len(clear), nr, s, done(clear), 100.0 * done(clear) / max(1, len(clear)), len(rest),
+                             done(rest)))
+            summary["clear/%s" % s] = dict(clear=len(clear), done=done(clear), rest=len(rest), rest_done=done(rest))
     for s in schemes:
         for mode in ("task", "stop"):
             v = summary.get("%s/%s" % (s, mode))
