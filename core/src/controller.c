@@ -993,6 +993,12 @@ static void ts_advance(mca_controller_t *ctrl, mca_tick_info_t *info, const int 
         ctrl->rate_avg[a] += (sigma - ctrl->rate_avg[a]) * fmin(1.0, cfg->dt / MCA_TS_RATE_AVG_S);
         const double rate = ctrl->rate_avg[a];
         give_way(ctrl, a, rate, speed);
+        if (ctrl->deadlock == MCA_DEADLOCK_BACK_OFF && a == ctrl->deadlock_arm && speed < 1e-6 &&
+            ctrl->tau[a] > 0.0) {
+            /* backing through a dwell moves nothing: its path time does not count towards the back-off (an
+             * arm that backed off into its pick dwell stayed in the other's way: pnp-jaco-mico:1) */
+            ctrl->deadlock_until += cfg->dt;
+        }
         ctrl->tau[a] = fmax(0.0, fmin(ctrl->path_end[a], ctrl->tau[a] + sigma * cfg->dt));
         if (ctrl->tau[a] < ctrl->path_end[a]) {
             unfinished++;
