@@ -184,6 +184,16 @@ static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &
     return rank == k ? 2 : 1;
 }
 
+// 1 once CLOCK_MONOTONIC has reached deadline_ns (0: no deadline).
+static int past(int64_t deadline_ns) {
+    if (deadline_ns == 0) {
+        return 0;
+    }
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec >= deadline_ns;
+}
+
 // One polish try from the network's iterate (a = N^T w, b = N x + q). Seed: the active set the projection
 // sees (a variable whose a_j the box clips, a row with w_i - b_i > 0, every equality row); cold: the
 // equality rows alone. Then a dual
@@ -196,8 +206,8 @@ static int kkt_solve(const MapN &N, const MapV &q, const MapV &lox, const MapV &
 // The caller still checks the candidate with the network's residual.
 template <typename AV, typename BV, typename WV>
 static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const MapV &low,
-                      const AV &a, const BV &b, const WV &w, int cold, double eps, int *budget, VecX &xc,
-                      VecW &wc) {
+                      const AV &a, const BV &b, const WV &w, int cold, double eps, int64_t deadline_ns,
+                      int *budget, VecX &xc, VecW &wc) {
     const int n = (int)N.cols(), m = (int)N.rows();
     unsigned char set[kMaxN + kMaxM];
     for (int j = 0; j < n; j++) {
@@ -209,8 +219,8 @@ static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV 
     VecX x1(n), at(n), a1(n);
     VecW w1(m);
     const auto solve = [&](VecX &xo, VecW &wo) {
-        if (*budget <= 0) {
-            return 0;
+        if (*budget <= 0 || past(deadline_ns)) {
+            return 0; // out of solves, or of time: the try fails and the network's answer stands
         }
         (*budget)--;
         return kkt_solve(N, q, lox, hix, low, set, xo, wo);
@@ -441,7 +451,8 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
             for (int cold = 0; cold < (steps == 0 ? 2 : 1) && !res->polished && tries < polish_max; cold++) {
                 int budget = polish_max - tries; // a try may use what is left: it is one active-set run
                 const int left = budget;
-                const int got = polish_try(N, q, lox, hix, low, a, b, w, cold, 0.1 * tol, &budget, xc, wc);
+                const int got = polish_try(N, q, lox, hix, low, a, b, w, cold, 0.1 * tol, p->deadline_ns,
+                                           &budget, xc, wc);
                 tries += left - budget;
                 if (got) {
                     const double rc = residual_at();
@@ -461,13 +472,9 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
             every *= 2;
             next_r = r * kPolishDrop;
         }
-        if (p->deadline_ns != 0 && steps > 0 && (steps & 15) == 0) {
-            struct timespec ts;
-            clock_gettime(CLOCK_MONOTONIC, &ts);
-            if ((int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec >= p->deadline_ns) {
-                res->timed_out = 1;
-                break;
-            }
+        if (steps > 0 && (steps & 15) == 0 && past(p->deadline_ns)) {
+            res->timed_out = 1;
+            break;
         }
         // The projection-contraction argument makes the distance to the solution fall, not the residual:
         // keep the best point seen, to hand back if the cap comes first.

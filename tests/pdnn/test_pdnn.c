@@ -856,6 +856,29 @@ static void test_polish_real_qp(void **state) {
                   res.steps, res.polish_tries, kkt, err);
 }
 
+static void test_polish_meets_deadline(void **state) {
+    (void)state;
+    /* The same tick with a deadline already past: the polish makes no solve (it checks the clock before
+     * each), the network stops at its first check (16 steps), and the solve reports the time-out, not an
+     * answer. */
+    mca_qp_t qp;
+    double phi[16];
+    mca_pdnn_result_t res;
+    mca_pdnn_params_t prm;
+    mca_pdnn_default_params(&prm);
+    prm.max_steps = 2000;
+    fixture_tick7199(&qp);
+    mca_pdnn_init(&solver);
+    assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_OK);
+    fixture_tick7200(&qp);
+    prm.deadline_ns = 1; /* CLOCK_MONOTONIC is past 1 ns */
+    assert_int_equal(mca_pdnn_solve(&solver, &qp, &prm, phi, &res), MCA_ETIMEDOUT);
+    assert_int_equal(res.timed_out, 1);
+    assert_int_equal(res.polished, 0);
+    assert_int_equal(res.polish_tries, 0);
+    assert_true(res.steps <= 16);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_equality_closed_form),
@@ -876,6 +899,7 @@ int main(void) {
         cmocka_unit_test(test_polish_dependent_row),
         cmocka_unit_test(test_polish_wrong_guess),
         cmocka_unit_test(test_polish_real_qp),
+        cmocka_unit_test(test_polish_meets_deadline),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
