@@ -9,10 +9,10 @@ before mcad:
   same      on the controller host, no ROS_*, RMW_*, CYCLONEDDS_* or FAST* variables at all;
   monitor   on the other host with the documented configuration, ROS_STATIC_PEERS=192.168.10.2 only;
   stranger  on the other host with no variables, at the same time.
-mcad runs until `same` and `monitor` both have 300 JointStates of every arm (3 s at the cells' 100 Hz after
+mcad runs until `same` and `monitor` both have 200 JointStates of every arm (2 s at the cells' 100 Hz after
 discovery; at most 40 s), then gets SIGTERM. Checks (in the listeners, against mcad's CSV): same and
-monitor got every JointState as a published tick, >= 99.9 % of those published from the first received, and
-markers and diagnostics; stranger got nothing and never saw a publisher of the cell's topics. mcad exits 0
+monitor got every JointState as a published tick (matched by stamp), >= 99.9 % of those published from the
+first received, >= 99 % of the MarkerArrays, and diagnostics; stranger got nothing and never saw a publisher of the cell's topics. mcad exits 0
 (3 for the negative example, which ends in its fault by design).
 usage: test_hosts.py MCAD SOURCE_DIR CELL [CELL...]   (root; exit 77 without)"""
 import os
@@ -28,7 +28,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 TAG = f"mca{os.getpid() % 100000}"
 NS_C, NS_M = f"{TAG}-ctl", f"{TAG}-mon"
 CTL_ADDR = "192.168.10.2"
-WANT = 300  # JointStates of every arm at `same` and `monitor` before mcad is stopped
+WANT = 200  # JointStates of every arm at `same` and `monitor` before mcad is stopped
 failures = []
 
 

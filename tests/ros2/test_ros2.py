@@ -34,7 +34,8 @@ restart (issue 16): mcad's DDS bridge process is killed with SIGSEGV after its f
 listen (for test_hosts.py, which runs it in network namespaces and then mcad): a node with the environment it
   is given subscribes to a cell's JointStates, markers and diagnostics, writes WORK/ROLE.status as it goes
   and, once WORK/done exists, checks what it got against mcad's CSV WORK/mcad.csv: EXPECT "all" = every
-  JointState one published tick, >= 99.9 % of them from the first received, markers and diagnostics came;
+  JointState one published tick, >= 99.9 % of them from the first received, >= 99 % of the MarkerArrays,
+  diagnostics came;
   EXPECT "none" = no sample and never a publisher of the cell's topics in its graph.
 usage: test_ros2.py topics|graph|stream|restart MCAD SOURCE_DIR DOMAIN [MARKERS_JSON]
        test_ros2.py listen SOURCE_DIR CELL WORK ROLE all|none"""
@@ -756,9 +757,9 @@ def mode_listen(tmp):
     check(min(n for n, _ in got) >= 100, f"{ROLE}: >= 100 JointStates of each arm ({[n for n, _ in got]})")
     mk = sorted({tick_of_stamp[stamp_ns(ma.markers[0].header)] for ma in node.markers
                  if ma.markers and stamp_ns(ma.markers[0].header) in tick_of_stamp})
-    n_mk = len([k for k in published if mk and k >= mk[0]])
-    check(len(mk) > 0, f"{ROLE}: {len(node.markers)} MarkerArrays; {len(mk)} of the {n_mk} ticks published from "
-          f"the first received ({100 * len(mk) / max(n_mk, 1):.2f} %)")
+    n_mk = len({k for k in published if mk and k >= mk[0]})  # distinct: the final snapshot may repeat a tick
+    check(len(mk) >= 0.99 * n_mk > 0, f"{ROLE}: {len(node.markers)} MarkerArrays; {len(mk)} of the {n_mk} ticks "
+          f"published from the first received ({100 * len(mk) / max(n_mk, 1):.2f} % >= 99 %)")
     check(len(diag) > 0, f"{ROLE}: {len(diag)} diagnostics of mcad: {NS} (states "
           f"{sorted({kv.value for st in diag for kv in st.values if kv.key == 'state'})})")
     check(all(pubs[t] == 1 for t in mine), f"{ROLE}: one publisher on each of the cell's topics ({pubs})")
