@@ -12,9 +12,10 @@ before mcad:
 mcad runs until `same` and `monitor` both have 200 JointStates of every arm (2 s at the cells' 100 Hz after
 discovery; at most 40 s), then gets SIGTERM. Checks (in the listeners, against mcad's CSV): same and
 monitor got every JointState as a published tick (matched by stamp), >= 99.9 % of those published from the
-first received, >= 99 % of the MarkerArrays, and diagnostics; stranger got nothing and never saw a publisher of the cell's topics. mcad exits 0
-(3 for the negative example, which ends in its fault by design).
+first received, >= 99 % of the MarkerArrays, and diagnostics; stranger got nothing and never saw a publisher
+of the cell's topics. mcad exits 0 (3 for the negative example, which ends in its fault by design).
 usage: test_hosts.py MCAD SOURCE_DIR CELL [CELL...]   (root; exit 77 without)"""
+import json
 import os
 import shutil
 import signal
@@ -63,7 +64,6 @@ def teardown():
 
 
 def read_status(work, role):
-    import json
     try:
         with open(os.path.join(work, role + ".status")) as f:
             return json.load(f)
