@@ -31,11 +31,19 @@ With a fifth argument (topics), the MarkerArray received at the tick of the smal
 as JSON: tools/plots/ros2_markers.py draws it (the README's picture).
 restart (issue 16): mcad's DDS bridge process is killed with SIGSEGV after its first /diagnostics (12 s run): it says
   dds_bridge_restarts 0 before and 1 from the restarted bridge, JointState flows again, mcad exits 0.
-usage: test_ros2.py topics|graph|stream|restart MCAD SOURCE_DIR DOMAIN [MARKERS_JSON]"""
+listen (for test_hosts.py, which runs it in network namespaces and then mcad): a node with the environment it
+  is given subscribes to a cell's JointStates, markers and diagnostics, writes WORK/ROLE.status as it goes
+  and, once WORK/done exists, checks what it got against mcad's CSV WORK/mcad.csv: EXPECT "all" = every
+  JointState one published tick, >= 99.9 % of them from the first received, >= 99 % of the MarkerArrays,
+  diagnostics came;
+  EXPECT "none" = no sample and never a publisher of the cell's topics in its graph.
+usage: test_ros2.py topics|graph|stream|restart MCAD SOURCE_DIR DOMAIN [MARKERS_JSON]
+       test_ros2.py listen SOURCE_DIR CELL WORK ROLE all|none"""
 import json
 import csv
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -43,9 +51,14 @@ import tempfile
 import threading
 import time
 
-MODE, MCAD, SRC, DOMAIN = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-os.environ["ROS_DOMAIN_ID"] = str(DOMAIN)
-os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+MODE = sys.argv[1]
+if MODE == "listen":  # as a user's node: the environment as given (test_hosts.py gives no ROS_* variables)
+    SRC, CELL_FILE, WORK, ROLE, EXPECT = sys.argv[2:7]
+    MCAD, DOMAIN = None, 0
+else:
+    MCAD, SRC, DOMAIN = sys.argv[2], sys.argv[3], int(sys.argv[4])
+    os.environ["ROS_DOMAIN_ID"] = str(DOMAIN)
+    os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
 
 import rclpy  # noqa: E402  (after ROS_DOMAIN_ID)
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -200,6 +213,54 @@ def spin_in_background(*nodes):
     return ex
 
 
+def published_ticks(rows, divisor):
+    """The ticks of mcad's CSV that went out on DDS: every divisor-th, and the final snapshot mcad sends as it
+    closes (the last tick's state again; a second sample of it when the last tick is itself a divisor-th)."""
+    return [k for k in range(len(rows)) if k % divisor == 0] + [len(rows) - 1]
+
+
+def check_joint_states(a, ai, msgs, rows, published, tick_of_stamp, share_min):
+    """Arm a (number ai in the CSV's q<ai>_<j> columns): each JointState is one published tick, ticks in order,
+    positions equal within 1e-9; at least share_min of the ticks published from the first one received. The
+    tick comes from the stamp (positions alone are ambiguous while an arm stands still): the bridge stamps a
+    tick's samples with its wake-up (the CSV's wake_ns) plus one offset, ROS time minus CLOCK_MONOTONIC taken
+    once; the offset is the one that puts the first samples' stamps on published wake-ups (the final snapshot
+    is stamped when mcad closes, after its last tick). Fills tick_of_stamp
+    (header stamp -> tick). Returns (received, expected)."""
+    names = [f"q{ai}_{j}" for j in range(len(msgs[0].position))] if msgs else []
+    tick_of_wake = {int(rows[k]["wake_ns"]): k for k in set(published)}
+    offset = 0
+    if msgs:
+        s0 = stamp_ns(msgs[0].header)
+        offset = max((s0 - w for w in tick_of_wake),
+                     key=lambda c: sum(1 for m in msgs[:50] if stamp_ns(m.header) - c in tick_of_wake))
+    matched, worst, bad = [], 0.0, 0
+    for m in msgs:
+        k = tick_of_wake.get(stamp_ns(m.header) - offset)
+        if k is None and stamp_ns(m.header) - offset > int(rows[-1]["wake_ns"]):
+            k = len(rows) - 1  # the final snapshot, sent as mcad closes: the last tick's state, stamped then
+        dq = max(abs(x - float(rows[k][n])) for x, n in zip(m.position, names)) if k is not None else math.inf
+        if k is None or dq > 1e-9 or (matched and k < matched[-1]):
+            bad += 1
+            print(f"{a}: a JointState (stamp {stamp_ns(m.header)}) is no published tick after "
+                  f"{matched[-1] if matched else None} (tick {k}, |dq| {dq:.1e})")
+            continue
+        worst = max(worst, dq)
+        matched.append(k)
+        tick_of_stamp.setdefault(stamp_ns(m.header), k)
+    expected = [k for k in published if matched and k >= matched[0]]
+    missing = sorted(set(expected) - set(matched))
+    if missing:
+        print(f"{a}: first received tick {matched[0]}, missing ticks {missing[:20]}")
+    share = len(matched) / len(expected) if expected else 0.0
+    check(bad == 0 and len(matched) > 0,
+          f"{a}: {len(matched)} JointState samples, each one tick of mcad's CSV by its stamp, in order "
+          f"(max |dq| {worst:.1e} rad; {bad} matched none)")
+    check(share >= share_min, f"{a}: {len(matched)} of the {len(expected)} ticks published from the first "
+          f"received ({100 * share:.2f} % >= {100 * share_min:g} %)")
+    return len(matched), len(expected)
+
+
 def mode_topics(tmp):
     main = Collector("mca_ros2_check")
     main.all_topics()
@@ -222,43 +283,13 @@ def mode_topics(tmp):
     if proc.returncode != 0:
         print(err)
     rows = read_csv(out_csv)
-    # every DIVISOR-th tick, and the final snapshot mcad sends as it closes: the last tick's state again (a
-    # second sample of it when the last tick is itself a DIVISOR-th one)
-    published = [k for k in range(len(rows)) if k % DIVISOR == 0] + [len(rows) - 1]
+    published = published_ticks(rows, DIVISOR)
     print(f"mcad: {len(rows)} ticks in its CSV, {len(published)} published")
 
     # JointState: each sample is one published tick, in order
     tick_of_stamp = {}
     for ai, a in enumerate(ARMS):
-        names = [f"q{ai}_{j}" for j in range(len(main.js[a][0].position))] if main.js[a] else []
-        ref = [[float(rows[k][n]) for n in names] for k in published]
-        nxt, matched, worst, bad = 0, [], 0.0, 0
-        for m in main.js[a]:
-            found = None
-            for i in range(nxt, len(ref)):
-                if max(abs(x - y) for x, y in zip(m.position, ref[i])) <= 1e-9:
-                    found = i
-                    break
-            if found is None:
-                bad += 1
-                near = min(range(len(ref)), key=lambda i: max(abs(x - y) for x, y in zip(m.position, ref[i])))
-                print(f"{a}: a JointState (stamp {stamp_ns(m.header)}) matches no published tick from "
-                      f"{published[nxt] if nxt < len(published) else None} on; nearest: tick {published[near]}")
-                continue
-            worst = max(worst, max(abs(x - y) for x, y in zip(m.position, ref[found])))
-            matched.append(published[found])
-            tick_of_stamp.setdefault(stamp_ns(m.header), published[found])
-            nxt = found + 1
-        n_exp = len([k for k in published if matched and k >= matched[0]])
-        missing = sorted(set(k for k in published if matched and k >= matched[0]) - set(matched))
-        if missing:
-            print(f"{a}: first received tick {matched[0]}, missing ticks {missing[:20]}")
-        share = len(matched) / n_exp if n_exp else 0.0
-        check(bad == 0 and len(matched) > 0,
-              f"{a}: {len(matched)} JointState samples, each one tick of mcad's CSV, in order "
-              f"(max |dq| {worst:.1e} rad; {bad} matched none)")
-        check(share >= 0.99, f"{a}: {len(matched)} of the {n_exp} ticks published from the first received "
-              f"({100 * share:.1f} % >= 99 %)")
+        check_joint_states(a, ai, main.js[a], rows, published, tick_of_stamp, 0.99)
         urdf_joints = ["S1", "S2", "S3", "E1", "E2", "W1", "W2", "T"]
         check(all(list(m.name) == urdf_joints for m in main.js[a]), f"{a}: joint names are the URDF's")
 
@@ -654,9 +685,90 @@ def mode_stream(tmp):
     check(last is not None and int(last["stream_accepted"]) > 300, f"accepted {last and last['stream_accepted']}")
 
 
+def cell_topics(path):
+    """A cell file's ROS 2 namespace (dds.ros2.namespace, or its name with other characters as '_'), arm names
+    and dds.publish_divisor, read line by line (the cells' block and flow styles)."""
+    name, ns, arms, divisor, in_arms = None, None, [], 1, False
+    with open(path) as f:
+        for line in f:
+            s = line.split("#")[0].rstrip()
+            if not s.strip():
+                continue
+            if not s.startswith(" "):
+                in_arms = s.startswith("arms:")
+                if s.startswith("name:"):
+                    name = s.split(":", 1)[1].strip()
+            m = re.search(r"name:\s*([A-Za-z0-9_]+)", s)
+            if in_arms and s.lstrip().startswith("- ") and m:
+                arms.append(m.group(1))
+            m = re.search(r"namespace:\s*([A-Za-z0-9_]+)", s)
+            ns = m.group(1) if m else ns
+            m = re.search(r"publish_divisor:\s*([0-9]+)", s)
+            divisor = int(m.group(1)) if m else divisor
+    return ns or re.sub(r"[^A-Za-z0-9_]", "_", name), arms, divisor
+
+
+def mode_listen(tmp):
+    """A user's node on some host (test_hosts.py): see the module's docstring."""
+    global NS, ARMS
+    NS, ARMS, divisor = cell_topics(CELL_FILE)
+    env = sorted(k for k in os.environ if k.startswith(("ROS_", "RMW_", "CYCLONEDDS", "FASTRTPS", "FASTDDS")))
+    node = Collector(f"mca_listen_{ROLE}")
+    node.all_topics()
+    ex = SingleThreadedExecutor()  # spun here: the graph queries below stay in this one thread
+    ex.add_node(node)
+    print(f"{ROLE}: rmw {rclpy.get_rmw_implementation_identifier()}, environment: "
+          f"{', '.join(f'{k}={os.environ[k]}' for k in env) or 'no ROS_*, RMW_*, CYCLONEDDS_*, FAST* variables'}")
+    mine = [topic("joint_states", a) for a in ARMS] + [topic("distance_markers"), "/diagnostics"]
+    pubs = dict.fromkeys(mine, 0)  # the most publishers seen on each topic while mcad ran
+    t_end, t_status = time.monotonic() + 300, 0.0
+    while not os.path.exists(os.path.join(WORK, "done")) and time.monotonic() < t_end:
+        ex.spin_once(timeout_sec=0.02)
+        if time.monotonic() - t_status < 0.1:
+            continue
+        t_status = time.monotonic()
+        for t in mine:
+            pubs[t] = max(pubs[t], node.count_publishers(t))
+        st = {"js": min(len(v) for v in node.js.values()), "markers": len(node.markers), "diag": len(node.diag)}
+        with open(os.path.join(WORK, ROLE + ".tmp"), "w") as f:
+            json.dump(st, f)
+        os.replace(os.path.join(WORK, ROLE + ".tmp"), os.path.join(WORK, ROLE + ".status"))
+    # mcad has exited: take what is still queued, until nothing new came for 1.5 s (at most 30 s)
+    t_end, last, t_last = time.monotonic() + 30, -1, time.monotonic()
+    while time.monotonic() < t_end and time.monotonic() - t_last < 1.5:
+        ex.spin_once(timeout_sec=0.05)
+        if node.received() != last:
+            last, t_last = node.received(), time.monotonic()
+    ex.shutdown()
+    diag = [st for da in node.diag for st in da.status if st.hardware_id == NS]
+    if EXPECT == "none":
+        got = {a: len(node.js[a]) for a in ARMS}
+        check(not any(got.values()) and not node.markers and not diag,
+              f"{ROLE}: nothing of /{NS} received (JointState {got}, {len(node.markers)} MarkerArrays, "
+              f"{len(diag)} diagnostics)")
+        check(not any(pubs.values()), f"{ROLE}: no publisher of /{NS}'s topics ever in the graph ({pubs})")
+        return
+    rows = read_csv(os.path.join(WORK, "mcad.csv"))
+    published = published_ticks(rows, divisor)
+    print(f"{ROLE}: mcad: {len(rows)} ticks in its CSV, {len(published)} published")
+    tick_of_stamp, got = {}, []
+    for ai, a in enumerate(ARMS):
+        got.append(check_joint_states(f"{ROLE}: {a}", ai, node.js[a], rows, published, tick_of_stamp, 0.999))
+    check(min(n for n, _ in got) >= 100, f"{ROLE}: >= 100 JointStates of each arm ({[n for n, _ in got]})")
+    mk = sorted({tick_of_stamp[stamp_ns(ma.markers[0].header)] for ma in node.markers
+                 if ma.markers and stamp_ns(ma.markers[0].header) in tick_of_stamp})
+    n_mk = len({k for k in published if mk and k >= mk[0]})  # distinct: the final snapshot may repeat a tick
+    check(len(mk) >= 0.99 * n_mk > 0, f"{ROLE}: {len(node.markers)} MarkerArrays; {len(mk)} of the {n_mk} ticks "
+          f"published from the first received ({100 * len(mk) / max(n_mk, 1):.2f} % >= 99 %)")
+    check(len(diag) > 0, f"{ROLE}: {len(diag)} diagnostics of mcad: {NS} (states "
+          f"{sorted({kv.value for st in diag for kv in st.values if kv.key == 'state'})})")
+    check(all(pubs[t] == 1 for t in mine), f"{ROLE}: one publisher on each of the cell's topics ({pubs})")
+
+
 rclpy.init()
 with tempfile.TemporaryDirectory(prefix="mca-ros2-") as tmp:
-    {"topics": mode_topics, "graph": mode_graph, "stream": mode_stream, "restart": mode_restart}[MODE](tmp)
+    {"topics": mode_topics, "graph": mode_graph, "stream": mode_stream, "restart": mode_restart,
+     "listen": mode_listen}[MODE](tmp)
 rclpy.try_shutdown()
 print("FAILED: " + "; ".join(failures) if failures else "PASSED", flush=True)
 sys.exit(1 if failures else 0)
