@@ -42,6 +42,11 @@ static const cyaml_strval_t kind_strings[] = {
     {"waypoints", MCA_PATH_WAYPOINTS},
 };
 
+static const cyaml_strval_t tracking_strings[] = {
+    {"path_first", MCA_PATH_TRACKING_PATH_FIRST},
+    {"elastic", MCA_PATH_TRACKING_ELASTIC},
+};
+
 static const cyaml_schema_value_t point_entry = {
     CYAML_VALUE_SEQUENCE_FIXED(CYAML_FLAG_FLOW, double, &mca_yaml_float_entry, 3)};
 
@@ -68,6 +73,8 @@ const cyaml_schema_field_t mca_scenario_path_fields[] = {
     CYAML_FIELD_SEQUENCE("exact", OPT | CYAML_FLAG_FLOW, mca_path_keys_t, exact, &int_entry, 1,
                          MCA_PATH_MAX_POINTS),
     CYAML_FIELD_FLOAT_PTR("exact_tolerance", OPT, mca_path_keys_t, exact_tolerance),
+    CYAML_FIELD_ENUM("tracking", CYAML_FLAG_OPTIONAL, mca_path_keys_t, tracking, tracking_strings,
+                     CYAML_ARRAY_LEN(tracking_strings)),
     CYAML_FIELD_END,
 };
 
@@ -336,7 +343,15 @@ static int path_apply(const mca_check_ctx_t *c, const char *at, const mca_path_k
     for (int i = 0; i < MCA_PATH_MAX_POINTS; i++) {
         np.seg_tol[i] = tol;
     }
-    np.path_first = k->tolerance || k->tolerances || k->exact;
+    /* path first unless the file asks for the elastic tracking (hold: nothing to keep) */
+    np.path_first = k->tracking == MCA_PATH_TRACKING_PATH_FIRST ||
+                    (k->tracking == MCA_PATH_TRACKING_DEFAULT && k->kind != MCA_PATH_HOLD);
+    if (rc == MCA_OK && k->tracking == MCA_PATH_TRACKING_ELASTIC &&
+        (k->tolerance || k->tolerances || k->exact || k->exact_tolerance)) {
+        snprintf(f, sizeof f, "%s.tracking", at);
+        rc = mca_check_fail(c, MCA_ECONFIG, f,
+                            "%s: elastic tracking has no tube (tolerance, exact): drop one", f);
+    }
     if (rc == MCA_OK && k->kind != MCA_PATH_WAYPOINTS && (k->tolerances || k->exact)) {
         snprintf(f, sizeof f, "%s.%s", at, k->tolerances ? "tolerances" : "exact");
         rc = mca_check_fail(c, MCA_ECONFIG, f, "%s: waypoints only", f);

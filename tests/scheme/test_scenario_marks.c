@@ -308,6 +308,10 @@ static const struct scase arm_cases[] = {
      "arms[*].path.period"},
     {"turns", ARM_HEAD("bad") "    path:\n      kind: circle\n" CIRCLE_TAIL "      turns: 0 #@\n",
      "arms[*].path.turns"},
+    {"tracking_elastic_tube",
+     ARM_HEAD("bad") "    path:\n      kind: circle\n" CIRCLE_TAIL "      tracking: elastic #@\n"
+                     "      tolerance: 0.01\n",
+     "arms[*].path.tracking"},
     {"u_zero",
      ARM_HEAD("bad") "    path:\n      kind: circle\n      radius: 0.1\n      period: 2\n"
                      "      u: [0, 0, 0] #@\n      v: [1, 0, 0]\n",

@@ -7,9 +7,9 @@ usage: test_tasks.py MCA_SIM SCENARIO_DIR WORK_DIR
     binding, no fault, the whole task;
     tasks 1-3: MCA's end-effector error <= 1e-4 m while no collision row binds, and overall;
  4. negative example: MCA ends in a braked stop with a named fault, no distance below d1 (MVN collides).
- 5. path first (issue 29): tasks 1-3 under mca-ts with `tolerance: 0` on every path: every pair >= d1, the
-    task completed, the tool tips' distance to their paths' curves <= 2e-5 m; under mca-ts with elastic
-    tracking (no tolerance key) the same tasks leave the path by more (the exact penalty is what holds it).
+ 5. path first (issue 29): tasks 1-3 as shipped under mca-ts (path first, tolerance 0, the default): every
+    pair >= d1, the task completed, the tool tips' distance to their paths' curves <= 2e-5 m; with
+    `tracking: elastic` on every path the same tasks leave the path by more (the exact penalty holds it).
 Prints the figures (min distance, tracking errors, PDNN steps, tick compute time).
 """
 import json
@@ -41,17 +41,17 @@ def run(sim, scn, work, schemes, extra=()):
     return {r["scheme"]: r for r in s["runs"]}, s["d1"]
 
 
-def path_first_copy(src, work):
-    """The scenario with `tolerance: 0.0` on every path (robot paths made absolute for the copy's folder)."""
+def elastic_copy(src, work):
+    """The scenario with `tracking: elastic` on every path (robot paths made absolute for the copy's folder)."""
     out = []
     for line in open(src):
         stripped = line.lstrip()
         if stripped.startswith("urdf: ../"):
             line = line.replace("../", os.path.dirname(os.path.dirname(os.path.abspath(src))) + "/", 1)
         out.append(line)
-        if stripped.startswith("kind: ") and stripped.split()[1] in ("circle", "waypoints", "hold"):
-            out.append(line[: len(line) - len(stripped)] + "tolerance: 0.0\n")
-    dst = os.path.join(work, "pathfirst-" + os.path.basename(src))
+        if stripped.startswith("kind: ") and stripped.split()[1] in ("circle", "waypoints"):
+            out.append(line[: len(line) - len(stripped)] + "tracking: elastic\n")
+    dst = os.path.join(work, "elastic-" + os.path.basename(src))
     with open(dst, "w") as f:
         f.writelines(out)
     return dst
@@ -59,8 +59,8 @@ def path_first_copy(src, work):
 
 def path_first(sim, sdir, work):
     for name in ("cross_circles", "hui", "cup_stacking"):
-        el, d1 = run(sim, os.path.join(sdir, name + ".yaml"), work, "mca-ts")
-        pf, _ = run(sim, path_first_copy(os.path.join(sdir, name + ".yaml"), work), work, "mca-ts")
+        pf, d1 = run(sim, os.path.join(sdir, name + ".yaml"), work, "mca-ts")
+        el, _ = run(sim, elastic_copy(os.path.join(sdir, name + ".yaml"), work), work, "mca-ts")
         el, pf = el["mca-ts"], pf["mca-ts"]
         check(pf["min_distance"] >= d1 and pf["fault"] == 0 and pf["completed"] == 1,
               "%s path first: completed %d, no fault (%s), min distance %.5f m >= d1 %.3f" %

@@ -3,8 +3,8 @@
 
 usage: test_sweep.py pa10|pa10-simarm MCA_SIM MCA_SWEEP_PY WORK_DIR
          50 seeded random two-PA10+ tasks through tools/mca-sweep (seed 11): the tasks exercise the scheme
-         (>= 70 % reachable, MVN below d1 on >= 5 of them) and mca-ts completes >= 95 % of the reachable
-         tasks. pa10: arms that realise each command exactly (mca-sim --euler): no mca-ts run below d1 (task,
+         (>= 70 % reachable, MVN below d1 on >= 5 of them) and mca-ts completes, on its paths (path first),
+         >= 90 % of the reachable tasks and >= 95 % of those whose paths clear the other arm at rest. pa10: arms that realise each command exactly (mca-sim --euler): no mca-ts run below d1 (task,
          and with a stop request). pa10-simarm: the sim backend's rate-limited firmware model: the stop runs
          have none below d1, the task runs at most KNOWN_SIMARM_UNSAFE (1) (a known gap of issue 11, see
          docs/scheme.md "What is not yet shown"; the bound makes a regression fail);
@@ -74,9 +74,17 @@ def sweep(sim, tool, work, ideal):
         allowed = 0 if ideal else KNOWN_SIMARM_UNSAFE
         check(ts["unsafe"] <= allowed, "mca-ts: %d runs below d1 (want <= %d) %s" % (ts["unsafe"], allowed,
                                                                                      " ".join(bad)))
+        # completed = on the path (path first, tolerance 0: the default since issue 29; the elastic tracking
+        # "completed" 49 of 50 here by leaving its paths by up to 10 cm). A task whose path runs into the other
+        # arm standing at its start (= end) cannot be completed by any path rate: the bar of 95 % is on the
+        # others (mca_sweep.py's a-priori rest probe), 90 % on all.
         done = ts["completed"] + ts["late"]
-        check(done >= 0.95 * nr, "mca-ts completes %d of %d reachable tasks (%.1f %%, want >= 95 %%; %d within "
+        cl = d["summary"].get("clear/mca-ts") or {}
+        check(done >= 0.90 * nr, "mca-ts completes %d of %d reachable tasks (%.1f %%, want >= 90 %%; %d within "
               "%.2f s of path time)" % (done, nr, 100.0 * done / max(nr, 1), ts["completed"], d["lost_threshold"]))
+        check(cl.get("clear", 0) >= 0.7 * nr and cl["done"] >= 0.95 * cl["clear"],
+              "mca-ts completes %s of the %s reachable tasks whose paths clear the other arm at rest (want >= 95 %%)"
+              % (cl.get("done"), cl.get("clear")))
     st = d["summary"].get("mca-ts/stop")
     if d["features"]["stop_at"] and st:
         check(st["unsafe"] == 0, "mca-ts with a stop request: %d runs below d1 (want 0)" % st["unsafe"])

@@ -170,10 +170,18 @@ typedef struct mca_path_keys {
     int *exact; /**< waypoints: indices into points of the exact ones (grasp, release) */
     unsigned exact_count;
     double *exact_tolerance; /**< [m] (MCA_PATH_DEFAULT_EXACT_TOL) */
+    int tracking;            /**< mca_path_tracking_key_t: 0 when the file does not say */
 } mca_path_keys_t;
 
-/** A path's tube when the file gives exact points but no tolerance [m]: it waits rather than leave it. A
- *  path with neither key keeps the elastic tracking of before (mca_path_t.path_first 0). */
+/** A path's `tracking` key: how mca-ts keeps it (docs/scheme.md sections 10 and 11). */
+typedef enum mca_path_tracking_key {
+    MCA_PATH_TRACKING_DEFAULT = 0,    /**< key absent: path first (hold and stream paths: elastic) */
+    MCA_PATH_TRACKING_PATH_FIRST = 1, /**< the path first, within its tube (tolerance, default 0) */
+    MCA_PATH_TRACKING_ELASTIC = 2,    /**< the L2 slack of before: passes by leaving the path */
+} mca_path_tracking_key_t;
+
+/** A path's tube when the file gives no tolerance [m]: it waits rather than leave it. Circle and waypoint
+ *  paths are kept path first unless the file says `tracking: elastic` (mca_path_t.path_first 0). */
 #define MCA_PATH_DEFAULT_TOL 0.0
 /** How near an exact waypoint the tool tip must be [m]. */
 #define MCA_PATH_DEFAULT_EXACT_TOL 0.001
