@@ -182,6 +182,8 @@ def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None):
             s.append("      durations: %s" % fmt(p["durations"]))
         if p.get("tolerance") is not None:
             s.append("      tolerance: %g" % p["tolerance"])
+        if p.get("tracking"):
+            s.append("      tracking: %s" % p["tracking"])
         if p.get("exact"):
             s.append("      exact: [%s]" % ", ".join(str(x) for x in p["exact"]))
     return "\n".join(s) + "\n"
@@ -646,7 +648,7 @@ def rest_conflicts(sim, wd, name, kind, arms, paths, duration):
     return out
 
 
-def make_task(sim, kind, seed, i, work, tol=None):
+def make_task(sim, kind, seed, i, work, tol=None, elastic=False):
     """Draw task i of kind (seeded by 'seed:kind:i'), write its scenario; a dict describing it."""
     rng, tid, name, wd = task_start(kind, seed, i, work)
     d2 = KINDS[kind]["d2"]
@@ -678,8 +680,10 @@ def make_task(sim, kind, seed, i, work, tol=None):
     if not ok:
         return dict(id=tid, error="no path towards the other arm in 20 draws")
     duration = round(max(times) + 0.5, 2)
-    if tol is not None:
-        for p in paths:
+    for p in paths:
+        if elastic:
+            p["tracking"] = "elastic"  # the L2 slack of docs/scheme.md section 10 (no tube)
+        elif tol is not None:
             p["tolerance"] = tol
     scn = os.path.join(wd, "scenario.yaml")
     with open(scn, "w") as f:
@@ -697,7 +701,7 @@ def run_task(sim, kind, seed, i, a):
     if kind in PNP:
         task = make_pnp_task(sim, kind, seed, i, a.work, a.max_err, tol)
     else:
-        task = make_task(sim, kind, seed, i, a.work, tol)
+        task = make_task(sim, kind, seed, i, a.work, tol, a.elastic)
     if "error" in task:
         task.update(reachable=False, unreachable="generation: " + task["error"], runs={}, seconds=time.time() - t0)
         return task
@@ -947,6 +951,9 @@ def main():
     ap.add_argument("--tolerance", type=float, default=None,
                     help="write `tolerance: X` (path error allowed outside exact points [m]) into every generated "
                     "path, when this mca-sim takes the key")
+    ap.add_argument("--elastic", action="store_true",
+                    help="crossing kinds: write `tracking: elastic` into every generated path (the L2 slack that "
+                    "passes by leaving the path; default: path first)")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
     if not os.access(a.sim, os.X_OK):
