@@ -414,24 +414,27 @@ def main():
           f"the {len(late)} longest command gaps ({', '.join(f'{r[1] / 1e3:.2f}' for r in late)} ms), "
           f"{len(late) - len(unexplained)} of them with cyclictest held up at the same moment (the machine's)",
           flush=True)
-    if om is not None and n_over == 0:
-        why = "none at all (summary: overruns 0)"
-    elif not unexplained:
-        why = f"each of the {len(late)} was the machine's"
-    else:
-        why = "late ticks without a machine stall: " + ", ".join(f"tick {r[0]} gap {r[1] / 1e3:.2f} ms"
-                                                                  for r in unexplained[:8])
     # cyclictest wakes every 1 ms too: a stall of about one period can fall between its wake-ups and leave it
     # less than half a period late, so an overrun with a gap under 3 periods that it did not see is printed, not
     # judged (seen: one 2.13 ms gap of 17 overruns in a 60 s run, 16 of them matched)
     big = [r for r in unexplained if r[1] >= 3.0 * PERIOD_NS / 1e3]
-    if unexplained and not big:
-        print(f"NOTE: {len(unexplained)} overrun(s) with a gap under 3 periods that cyclictest did not see: not "
-              "judged", flush=True)
+    small = [r for r in unexplained if r not in big]
+    if om is not None and n_over == 0:
+        why = "none at all (summary: overruns 0)"
+    elif not unexplained:
+        why = f"each of the {len(late)} was the machine's"
+    elif not big:
+        why = (f"{len(late) - len(small)} of the {len(late)} were the machine's; {len(small)} with a gap under 3 "
+               "periods that cyclictest missed, not judged: " + ", ".join(f"tick {r[0]} gap {r[1] / 1e3:.2f} ms"
+                                                                           for r in small[:8]))
+    else:
+        why = "overruns of 3 periods or more without a machine stall: " + ", ".join(
+            f"tick {r[0]} gap {r[1] / 1e3:.2f} ms" for r in big[:8])
     check(om is not None and not big, "0 overruns of the bridge's making: " + why)
     ups = [t - t_peer for t, _ in spawns[1:]]
-    print(f"bridge processes started after the first: {len(ups)}, at " + ", ".join(f"{x:.2f}" for x in ups)
-          + " s after the peer joined", flush=True)
+    print(f"bridge processes seen starting after the first (mcad's children, polled every 10 ms: a short-lived "
+          f"one can be missed): {len(ups)}, at " + ", ".join(f"{x:.2f}" for x in ups) + " s after the peer joined",
+          flush=True)
     print(f"run: {t_end - t_start:.1f} s; mcad 'running' at +{(t_running or t_start) - t_start:.2f} s; peer present "
           f"{t_left - t_peer:.1f} s")
     return 1 if failures else 0
