@@ -33,7 +33,8 @@ protected, files from config/security/make_security.sh), asserted:
 Both: mcad exits 0 in state stopped with no fault; no overrun of the bridge's making: each of the summary's N
 overruns, taken to be the run's N longest command gaps, is matched by cyclictest (beside mcad on every CPU at
 the loop's priority) being held up at the same moment (this VM freezes its vCPUs for 1-15 ms a few times a
-minute); gaps under 3 periods that cyclictest missed are printed, not judged (its own 1 ms grid can miss them). Printed: deaths, back-offs, restart times, the loop's command gap and compute per phase.
+minute); gaps under 3 periods that cyclictest missed are printed, not judged (its own 1 ms grid can miss them).
+Printed: deaths, back-offs, restart times, the loop's command gap and compute per phase.
 
 usage: test_bridge_crash.py MCAD MONITOR SOURCE_DIR DOMAIN [--peer-seconds S] [--secure]"""
 import argparse
