@@ -1045,8 +1045,8 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                             pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
                             failed ? " (NOT: its DDS set-up failed: " : "",
                             failed ? (int)sizeof b->shm->open_err : 0, b->shm->open_err, failed ? ")" : "");
+                    lines++;
                 }
-                lines++;
             }
             /* a series whose restarts were not all logged: say once that this one lives */
             if (b->quick_deaths > MCA_DDS_BRIDGE_LOG_ALL && !b->up_logged &&
@@ -1054,14 +1054,14 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                 atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
                 b->up_logged = 1;
                 if (log != NULL) {
-                    fprintf(log,
-                            "<5>%sdds bridge up again: pid %d (restart %llu) has lived %.0f s after %d "
-                            "deaths in a "
-                            "row, publishing\n",
-                            pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
-                            now - b->started_s, b->quick_deaths);
+                    fprintf(
+                        log,
+                        "<5>%sdds bridge up again: pid %d (restart %llu) has lived %.0f s after %d deaths "
+                        "in a row, publishing\n",
+                        pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
+                        now - b->started_s, b->quick_deaths);
+                    lines++;
                 }
-                lines++;
             }
             /* alive and up: one that publishes nothing for MCA_DDS_BRIDGE_HUNG_S while snapshots wait is hung
              * (a deadlock inside Cyclone, a stopped process): killed, then restarted as after any death */
