@@ -1783,11 +1783,15 @@ void mca_daemon_close(mca_daemon_t *d) {
                     (double)ds.max_publish_ns / 1e3, (unsigned long long)ds.grid_sleeps,
                     (unsigned long long)ds.wakes);
             fprintf(d->opts.log,
-                    "<%d>mcad: summary: dds bridge: died %llu times, restarted %llu times%s, %llu stale "
-                    "snapshots skipped at restarts, %llu killed as hung\n",
+                    "<%d>mcad: summary: dds bridge: died %llu times, restarted %llu times, %llu stale "
+                    "snapshots skipped at restarts, %llu killed as hung; at the end %s",
                     ds.deaths ? 4 : 6, (unsigned long long)ds.deaths, (unsigned long long)ds.restarts,
-                    ds.down ? " (then left down: too many deaths in a row)" : "",
-                    (unsigned long long)ds.stale, (unsigned long long)ds.hung);
+                    (unsigned long long)ds.stale, (unsigned long long)ds.hung, ds.down ? "down" : "up");
+            if (ds.deaths_in_a_row > 0) {
+                fprintf(d->opts.log, " (%s%u deaths in a row, back-off %.1f s)",
+                        ds.down ? "backing off: " : "restarted after ", ds.deaths_in_a_row, ds.backoff_s);
+            }
+            fputc('\n', d->opts.log);
         }
     }
     for (int a = 0; a < MCA_MAX_ARMS; a++) {

@@ -76,11 +76,15 @@ struct mca_dds_bridge {
     int memfd;
     char exe[PATH_MAX];
     pid_t pid;           /* the running publisher, 0: none */
-    int down;            /* 1: gave up restarting */
     int quick_deaths;    /* deaths in a row, each within MCA_DDS_BRIDGE_STABLE_S of its start */
     double started_s;    /* when the running publisher was started */
-    double next_start_s; /* when to restart it (pid 0, not down) */
-    uint32_t announced;  /* generation whose readiness was logged */
+    double next_start_s; /* when to restart it (pid 0) */
+    double backoff_s;    /* the last back-off [s] */
+    int up_logged;       /* a thinned-out series: its publisher's "up for a while" line was written */
+    int stopped;         /* destroy began: up_at_stop says whether a publisher was alive then */
+    int up_at_stop;
+    double stop_s;
+    uint32_t announced; /* generation whose readiness was logged */
     uint64_t deaths;
     uint64_t hung;          /* publishers killed for making no progress */
     uint64_t seen_progress; /* published + invalid + stale when last looked at */
@@ -233,8 +237,23 @@ static void write_status(publisher_t *b) {
     write_one(b, W_STATUS, &m);
     if (b->ros2 != NULL) {
         uint64_t errors = 0;
-        const uint64_t restarts = atomic_load_explicit(&b->shm->restarts, memory_order_relaxed);
-        add(&b->shm->samples, (uint64_t)mca_ros2_pub_status(b->ros2, &m, restarts, &errors));
+        const mca_dds_shm_t *shm = b->shm;
+        const int64_t death_ns = atomic_load_explicit(&shm->last_death_ns, memory_order_acquire);
+        struct timespec ts;
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        const int64_t now_ns = (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+        char last_death[sizeof shm->last_death];
+        memcpy(last_death, shm->last_death, sizeof last_death); /* written before this publisher started */
+        last_death[sizeof last_death - 1] = '\0';
+        const mca_ros2_bridge_health_t h = {
+            .restarts = atomic_load_explicit(&shm->restarts, memory_order_relaxed),
+            .deaths = atomic_load_explicit(&shm->deaths, memory_order_relaxed),
+            .deaths_in_a_row = atomic_load_explicit(&shm->deaths_in_a_row, memory_order_relaxed),
+            .backoff_s = atomic_load_explicit(&shm->backoff_ms, memory_order_relaxed) / 1e3,
+            .since_death_s = death_ns > 0 ? (double)(now_ns - death_ns) / 1e9 : -1.0,
+            .last_death = last_death,
+        };
+        add(&b->shm->samples, (uint64_t)mca_ros2_pub_status(b->ros2, &m, &h, &errors));
         add(&b->shm->write_errors, errors);
     }
     b->since_status = 0;
@@ -888,7 +907,13 @@ int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     out->deaths = bridge->deaths;
     out->hung = bridge->hung;
     out->pid = bridge->process ? (int32_t)bridge->pid : 0;
-    out->down = bridge->process && bridge->down;
+    out->down = bridge->process && (bridge->stopped ? !bridge->up_at_stop : bridge->pid == 0);
+    /* a publisher alive for MCA_DDS_BRIDGE_STABLE_S ends the series (the next death starts it afresh) */
+    const int alive = bridge->stopped ? bridge->up_at_stop : bridge->pid > 0;
+    const double until = bridge->stopped ? bridge->stop_s : mono_s();
+    const int stable = alive && until - bridge->started_s >= MCA_DDS_BRIDGE_STABLE_S;
+    out->deaths_in_a_row = bridge->process && !stable ? (uint32_t)bridge->quick_deaths : 0;
+    out->backoff_s = bridge->process ? bridge->backoff_s : 0.0;
     return MCA_OK;
 }
 
@@ -973,8 +998,31 @@ static void describe_status(int status, char *buf, size_t len) {
     }
 }
 
+#define STR_(x) #x
+#define STR(x) STR_(x)
+
+/* Every death of a series up to MCA_DDS_BRIDGE_LOG_ALL, then every MCA_DDS_BRIDGE_LOG_EVERY-th: a peer that
+ * stays for hours must not fill the journal (it would rate-limit mcad's other lines). The summary and
+ * /diagnostics count them all. */
+static int log_this_death(int quick_deaths) {
+    return quick_deaths <= MCA_DDS_BRIDGE_LOG_ALL || quick_deaths % MCA_DDS_BRIDGE_LOG_EVERY == 0;
+}
+
+/* The death as the next publisher puts it on /diagnostics. */
+static void record_death(mca_dds_bridge_t *b, const char *why, double delay) {
+    mca_dds_shm_t *shm = b->shm;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    snprintf(shm->last_death, sizeof shm->last_death, "%s", why);
+    atomic_store_explicit(&shm->deaths, b->deaths, memory_order_relaxed);
+    atomic_store_explicit(&shm->deaths_in_a_row, (uint32_t)b->quick_deaths, memory_order_relaxed);
+    atomic_store_explicit(&shm->backoff_ms, (uint32_t)(delay * 1e3 + 0.5), memory_order_relaxed);
+    atomic_store_explicit(&shm->last_death_ns, (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec,
+                          memory_order_release);
+}
+
 int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *prefix) {
-    if (bridge == NULL || !bridge->process || bridge->down ||
+    if (bridge == NULL || !bridge->process ||
         atomic_load_explicit(&bridge->shm->stop, memory_order_relaxed)) {
         return 0;
     }
@@ -990,15 +1038,30 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
             if (b->announced != gen &&
                 atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
                 b->announced = gen;
-                if (log != NULL) {
+                if (log != NULL && (b->deaths == 0 || log_this_death(b->quick_deaths))) {
                     const int failed = atomic_load(&b->shm->open_rc) != MCA_OK;
                     fprintf(log,
                             "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s%.*s%s\n",
                             pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
                             failed ? " (NOT: its DDS set-up failed: " : "",
                             failed ? (int)sizeof b->shm->open_err : 0, b->shm->open_err, failed ? ")" : "");
+                    lines++;
                 }
-                lines++;
+            }
+            /* a series whose restarts were not all logged: say once that this one lives */
+            if (b->quick_deaths > MCA_DDS_BRIDGE_LOG_ALL && !b->up_logged &&
+                now - b->started_s >= MCA_DDS_BRIDGE_UP_S &&
+                atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
+                b->up_logged = 1;
+                if (log != NULL) {
+                    fprintf(
+                        log,
+                        "<5>%sdds bridge up again: pid %d (restart %llu) has lived %.0f s after %d deaths "
+                        "in a row, publishing\n",
+                        pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
+                        now - b->started_s, b->quick_deaths);
+                    lines++;
+                }
             }
             /* alive and up: one that publishes nothing for MCA_DDS_BRIDGE_HUNG_S while snapshots wait is hung
              * (a deadlock inside Cyclone, a stopped process): killed, then restarted as after any death */
@@ -1030,22 +1093,14 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
         const pid_t dead = b->pid;
         b->pid = 0;
         b->deaths++;
+        b->up_logged = 0;
         repair_mailboxes(b);
         b->quick_deaths = now - b->started_s < MCA_DDS_BRIDGE_STABLE_S ? b->quick_deaths + 1 : 1;
         char why[96];
         describe_status(status, why, sizeof why);
-        if (b->quick_deaths > MCA_DDS_BRIDGE_MAX_RESTARTS) {
-            b->down = 1;
-            if (log != NULL) {
-                fprintf(
-                    log,
-                    "<3>%sdds bridge (pid %d) died: %s; %d deaths in a row, each within %.0f s of its start: "
-                    "it stays down, nothing is published until mcad restarts (the loop and the arms are not "
-                    "affected)\n",
-                    pre, (int)dead, why, b->quick_deaths, MCA_DDS_BRIDGE_STABLE_S);
-            }
-            return lines + 1;
-        }
+        /* capped exponential back-off, never a last restart: a peer that crashes every start (docs/dds.md)
+         * costs one short-lived process per MCA_DDS_BRIDGE_BACKOFF_MAX_S while it is there, and monitoring
+         * is back within that time after it left */
         double delay = MCA_DDS_BRIDGE_BACKOFF_S;
         for (int k = 1; k < b->quick_deaths && delay < MCA_DDS_BRIDGE_BACKOFF_MAX_S; k++) {
             delay *= 2.0;
@@ -1054,14 +1109,22 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
             delay = MCA_DDS_BRIDGE_BACKOFF_MAX_S;
         }
         b->next_start_s = now + delay;
-        if (log != NULL) {
+        b->backoff_s = delay;
+        record_death(b, why, delay);
+        if (log != NULL && log_this_death(b->quick_deaths)) {
             fprintf(
                 log,
-                "<3>%sdds bridge (pid %d) died: %s; restart %llu in %.1f s (the loop and the arms are not "
-                "affected)\n",
-                pre, (int)dead, why, (unsigned long long)atomic_load(&b->shm->restarts) + 1u, delay);
+                "<3>%sdds bridge (pid %d) died: %s; restart %llu in %.1f s (%d deaths in a row; the loop and "
+                "the arms are not affected)%s\n",
+                pre, (int)dead, why, (unsigned long long)atomic_load(&b->shm->restarts) + 1u, delay,
+                b->quick_deaths,
+                b->quick_deaths == MCA_DDS_BRIDGE_LOG_ALL
+                    ? "; it is restarted for as long as mcad runs, from now on every " STR(
+                          MCA_DDS_BRIDGE_LOG_EVERY) "th death of this series is logged"
+                    : "");
+            return lines + 1;
         }
-        return lines + 1;
+        return lines;
     }
     if (now < b->next_start_s) {
         return lines;
@@ -1072,15 +1135,14 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
     if (spawn_publisher(b, why, sizeof why) != MCA_OK) {
         b->started_s = now; /* counts as a quick death */
         b->quick_deaths++;
+        b->backoff_s = MCA_DDS_BRIDGE_BACKOFF_MAX_S;
         b->next_start_s = now + MCA_DDS_BRIDGE_BACKOFF_MAX_S;
-        if (b->quick_deaths > MCA_DDS_BRIDGE_MAX_RESTARTS) {
-            b->down = 1;
+        record_death(b, "not started", MCA_DDS_BRIDGE_BACKOFF_MAX_S);
+        if (log != NULL && log_this_death(b->quick_deaths)) {
+            fprintf(log, "<3>%sdds bridge: %s: next try in %.1f s (the loop and the arms are not affected)\n",
+                    pre, why, MCA_DDS_BRIDGE_BACKOFF_MAX_S);
+            lines++;
         }
-        if (log != NULL) {
-            fprintf(log, "<3>%sdds bridge: %s%s\n", pre, why,
-                    b->down ? ": it stays down (the loop and the arms are not affected)" : "");
-        }
-        lines++;
     }
     return lines;
 }
@@ -1095,6 +1157,9 @@ void mca_dds_bridge_destroy(mca_dds_bridge_t *bridge, mca_dds_stats_t *final_sta
         pthread_join(bridge->thread, NULL);
         publisher_close(bridge->pub);
     }
+    bridge->stopped = 1;
+    bridge->up_at_stop = bridge->pid > 0;
+    bridge->stop_s = mono_s();
     if (bridge->process && bridge->pid > 0) {
         /* it publishes what is queued, the final status, waits up to 1 s for acks (each writer) */
         reap(bridge, 10.0);

@@ -22,7 +22,7 @@
 #include "mca/ros2.h"
 
 #define MCA_DDS_SHM_MAGIC 0x316d73736464616dULL /* "mddssm1" */
-#define MCA_DDS_SHM_VERSION 3u
+#define MCA_DDS_SHM_VERSION 4u
 #define MCA_DDS_CONFIG_PATH_MAX 1023
 
 /** One arm's latest accepted stream target: a seqlock (the publisher's DDS listener writes, the loop reads;
@@ -76,7 +76,13 @@ typedef struct mca_dds_shm {
     _Alignas(64) _Atomic int stop;
     _Atomic uint32_t start_gen; /* publisher processes started so far (1 = the first) */
     _Atomic uint64_t restarts;  /* publisher restarts after a death (published on /diagnostics) */
-    _Atomic int32_t fault_code; /* != 0: fault_text below is the text of this code (written once) */
+    /* the supervisor's record of deaths, for /diagnostics (written before the next publisher is started) */
+    _Atomic uint64_t deaths;          /* publishers that died */
+    _Atomic uint32_t deaths_in_a_row; /* quick deaths in a row (0 after a stable run) */
+    _Atomic uint32_t backoff_ms;      /* the back-off before the running publisher's start */
+    _Atomic int64_t last_death_ns;    /* CLOCK_MONOTONIC of the last death seen, 0: none */
+    char last_death[64];              /* its cause: "signal 11 (SIGSEGV)" */
+    _Atomic int32_t fault_code;       /* != 0: fault_text below is the text of this code (written once) */
     char fault_text[MCA_DDS_FAULT_TEXT_MAX + 1];
     /* publisher (its DDS listener), read by the loop */
     _Alignas(64) mca_dds_mailbox_t box[MCA_MAX_ARMS];

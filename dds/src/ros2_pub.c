@@ -22,7 +22,7 @@ enum { MARKER_CYLINDER = 3, MARKER_SPHERE_LIST = 7, MARKER_LINE_LIST = 5, MARKER
 enum { DIAG_OK = 0, DIAG_WARN = 1, DIAG_ERROR = 2 };
 
 #define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2)
-#define N_KV 25
+#define N_KV 30
 #define URDF_MAX (4 * 1024 * 1024)
 
 typedef sensor_msgs_msg_dds__JointState_ JointState;
@@ -55,7 +55,7 @@ struct mca_ros2_pub {
     char text[MCA_MAX_PAIRS][48];
     char hardware_id[MCA_ROS2_NAME_MAX + 1];
     char diag_name[MCA_ROS2_NAME_MAX + 16];
-    char diag_message[160];
+    char diag_message[256];
     KeyValue kv[N_KV];
     char kv_value[N_KV][168];
 };
@@ -676,8 +676,8 @@ static const char *state_name(int32_t s) {
     return s >= 0 && s <= 5 ? names[s] : "unknown";
 }
 
-int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t bridge_restarts,
-                        uint64_t *errors) {
+int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st,
+                        const mca_ros2_bridge_health_t *h, uint64_t *errors) {
     if (!r->cfg.diagnostics) {
         return 0;
     }
@@ -710,7 +710,13 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, u
     const builtin_interfaces_msg_dds__Time_ t_min = ros_time(r, st->min_distance_stamp_ns);
     KV("min_distance_stamp", "%d.%09u", t_min.sec, t_min.nanosec);
     KV("snapshots_dropped", "%llu", (unsigned long long)st->snapshots_dropped);
-    KV("dds_bridge_restarts", "%llu", (unsigned long long)bridge_restarts);
+    KV("dds_bridge_restarts", "%llu", (unsigned long long)h->restarts);
+    KV("dds_bridge_deaths", "%llu", (unsigned long long)h->deaths);
+    /* this publisher was started after that many quick deaths in a row, that long after the last one */
+    KV("dds_bridge_deaths_in_a_row", "%u", h->deaths_in_a_row);
+    KV("dds_bridge_backoff_s", "%.1f", h->backoff_s);
+    KV("dds_bridge_last_death", "%s", h->last_death);
+    KV("dds_bridge_since_last_death_s", "%.1f", h->since_death_s);
     int streams = 0;
     uint64_t accepted = 0;
     for (uint32_t a = 0; a < r->cfg.n_arms; a++) {
@@ -728,12 +734,21 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, u
     }
 #undef KV
     const int fault = st->state == MCA_DDS_STATE_FAULT;
-    snprintf(r->diag_message, sizeof r->diag_message, "%s%s%s", state_name(st->state),
-             st->fault_text[0] ? ": " : "", st->fault_text);
+    /* a bridge that died lately (a peer that crashes it may still be there: it is restarted with a capped
+     * back-off, and publishes nothing while down) is a warning; the controller itself is not affected */
+    const int bridge_dying = h->since_death_s >= 0.0 && h->since_death_s < MCA_DDS_BRIDGE_STABLE_S;
+    char bridge_note[96] = "";
+    if (bridge_dying) {
+        snprintf(bridge_note, sizeof bridge_note,
+                 "; dds bridge restarted %llu times, last death %.1f s ago (%s)",
+                 (unsigned long long)h->restarts, h->since_death_s, h->last_death);
+    }
+    snprintf(r->diag_message, sizeof r->diag_message, "%s%s%s%s", state_name(st->state),
+             st->fault_text[0] ? ": " : "", st->fault_text, bridge_note);
     diagnostic_msgs_msg_dds__DiagnosticStatus_ ds = {
-        .level = (uint8_t)(fault                                ? DIAG_ERROR
-                           : st->state == MCA_DDS_STATE_BRAKING ? DIAG_WARN
-                                                                : DIAG_OK),
+        .level = (uint8_t)(fault                                                ? DIAG_ERROR
+                           : st->state == MCA_DDS_STATE_BRAKING || bridge_dying ? DIAG_WARN
+                                                                                : DIAG_OK),
         .name = r->diag_name,
         .message = r->diag_message,
         .hardware_id = r->hardware_id,

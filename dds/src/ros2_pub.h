@@ -23,9 +23,21 @@ int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_co
 /** Joint states and markers of one snapshot. Returns the samples written; *errors counts failures. */
 int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64_t *errors);
 
-/** /diagnostics from the status just written on mca/controller_status, with the bridge's restart count. */
-int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st, uint64_t bridge_restarts,
-                        uint64_t *errors);
+/** The bridge process's own health as its supervisor recorded it (dds_shm.h), for /diagnostics. */
+typedef struct mca_ros2_bridge_health {
+    uint64_t restarts;        /**< publishers started after a death */
+    uint64_t deaths;          /**< publishers that died */
+    uint32_t deaths_in_a_row; /**< the series the running publisher was started in (0: none) */
+    double backoff_s;         /**< the back-off before this publisher's start */
+    double since_death_s;     /**< since the last death [s]; < 0: none */
+    const char *last_death;   /**< its cause ("signal 11 (SIGSEGV)"), "" if none */
+} mca_ros2_bridge_health_t;
+
+/** /diagnostics from the status just written on mca/controller_status, with the bridge's health: a death
+ *  within the last MCA_DDS_BRIDGE_STABLE_S makes the level WARN (the controller's state decides otherwise).
+ */
+int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st,
+                        const mca_ros2_bridge_health_t *h, uint64_t *errors);
 
 /** Writers matched to at least n readers each (for tests). */
 int mca_ros2_pub_matched(const mca_ros2_pub_t *r, uint32_t n);

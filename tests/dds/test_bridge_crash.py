@@ -1,35 +1,43 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Issue 16, "No peer can take the controller down": the crash of docs/dds.md replayed against a running mcad.
+"""The peer that crashes libddsc 0.10.2 (docs/dds.md, "A peer that crashes Cyclone 0.10.2"), present for a while
+against a running mcad (issues 16 and 32).
 
-mcad runs the shipped cross-circles sim cell (11 s, DDS at 100 Hz, --csv); mca-monitor --csv and a Python
-reader of mca/controller_status (types of mca_types.py, which match idlc's) subscribe. At ~3 s the peer of the
-issue joins: a Python subscriber of mca/distances whose type was written from dds/mca_dds.idl with plain uint8
-keys and no must-understand (tests/dds/crash_peer.py). libddsc 0.10.2 (Debian 12) crashes on it in its
-type-lookup thread: since issue 16 that thread is in mca-dds-bridge, not in mcad.
+mcad runs the shipped cross-circles sim cell (DDS at 100 Hz, --csv, SCHED_FIFO as the cell says) long enough for
+the peer to be there PEER_S seconds (--peer-seconds, default 12; the issue's 60 s by hand) and for the run to go
+on after it left. ~3 s after mcad runs, the peer joins: a Python subscriber of mca/distances whose type was
+written from dds/mca_dds.idl with plain uint8 keys and no must-understand (tests/dds/crash_peer.py, PyPI
+cyclonedds 11.0.1). libddsc 0.10.2 (Debian 12) asks it for its type object and crashes on the reply in its
+type-lookup thread (a NULL member type in xt_validate_impl, ddsi_typewrap.c: the reply's uint8 members are
+TK_UINT8, a type kind 0.10.2 does not know). Since issue 16 that thread is in mca-dds-bridge, not in mcad.
 
-mca-monitor is a libddsc 0.10.2 program too: the same peer can crash it (seen: it does, SIGSEGV). So a second
-mca-monitor joins once the bridge is back, as an operator would start it again.
+Plain cell (config/dds/loopback.xml; default), asserted:
+  - the bridge dies of SIGSEGV within 10 s of the peer joining ("the crash REPRODUCED"; if not, a Cyclone without
+    the bug: said plainly, the bridge is killed with SIGSEGV once so that the restart path runs all the same);
+  - while the peer is there the bridge keeps dying and mcad keeps restarting it: at least 3 deaths, each
+    restarted, the logged back-offs 0.1, 0.2, 0.4, 0.8, 1.6 s (capped at 2 s), never "stays down"; the summary
+    counts as many restarts as deaths and says the bridge was up at the end;
+  - after the peer left it publishes again: this test's own Distances reader (the wheel's libddsc 11.0.1 lives
+    through the peer) receives again within 2.5 s and to the end, a mca-monitor (libddsc 0.10.2, started
+    after the peer left: the peer kills a running one too) receives to the end and knows the state at once;
+    the status reader gets the final STOPPED.
+Secure cell (--secure; in a network namespace, tests/ros2/netns.sh: config/dds/secure.xml, monitoring
+protected, files from config/security/make_security.sh), asserted:
+  - the bridge never dies (summary: died 0 times), the peer (no credentials, config/dds/ros2.xml) lives and
+    receives nothing;
+  - mca-monitor with the 'monitor' identity receives every Distances sample after its first (ticks 10 apart,
+    none missing) up to mcad's last;
+  - the bridge's Cyclone trace (the shipped secure.xml plus a <Tracing> element) shows why: the peer's
+    discovery writers and its type-lookup reply writer are "not allowed" (non-secure), and the bridge sent no
+    type-lookup request (no "tl-req" line): an unauthenticated peer never reaches type lookup.
+Both: mcad exits 0 in state stopped with no fault; no overrun of the bridge's making: each of the summary's N
+overruns, taken to be the run's N longest command gaps, is matched by cyclictest (beside mcad on every CPU at
+the loop's priority) being held up at the same moment (this VM freezes its vCPUs for 1-15 ms a few times a
+minute); gaps under 3 periods that cyclictest missed are printed, not judged (its own 1 ms grid can miss them).
+Printed: deaths, back-offs, restart times, the loop's command gap and compute per phase.
 
-Asserted:
-  - the bridge process dies of SIGSEGV within 10 s of the peer joining (printed as "the crash REPRODUCED");
-    if it does not (a Cyclone without the bug), that is said plainly and the bridge is killed with SIGSEGV
-    instead, so the restart path is exercised all the same. The peer is stopped after the first death.
-  - mcad logs the death with its signal and the restart, restarts the bridge once (restart 1 after 0.5 s),
-    and its summary says "died 1 times, restarted 1 times";
-  - the task completes: mcad exits 0 in state stopped, no fault, no loop stall (> 5 periods between two
-    ticks' commands) while the bridge died and came back, unless cyclictest, running beside mcad on every CPU
-    at the loop's priority for the whole run, was held up at the same moment: this VM freezes its vCPUs for
-    1-15 ms a few times a minute, and such a stall is the machine's, said so, and not judged;
-  - a mca-monitor started after the restart receives Distances up to the end of the run and knows the state
-    (RUNNING) from its first samples; the first mca-monitor, if the peer spared it, receives again;
-  - the Python reader gets a ControllerStatus from the restarted bridge at once (its first status: the
-    current one, RUNNING, with the tick it was published at) and the final STOPPED one.
-Printed, not asserted: whether the test's own Distances reader, on the PyPI wheel's newer libddsc (11.0.1),
-lives through the same peer (seen: it does, in every run, while mca-monitor on 0.10.2 dies). Printed: restart time (death seen -> restarted bridge up; monitor gap), the loop's command gap and compute time
-per phase (before the peer, the crash and restart window, after), from mcad's CSV.
-
-usage: test_bridge_crash.py MCAD MONITOR SOURCE_DIR DOMAIN"""
+usage: test_bridge_crash.py MCAD MONITOR SOURCE_DIR DOMAIN [--peer-seconds S] [--secure]"""
+import argparse
 import csv
 import os
 import re
@@ -47,13 +55,24 @@ import mca_types as m  # noqa: E402
 sys.path.insert(0, os.path.join(HERE, "..", "common"))
 from cyclic_probe import CyclicProbe  # noqa: E402
 
-MCAD, MONITOR, SRC, DOMAIN = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-XML = os.path.join(SRC, "config", "dds", "loopback.xml")
-os.environ["CYCLONEDDS_URI"] = "file://" + XML
+ap = argparse.ArgumentParser()
+ap.add_argument("mcad")
+ap.add_argument("monitor")
+ap.add_argument("src")
+ap.add_argument("domain", type=int)
+ap.add_argument("--peer-seconds", type=float, default=12.0)
+ap.add_argument("--secure", action="store_true")
+A = ap.parse_args()
+MCAD, MONITOR, SRC, DOMAIN, PEER_S, SECURE = A.mcad, A.monitor, A.src, A.domain, A.peer_seconds, A.secure
+XML = os.path.join(SRC, "config", "dds", "secure.xml" if SECURE else "loopback.xml")
+PEER_XML = os.path.join(SRC, "config", "dds", "ros2.xml" if SECURE else "loopback.xml")  # no credentials
+if not SECURE:
+    os.environ["CYCLONEDDS_URI"] = "file://" + XML
 PERIOD_NS = 1_000_000
-STALL_MS = 5.0  # MCA_DAEMON_STALL_PERIODS periods
+DIVISOR = 10  # the cell's dds.publish_divisor
 LOOP_PRIO = 80  # the cell's rt.priority
 STATES = ["INIT", "READY", "RUNNING", "BRAKING", "STOPPED", "FAULT"]
+DEATH = r"dds bridge \(pid (\d+)\) died: (.*?); restart (\d+) in ([\d.]+) s"
 
 failures = []
 
@@ -92,20 +111,16 @@ class Lines:
             with self.lock:
                 self.lines.append((time.monotonic(), line.rstrip("\n")))
 
-    def find(self, pattern):
+    def all(self, pattern):
         with self.lock:
-            for t, line in self.lines:
-                mm = re.search(pattern, line)
-                if mm:
-                    return t, mm
-        return None, None
+            return [(t, mm) for t, line in self.lines for mm in [re.search(pattern, line)] if mm]
 
-    def wait(self, pattern, timeout):
+    def wait(self, pattern, timeout, after=0.0):
         end = time.monotonic() + timeout
         while time.monotonic() < end:
-            t, mm = self.find(pattern)
-            if mm:
-                return t, mm
+            hits = [x for x in self.all(pattern) if x[0] >= after]
+            if hits:
+                return hits[0]
             time.sleep(0.005)
         return None, None
 
@@ -114,256 +129,315 @@ class Lines:
             return "\n".join(line for _, line in self.lines)
 
 
+def start_monitor(out_csv, env):
+    cmd = [MONITOR, "--domain", str(DOMAIN), "--config", XML, "--csv", out_csv, "--no-color"]
+    if os.geteuid() == 0:
+        cmd += ["--priority", "5"]  # a monitor that must see every sample (docs/dds.md)
+    return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+
+
+def stop_proc(p):
+    if p.poll() is None:
+        p.send_signal(signal.SIGINT)
+    try:
+        return p.communicate(timeout=20)[1] or ""
+    except subprocess.TimeoutExpired:
+        p.kill()
+        return p.communicate()[1] or ""
+
+
 def main():
-    from cyclonedds.domain import DomainParticipant
-    from cyclonedds.sub import DataReader
-    from cyclonedds.topic import Topic
+    tmp_obj = tempfile.TemporaryDirectory(prefix="mca-bridge-crash-")
+    tmp = tmp_obj.name
+    env = dict(os.environ)
+    env_mcad, env_mon = env, env
+    xml_mcad = XML
+    trace = os.path.join(tmp, "bridge_trace.log")
+    if SECURE:
+        sec = os.path.join(tmp, "security")
+        r = subprocess.run([os.path.join(SRC, "config", "security", "make_security.sh"), sec], capture_output=True,
+                           text=True)
+        check(r.returncode == 0, f"make_security.sh made the files ({r.stderr.strip()[-300:]})")
+        env = dict(os.environ, MCA_SECURITY_DIR=sec)
+        env.pop("CYCLONEDDS_URI", None)
+        env_mcad, env_mon = dict(env, MCA_DDS_IDENTITY="mcad"), dict(env, MCA_DDS_IDENTITY="monitor")
+        # the shipped secure.xml plus a trace of the bridge's Cyclone (finest: the type-lookup lines too)
+        xml_mcad = os.path.join(tmp, "secure_traced.xml")
+        with open(XML) as f:
+            x = f.read()
+        with open(xml_mcad, "w") as f:
+            f.write(x.replace("</Domain>", f"  <Tracing><Verbosity>finest</Verbosity><OutputFile>{trace}"
+                                           "</OutputFile><AppendToFile>true</AppendToFile></Tracing>\n  </Domain>"))
 
     with open(os.path.join(SRC, "config", "cells", "cross_circles_sim.yaml")) as f:
         cell_text = f.read()
     cell_text = cell_text.replace("../", os.path.join(SRC, "config") + "/")
     cell_text = re.sub(r"domain: *\d+", f"domain: {DOMAIN}", cell_text)
-    with tempfile.TemporaryDirectory(prefix="mca-bridge-crash-") as tmp:
-        cell, mcad_csv, mon_csv, mon2_csv = (os.path.join(tmp, n)
-                                              for n in ("cell.yaml", "mcad.csv", "monitor.csv", "monitor2.csv"))
-        with open(cell, "w") as f:
-            f.write(cell_text)
+    cell_text = re.sub(r"config: *\S+", f"config: {xml_mcad}", cell_text)
+    assert f"publish_divisor: {DIVISOR}" in cell_text
+    run_s = 3.0 + PEER_S + (6.0 if SECURE else 9.0)  # task time: peer at ~3 s, then the run after it left
+    cell, mcad_csv, mon_csv, mon2_csv = (os.path.join(tmp, n)
+                                          for n in ("cell.yaml", "mcad.csv", "monitor.csv", "monitor2.csv"))
+    with open(cell, "w") as f:
+        f.write(cell_text)
 
-        # readers first: discovery matches them as soon as the bridge's writers exist
+    statuses, dist_rx = [], []  # (rx monotonic, tick, state) / (rx monotonic, tick)
+    stop_reader = threading.Event()
+    reader = None
+    if not SECURE:  # the wheel's participants cannot authenticate (no security plugins in it)
+        from cyclonedds.domain import DomainParticipant
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
         dp = DomainParticipant(DOMAIN)
         rs = DataReader(dp, Topic(dp, m.TOPIC_STATUS, m.ControllerStatus, qos=m.status_qos()), qos=m.status_qos())
-        # a Distances reader on the PyPI wheel's own libddsc (11.0.1): does a newer Cyclone live through the peer?
+        # a Distances reader on the wheel's own libddsc (11.0.1), which lives through the peer
         rdist = DataReader(dp, Topic(dp, m.TOPIC_DISTANCES, m.Distances, qos=m.stream_qos()), qos=m.stream_qos())
-        dist_rx = []
-        mon = subprocess.Popen([MONITOR, "--domain", str(DOMAIN), "--config", XML, "--csv", mon_csv, "--no-color"],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        statuses = []  # (rx monotonic, tick, state, ticks)
-        stop_reader = threading.Event()
 
-        def read_status():
+        def read():
             while not stop_reader.is_set():
                 for s in rs.take(N=100):
                     if isinstance(s, m.ControllerStatus):
-                        statuses.append((time.monotonic(), s.tick, s.state, s.ticks))
+                        statuses.append((time.monotonic(), s.tick, s.state))
                 for s in rdist.take(N=1000):
                     if isinstance(s, m.Distances):
                         dist_rx.append((time.monotonic(), s.tick))
                 time.sleep(0.002)
 
-        reader = threading.Thread(target=read_status, daemon=True)
+        reader = threading.Thread(target=read, daemon=True)
         reader.start()
-        time.sleep(1.0)
+    mon = start_monitor(mon_csv, env_mon)
+    time.sleep(1.0)
 
-        probe = CyclicProbe(LOOP_PRIO)  # the machine's own stalls, timed, for the whole run
-        t_start = time.monotonic()
-        mcad = subprocess.Popen([MCAD, "--csv", mcad_csv, cell], stderr=subprocess.PIPE, text=True)
-        log = Lines(mcad.stderr)
-        _, mm = log.wait(r"dds bridge: pid (\d+)", 30)
-        check(mm is not None, "mcad started its DDS bridge process")
-        if mm is None:
-            mcad.kill()
-            print(log.text())
-            return 1
-        bridge0 = int(mm.group(1))
-        t_running, _ = log.wait(r"running: 2 arms", 30)
-        time.sleep(3.0)
+    probe = CyclicProbe(LOOP_PRIO, spike_us=400)  # the machine's own stalls, timed, for the whole run
+    t_start = time.monotonic()
+    mcad = subprocess.Popen([MCAD, "--csv", mcad_csv, "--stop-after", f"{run_s:.0f}", cell], stderr=subprocess.PIPE,
+                            text=True, env=env_mcad)
+    log = Lines(mcad.stderr)
+    _, mm = log.wait(r"dds bridge: pid (\d+)", 30)
+    check(mm is not None, "mcad started its DDS bridge process")
+    if mm is None:
+        mcad.kill()
+        print(log.text())
+        return 1
+    bridge0 = int(mm.group(1))
+    spawns = []  # (CLOCK_MONOTONIC, pid) of each bridge process seen as mcad's child (the log is thinned out)
 
-        # the peer of the issue joins
-        t_peer = time.monotonic()
-        peer = subprocess.Popen([sys.executable, os.path.join(HERE, "crash_peer.py"), str(DOMAIN), XML],
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        t_death, dm = log.wait(r"dds bridge \(pid (\d+)\) died: (.*?); restart (\d+) in ([\d.]+) s", 10)
-        reproduced = dm is not None
-        if not reproduced:
-            print(f"the crash did NOT reproduce: the bridge (pid {bridge0}) lived 10 s with the peer; "
-                  "killing it with SIGSEGV instead", flush=True)
-            os.kill(bridge0, signal.SIGSEGV)
-            t_death, dm = log.wait(r"dds bridge \(pid (\d+)\) died: (.*?); restart (\d+) in ([\d.]+) s", 5)
-        peer.kill()  # one crash is enough (a peer that stays crashes every restart: see docs/dds.md)
-        peer_out = peer.communicate()[0]
-        print("crash peer:", " | ".join(peer_out.strip().splitlines()[-3:]))
-        check(dm is not None, "mcad logged the bridge's death")
-        if dm is None:
-            mcad.kill()
-            print(log.text())
-            return 1
-        print(f"the crash {'REPRODUCED' if reproduced else 'did not reproduce'}: bridge pid {dm.group(1)} died "
-              f"{t_death - t_peer:.2f} s after the peer joined: {dm.group(2)}", flush=True)
-        check(int(dm.group(1)) == bridge0 and "signal 11 (SIGSEGV)" in dm.group(2),
-              f"the first bridge died of SIGSEGV ({dm.group(2)})")
-        check(dm.group(3) == "1" and float(dm.group(4)) == 0.5, f"restart 1 announced after 0.5 s ({dm.group(0)})")
-        t_up, um = log.wait(r"dds bridge restarted: pid (\d+) \(restart (\d+)\)", 10)
-        check(um is not None and um.group(2) == "1", "the bridge restarted (restart 1)")
-        if um is not None:
-            print(f"restart: death seen -> restarted bridge up {t_up - t_death:.3f} s (back-off 0.5 s)", flush=True)
-        # mca-monitor links the same libddsc 0.10.2: the peer can kill it too. A second monitor joins now, as an
-        # operator (or systemd) would start it again: it must get the current state at once and the stream.
-        time.sleep(0.2)
-        mon1_dead = mon.poll() is not None
-        mon2 = subprocess.Popen([MONITOR, "--domain", str(DOMAIN), "--config", XML, "--csv", mon2_csv,
-                                 "--no-color"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        t_mon2 = time.monotonic()
-
-        try:
-            mcad.wait(timeout=40)
-        except subprocess.TimeoutExpired:
-            mcad.kill()
-            mcad.wait()
-        log.t.join(timeout=5)
-        t_end = time.monotonic()
-        check(probe.stop(), probe.describe())
-        time.sleep(1.5)  # the final status and the last samples reach the readers
-        stop_reader.set()
-        reader.join(timeout=5)
-        mon_err, mon2_err = "", ""
-        for p in (mon, mon2):
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
+    def watch_children():
+        last = None
+        while mcad.poll() is None:
             try:
-                err = p.communicate(timeout=20)[1]
-            except subprocess.TimeoutExpired:
-                p.kill()
-                err = p.communicate()[1]
-            if p is mon:
-                mon_err = err
-            else:
-                mon2_err = err
-        text = log.text()
-        print("mcad:\n  " + "\n  ".join(line for line in text.splitlines() if "bridge" in line or "summary" in line))
-        print(f"mca-monitor (from the start): exit {mon.returncode}: "
-              + " | ".join(sorted(set(re.sub(r"^[\d.]+ ", "", x) for x in mon_err.strip().splitlines()))))
-        print(f"mca-monitor (joined after the restart): exit {mon2.returncode}: " + mon2_err.strip().replace("\n", " | "))
-        if mon.returncode == -signal.SIGSEGV:
-            print("NOTE: the peer crashed mca-monitor too (SIGSEGV, the same libddsc 0.10.2 bug): every 0.10.2 "
-                  "participant on the network is exposed, not only mcad's bridge", flush=True)
-        check(mon2.returncode == 0, f"the second mca-monitor exit status {mon2.returncode}")
+                with open(f"/proc/{mcad.pid}/task/{mcad.pid}/children") as f:
+                    kids = f.read().split()
+            except OSError:
+                kids = []
+            cur = kids[0] if kids else None
+            if cur != last and cur is not None:
+                spawns.append((time.monotonic(), int(cur)))
+            last = cur
+            time.sleep(0.01)
 
-        check(mcad.returncode == 0, f"mcad exit status {mcad.returncode} (0: the task completed and stopped)")
-        check("summary: state stopped" in text, "mcad ended in state stopped")
-        check("summary: faults: none" in text, "no fault")
-        check("dds bridge: died 1 times, restarted 1 times" in text, "summary: the bridge died once, restarted once")
-        check(len(re.findall(r"dds bridge \(pid \d+\) died", text)) == 1, "one death only (the peer was stopped)")
+    threading.Thread(target=watch_children, daemon=True).start()
+    t_running, _ = log.wait(r"running: 2 arms", 30)
+    time.sleep(3.0)
 
-        # the loop, per phase, from mcad's CSV: task time t = tick * period, on the wall clock from the
-        # monitor's samples (stamp_ns = CLOCK_MONOTONIC wake-up of the tick)
-        mon_rows, rows2 = monitor_rows(mon_csv), monitor_rows(mon2_csv)
-        check(len(mon_rows) > 100, f"mca-monitor wrote {len(mon_rows)} rows")
-        if not mon_rows:
-            return 1
-        offs = sorted(int(r["stamp_ns"]) - int(r["tick"]) * PERIOD_NS for r in mon_rows)
-        off = offs[len(offs) // 2]  # median: wake-up jitter (tens of us) aside, stamp = start + tick * period
+    # the peer joins, stays PEER_S, leaves
+    t_peer = time.monotonic()
+    peer = subprocess.Popen([sys.executable, os.path.join(HERE, "crash_peer.py"), str(DOMAIN), PEER_XML],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    t_death, dm = log.wait(DEATH, min(10.0, PEER_S))
+    reproduced = dm is not None
+    if not reproduced and not SECURE:
+        print(f"the crash did NOT reproduce: the bridge (pid {bridge0}) lived {min(10.0, PEER_S):.0f} s with the "
+              "peer; killing it with SIGSEGV instead", flush=True)
+        os.kill(bridge0, signal.SIGSEGV)
+        t_death, dm = log.wait(DEATH, 5)
+    time.sleep(max(0.0, t_peer + PEER_S - time.monotonic()))
+    peer_alive = peer.poll() is None
+    peer.kill()
+    t_left = time.monotonic()
+    peer_out = peer.communicate()[0]
+    print(f"crash peer: present {t_left - t_peer:.1f} s, alive until then: {peer_alive}; its output: "
+          + " | ".join(peer_out.strip().splitlines()[-3:]), flush=True)
+    # mca-monitor links libddsc 0.10.2: the peer kills a running one too. A second one joins after the peer
+    # left, as an operator (or systemd) would start it again.
+    time.sleep(0.5)
+    mon1_dead = mon.poll() is not None
+    mon2 = start_monitor(mon2_csv, env_mon)
+    t_mon2 = time.monotonic()
 
-        def tick_at(t_mono):
-            return int((t_mono * 1e9 - off) / PERIOD_NS)
+    try:
+        mcad.wait(timeout=run_s + 60)
+    except subprocess.TimeoutExpired:
+        mcad.kill()
+        mcad.wait()
+    log.t.join(timeout=5)
+    t_end = time.monotonic()
+    check(probe.stop(), probe.describe())
+    time.sleep(1.5)  # the final status and the last samples reach the readers
+    stop_reader.set()
+    if reader:
+        reader.join(timeout=5)
+    mon_err, mon2_err = stop_proc(mon), stop_proc(mon2)
+    text = log.text()
+    print("mcad:\n  " + "\n  ".join(line for line in text.splitlines() if "bridge" in line or "summary" in line))
+    print(f"mca-monitor (from the start): exit {mon.returncode}: "
+          + " | ".join(sorted(set(re.sub(r"^[\d.]+ ", "", x) for x in mon_err.strip().splitlines()))[:5]))
+    print(f"mca-monitor (joined after the peer left): exit {mon2.returncode}: "
+          + mon2_err.strip().replace("\n", " | ")[:300])
 
-        k_peer, k_death = tick_at(t_peer), tick_at(t_death)
-        k_up = tick_at(t_up) if t_up else k_death + 1000
-        with open(mcad_csv) as f:
-            rows = [(round(float(r["t"]) * 1000), float(r["cmd_gap_us"]), int(r["compute_ns"]), int(r["state"]))
-                    for r in csv.DictReader(f)]
-        running = [r for r in rows if STATES[r[3]] == "RUNNING"]
-        phases = {"before the peer": [r for r in running if 1000 <= r[0] < k_peer],
-                  "death + restart": [r for r in running if k_death - 200 <= r[0] <= k_up + 1000],
-                  "after": [r for r in running if r[0] > k_up + 1000]}
-        for name, rr in phases.items():
-            gaps = [r[1] for r in rr]
-            comp = [r[2] / 1e3 for r in rr]
-            late = sum(1 for g in gaps if g > 1500)
-            print(f"loop {name:16s}: {len(rr):5d} ticks, command gap p50 {pct(gaps, 0.5):.0f} us, p99 "
-                  f"{pct(gaps, 0.99):.0f} us, max {max(gaps, default=0):.0f} us, gaps > 1.5 periods {late}; compute "
-                  f"p50 {pct(comp, 0.5):.1f} us, p99 {pct(comp, 0.99):.1f} us, max {max(comp, default=0):.1f} us",
-                  flush=True)
-        win = phases["death + restart"]
-        check(len(win) > 500, f"{len(win)} running ticks in the death + restart window")
-        # This VM (2 cores, shared with a QEMU guest) freezes its vCPUs now and then (seen: 5-14 ms gaps before any
-        # peer and long after the restart, cyclictest held up as long). A gap of 5 periods or more
-        # (MCA_DAEMON_STALL_PERIODS) in the window is the bridge's unless cyclictest was held up at the same
-        # moment: its wall time is the nearest monitor sample's stamp (the tick's wake-up) moved by the command
-        # gaps between them, and a cyclictest wake-up at least half the gap's excess over a period late, within
-        # 20 ms of the stalled interval, makes it the machine's.
-        stamps = sorted({int(r["tick"]): int(r["stamp_ns"])
-                         for r in mon_rows + rows2}.items())
-        gap_of = {r[0]: r[1] for r in rows}
+    check(mcad.returncode == 0, f"mcad exit status {mcad.returncode} (0: it ran its time and stopped)")
+    check("summary: state stopped" in text, "mcad ended in state stopped")
+    check("summary: faults: none" in text, "no fault")
+    sm = re.search(r"summary: dds bridge: died (\d+) times, restarted (\d+) times.*; at the end (\w+)", text)
+    died, restarted, at_end = (int(sm.group(1)), int(sm.group(2)), sm.group(3)) if sm else (-1, -1, "?")
+    om = re.search(r"summary: state \w+, ticks (\d+), overruns (\d+) \(skipped periods (\d+)\)", text)
+    deaths = log.all(DEATH)
+    with open(mcad_csv) as f:
+        rows = [(round(float(r["t"]) * 1000), float(r["cmd_gap_us"]), int(r["compute_ns"]), int(r["state"]),
+                 int(r["wake_ns"])) for r in csv.DictReader(f)]
+    last_ref = max(r[0] for r in rows)
 
-        def wall_us(k):
-            if not stamps:
-                return None
-            j, st = min(stamps, key=lambda x: abs(x[0] - k))
-            lo, hi, sign = (j + 1, k, 1) if j < k else (k + 1, j, -1)
-            return st / 1e3 + sign * sum(gap_of.get(i, 1000.0) for i in range(lo, hi + 1))
-
-        def machine_stalls(rr):
-            """The gaps of 5 periods or more in rr: (tick, gap, cyclictest spikes at that moment)."""
-            out = []
-            for k, g, _, _ in rr:
-                if g >= STALL_MS * 1000:
-                    w = wall_us(k)
-                    out.append((k, g, probe.near(w, g) if w is not None else []))
-            return out
-
-        # outside the window: how often the machine's own stalls were matched (how well the timing holds)
-        rest = machine_stalls(phases["before the peer"] + phases["after"])
-        print(f"loop stalls >= {STALL_MS:.0f} ms outside the window: {len(rest)}, {sum(1 for x in rest if x[2])} of "
-              f"them with cyclictest held up at the same moment, longest "
-              f"{max((x[1] for x in rest), default=0) / 1e3:.2f} ms", flush=True)
-        stalls = machine_stalls(win)
-        machines = [x for x in stalls if x[2]]
-        ours = [x for x in stalls if not x[2]]
-        for k, g, near in machines:
-            x = max(near, key=lambda y: y[1])
-            print(f"NOTE: the loop's {g / 1e3:.2f} ms gap at tick {k} is the machine's, not judged: cyclictest on "
-                  f"CPU {x[0]} woke {x[1] / 1e3:.2f} ms late {(x[2] - wall_us(k)) / 1e3:+.1f} ms from it", flush=True)
-        check(not ours, "no loop stall of the bridge's making while it died and restarted: "
-              + (", ".join(f"{g / 1e3:.2f} ms at tick {k} (cyclictest not held up then)" for k, g, _ in ours)
-                 if ours else f"longest command gap {max((r[1] for r in win), default=0) / 1e3:.2f} ms, "
-                 f"{len(machines)} of the machine's"))
-
-        # the monitors: the first one before the crash (and after, if the peer spared it), the second after
-        ticks = [int(r["tick"]) for r in mon_rows]
-        before = [k for k in ticks if k < k_death]
-        after = [k for k in ticks if k > k_death]
-        last_ref = max(r[0] for r in rows)
-        check(len(before) > 100, f"the monitor received {len(before)} samples before the crash")
-        if not mon1_dead:
-            check(len(after) > 300 and max(after, default=0) >= last_ref - 200,
-                  f"the first monitor (alive) received again after the restart: {len(after)} samples, up to tick "
-                  f"{max(after, default=0)} (mcad's last {last_ref})")
-            if before and after:
-                print(f"monitor: last sample before the death tick {max(before)}, first after {min(after)}: "
-                      f"gap {(min(after) - max(before)) / 1e3:.3f} s of task time", flush=True)
+    if SECURE:
+        check(sm is not None and died == 0 and not deaths and at_end == "up",
+              f"the bridge never died with the unauthenticated peer there for {t_left - t_peer:.0f} s (summary: "
+              f"died {died} times, at the end {at_end})")
+        check(peer_alive and "first sample" not in peer_out,
+              "the peer (no credentials) lived the whole time and received no sample")
+        # every Distances sample after the monitor's first, from the monitor that was there all along
+        ticks = [int(r["tick"]) for r in monitor_rows(mon_csv)]
+        steps = [b - a for a, b in zip(ticks, ticks[1:])]
+        # the last may be the final snapshot, pushed at the stop (its tick need not be a publishing one)
+        missing = [(a, b) for a, b in zip(ticks, ticks[1:])
+                   if b - a != DIVISOR and not (b == ticks[-1] and 0 <= b - a < DIVISOR)]
+        last_pub = last_ref - last_ref % DIVISOR
+        check(mon.returncode == 0 and len(ticks) > 100 and not missing and max(ticks) >= last_pub,
+              f"the authenticated monitor ('monitor' identity) received every Distances sample after its first: "
+              f"{len(ticks)} samples, ticks {min(ticks, default=0)}..{max(ticks, default=0)} (mcad's last tick "
+              f"{last_ref}), steps {sorted(set(steps))}, gaps {missing[:5]}")
+        with open(trace, errors="replace") as f:
+            tr = f.read()
+        refused = set(re.findall(r"Non secure remote (?:reader|writer) \S+?:(\w+) is not allowed", tr))
+        n_req = len(re.findall(r"tl-req", tr))
+        n_rep = len(re.findall(r"tl-reply-add-types", tr))
+        print(f"bridge trace: {len(tr) / 1e6:.1f} MB; the peer's endpoints refused as non-secure (entity ids): "
+              f"{sorted(refused)}; type-lookup requests sent {n_req}, replies handled {n_rep}", flush=True)
+        # 4c2: SEDP subscriptions writer (its reader of mca/distances is never announced to the bridge),
+        # 301c3: type-lookup reply writer (no reply of its can reach the bridge)
+        check({"4c2", "301c3"} <= refused and n_req == 0 and n_rep == 0,
+              "the bridge refused the peer's discovery and type-lookup endpoints (non-secure) and never sent "
+              "or handled a type-lookup message: the unauthenticated peer did not reach type lookup")
+    else:
+        check(dm is not None, "mcad logged the bridge's death")
+        if dm is not None:
+            print(f"the crash {'REPRODUCED' if reproduced else 'did not reproduce'}: bridge pid {dm.group(1)} died "
+                  f"{t_death - t_peer:.2f} s after the peer joined: {dm.group(2)}", flush=True)
+            check(int(dm.group(1)) == bridge0 and "signal 11 (SIGSEGV)" in dm.group(2),
+                  f"the first bridge died of SIGSEGV ({dm.group(2)})")
+        while_there = [(t, x) for t, x in deaths if t <= t_left + 0.5]
+        print("deaths logged (s after the peer joined: cause, restart n in s): " + ", ".join(
+            f"{t - t_peer:.2f}: {x.group(2)}, {x.group(3)} in {x.group(4)}" for t, x in deaths), flush=True)
+        print(f"summary: died {died}, restarted {restarted}, at the end {at_end}; overruns "
+              f"{om.group(2) if om else '?'}", flush=True)
+        if reproduced:
+            want = [min(0.1 * 2 ** k, 2.0) for k in range(len(deaths))]
+            got = [float(x.group(4)) for _, x in deaths]
+            check(died >= 3 and all("SIGSEGV" in x.group(2) for _, x in while_there) and got == want,
+                  f"the bridge kept dying while the peer was there ({died} deaths in {t_left - t_peer:.0f} s, the "
+                  f"first {len(deaths)} logged) and each was followed by a restart after {got} s (capped doubling)")
+        check(sm is not None and restarted == died and at_end == "up" and "stays down" not in text,
+              f"no give-up: restarted as often as it died ({restarted} of {died}), up at the end")
+        if died > 5:
+            t_up, um = log.wait(r"dds bridge up again: pid \d+ \(restart (\d+)\) has lived", 0.1)
+            check(um is not None and t_up > t_left, "after the thinned-out restarts the log says it is up again"
+                  + (f" ({t_up - t_left:.1f} s after the peer left)" if um else ""))
+        # publishing again after the peer left: the wheel's reader (alive throughout) ...
+        back = [t for t, _ in dist_rx if t > t_left]
+        gaps_after = [b - a for a, b in zip(back, back[1:])]
+        check(bool(back) and back[0] - t_left < 2.5 and max(gaps_after, default=9) < 1.0
+              and max((k for _, k in dist_rx), default=0) >= last_ref - 200,
+              f"Distances again after the peer left: the first {back[0] - t_left if back else -1:.2f} s after it, "
+              f"then {len(back)} samples with no gap over {max(gaps_after, default=0):.2f} s up to tick "
+              f"{max((k for _, k in dist_rx), default=0)} (mcad's last {last_ref}); before: "
+              f"{sum(1 for t, _ in dist_rx if t_peer <= t <= t_left)} received while the peer was there")
+        # ... and a mca-monitor (libddsc 0.10.2) started after it left
+        rows2 = monitor_rows(mon2_csv)
         ticks2 = [int(r["tick"]) for r in rows2]
-        check(len(ticks2) > 300 and max(ticks2, default=0) >= last_ref - 200,
-              f"the monitor that joined after the restart received {len(ticks2)} samples, ticks "
-              f"{min(ticks2, default=0)}..{max(ticks2, default=0)} (mcad's last {last_ref})")
-        if ticks2:
-            print(f"monitor 2: joined {t_mon2 - t_up:.2f} s after the restart, first sample tick {ticks2[0]} "
-                  f"({(ticks2[0] - k_death) / 1e3:.3f} s of task time after the death)", flush=True)
-        # the monitor shows "?" until its status reader has matched (a few ms after its Distances reader)
+        check(mon2.returncode == 0 and len(ticks2) > 300 and max(ticks2, default=0) >= last_ref - 200,
+              f"the mca-monitor that joined after the peer left received {len(ticks2)} samples, ticks "
+              f"{min(ticks2, default=0)}..{max(ticks2, default=0)} (mcad's last {last_ref}; exit {mon2.returncode})")
         st2 = [r["state"] for r in rows2[:50]]
         known = [x for x in st2 if x != "?"]
-        unknown = len(st2) - len(known)
-        check(bool(known) and all(x == "RUNNING" for x in known) and unknown <= 10,
-              f"the second monitor knew the current state (RUNNING) from its first samples: {sorted(set(st2))}, "
-              f"{unknown} of its first {len(st2)} rows before the status came ('?')")
-        # the status reader: the restarted bridge's first status (current, at once), the final one
-        new = [s for s in statuses if t_death < s[0]]
-        if new:
-            rx, tick, state, _ = new[0]
-            print(f"status: the first after the death came {rx - t_up:+.3f} s after the restart was logged, tick "
-                  f"{tick} ({(tick - k_death) / 1e3:+.3f} s after the death), {STATES[state]}", flush=True)
-        check(bool(new) and STATES[new[0][2]] == "RUNNING" and new[0][0] - t_up < 1.0 and new[0][1] >= k_death,
-              "the restarted bridge published the current status at once (RUNNING, within 1 s, a tick after the "
-              "death)")
+        check(bool(known) and all(x == "RUNNING" for x in known) and len(st2) - len(known) <= 10,
+              f"it knew the current state (RUNNING) from its first samples: {sorted(set(st2))}")
+        if ticks2:
+            print(f"monitor 2: started {t_mon2 - t_left:.2f} s after the peer left, its first sample "
+                  f"{rows2 and (int(rows2[0]['rx_ns']) / 1e9 - t_left):.2f} s after it", flush=True)
+        if mon1_dead:
+            print(f"NOTE: the peer crashed the first mca-monitor too (exit {mon.returncode}: the same libddsc 0.10.2 "
+                  "bug; every 0.10.2 participant on the network is exposed)", flush=True)
         check(bool(statuses) and STATES[statuses[-1][2]] == "STOPPED", "the final status (STOPPED) arrived")
-        # informational: the same peer against libddsc 11.0.1 (the PyPI wheel's, in this very process)
-        import importlib.metadata
-        after_py = [k for t, k in dist_rx if t > t_up]
-        print(f"newer Cyclone: this test's own reader of mca/distances (PyPI cyclonedds "
-              f"{importlib.metadata.version('cyclonedds')}, its bundled libddsc) lived through the peer: "
-              f"{len([1 for t, _ in dist_rx if t < t_death])} samples before the death, {len(after_py)} after the "
-              f"restart, up to tick {max(after_py, default=0)}; mca-monitor on Debian's libddsc 0.10.2 "
-              f"{'died (SIGSEGV)' if mon.returncode == -signal.SIGSEGV else 'lived'}", flush=True)
-        print(f"run: {t_end - t_start:.1f} s; mcad 'running' at +{t_running - t_start:.2f} s")
+
+    # the loop: no overrun and no stall of the bridge's making
+    running = [r for r in rows if STATES[r[3]] == "RUNNING"]
+    # an overrun: a tick ended after the next one was due (compute being ~15 us: a wake-up a whole period late),
+    # which leaves one of the longest command gaps of the run; mcad's summary counts them: its N overruns are
+    # taken to be the N longest gaps, and each must have cyclictest held up at the same moment
+    n_over = int(om.group(2)) if om else 0
+    late = sorted(rows, key=lambda r: -r[1])[:n_over]
+    unexplained = [r for r in late if not probe.near(r[4] / 1e3, r[1], slack_us=20000)]
+    for r in late:
+        near = probe.near(r[4] / 1e3, r[1], slack_us=20000)
+        x = max(near, key=lambda y: y[1]) if near else None
+        sp = min(spawns, key=lambda y: abs(y[0] - r[4] / 1e9), default=None)
+        print(f"late tick {r[0]}: command gap {r[1] / 1e3:.2f} ms; " + (
+            f"cyclictest on CPU {x[0]} woke {x[1] / 1e3:.2f} ms late {(x[2] - r[4] / 1e3) / 1e3:+.1f} ms from it"
+            if x else "cyclictest was not held up then") + (
+            f"; the nearest bridge start {sp[0] - r[4] / 1e9:+.2f} s from it" if sp and len(spawns) > 1 else ""),
+            flush=True)
+    k0 = min(r[0] for r in running)
+    off_ms = (running[0][4] / 1e6) - running[0][0]  # wake_ns (ms) - tick: tick -> CLOCK_MONOTONIC
+
+    def tick_at(t_mono):
+        return int(t_mono * 1e3 - off_ms)
+
+    k_peer, k_left = tick_at(t_peer), tick_at(t_left)
+    phases = {"before the peer": [r for r in running if k0 + 1000 <= r[0] < k_peer],
+              "peer present": [r for r in running if k_peer <= r[0] < k_left],
+              "after it left": [r for r in running if r[0] >= k_left]}
+    for name, rr in phases.items():
+        gaps = [r[1] for r in rr]
+        comp = [r[2] / 1e3 for r in rr]
+        print(f"loop {name:16s}: {len(rr):5d} ticks, command gap p50 {pct(gaps, 0.5):.0f} us, p99 "
+              f"{pct(gaps, 0.99):.0f} us, max {max(gaps, default=0):.0f} us, gaps > 1.5 periods "
+              f"{sum(1 for g in gaps if g > 1500)}; compute p50 {pct(comp, 0.5):.1f} us, p99 {pct(comp, 0.99):.1f} "
+              f"us, max {max(comp, default=0):.1f} us", flush=True)
+    print(f"mcad's summary: overruns {om.group(2) if om else '?'} (skipped periods {om.group(3) if om else '?'}); "
+          f"the {len(late)} longest command gaps ({', '.join(f'{r[1] / 1e3:.2f}' for r in late)} ms), "
+          f"{len(late) - len(unexplained)} of them with cyclictest held up at the same moment (the machine's)",
+          flush=True)
+    # cyclictest wakes every 1 ms too: a stall of about one period can fall between its wake-ups and leave it
+    # less than half a period late, so an overrun with a gap under 3 periods that it did not see is printed, not
+    # judged (seen: one 2.13 ms gap of 17 overruns in a 60 s run, 16 of them matched)
+    big = [r for r in unexplained if r[1] >= 3.0 * PERIOD_NS / 1e3]
+    small = [r for r in unexplained if r not in big]
+    if om is not None and n_over == 0:
+        why = "none at all (summary: overruns 0)"
+    elif not unexplained:
+        why = f"each of the {len(late)} was the machine's"
+    elif not big:
+        why = (f"{len(late) - len(small)} of the {len(late)} were the machine's; {len(small)} with a gap under 3 "
+               "periods that cyclictest missed, not judged: " + ", ".join(f"tick {r[0]} gap {r[1] / 1e3:.2f} ms"
+                                                                           for r in small[:8]))
+    else:
+        why = "overruns of 3 periods or more without a machine stall: " + ", ".join(
+            f"tick {r[0]} gap {r[1] / 1e3:.2f} ms" for r in big[:8])
+    check(om is not None and not big, "0 overruns of the bridge's making: " + why)
+    ups = [t - t_peer for t, _ in spawns[1:]]
+    print(f"bridge processes seen starting after the first (mcad's children, polled every 10 ms: a short-lived "
+          f"one can be missed): {len(ups)}, at " + ", ".join(f"{x:.2f}" for x in ups) + " s after the peer joined",
+          flush=True)
+    print(f"run: {t_end - t_start:.1f} s; mcad 'running' at +{(t_running or t_start) - t_start:.2f} s; peer present "
+          f"{t_left - t_peer:.1f} s")
     return 1 if failures else 0
 
 

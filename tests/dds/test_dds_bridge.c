@@ -35,10 +35,10 @@ static const char *g_bridge_exe; /* mca-dds-bridge (process mode), argv[3] */
  * SIGSEGV into an exit with a report, so the sanitizer build kills it with SIGKILL instead. */
 #if defined(__SANITIZE_ADDRESS__)
 #define CRASH_SIGNAL SIGKILL
-#define CRASH_TEXT "died: signal 9 (SIGKILL); restart 1 in 0.5 s"
+#define CRASH_TEXT "died: signal 9 (SIGKILL); restart 1 in 0.1 s"
 #else
 #define CRASH_SIGNAL SIGSEGV
-#define CRASH_TEXT "died: signal 11 (SIGSEGV); restart 1 in 0.5 s"
+#define CRASH_TEXT "died: signal 11 (SIGSEGV); restart 1 in 0.1 s"
 #endif
 static char g_partition[64]; /* per process: other tests' publishers may share the domain */
 
@@ -913,7 +913,7 @@ static void test_process_mode_hung_bridge_killed(void **state) {
     assert_int_equal(st.hung, 1);
     assert_true(hung_after >= MCA_DDS_BRIDGE_HUNG_S && hung_after < MCA_DDS_BRIDGE_HUNG_S + 2.0);
     assert_non_null(strstr(logbuf, "hung: nothing published for"));
-    assert_non_null(strstr(logbuf, "died: signal 9 (SIGKILL); restart 1 in 0.5 s"));
+    assert_non_null(strstr(logbuf, "died: signal 9 (SIGKILL); restart 1 in 0.1 s"));
     assert_int_equal(st.deaths, 1);
     assert_int_equal(st.restarts, 1);
     const uint64_t published = st.published;
@@ -924,6 +924,102 @@ static void test_process_mode_hung_bridge_killed(void **state) {
     }
     assert_true(st.published > published);
     mca_dds_bridge_destroy(b, &st);
+    fclose(log);
+}
+
+/* Issue 32: a bridge that dies at every start (a peer that crashes libddsc 0.10.2 stays on the network) is
+ * restarted for as long as its owner runs: a capped exponential back-off (0.1, 0.2, 0.4, 0.8, 1.6, 2.0, 2.0
+ * s), never a last restart; the log says each of the first MCA_DDS_BRIDGE_LOG_ALL deaths and then thins out;
+ * the counters say down / backing off; once the deaths stop, it publishes again. */
+static void test_process_mode_never_gives_up(void **state) {
+    (void)state;
+    if (g_bridge_exe == NULL) {
+        skip();
+    }
+    mca_dds_config_t cfg;
+    mca_dds_config_default(&cfg);
+    cfg.domain_id = g_domain;
+    cfg.partition = g_partition;
+    cfg.process_exe = g_bridge_exe;
+    mca_dds_bridge_t *b = NULL;
+    char err[320] = "";
+    assert_int_equal(mca_dds_bridge_create(&b, &cfg, err, sizeof err), MCA_OK);
+    static char logbuf[16384];
+    logbuf[0] = '\0';
+    FILE *log = fmemopen(logbuf, sizeof logbuf - 1, "w");
+    assert_non_null(log);
+    setvbuf(log, NULL, _IONBF, 0);
+    static mca_dds_snapshot_t snap;
+    double mn = INFINITY;
+    int64_t ms = 0;
+    uint64_t k = 0;
+    mca_dds_stats_t st;
+    mca_dds_bridge_stats(b, &st);
+    const double want[] = {0.1, 0.2, 0.4, 0.8, 1.6, 2.0, 2.0};
+    const int n_kills = (int)(sizeof want / sizeof want[0]); /* more than the 5 after which it once gave up */
+    for (int n = 0; n < n_kills; n++) {
+        /* the running publisher (the first, or the n-th restart) dies */
+        for (int i = 0; i < 1500 && (st.pid == 0 || st.restarts != (uint64_t)n); ++i) {
+            mca_dds_bridge_supervise(b, log, "test: ");
+            mca_dds_bridge_stats(b, &st);
+            nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
+        }
+        assert_true(st.pid > 0);
+        assert_int_equal(st.restarts, (uint64_t)n);
+        for (int i = 0; i < 150; ++i) { /* it makes its DDS entities (as with the peer: ~0.5 s, then dies) */
+            mca_dds_bridge_supervise(b, log, "test: ");
+            nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
+        }
+        assert_int_equal(kill(st.pid, CRASH_SIGNAL), 0);
+        for (int i = 0; i < 1500 && st.deaths == (uint64_t)n; ++i) {
+            mca_dds_bridge_supervise(b, log, "test: ");
+            mca_dds_bridge_stats(b, &st);
+            nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
+        }
+        assert_int_equal(st.deaths, (uint64_t)n + 1);
+        assert_true(st.down);
+        assert_int_equal(st.deaths_in_a_row, (uint32_t)n + 1);
+        assert_true(fabs(st.backoff_s - want[n]) < 1e-9);
+        mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms); /* the loop pushes on meanwhile */
+        mca_dds_bridge_push(b, &snap);
+        k++;
+    }
+    /* the last one is restarted too and publishes */
+    const uint64_t published = st.published;
+    for (int i = 0; i < 1500 && (st.published == published || st.pid == 0); ++i) {
+        mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms);
+        mca_dds_bridge_push(b, &snap);
+        k++;
+        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_stats(b, &st);
+        nanosleep(&(struct timespec){0, 5 * 1000 * 1000}, NULL);
+    }
+    print_message("%s", logbuf);
+    assert_true(st.pid > 0 && !st.down);
+    assert_int_equal(st.restarts, (uint64_t)n_kills);
+    assert_true(st.published > published);
+    /* the first MCA_DDS_BRIDGE_LOG_ALL deaths are logged, the 6th and 7th not (the 30th would be) */
+    int died = 0, restarted = 0;
+    for (const char *p = logbuf; (p = strstr(p, ") died: ")) != NULL; p++) {
+        died++;
+    }
+    for (const char *p = logbuf; (p = strstr(p, "dds bridge restarted: pid")) != NULL; p++) {
+        restarted++;
+    }
+    assert_int_equal(died, MCA_DDS_BRIDGE_LOG_ALL);
+    assert_int_equal(restarted, MCA_DDS_BRIDGE_LOG_ALL);
+    /* after the thinned-out ones, a publisher that lives is said to be up (after MCA_DDS_BRIDGE_UP_S) */
+    for (int i = 0; i < 1500 && strstr(logbuf, "dds bridge up again") == NULL; ++i) {
+        mca_dds_bridge_supervise(b, log, "test: ");
+        nanosleep(&(struct timespec){0, 5 * 1000 * 1000}, NULL);
+    }
+    print_message("%s", strstr(logbuf, "dds bridge up again") ? strstr(logbuf, "dds bridge up again") : "");
+    assert_non_null(strstr(logbuf, "has lived 5 s after 7 deaths in a row, publishing"));
+    assert_non_null(strstr(logbuf, "restart 5 in 1.6 s (5 deaths in a row"));
+    assert_non_null(strstr(logbuf, "it is restarted for as long as mcad runs"));
+    assert_null(strstr(logbuf, "stays down"));
+    mca_dds_bridge_destroy(b, &st);
+    assert_false(st.down); /* up at the end */
     fclose(log);
 }
 
@@ -951,6 +1047,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(test_process_mode_restart),
         cmocka_unit_test(test_process_mode_stream_target_survives),
         cmocka_unit_test(test_process_mode_hung_bridge_killed),
+        cmocka_unit_test(test_process_mode_never_gives_up),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -457,9 +457,10 @@ def mode_restart(tmp):
     print("\n".join(line for line in err.splitlines() if "bridge" in line))
     check(proc.returncode == 0, f"mcad exit status {proc.returncode}")
     # (an ASan build's bridge turns the SIGSEGV into a report and an exit: the cause is printed above)
-    check("died: " in err and "restart 1 in 0.5 s" in err and "dds bridge restarted" in err,
+    check("died: " in err and "restart 1 in 0.1 s" in err and "dds bridge restarted" in err,
           "mcad logged the bridge's death and its restart")
     restarts = []  # (receipt, state, dds_bridge_restarts)
+    health = []  # the restarted bridge's: (level, message, deaths, last death, back-off)
     with main.lock:
         diag = list(main.diag)
         js_after = [m for m in main.js["left"] if stamp_ns(m.header) > t_kill]
@@ -468,11 +469,22 @@ def mode_restart(tmp):
             kv = {v.key: v.value for v in st.values}
             if st.hardware_id == NS and "dds_bridge_restarts" in kv:
                 restarts.append((stamp_ns(da.header), kv["state"], kv["dds_bridge_restarts"]))
+                if kv["dds_bridge_restarts"] == "1":
+                    health.append((st.level, st.message, kv.get("dds_bridge_deaths"), kv.get("dds_bridge_last_death"),
+                                   kv.get("dds_bridge_backoff_s")))
     print("diagnostics (stamp, state, dds_bridge_restarts):",
           [(round((t - t_kill) / 1e9, 3), s, r) for t, s, r in restarts])
     check(any(r == "0" and t < t_kill for t, _, r in restarts), "/diagnostics before the kill: dds_bridge_restarts 0")
     check(any(r == "1" and s == "running" for _, s, r in restarts),
           "/diagnostics from the restarted bridge: dds_bridge_restarts 1, running")
+    # the death is said on /diagnostics too: a WARN (the controller is fine; its monitoring was down), the
+    # count, the cause and the back-off (issue 32)
+    h = health[0] if health else None
+    lvl = None if h is None else (h[0][0] if isinstance(h[0], (bytes, bytearray)) else int(h[0]))
+    check(lvl == 1, f"/diagnostics from the restarted bridge: level WARN (1) while its death is recent: {h}")
+    check(h is not None and h[2] == "1" and h[3] and h[4] == "0.1" and "dds bridge restarted 1 times" in h[1],
+          "/diagnostics from the restarted bridge: dds_bridge_deaths 1, its cause, back-off 0.1 s, said in the "
+          f"message: {h}")
     check(len(js_after) > 100, f"{len(js_after)} JointState samples of arm left stamped after the kill")
     print(f"JointState of arm left: {len(main.js['left']) - len(js_after)} before the kill, {len(js_after)} after")
 

@@ -159,39 +159,50 @@ typedef struct mca_dds_config {
 
 /** Bridge counters. */
 typedef struct mca_dds_stats {
-    uint64_t offered;       /**< mca_dds_bridge_push() calls */
-    uint64_t queued;        /**< snapshots put into the ring (= offered: the caller decimates) */
-    uint64_t published;     /**< snapshots written to DDS */
-    uint64_t dropped;       /**< snapshots lost to ring overrun */
-    uint64_t pending;       /**< snapshots in the ring now */
-    uint64_t samples;       /**< DDS samples written (all topics) */
-    uint64_t write_errors;  /**< dds_write failures */
-    uint64_t invalid;       /**< snapshots rejected (n_arms, n_dof, ... out of range) */
-    uint64_t max_pending;   /**< most snapshots seen waiting in the ring (high-water mark) */
-    int64_t max_publish_ns; /**< longest time spent writing one snapshot's samples */
-    uint64_t wakes;         /**< pushes that woke the parked publisher (FUTEX_WAKE calls of the rt side) */
-    uint64_t parks;         /**< times the publisher parked (slept on the futex with the ring empty) */
-    uint64_t grid_sleeps;   /**< wake_period_ns: sleeps until the next publishing tick (no futex) */
-    uint64_t stale;         /**< snapshots a restarted publisher skipped (older than the newest it found) */
-    uint64_t restarts;      /**< process mode: publisher processes started after a death */
-    uint64_t deaths;        /**< process mode: publisher processes that died (not at destroy) */
-    uint64_t hung;          /**< process mode: of those, killed by the supervisor as hung */
-    int32_t pid;            /**< process mode: the running publisher's pid, 0: none (down or restarting) */
-    int down;               /**< process mode: 1 = it died too often and is not restarted any more */
+    uint64_t offered;         /**< mca_dds_bridge_push() calls */
+    uint64_t queued;          /**< snapshots put into the ring (= offered: the caller decimates) */
+    uint64_t published;       /**< snapshots written to DDS */
+    uint64_t dropped;         /**< snapshots lost to ring overrun */
+    uint64_t pending;         /**< snapshots in the ring now */
+    uint64_t samples;         /**< DDS samples written (all topics) */
+    uint64_t write_errors;    /**< dds_write failures */
+    uint64_t invalid;         /**< snapshots rejected (n_arms, n_dof, ... out of range) */
+    uint64_t max_pending;     /**< most snapshots seen waiting in the ring (high-water mark) */
+    int64_t max_publish_ns;   /**< longest time spent writing one snapshot's samples */
+    uint64_t wakes;           /**< pushes that woke the parked publisher (FUTEX_WAKE calls of the rt side) */
+    uint64_t parks;           /**< times the publisher parked (slept on the futex with the ring empty) */
+    uint64_t grid_sleeps;     /**< wake_period_ns: sleeps until the next publishing tick (no futex) */
+    uint64_t stale;           /**< snapshots a restarted publisher skipped (older than the newest it found) */
+    uint64_t restarts;        /**< process mode: publisher processes started after a death */
+    uint64_t deaths;          /**< process mode: publisher processes that died (not at destroy) */
+    uint64_t hung;            /**< process mode: of those, killed by the supervisor as hung */
+    int32_t pid;              /**< process mode: the running publisher's pid, 0: none (down or restarting) */
+    int down;                 /**< process mode: 1 = no publisher now: it died and its restart is pending (the
+                               *   supervisor keeps restarting it for as long as the owner runs) */
+    uint32_t deaths_in_a_row; /**< process mode: quick deaths in a row (each within
+                               *   MCA_DDS_BRIDGE_STABLE_S of its start), 0 after a stable run */
+    double backoff_s;         /**< process mode: the last back-off before a restart [s], 0: none yet */
     int sched_refused; /**< 1: sched_priority was not permitted; the publisher runs the caller's policy */
 } mca_dds_stats_t;
 
-/** Process mode: the first restart comes this long after a death [s], each further one twice as long after
- *  the last, at most MCA_DDS_BRIDGE_BACKOFF_MAX_S. */
-#define MCA_DDS_BRIDGE_BACKOFF_S 0.5
-#define MCA_DDS_BRIDGE_BACKOFF_MAX_S 8.0
+/** Process mode: the first restart comes this long after a death [s], each further one (while each dies
+ *  within MCA_DDS_BRIDGE_STABLE_S of its start) twice as long after the last, at most
+ *  MCA_DDS_BRIDGE_BACKOFF_MAX_S, and never a last one: the supervisor keeps restarting it for as long as the
+ *  owner runs (issue 32: a peer that crashes every libddsc 0.10.2 participant, docs/dds.md, would otherwise
+ *  take monitoring down for the rest of the run). Its log lines are thinned out after
+ *  MCA_DDS_BRIDGE_LOG_ALL deaths in a row. */
+#define MCA_DDS_BRIDGE_BACKOFF_S 0.1
+#define MCA_DDS_BRIDGE_BACKOFF_MAX_S 2.0
 /** A publisher that lived this long [s] was stable: the next death starts the back-off afresh. */
 #define MCA_DDS_BRIDGE_STABLE_S 30.0
 /** A publisher process that publishes nothing this long [s] while snapshots wait is hung: killed (SIGKILL),
  *  then restarted as after a death. */
 #define MCA_DDS_BRIDGE_HUNG_S 5.0
-/** Deaths in a row (each within MCA_DDS_BRIDGE_STABLE_S of its start) after which it is not restarted. */
-#define MCA_DDS_BRIDGE_MAX_RESTARTS 5
+/** Deaths in a row that are each logged with their restart; after that every MCA_DDS_BRIDGE_LOG_EVERY-th. */
+#define MCA_DDS_BRIDGE_LOG_ALL 5
+#define MCA_DDS_BRIDGE_LOG_EVERY 30
+/** In a series whose restarts are no longer all logged, a publisher alive this long [s] is said to be up. */
+#define MCA_DDS_BRIDGE_UP_S 5.0
 
 typedef struct mca_dds_bridge mca_dds_bridge_t;
 
@@ -231,8 +242,9 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
  * MCA_DDS_BRIDGE_HUNG_S while snapshots wait: logged and killed), log a death with its cause on log
  * (`<3>PREFIXdds bridge (pid N) died: signal 11 (SIGSEGV); restart 1 in 0.5 s ...`), restart it when its
  * back-off has passed (the restarted one publishes the newest snapshot and the current status at once, and
- * the restart count on /diagnostics), log that it is up again, and give up after MCA_DDS_BRIDGE_MAX_RESTARTS
- * quick deaths in a row (logged; the loop is not affected: pushes go on into the ring, nobody reads them).
+ * the restart count, deaths and back-off on /diagnostics), log that it is up again; it never gives up (capped
+ * back-off, MCA_DDS_BRIDGE_BACKOFF_*; logging thinned out after MCA_DDS_BRIDGE_LOG_ALL deaths in a row; the
+ * loop is not affected: pushes go on into the ring, nobody reads them while it is down).
  * A mailbox the dead publisher was writing is closed as a target received long ago (task.stream brakes).
  * Call it every few ms from ONE non-rt thread, the one that created the bridge (the publisher process
  * ends with that thread: PR_SET_PDEATHSIG). In-process mode: does nothing. Context: non-rt.
