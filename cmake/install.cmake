@@ -13,8 +13,8 @@
 #   lib/systemd/system/mcad@.service       the unit, with this prefix's paths
 # With the prefix /usr (the Debian package, cmake/package.cmake) etc is /etc and the unit goes to
 # /lib/systemd/system: absolute, so install with DESTDIR (cpack does) rather than --prefix.
-# A cell's relative paths find share/mca through the search path (docs/daemon.md): the daemon is built
-# with this prefix's etc/mca and share/mca in it.
+# A cell's relative paths find share/mca through the search path (docs/daemon.md): the running program's
+# own prefix's etc/mca and share/mca first (so any --prefix works), then this prefix's, built in.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -52,7 +52,8 @@ install(FILES "${CMAKE_BINARY_DIR}/mcaConfig.cmake" "${CMAKE_BINARY_DIR}/mcaConf
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/mca)
 
 install(TARGETS mcad RUNTIME DESTINATION ${CMAKE_INSTALL_SBINDIR})
-# mcad's DDS publisher process (issue 16): found by mcad in libexec/mca (MCA_LIBEXECDIR, daemon/CMakeLists.txt)
+# mcad's DDS publisher process (issue 16): found by mcad in its own prefix's libexec/mca (then MCA_LIBEXECDIR,
+# daemon/CMakeLists.txt)
 install(TARGETS mca-dds-bridge RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/mca)
 set(MCA_INSTALLED_TOOLS mca-sim mca-monitor mca-record mca-geom mca-armsim mca-drivesim mca-stopcheck
                         mca-simarm-trace mca-dds-synth)

@@ -5,8 +5,8 @@
 # computes Depends as Debian's own tools do.
 #
 # The package must come from its own configure with the prefix /usr, not from cpack of a /usr/local build with
-# CPACK_PACKAGING_INSTALL_PREFIX=/usr: mcad has its prefix compiled in (the search path etc/mca:share/mca and
-# libexec/mca, where it finds mca-dds-bridge, daemon/CMakeLists.txt) and the unit is written with it.
+# CPACK_PACKAGING_INSTALL_PREFIX=/usr: the unit is written with the configured prefix, and etc is /etc only
+# for the prefix /usr (mcad finds its files and mca-dds-bridge relative to itself, docs/install.md).
 # So `cpack`/`make package` exist only in a build with that prefix.
 if(NOT CMAKE_INSTALL_PREFIX STREQUAL "/usr")
   return()

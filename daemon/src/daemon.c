@@ -22,6 +22,7 @@
 #include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_printf */
+#include "mca/prefix.h" /* mca_exe_prefix */
 #include "mca/scenario.h"
 #include "mca/tick_csv.h" /* mca_tick_csv_header, mca_tick_csv_row */
 #ifdef MCA_TEST_HOOKS
@@ -437,7 +438,8 @@ static void pin_non_rt(mca_daemon_t *d) {
 }
 
 /* The DDS publisher program: the option's, else next to this executable (the build tree: build/daemon), else
- * the install's libexec/mca. Start-up. */
+ * this executable's prefix's libexec/mca (an install to any prefix), else the configured install's
+ * libexec/mca. Start-up. */
 static int find_bridge_exe(const mca_daemon_opts_t *opts, char *out, size_t len) {
     if (opts->dds_bridge_exe != NULL) {
         snprintf(out, len, "%s", opts->dds_bridge_exe);
@@ -449,6 +451,13 @@ static int find_bridge_exe(const mca_daemon_opts_t *opts, char *out, size_t len)
         self[n] = 0;
         snprintf(out, len, "%s/mca-dds-bridge", dirname(self));
         if (access(out, X_OK) == 0) {
+            return MCA_OK;
+        }
+    }
+    char prefix[PATH_MAX];
+    if (mca_exe_prefix(prefix, sizeof prefix) == MCA_OK) {
+        const int w = snprintf(out, len, "%s/libexec/mca/mca-dds-bridge", prefix);
+        if (w > 0 && (size_t)w < len && access(out, X_OK) == 0) {
             return MCA_OK;
         }
     }
@@ -550,7 +559,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         if (rc == MCA_OK && find_bridge_exe(opts, exe, sizeof exe) != MCA_OK) {
             mca_errbuf_printf(err, errlen,
                               "DDS: the publisher program mca-dds-bridge is neither next to this program nor "
-                              "in %s (install it, or --no-dds)",
+                              "in its prefix's libexec/mca nor in %s (install it, or --no-dds)",
                               MCA_LIBEXECDIR);
             rc = MCA_ENOENT;
         }

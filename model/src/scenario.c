@@ -3,16 +3,19 @@
 #include "mca/scenario.h"
 
 #include <cyaml/cyaml.h>
+#include <limits.h> /* PATH_MAX */
 #include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h> /* access */
+#include <threads.h> /* call_once */
+#include <unistd.h>  /* access */
 
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_printf, mca_errbuf_at */
+#include "mca/prefix.h" /* mca_exe_prefix, mca_prefix_sysconfdir */
 #include "mca/scheme.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
@@ -426,9 +429,48 @@ static int place_apply(const mca_check_ctx_t *c, int arm, const double *xyz, con
 #define CONFIG_SEARCH_PATH "/etc/mca:/usr/share/mca"
 #endif
 
+/* The search path without MCA_PATH: the running program's own prefix first (an install to any prefix finds
+ * its files), then the build's, each folder once. Made once, at the first lookup (start-up). */
+static char search_path[3 * PATH_MAX];
+static once_flag search_path_once = ONCE_FLAG_INIT;
+
+static void search_path_add(const char *dir, size_t n) {
+    const size_t have = strlen(search_path);
+    for (const char *p = search_path; *p;) {
+        const size_t m = strcspn(p, ":");
+        if (m == n && strncmp(p, dir, n) == 0) {
+            return;
+        }
+        p += m + (p[m] == ':');
+    }
+    if (n > 0 && have + n + 2 <= sizeof search_path) {
+        snprintf(search_path + have, sizeof search_path - have, "%s%.*s", have ? ":" : "", (int)n, dir);
+    }
+}
+
+static void search_path_init(void) {
+    char prefix[PATH_MAX], etc[PATH_MAX], dir[PATH_MAX + 16];
+    if (mca_exe_prefix(prefix, sizeof prefix) == MCA_OK &&
+        mca_prefix_sysconfdir(prefix, etc, sizeof etc) == MCA_OK) {
+        snprintf(dir, sizeof dir, "%s/mca", etc);
+        search_path_add(dir, strlen(dir));
+        snprintf(dir, sizeof dir, "%s/share/mca", prefix);
+        search_path_add(dir, strlen(dir));
+    }
+    for (const char *p = CONFIG_SEARCH_PATH; *p;) {
+        const size_t n = strcspn(p, ":");
+        search_path_add(p, n);
+        p += n + (p[n] == ':');
+    }
+}
+
 const char *mca_config_search_path(void) {
     const char *env = getenv("MCA_PATH");
-    return env && env[0] ? env : CONFIG_SEARCH_PATH;
+    if (env && env[0]) {
+        return env;
+    }
+    call_once(&search_path_once, search_path_init);
+    return search_path;
 }
 
 static int readable(const char *p) {

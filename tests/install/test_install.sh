@@ -4,7 +4,8 @@
 # the files where FHS puts them, the unit with the prefix's paths, the installed mcad checking an installed
 # cell that reaches the shared scenarios and robots through the search path, and an outside CMake project
 # that finds the package (find_package(mca)), builds against the installed headers and static libraries
-# and runs.
+# and runs. The install is relocatable: the installed mcad, without MCA_PATH, finds its files and its DDS
+# publisher relative to its own executable and runs a cell with DDS on.
 # usage: test_install.sh BUILD_DIR SOURCE_DIR
 set -eu
 B=$(cd "$1" && pwd)
@@ -54,6 +55,29 @@ if MCA_PATH="$P/etc/mca:$P/share/mca" "$P/sbin/mcad" --check "$P/etc/mca/cells/c
 else
     cat "$T/check.log"
     echo "FAIL installed mcad --check installed cell"
+    fail=1
+fi
+# relocatable: without MCA_PATH the installed mcad finds the cell's scenario and robots through its own prefix
+# (P/sbin/mcad -> P/etc/mca, P/share/mca; not the build's configured prefix) ...
+if env -u MCA_PATH "$P/sbin/mcad" --check "$P/etc/mca/cells/cross_circles_sim.yaml" >"$T/reloc.log" 2>&1 &&
+    grep -q "$P/share/mca/scenarios/" "$T/reloc.log"; then
+    echo "ok   installed mcad --check without MCA_PATH: scenario from its own prefix's share/mca"
+else
+    cat "$T/reloc.log"
+    echo "FAIL installed mcad --check without MCA_PATH (search path relative to the executable)"
+    fail=1
+fi
+# ... and runs the cell with DDS on, its publisher started from P/libexec/mca (not next to mcad, not the
+# configured prefix's libexec/mca)
+if env -u MCA_PATH "$P/sbin/mcad" --no-rt --stop-after 1 "$P/etc/mca/cells/cross_circles_sim.yaml" \
+    >"$T/run.log" 2>&1 &&
+    grep -q "dds bridge: pid [0-9]* ($P/libexec/mca/mca-dds-bridge)" "$T/run.log" &&
+    grep -q "summary: state stopped" "$T/run.log" && grep -q "summary: faults: none" "$T/run.log" &&
+    ! grep -q "^<[0-3]>" "$T/run.log"; then
+    echo "ok   installed mcad runs an installed cell from its prefix with DDS on (bridge from P/libexec/mca), exit 0"
+else
+    tail -30 "$T/run.log"
+    echo "FAIL installed mcad run from its prefix with DDS on"
     fail=1
 fi
 # an outside project

@@ -112,7 +112,8 @@ typedef struct mca_daemon_opts {
     void (*config_hook)(mca_controller_config_t *cfg, void *arg);
     void *config_hook_arg;
     /** The DDS publisher program (mca-dds-bridge, run as a process of its own: issue 16). NULL: the one next
-     *  to the running executable, else MCA_LIBEXECDIR's (the install's libexec/mca). */
+     *  to the running executable, else in its prefix's libexec/mca (PREFIX/sbin/mcad ->
+     *  PREFIX/libexec/mca, mca/prefix.h), else MCA_LIBEXECDIR's (the configured install's libexec/mca). */
     const char *dds_bridge_exe;
 } mca_daemon_opts_t;
 

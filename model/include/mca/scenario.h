@@ -232,8 +232,10 @@ int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, mca_scenario_arm_t
  */
 int mca_config_find(const mca_check_ctx_t *c, const char *field, const char *rel, char *out, size_t outlen);
 
-/** The data search path after a file's own folder: $MCA_PATH (':'-separated), or the build's (this install's
- *  etc/mca and share/mca, then /etc/mca and /usr/share/mca). */
+/** The data search path after a file's own folder: $MCA_PATH (':'-separated), else the running program's
+ *  prefix's etc/mca and share/mca (mca/prefix.h: PREFIX/sbin/mcad -> PREFIX/etc/mca:PREFIX/share/mca,
+ * /etc/mca for the prefix /usr), then the build's (the configured prefix's etc/mca and share/mca, /etc/mca,
+ *  /usr/share/mca), each folder once. Start-up only (the first call reads /proc/self/exe). */
 const char *mca_config_search_path(void);
 
 /**
