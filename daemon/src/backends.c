@@ -17,7 +17,8 @@
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_at */
 #include "mca/sim_backend.h"
-#include "mca/yaml_load.h" /* MCA_YAML_OPT */
+#include "mca/yaml_load.h"  /* MCA_YAML_OPT */
+#include "mca/yaml_marks.h" /* mca_yaml_marks_load, mca_yaml_marks_line_of */
 
 /* The line of a printf-formatted field of the cell (or of its nearest enclosing node). */
 #define LINE(...) mca_yaml_marks_line_of(c->marks, __VA_ARGS__)
@@ -359,7 +360,28 @@ const mca_backend_def_t *mca_backend_get(mca_cell_backend_t id) {
             return &backends[i];
         }
     }
-    return &backends[0];
+    return NULL;
+}
+
+int mca_backend_check_ids(const mca_cell_t *cell, char *err, size_t errlen) {
+    for (int a = 0; a < cell->scn.n_arms && a < MCA_MAX_ARMS; a++) {
+        if (mca_backend_get(cell->arm[a].backend)) {
+            continue;
+        }
+        /* the id was set after the file was read (a cell read from a file has a known name): the line is
+         * that of the arm's backend key in its file, when the file is still there */
+        mca_yaml_marks_t marks = {0};
+        const int line = mca_yaml_marks_load(cell->source, &marks, NULL, 0) == MCA_OK
+                             ? mca_yaml_marks_line_of(&marks, "arms[%d].backend", a)
+                             : 0;
+        mca_yaml_marks_free(&marks);
+        char known[128];
+        mca_backend_names(known, sizeof known);
+        mca_errbuf_at(err, errlen, cell->source, line, "arms[%d].backend: unknown backend id %d (known: %s)",
+                      a, (int)cell->arm[a].backend, known);
+        return MCA_ECONFIG;
+    }
+    return MCA_OK;
 }
 
 const mca_backend_def_t *mca_backend_at(size_t i) {
@@ -379,7 +401,8 @@ void mca_backend_names(char *buf, size_t len) {
 }
 
 const char *mca_cell_backend_name(mca_cell_backend_t b) {
-    return mca_backend_get(b)->name;
+    const mca_backend_def_t *be = mca_backend_get(b);
+    return be ? be->name : "?";
 }
 
 void mca_cell_backend_describe(const mca_cell_arm_t *ca, int n_joints, char *buf, size_t len) {

@@ -473,6 +473,11 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (err && errlen) {
         err[0] = '\0'; /* the steps below keep the first reason they find: none yet */
     }
+    /* every mca_backend_get below may then take its backend as found */
+    const int ids = mca_backend_check_ids(cell, err, errlen);
+    if (ids != MCA_OK) {
+        return ids;
+    }
     /* the rings inside have 64-byte aligned members (producer/consumer cache lines) */
     mca_daemon_t *d = aligned_alloc(_Alignof(mca_daemon_t), sizeof *d);
     if (!d) {

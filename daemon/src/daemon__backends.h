@@ -54,8 +54,13 @@ typedef struct mca_backend_def {
 /* The backend named `name`, or NULL. */
 const mca_backend_def_t *mca_backend_find(const char *name);
 
-/* The backend of id `id` (the sim backend for an id no backend has). */
+/* The backend of id `id`, or NULL when no backend has it. */
 const mca_backend_def_t *mca_backend_get(mca_cell_backend_t id);
+
+/* Every arm's backend id is one of the table's (a cell changed in code after its file was read may hold any
+ * value): MCA_OK, or MCA_ECONFIG with "FILE:LINE: arms[N].backend: unknown backend id ID (known: ...)" in
+ * err, LINE that of the arm's backend key in cell->source (0 when the file cannot be read). Start-up. */
+int mca_backend_check_ids(const mca_cell_t *cell, char *err, size_t errlen);
 
 /* The known names, ", "-separated ("sim, socketcan, canopen"), for messages. */
 void mca_backend_names(char *buf, size_t len);

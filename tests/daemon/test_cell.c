@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "mca/cell.h"
+#include "mca/daemon.h" /* mca_daemon_open */
 #include "mca/err.h"
 
 #ifndef MCA_SOURCE_DIR
@@ -244,6 +245,28 @@ static void test_unknown_backend(void **state) {
     const char *p = write_variant("backend", "backend: socketcan", "backend: ethercat");
     expect_error(p, MCA_ECONFIG, line_of(p, "ethercat"), "arms[1].backend", "unknown backend 'ethercat'",
                  NULL);
+}
+
+/* A cell whose backend id was changed in code after its file was read: the daemon refuses to open it with
+ * the file, the line of that arm's backend key and the field (the registry once took it for the sim). */
+static void test_unknown_backend_id(void **state) {
+    (void)state;
+    const char *p = write_variant("backend_id", NULL, NULL);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    cell.arm[1].backend = (mca_cell_backend_t)7;
+    assert_string_equal(mca_cell_backend_name(cell.arm[1].backend), "?");
+    const mca_daemon_opts_t opts = {.no_rt = 1};
+    mca_daemon_t *d = NULL;
+    const int rc = mca_daemon_open(&d, &cell, &opts, err, sizeof err);
+    print_message("  %s\n", err);
+    assert_int_equal(rc, MCA_ECONFIG);
+    assert_null(d);
+    char prefix[600];
+    snprintf(prefix, sizeof prefix,
+             "%s:%d: arms[1].backend: unknown backend id 7 (known: sim, socketcan, canopen)", p,
+             line_of(p, "backend: socketcan"));
+    assert_string_equal(err, prefix);
 }
 
 static void test_dof_mismatch(void **state) {
@@ -859,20 +882,35 @@ int main(void) {
         return 1;
     }
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_good_cell),          cmocka_unit_test(test_missing_file),
-        cmocka_unit_test(test_yaml_syntax),        cmocka_unit_test(test_wrong_type),
-        cmocka_unit_test(test_wrong_type_in_arm),  cmocka_unit_test(test_unknown_key),
-        cmocka_unit_test(test_unknown_top_key),    cmocka_unit_test(test_missing_required),
-        cmocka_unit_test(test_d1_ge_d2),           cmocka_unit_test(test_missing_urdf),
-        cmocka_unit_test(test_unknown_backend),    cmocka_unit_test(test_dof_mismatch),
-        cmocka_unit_test(test_q0_outside_limits),  cmocka_unit_test(test_negative_period),
-        cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
-        cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
-        cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_dds_priority),       cmocka_unit_test(test_ros2_keys),
-        cmocka_unit_test(test_search_path),        cmocka_unit_test(test_duplicate_arm),
-        cmocka_unit_test(test_shipped_cells),      cmocka_unit_test(test_mca_ts_keys),
-        cmocka_unit_test(test_cell_error_lines),   cmocka_unit_test(test_arm_error_lines),
+        cmocka_unit_test(test_good_cell),
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_yaml_syntax),
+        cmocka_unit_test(test_wrong_type),
+        cmocka_unit_test(test_wrong_type_in_arm),
+        cmocka_unit_test(test_unknown_key),
+        cmocka_unit_test(test_unknown_top_key),
+        cmocka_unit_test(test_missing_required),
+        cmocka_unit_test(test_d1_ge_d2),
+        cmocka_unit_test(test_missing_urdf),
+        cmocka_unit_test(test_unknown_backend),
+        cmocka_unit_test(test_unknown_backend_id),
+        cmocka_unit_test(test_dof_mismatch),
+        cmocka_unit_test(test_q0_outside_limits),
+        cmocka_unit_test(test_negative_period),
+        cmocka_unit_test(test_debug_kill_hook),
+        cmocka_unit_test(test_bad_priority),
+        cmocka_unit_test(test_scenario_missing),
+        cmocka_unit_test(test_socketcan_needs_interface),
+        cmocka_unit_test(test_dds_config_missing),
+        cmocka_unit_test(test_unknown_scheme),
+        cmocka_unit_test(test_dds_priority),
+        cmocka_unit_test(test_ros2_keys),
+        cmocka_unit_test(test_search_path),
+        cmocka_unit_test(test_duplicate_arm),
+        cmocka_unit_test(test_shipped_cells),
+        cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_cell_error_lines),
+        cmocka_unit_test(test_arm_error_lines),
         cmocka_unit_test(test_scenario_arm_lines),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);

@@ -163,7 +163,8 @@ int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *
  */
 int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_scheme_kind_t scheme);
 
-/** The backend's name as in cell files: "sim", "socketcan", "canopen" (the backend registry's). */
+/** The backend's name as in cell files: "sim", "socketcan", "canopen" (the backend registry's); "?" for an
+ *  id no backend has. */
 const char *mca_cell_backend_name(mca_cell_backend_t b);
 
 /** Where an arm's backend reaches it, for a summary line (" vcan0 id_base 0x140"; "" for the sim backend);

@@ -207,6 +207,8 @@ typedef struct mca_daemon mca_daemon_t; /**< opaque */
  * Open everything a cell needs (start-up): controller, arms (waits up to 2 s for each to answer),
  * DDS bridge, log ring. State READY on success.
  * @retval MCA_OK, MCA_ENOMEM, or a backend/controller/DDS error (err says which arm/part)
+ * @retval MCA_ECONFIG  an arm's backend id is none the registry has (set in code after the file was read):
+ *         "FILE:LINE: arms[N].backend: unknown backend id ID (known: ...)", nothing opened
  */
 int mca_daemon_open(mca_daemon_t **d, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen);
