@@ -56,6 +56,35 @@ static int read_id_base(const mca_check_ctx_t *c, int a, const mca_backend_keys_
     return MCA_OK;
 }
 
+static const mca_backend_def_t *backend_of(const mca_cell_arm_t *ca);
+
+/* Arm a's bus against every earlier arm's (arms 0..a-1 are read), by what the two backends say of their bus,
+ * never by which of them comes first: a bus with a canopen arm on it is that arm's alone (one SYNC producer
+ * and NMT master), whichever backend the other arm has; two id-block arms (socketcan) on one bus need two
+ * id blocks (each would take the other's frames). The error is always arm a's. */
+static int bus_check(const mca_check_ctx_t *c, const mca_cell_t *cell, int a) {
+    const mca_cell_arm_t *ca = &cell->arm[a];
+    const mca_backend_def_t *ba = backend_of(ca);
+    for (int b = 0; b < a && ba && ba->bus != MCA_BUS_NONE; b++) {
+        const mca_cell_arm_t *cb = &cell->arm[b];
+        const mca_backend_def_t *bb = backend_of(cb);
+        if (!bb || bb->bus == MCA_BUS_NONE || strcmp(cb->interface, ca->interface) != 0) {
+            continue;
+        }
+        if (ba->bus == MCA_BUS_OWNED || bb->bus == MCA_BUS_OWNED) {
+            FAIL(MCA_ECONFIG, LINE("arms[%d].interface", a),
+                 "arms[%d].interface: %s is already arms[%d]'s (one bus per canopen arm)", a, ca->interface,
+                 b);
+        }
+        if (cb->id_base == ca->id_base) {
+            FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", a),
+                 "arms[%d].id_base: 0x%x on %s is already arms[%d]'s (one id block per arm and bus)", a,
+                 ca->id_base, ca->interface, b);
+        }
+    }
+    return MCA_OK;
+}
+
 /* ---------------------------------------------------------------- sim */
 
 /* The sim: section of a cell arm (NULL: key not in the file). */
@@ -165,17 +194,7 @@ static int socketcan_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, con
     if (rc != MCA_OK) {
         return rc;
     }
-    /* two arms on one bus with one id block would each take the other's frames */
-    for (int b = 0; b < a; b++) {
-        const mca_cell_arm_t *cb = &cell->arm[b];
-        if (cb->backend == MCA_CELL_BACKEND_SOCKETCAN && strcmp(cb->interface, ca->interface) == 0 &&
-            cb->id_base == ca->id_base) {
-            FAIL(MCA_ECONFIG, LINE("arms[%d].id_base", a),
-                 "arms[%d].id_base: 0x%x on %s is already arms[%d]'s (one id block per arm and bus)", a,
-                 ca->id_base, ca->interface, b);
-        }
-    }
-    return MCA_OK;
+    return bus_check(c, cell, a);
 }
 
 static int socketcan_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen) {
@@ -276,15 +295,7 @@ static int canopen_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const
     if (rc != MCA_OK) {
         return rc;
     }
-    /* a CANopen bus has one SYNC producer and NMT master: one canopen arm per bus */
-    for (int b = 0; b < a; b++) {
-        if (strcmp(cell->arm[b].interface, ca->interface) == 0) {
-            FAIL(MCA_ECONFIG, LINE("arms[%d].interface", a),
-                 "arms[%d].interface: %s is already arms[%d]'s (one bus per canopen arm)", a, ca->interface,
-                 b);
-        }
-    }
-    return MCA_OK;
+    return bus_check(c, cell, a);
 }
 
 static int canopen_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen) {
@@ -325,6 +336,7 @@ static const mca_backend_def_t backends[] = {
     {
         .name = "socketcan",
         .id = MCA_CELL_BACKEND_SOCKETCAN,
+        .bus = MCA_BUS_ID_BLOCKS,
         .read = socketcan_read,
         .open = socketcan_open,
         .reported_joints = socketcan_reported_joints,
@@ -333,6 +345,7 @@ static const mca_backend_def_t backends[] = {
     {
         .name = "canopen",
         .id = MCA_CELL_BACKEND_CANOPEN,
+        .bus = MCA_BUS_OWNED,
         .section = "canopen",
         .section_fields = co_fields,
         .section_size = sizeof(co_keys_t),
@@ -382,6 +395,10 @@ int mca_backend_check_ids(const mca_cell_t *cell, char *err, size_t errlen) {
         return MCA_ECONFIG;
     }
     return MCA_OK;
+}
+
+static const mca_backend_def_t *backend_of(const mca_cell_arm_t *ca) {
+    return mca_backend_get(ca->backend);
 }
 
 const mca_backend_def_t *mca_backend_at(size_t i) {

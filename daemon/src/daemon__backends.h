@@ -34,9 +34,17 @@ typedef struct mca_backend_open_args {
     int virtual_time;                      /* mca_daemon_opts_t.virtual_time */
 } mca_backend_open_args_t;
 
+/* What a backend does with its arm's interface (the cell's bus clash check, whatever the arms' order). */
+typedef enum mca_backend_bus {
+    MCA_BUS_NONE = 0,  /* opens no bus (the sim: an interface key is only kept) */
+    MCA_BUS_ID_BLOCKS, /* shares its bus, one CAN id block per arm (socketcan) */
+    MCA_BUS_OWNED,     /* its bus is its alone, with no arm of any backend beside it (canopen) */
+} mca_backend_bus_t;
+
 typedef struct mca_backend_def {
     const char *name;      /* as in cell files */
     mca_cell_backend_t id; /* as in mca_cell_arm_t.backend */
+    mca_backend_bus_t bus; /* its arm's bus: which other arms may share it */
     const char *section;   /* its own mapping in a cell arm ("sim", "canopen"; NULL: none): only with it */
     const cyaml_schema_field_t *section_fields; /* the section's schema: the cell's arm schema takes it */
     size_t section_size;                        /* what libcyaml allocates for it */

@@ -832,6 +832,50 @@ static void test_scenario_arm_lines(void **state) {
 }
 
 /* Every shipped cell file loads (they reference the scheme's scenario files and the URDFs). */
+/* The bus clash does not depend on the arms' order: a canopen arm and a socketcan arm on one can0 are refused
+ * both ways round, at the second arm's interface; a sim arm that names can0 (it opens no bus) is accepted
+ * beside a canopen arm both ways round. */
+static void test_bus_clash_order(void **state) {
+    (void)state;
+    static const char *const on_can0[] = {
+        "    backend: socketcan\n    interface: can0\n    id_base: 0x140\n",
+        "    backend: canopen\n    interface: can0\n",
+        "    backend: sim\n    interface: can0\n",
+    };
+    static const char *const names[] = {"socketcan", "canopen", "sim"};
+    static const struct {
+        int first, second, refused;
+    } cases[] = {{0, 1, 1}, {1, 0, 1}, {2, 1, 0}, {1, 2, 0}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char text[4096];
+        int n = snprintf(text, sizeof text,
+                         "name: bus-order\ntask:\n  duration: 3.5\nd1: 0.04\nd2: 0.15\narms:\n");
+        for (int k = 0; k < 2; k++) {
+            n += snprintf(
+                text + n, sizeof text - (size_t)n,
+                "  - name: a%d\n%s    urdf: %s/config/robots/pa10plus.urdf\n    base_xyz: [0.%d, 0.6, 0.1]\n"
+                "    q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]\n",
+                k, on_can0[k ? cases[i].second : cases[i].first], MCA_SOURCE_DIR, k);
+        }
+        snprintf(text + n, sizeof text - (size_t)n, "dds:\n  enabled: false\n");
+        char name[32];
+        snprintf(name, sizeof name, "bus_order_%zu", i);
+        const char *p = write_text(name, text);
+        print_message("%s then %s on can0:\n", names[cases[i].first], names[cases[i].second]);
+        if (cases[i].refused) {
+            /* the second arm's interface: the line after its backend's */
+            expect_error(p, MCA_ECONFIG, line_of(p, "- name: a1") + 2, "arms[1].interface",
+                         "can0 is already arms[0]'s (one bus per canopen arm)", NULL);
+        } else {
+            char err[1024] = "";
+            const int rc = mca_cell_load(p, &cell, err, sizeof err);
+            if (rc != MCA_OK) {
+                fail_msg("refused: %s", err);
+            }
+        }
+    }
+}
+
 static void test_shipped_cells(void **state) {
     (void)state;
     glob_t g;
@@ -882,35 +926,21 @@ int main(void) {
         return 1;
     }
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_good_cell),
-        cmocka_unit_test(test_missing_file),
-        cmocka_unit_test(test_yaml_syntax),
-        cmocka_unit_test(test_wrong_type),
-        cmocka_unit_test(test_wrong_type_in_arm),
-        cmocka_unit_test(test_unknown_key),
-        cmocka_unit_test(test_unknown_top_key),
-        cmocka_unit_test(test_missing_required),
-        cmocka_unit_test(test_d1_ge_d2),
-        cmocka_unit_test(test_missing_urdf),
-        cmocka_unit_test(test_unknown_backend),
-        cmocka_unit_test(test_unknown_backend_id),
-        cmocka_unit_test(test_dof_mismatch),
-        cmocka_unit_test(test_q0_outside_limits),
-        cmocka_unit_test(test_negative_period),
-        cmocka_unit_test(test_debug_kill_hook),
-        cmocka_unit_test(test_bad_priority),
-        cmocka_unit_test(test_scenario_missing),
-        cmocka_unit_test(test_socketcan_needs_interface),
-        cmocka_unit_test(test_dds_config_missing),
-        cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_dds_priority),
-        cmocka_unit_test(test_ros2_keys),
-        cmocka_unit_test(test_search_path),
-        cmocka_unit_test(test_duplicate_arm),
-        cmocka_unit_test(test_shipped_cells),
-        cmocka_unit_test(test_mca_ts_keys),
-        cmocka_unit_test(test_cell_error_lines),
-        cmocka_unit_test(test_arm_error_lines),
+        cmocka_unit_test(test_good_cell),          cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_yaml_syntax),        cmocka_unit_test(test_wrong_type),
+        cmocka_unit_test(test_wrong_type_in_arm),  cmocka_unit_test(test_unknown_key),
+        cmocka_unit_test(test_unknown_top_key),    cmocka_unit_test(test_missing_required),
+        cmocka_unit_test(test_d1_ge_d2),           cmocka_unit_test(test_missing_urdf),
+        cmocka_unit_test(test_unknown_backend),    cmocka_unit_test(test_unknown_backend_id),
+        cmocka_unit_test(test_bus_clash_order),    cmocka_unit_test(test_dof_mismatch),
+        cmocka_unit_test(test_q0_outside_limits),  cmocka_unit_test(test_negative_period),
+        cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
+        cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
+        cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
+        cmocka_unit_test(test_dds_priority),       cmocka_unit_test(test_ros2_keys),
+        cmocka_unit_test(test_search_path),        cmocka_unit_test(test_duplicate_arm),
+        cmocka_unit_test(test_shipped_cells),      cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_cell_error_lines),   cmocka_unit_test(test_arm_error_lines),
         cmocka_unit_test(test_scenario_arm_lines),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);
