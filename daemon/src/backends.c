@@ -199,7 +199,7 @@ static int socketcan_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, con
 
 static int socketcan_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen) {
     const mca_cell_arm_t *ca = &o->cell->arm[o->arm];
-    /* the link refuses feedback outside the same bounds the daemon checks (issue 16: at the decoder) */
+    /* the link refuses feedback outside the same bounds the daemon checks (at the decoder) */
     mca_can_options_t co;
     mca_can_options_default(&co);
     for (int j = 0; j < o->chain->dof; j++) {
@@ -300,7 +300,7 @@ static int canopen_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const
 
 static int canopen_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen) {
     const mca_cell_arm_t *ca = &o->cell->arm[o->arm];
-    /* issue 15: joint j = CiA 402 drive ca->co_first_node + j on ca->interface (docs/canopen.md) */
+    /* joint j = CiA 402 drive ca->co_first_node + j on ca->interface (docs/canopen.md) */
     mca_co_master_config_t cc;
     mca_co_master_config_default(&cc, o->chain->dof, (uint8_t)ca->co_first_node);
     snprintf(cc.iface, sizeof cc.iface, "%s", ca->interface);

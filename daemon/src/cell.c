@@ -244,7 +244,7 @@ static const cyaml_schema_value_t cell_schema = {
         goto out;                                                                                            \
     } while (0)
 
-/* Range check of one loaded value (ranges: mca_range_t, issue 16), the one check the scenario reader uses
+/* Range check of one loaded value (ranges: mca_range_t), the one check the scenario reader uses
  * too; the field is printf-formatted and is also the node whose line is reported:
  * "FILE:LINE: FIELD: must be in [LO, HI] UNIT (got V)". */
 #define CHECK(range, v, ...)                                                                                 \
@@ -332,7 +332,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     snprintf(cell->source, sizeof cell->source, "%s", path);
 #ifndef MCA_TEST_HOOKS
     {
-        /* issue 16: production holds no test hooks. The keys stay in the schema so that the error names
+        /* production holds no test hooks. The keys stay in the schema so that the error names
          * the line (not a generic unknown key), before anything else is checked. */
         const char *hook = raw->debug_stall_after_ticks  ? "debug_stall_after_ticks"
                            : raw->debug_kill_after_ticks ? "debug_kill_after_ticks"
@@ -418,7 +418,7 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         }
     }
 
-    cell->scheme = MCA_SCHEME_MCA_TS; /* the default for cells (issue 11) */
+    cell->scheme = MCA_SCHEME_MCA_TS; /* the default for cells */
     if (raw->scheme && mca_scheme_from_name(raw->scheme, &cell->scheme) != MCA_OK) {
         FAIL(MCA_ECONFIG, LINE("scheme"), "scheme: unknown scheme '%s' (known: mca-ts, mca, mvn, apf)",
              raw->scheme);

@@ -558,7 +558,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
             dc.wake_offset_ns = MCA_DAEMON_DDS_WAKE_OFFSET_NS;
         }
         dc.sched_priority = opts->no_rt ? 0 : cell->dds.priority;
-        /* the publisher is a process of its own (issue 16): no DDS, and so no peer on the network, in this
+        /* the publisher is a process of its own: no DDS, and so no peer on the network, in this
          * one */
         char exe[PATH_MAX];
         if (rc == MCA_OK && find_bridge_exe(opts, exe, sizeof exe) != MCA_OK) {
@@ -1128,7 +1128,7 @@ static void stream_targets(mca_daemon_t *d, double t, int64_t now_ns) {
         double v[3] = {0.0, 0.0, 0.0};
         /* The bridge process checked the target (finite, in the box, under max_speed); the loop does not take
          * its word for it: a target from the shared mailbox that is not finite is no target (hold), and no
-         * velocity goes beyond max_speed (issue 16: the bridge is another process) */
+         * velocity goes beyond max_speed (the bridge is another process) */
         const int finite = isfinite(tg.x[0]) && isfinite(tg.x[1]) && isfinite(tg.x[2]);
         if (rc == MCA_OK && tg.accepted > 0) {
             const double age = (double)(now_ns - tg.recv_ns) * 1e-9;

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* The arm backends mcad knows, in one const table (issue 12): each names itself as cell files do
+/* The arm backends mcad knows, in one const table: each names itself as cell files do
  * ("backend: NAME"), reads and checks its keys of a cell arm, opens the arm and says what the daemon must
  * know of it; its own section of a cell arm comes with its schema. The cell reader builds the arm schema from
  * the table and looks a backend up by name, the daemon by id; neither switches on names nor knows sections.

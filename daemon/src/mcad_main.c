@@ -300,7 +300,7 @@ int main(int argc, char **argv) {
             mca_daemon_request_stall(d);
             stalled = 1;
 #else
-            /* issue 16: many setups send SIGUSR1 for log rotation. mcad logs to stderr (the journal) and
+            /* many setups send SIGUSR1 for log rotation. mcad logs to stderr (the journal) and
              * has no log file to re-open, so SIGUSR1 only prints where the loop is; the loop never sees it
              * (every signal is taken here, blocked in every other thread). */
             mca_daemon_summary_t s;

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* DDS bridge: rt loop -> SPSC drop-oldest ring -> publisher -> Cyclone DDS writers. The publisher is a thread
- * of the caller (in-process mode) or the program mca-dds-bridge (process mode, issue 16: a crash in Cyclone
+ * of the caller (in-process mode) or the program mca-dds-bridge (process mode: a crash in Cyclone
  * cannot take the loop's process with it); both run the same code below over the same shared region
  * (dds_shm.h). The publisher parks on a futex when the ring is empty; a push wakes it only when it is parked.
  */

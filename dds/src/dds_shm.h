@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* Internal to mca_dds: the region the loop's side of the bridge shares with its publisher (mca/dds_bridge.h).
  *
- * In-process mode it is plain heap memory and the publisher is a thread; in process mode (issue 16) it is a
+ * In-process mode it is plain heap memory and the publisher is a thread; in process mode it is a
  * memfd mapped MAP_SHARED by mcad and by mca-dds-bridge, which owns the DDS participant. Everything the two
  * sides exchange lives here, and none of it is a pointer: the ring keeps its storage as an offset from itself
  * (mca/ring.h), the settings are plain data, and the futex word is waited on and woken with the shared (not

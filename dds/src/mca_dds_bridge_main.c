@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* mca-dds-bridge: the DDS publisher process of mcad (issue 16). mcad starts it with posix_spawn, the shared
+/* mca-dds-bridge: the DDS publisher process of mcad. mcad starts it with posix_spawn, the shared
  * region (dds_shm.h: snapshot ring, futex word, counters, stream-target mailboxes, settings) as a memfd on
  * --shm-fd; it alone owns a DDS participant, so a crash inside Cyclone (a peer on the network can cause one,
  * docs/dds.md) ends this process and not the controller. It publishes until mcad sets the region's stop

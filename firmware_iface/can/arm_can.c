@@ -145,7 +145,7 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         l->st.bus_errors++;
         l->err_pending = 1;
         /* Bus-off ends only when feedback gets through again: a CAN_ERR_RESTARTED frame (alone, or in the
-         * same frame as BUSOFF) says the controller restarted, not that the bus works (issue 16). */
+         * same frame as BUSOFF) says the controller restarted, not that the bus works. */
         if (f->can_id & CAN_ERR_BUSOFF) {
             set_bus_off(l, 1);
         }
@@ -202,7 +202,7 @@ int mca_can_link_rx(mca_can_link_t *l, const mca_can_frame_t *f) {
         l->state = m;
         l->have_state = 1;
         l->st.hb_joints = m.n;
-        /* the arm's own joint count against the configured one (issue 16: the decoder's fb.n is ours) */
+        /* the arm's own joint count against the configured one (the decoder's fb.n is ours) */
         l->bad_joints = m.n != l->n;
         if (l->bad_joints) {
             l->st.rx_bad_joints++;

@@ -115,7 +115,7 @@ static const cyaml_schema_value_t scn_schema = {
         goto out;                                                                                            \
     } while (0)
 
-/* ---------------------------------------------------------------- ranges (issue 16) */
+/* ---------------------------------------------------------------- ranges */
 
 /* What a real cell can need; docs/scheme.md section 3 lists them. Times up to an hour (the longest task),
  * distances and placements within 100 m of the world origin, gains and speeds far above the paper's. */

@@ -275,7 +275,7 @@ int prescan(Ctx &cx, const std::string &text) {
         return cx.fail(MCA_EPARSE, "no <robot> element at the top level");
     }
     /* child link -> (parent link, joint); urdfdom builds a link that is its own parent, or a loop of
-     * links, into shared_ptr cycles that it never frees (found by fuzz/fuzz_urdf, issue 16): refused here */
+     * links, into shared_ptr cycles that it never frees (found by fuzz/fuzz_urdf): refused here */
     std::map<std::string, std::pair<std::string, std::string>> parent_of;
     for (const TiXmlElement *j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
         const char *name = j->Attribute("name");

@@ -10,7 +10,7 @@
  *   st <fw_cycle> <counter> <state> <fault_code> <missed> <n_joints> <rx_errors>
  *   ft <fw_cycle> <counter> <state> <fault_code> <flags0..7>
  * (recorded in a buffer allocated at start-up; nothing is written on the cycle path).
- * --lie KIND@CYCLE[:JOINT] (issue 16, tests of the controller's plausibility checks): from firmware cycle
+ * --lie KIND@CYCLE[:JOINT] (tests of the controller's plausibility checks): from firmware cycle
  * CYCLE on, the feedback on the wire lies, while the arm itself runs on truthfully:
  *   position  joint JOINT reported 0.3 rad beyond its upper limit
  *   velocity  joint JOINT reported at 2 x its velocity limit (at most what the int16 field holds)

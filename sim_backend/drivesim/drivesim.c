@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* mca-drivesim: CiA 402 drive emulator (issue 15). One CANopen node per joint (node ids first..first+n-1)
+/* mca-drivesim: CiA 402 drive emulator. One CANopen node per joint (node ids first..first+n-1)
  * on one classic CAN bus, each with its object dictionary (config/canopen/mca-drivesim.eds), NMT slave
  * (boot-up, start/stop/pre-op, reset node/communication), SDO server (expedited and segmented), two
  * RPDOs and two TPDOs mapped over SDO, heartbeat producer (0x1017), EMCY producer, and the CiA 402 state

@@ -84,7 +84,7 @@ typedef struct mca_simrun_result {
     int exact_missed;       /**< of those, missed (farther than exact_tolerance while on the point) */
     double exact_error_max; /**< the largest distance to an exact point while on it [m] */
     int pdnn_steps_p50, pdnn_steps_p999; /**< PDNN steps per running tick */
-    /* every solve, running and braking (issue 29 item 2): steps and the polish's exact solves per tick */
+    /* every solve, running and braking: steps and the polish's exact solves per tick */
     int solves; /**< ticks that solved a QP */
     int solve_steps_p50, solve_steps_p999, solve_steps_max;
     int exact_p50, exact_p999, exact_max;

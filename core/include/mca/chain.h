@@ -32,7 +32,7 @@ typedef struct mca_pose {
     double p[3];
 } mca_pose_t;
 
-/** Largest joint velocity limit a URDF may give [rad/s] (issue 16: velocity="1e300" switched the velocity
+/** Largest joint velocity limit a URDF may give [rad/s] (velocity="1e300" switched the velocity
  *  bounds off); real revolute joints move at well under 10 rad/s. */
 #define MCA_JOINT_VEL_MAX 100.0
 

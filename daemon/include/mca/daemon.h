@@ -63,7 +63,7 @@ typedef enum mca_daemon_fault {
 } mca_daemon_fault_t;
 
 /**
- * Plausibility of one feedback sample (issue 16: "feedback that is not plausible is a fault of that arm,
+ * Plausibility of one feedback sample ("feedback that is not plausible is a fault of that arm,
  * never integrated into a command"). Every sample an arm's read returns (mca_arm_read: MCA_OK/MCA_EFAULT)
  * is checked in this order before the daemon uses any of it; the first failed check names the fault.
  * A failed sample is dropped (positions, velocities, state and frame id stay the last good sample's),
@@ -111,7 +111,7 @@ typedef struct mca_daemon_opts {
      *  (mca-sim's solver overrides). NULL: none. */
     void (*config_hook)(mca_controller_config_t *cfg, void *arg);
     void *config_hook_arg;
-    /** The DDS publisher program (mca-dds-bridge, run as a process of its own: issue 16). NULL: the one next
+    /** The DDS publisher program (mca-dds-bridge, run as a process of its own). NULL: the one next
      *  to the running executable, else in its prefix's libexec/mca (PREFIX/sbin/mcad ->
      *  PREFIX/libexec/mca, mca/prefix.h), else MCA_LIBEXECDIR's (the configured install's libexec/mca). */
     const char *dds_bridge_exe;

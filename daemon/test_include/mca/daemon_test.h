@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /** @file mca/daemon_test.h
  * Test hooks of the controller daemon: only in the test build (mca_daemon_test, mcad-test; compiled with
- * MCA_TEST_HOOKS, installed nowhere). The production library and mcad have none of this (issue 16:
- * "production holds no test hooks"): they reject the debug_* cell keys and give SIGUSR1 no power over the
+ * MCA_TEST_HOOKS, installed nowhere). The production library and mcad have none of this
+ * ("production holds no test hooks"): they reject the debug_* cell keys and give SIGUSR1 no power over the
  * loop (docs/daemon.md, "Test hooks").
  *
  * Cell keys of the test build (fields of mca_cell_t under MCA_TEST_HOOKS):

@@ -13,7 +13,7 @@
  * dropped and counted, never the loop delayed.
  *
  * The publisher is either a thread of the caller (in-process: mca-dds-synth, tests) or, with
- * cfg.process_exe set, a separate program (mca-dds-bridge, issue 16) that owns the DDS participant: ring,
+ * cfg.process_exe set, a separate program (mca-dds-bridge) that owns the DDS participant: ring,
  * futex word, counters and the stream-target mailboxes are then in a memfd both processes map (MAP_SHARED,
  * shared futex operations), and a crash inside Cyclone (a peer on the network can cause one, docs/dds.md)
  * kills only that process. The owner's non-rt supervisor calls mca_dds_bridge_supervise() to notice its
@@ -188,7 +188,7 @@ typedef struct mca_dds_stats {
 /** Process mode: the first restart comes this long after a death [s], each further one (while each dies
  *  within MCA_DDS_BRIDGE_STABLE_S of its start) twice as long after the last, at most
  *  MCA_DDS_BRIDGE_BACKOFF_MAX_S, and never a last one: the supervisor keeps restarting it for as long as the
- *  owner runs (issue 32: a peer that crashes every libddsc 0.10.2 participant, docs/dds.md, would otherwise
+ *  owner runs (a peer that crashes every libddsc 0.10.2 participant, docs/dds.md, would otherwise
  *  take monitoring down for the rest of the run). Its log lines are thinned out after
  *  MCA_DDS_BRIDGE_LOG_ALL deaths in a row. */
 #define MCA_DDS_BRIDGE_BACKOFF_S 0.1

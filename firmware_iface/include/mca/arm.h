@@ -58,9 +58,9 @@ enum mca_arm_fault {
     MCA_ARM_FAULT_VELOCITY = 3,    /**< commanded velocity above the limit */
     MCA_ARM_FAULT_INJECTED = 4,    /**< test fault injection */
     MCA_ARM_FAULT_BUS = 5,         /**< bus error / bus-off */
-    MCA_ARM_FAULT_FEEDBACK = 6,    /**< the link refused implausible feedback (link_fault only, issue 16) */
+    MCA_ARM_FAULT_FEEDBACK = 6,    /**< the link refused implausible feedback (link_fault only) */
     MCA_ARM_FAULT_JOINT_COUNT = 7, /**< the arm's heartbeat names another joint count (link_fault only) */
-    /* CANopen backend (mca/canopen.h, issue 15): which node and why via mca_canopen_backend_fault() */
+    /* CANopen backend (mca/canopen.h): which node and why via mca_canopen_backend_fault() */
     MCA_ARM_FAULT_DRIVE = 8,      /**< a CiA 402 drive in FAULT (statusword) */
     MCA_ARM_FAULT_EMCY = 9,       /**< a drive sent an emergency message */
     MCA_ARM_FAULT_HEARTBEAT = 10, /**< a drive's heartbeat missed its consumer time, or the drive rebooted */

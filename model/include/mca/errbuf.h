@@ -2,7 +2,7 @@
 /** @file mca/errbuf.h
  * Filling the caller's error buffer (mca_model, start-up only): every loader that takes `char *err, size_t
  * errlen` writes its message through these, so that a NULL or empty buffer and a cut message are handled
- * the same way everywhere (issue 12: one helper, not one copy per file).
+ * the same way everywhere (one helper, not one copy per file).
  */
 #ifndef MCA_ERRBUF_H
 #define MCA_ERRBUF_H

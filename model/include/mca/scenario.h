@@ -62,7 +62,7 @@ typedef struct mca_scenario {
 } mca_scenario_t;
 
 /**
- * Allowed range of one number in a scenario or cell file (issue 16: values that switched supervision off, or
+ * Allowed range of one number in a scenario or cell file (values that switched supervision off, or
  * overflowed the tick count, were accepted). The ranges are what a real cell can need; they are listed in
  * docs/scheme.md section 3 (scenario keys) and docs/daemon.md (cell keys).
  */

@@ -9,7 +9,7 @@
  * frame id is plausible: the 16-bit wire id is unwrapped against the newest accepted one (the reference)
  * and may be at most MCA_ARMSIM_FRAME_JUMP_MAX ahead of it. A frame further ahead is refused
  * (rx_bad_frame_id) and does not move the reference, so one forged command with frame id +32767 does not
- * make the genuine ones that follow stale (issue 16); a run of MCA_CAN_SEQ_RESYNC_RUN frames with
+ * make the genuine ones that follow stale; a run of MCA_CAN_SEQ_RESYNC_RUN frames with
  * consecutive ids that all jump ahead is a genuine jump and its last frame is taken. The reference never
  * moves backwards; a frame at or behind the command already taken this cycle does not supersede it.
  *
@@ -32,7 +32,7 @@ extern "C" {
  *  controller's side: the MCA_EAGAIN of a full tx queue does not consume a counter, only a frame id). */
 #define MCA_ARMSIM_FRAME_JUMP_MAX 16u
 /** Most frames the emulator drains per firmware cycle; the rest wait in the socket (and the kernel drops
- *  what overflows it), so a flood cannot starve the firmware cycle (issue 16). */
+ *  what overflows it), so a flood cannot starve the firmware cycle. */
 #define MCA_ARMSIM_RX_BURST 64
 
 typedef struct mca_armsim_rx_counters {

@@ -12,7 +12,7 @@
  *   continues its stream (mca_can_seq_accept()). Anything else is counted (rx_bad_length: wrong length
  *   or undecodable contents; rx_bad_counter; rx_unknown_id: other ids of the arm's block, including our
  *   own command id sent by another node) and never applied.
- *   A feedback frame that passes these is also checked for plausibility (issue 16; enum
+ *   A feedback frame that passes these is also checked for plausibility (enum
  *   mca_can_fb_check): a position at the end of its field (saturated: +-2147 rad) or outside the link's
  *   position bounds (mca_can_options_t.pos_lo/pos_hi; default +-MCA_CAN_FB_POS_ABS_MAX), a position that
  * moved further since the last applied feedback than the wire's fastest velocity allows in the time between
@@ -26,7 +26,7 @@
  *   bus_off_events, and stats.link_fault = MCA_ARM_FAULT_BUS, so a controller that gets MCA_EIO can
  *   name the cause with mca_arm_fault_name()) until the next valid feedback gets through. A
  *   CAN_ERR_RESTARTED frame does not end it (the controller restarted; whether the bus works shows when
- *   feedback arrives), nor does a frame that says both BUSOFF and RESTARTED (issue 16). Return codes:
+ *   feedback arrives), nor does a frame that says both BUSOFF and RESTARTED. Return codes:
  *     MCA_OK / MCA_EFAULT  new feedback (EFAULT: the arm reports FAULT), also when an error frame
  *                arrived in the same read: the feedback wins and the error stays pending (mca/arm.h)
  *     MCA_EIO    no new feedback, and an error frame (or a socket error) since the last MCA_EIO, or
@@ -94,7 +94,7 @@ int mca_can_backend_state(const mca_arm_t *arm, mca_can_state_msg_t *st);
 /** The socket, e.g. to poll() for feedback outside the real-time loop. @return fd or MCA_EINVAL. */
 int mca_can_backend_fd(const mca_arm_t *arm);
 
-/** Feedback the link refuses as implausible (stats.implausible_kind; issue 16). */
+/** Feedback the link refuses as implausible (stats.implausible_kind). */
 enum mca_can_fb_check {
     MCA_CAN_FB_OK = 0,
     MCA_CAN_FB_SATURATED = 1,       /**< a position at the end of its int32 field (+-2147 rad) */

@@ -115,7 +115,7 @@ int mca_can_decode_fault(const uint8_t *data, size_t len, mca_can_fault_msg_t *m
  * candidate run; a run of MCA_CAN_SEQ_RESYNC_RUN consecutive counters (c, c+1, c+2) resyncs the stream at
  * its last frame, which is accepted. A frame that continues the current stream always wins and drops the
  * run. So a stray frame costs nothing, a forged pair of counters (c, c+1) never gets in nor resyncs the
- * stream (issue 16), a real loss costs MCA_CAN_SEQ_RESYNC_RUN - 1 more frames. The first frame syncs.
+ * stream, a real loss costs MCA_CAN_SEQ_RESYNC_RUN - 1 more frames. The first frame syncs.
  * (Counters are no authentication: a node that sends three consecutive counters before the next genuine
  * frame takes the stream over, until the genuine stream's own run takes it back.)
  */

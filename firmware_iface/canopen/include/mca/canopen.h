@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /** @file mca/canopen.h
  * CANopen (CiA 301 subset) and the CiA 402 drive profile, on SocketCAN (classic CAN, 11-bit ids):
- * one header for the whole module (issue 15). Three layers:
+ * one header for the whole module. Three layers:
  *
  *  1. Pure codec (no socket, no clock; host unit tests): NMT, SYNC, heartbeat, EMCY frames; the SDO
  *     client and SDO server as state machines that turn one received frame into at most one frame to
