@@ -99,10 +99,11 @@ REGRESSIONS = ["jaco-mico:411"]
 STOP_REGRESSIONS = ["jaco-mico:19"]
 
 
-def run_sweep(tool, sim, work, name, args, timeout):
-    """mca_sweep.py on seed 1 (jaco-mico tasks) with args, its work files under work/name; the JSON it wrote."""
+def run_sweep(tool, sim, work, name, args, timeout, seed=1):
+    """mca_sweep.py on jaco-mico tasks with args, its work files under work/name; (the JSON it wrote, what it
+    printed)."""
     out = os.path.join(work, name + ".json")
-    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--seed", "1", "--jobs", "2", "--work",
+    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--seed", str(seed), "--jobs", "2", "--work",
            os.path.join(work, name), "--json", out] + args
     print(" ".join(cmd))
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
@@ -110,12 +111,12 @@ def run_sweep(tool, sim, work, name, args, timeout):
     if p.returncode != 0:
         print(p.stderr)
         sys.exit("mca_sweep.py failed (exit %d)" % p.returncode)
-    return json.load(open(out))
+    return json.load(open(out)), p.stdout
 
 
 def regress(sim, tool, work, stopcheck=None):
     os.makedirs(work, exist_ok=True)
-    d = run_sweep(tool, sim, work, "tasks", ["--n", "500", "--only", ",".join(REGRESSIONS), "--schemes", "mvn,mca-ts"],
+    d, _ = run_sweep(tool, sim, work, "tasks", ["--n", "500", "--only", ",".join(REGRESSIONS), "--schemes", "mvn,mca-ts"],
                   400)
     check(len(d["tasks"]) == len(REGRESSIONS), "%d tasks run" % len(d["tasks"]))
     for t in d["tasks"]:
@@ -127,7 +128,7 @@ def regress(sim, tool, work, stopcheck=None):
             check(cls != "unsafe", "%s: mca-ts %s run keeps d1 (%s)" % (t["id"], r, cls))
     if not stopcheck:
         return
-    d = run_sweep(tool, sim, work, "stop-tasks", ["--n", "50", "--only", ",".join(STOP_REGRESSIONS), "--schemes",
+    d, _ = run_sweep(tool, sim, work, "stop-tasks", ["--n", "50", "--only", ",".join(STOP_REGRESSIONS), "--schemes",
                                                   "mca-ts", "--no-stop", "--stopcheck", stopcheck], 600)
     check(len(d["tasks"]) == len(STOP_REGRESSIONS), "%d stop-check tasks run" % len(d["tasks"]))
     for t in d["tasks"]:
@@ -146,17 +147,8 @@ def path_first(sim, tool, work):
     standing at home (jaco-mico:0, found by the a-priori rest probe) ends named: blocked by that arm at its
     path's end (before the averaged hold it crawled unnamed; before the tube's edge rule its error reached 8.3 cm)."""
     os.makedirs(work, exist_ok=True)
-    out = os.path.join(work, "pf.json")
-    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--seed", "501", "--n", "16", "--only",
-           "0,3,6,7", "--schemes", "mca-ts", "--no-stop", "--tolerance", "0.05", "--jobs", "2", "--work",
-           os.path.join(work, "pf"), "--json", out]
-    print(" ".join(cmd))
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    print(p.stdout)
-    if p.returncode != 0:
-        print(p.stderr)
-        sys.exit("mca_sweep.py failed (exit %d)" % p.returncode)
-    d = json.load(open(out))
+    d, printed = run_sweep(tool, sim, work, "pf", ["--n", "16", "--only", "0,3,6,7", "--schemes", "mca-ts",
+                                                   "--no-stop", "--tolerance", "0.05"], 300, seed=501)
     tasks = {t["id"]: t for t in d["tasks"]}
     check(len(tasks) == 4, "4 tasks run")
     for tid, t in sorted(tasks.items()):
@@ -170,7 +162,7 @@ def path_first(sim, tool, work):
     check([1, 0] in [c[:2] for c in t0["rest_conflicts"]],
           "jaco-mico:0: arm 1's path runs into arm 0 at rest (%s)" % t0["rest_conflicts"])
     check(t0["runs"]["mca-ts"]["task"]["cls"] == "safe-stop" and
-          "jaco-mico:0 " in p.stdout and "blocked by arm0 at its path's end" in p.stdout,
+          "jaco-mico:0 " in printed and "blocked by arm0 at its path's end" in printed,
           "jaco-mico:0: unfinished, named as blocked by arm0 standing at its path's end")
 
 

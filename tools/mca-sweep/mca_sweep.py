@@ -638,8 +638,7 @@ def rest_conflicts(sim, wd, name, kind, arms, paths, duration):
                 for b in range(len(arms))]
         with open(scn, "w") as f:
             f.write(scenario_yaml(name + "_rest%d" % a, kind, arms, duration, solo))
-        runs, errs = sim.run(scn, os.path.join(wd, "rest%d.json" % a), ["mvn"])
-        r = runs.get("mvn")
+        r = sim.run(scn, os.path.join(wd, "rest%d.json" % a), ["mvn"])[0].get("mvn")
         if r is None:
             continue
         if r["min_distance"] < KINDS[kind]["d1"]:
@@ -845,16 +844,15 @@ def table(tasks, schemes, sim, a):
     lines.append("unreachable (MVN cannot track alone): %d %s" % (len(tasks) - nr, json.dumps(un, sort_keys=True)))
     # paths that run into another arm standing at its start (rest_conflicts): reported apart, never dropped
     clear = [t for t in reach if not t.get("rest_conflicts")]
+    rest = [t for t in reach if t.get("rest_conflicts")]
     if any("rest_conflicts" in t for t in reach):
         for s in schemes:
-            def done(ts):
-                return sum(1 for t in ts if t["runs"].get(s, {}).get("task", {}).get("cls") in ("completed", "late"))
-            rest = [t for t in reach if t.get("rest_conflicts")]
+            dc, dr = [sum(1 for t in ts if t["runs"].get(s, {}).get("task", {}).get("cls") in ("completed", "late"))
+                      for ts in (clear, rest)]
             lines.append("paths clear of the other arms at rest: %d of %d reachable; %s done (completed or late) on "
                          "them %d (%.1f %%), on the %d others %d" % (
-                             len(clear), nr, s, done(clear), 100.0 * done(clear) / max(1, len(clear)), len(rest),
-                             done(rest)))
-            summary["clear/%s" % s] = dict(clear=len(clear), done=done(clear), rest=len(rest), rest_done=done(rest))
+                             len(clear), nr, s, dc, 100.0 * dc / max(1, len(clear)), len(rest), dr))
+            summary["clear/%s" % s] = dict(clear=len(clear), done=dc, rest=len(rest), rest_done=dr)
     for s in schemes:
         for mode in ("task", "stop"):
             v = summary.get("%s/%s" % (s, mode))
