@@ -73,6 +73,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->ts.deadlock_sigma = 0.05;
     cfg->ts.back_off_time = 1.0;
     cfg->ts.d1_margin = 0.005;
+    cfg->ts.coordinate = 1;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         cfg->ts.priority[a] = 1.0;
     }
@@ -147,8 +148,35 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     }
     ctrl->exact_met = ctrl->exact_missed = 0;
     ctrl->exact_error_max = 0.0;
+    memset(&ctrl->coord, 0, sizeof ctrl->coord); /* a plan holds for one start */
+    memset(ctrl->gated, 0, sizeof ctrl->gated);
     ctrl->brake_pdnn.h = 0;
     ctrl->n_row_key = ctrl->n_brake_row_key = 0;
+}
+
+int mca_controller_plan(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS], mca_coord_work_t *work) {
+    if (!ctrl || !q || !work) {
+        return MCA_EINVAL;
+    }
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    memset(&ctrl->coord, 0, sizeof ctrl->coord);
+    if (cfg->scheme != MCA_SCHEME_MCA_TS || !cfg->ts.coordinate) {
+        return MCA_OK;
+    }
+    mca_path_t paths[MCA_MAX_ARMS];
+    mca_coord_arm_t arms[MCA_MAX_ARMS];
+    for (int a = 0; a < cfg->n_arms; a++) {
+        mca_kin_t kin;
+        if (!q[a] || mca_fk(&cfg->chain[a], q[a], &kin) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+        paths[a] = cfg->path[a];
+        mca_path_anchor(&paths[a], kin.ee);
+        arms[a] = (mca_coord_arm_t){&cfg->chain[a], &paths[a], q[a], cfg->sp.K};
+    }
+    /* the predicted arms kept out of each other's bands (d2) where a schedule allows, else nearer */
+    return mca_coord_plan(arms, cfg->n_arms, cfg->sp.d2, cfg->sp.d1 + 2.0 * cfg->ts.d1_margin, work,
+                          &ctrl->coord);
 }
 
 int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]) {
@@ -900,7 +928,12 @@ static void tube_keep_brake(mca_controller_t *ctrl, const mca_scheme_info_t *si,
 /* Catching up: the rate an arm aims at grows with its lag behind task time (1/s per s of lag). */
 #define MCA_TS_CATCH_UP_GAIN 1.0
 
-/* mca-ts, before the solve: each arm's target rate and rate bounds from the deadlock state. */
+/* Coordination gates: an arm slows at this path-rate deceleration [1/s^2] to stop this far [cells] before a
+ * gated cell of its path time (from sigma_max 1.5: 0.28 s of path time). */
+#define MCA_TS_GATE_DEC 4.0
+#define MCA_TS_GATE_ROOM 0.25
+
+/* mca-ts, before the solve: each arm's target rate and rate bounds from the deadlock state and the gates. */
 static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], double lo[], double hi[]) {
     const mca_timescale_params_t *tp = &ctrl->cfg.ts;
     const int na = ctrl->cfg.n_arms;
@@ -941,6 +974,20 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
             hi[a] = 0.0;
         } else if (a == ctrl->deadlock_arm && ctrl->deadlock == MCA_DEADLOCK_WAIT) {
             target[a] = lo[a] = hi[a] = 0.0;
+        }
+        ctrl->gated[a] = 0;
+        if (ctrl->coord.n_pairs > 0 && hi[a] > 0.0) {
+            const double ahead = tp->sigma_max * tp->sigma_max / (2.0 * MCA_TS_GATE_DEC);
+            const double gate = mca_coord_gate(&ctrl->coord, a, ctrl->tau, ahead);
+            if (gate < INFINITY) {
+                const double room = fmax(0.0, gate - MCA_TS_GATE_ROOM * MCA_COORD_CELL_S - ctrl->tau[a]);
+                const double cap = sqrt(2.0 * MCA_TS_GATE_DEC * room);
+                if (cap < hi[a]) {
+                    hi[a] = fmax(lo[a], cap);
+                    target[a] = fmin(target[a], hi[a]);
+                    ctrl->gated[a] = 1;
+                }
+            }
         }
     }
 }

@@ -465,6 +465,42 @@ static int find_bridge_exe(const mca_daemon_opts_t *opts, char *out, size_t len)
     return access(out, X_OK) == 0 ? MCA_OK : MCA_ENOENT;
 }
 
+/* mca-ts: the order in which arms on fixed paths pass each other, planned from where the arms stand
+ * (start-up: the plan's scratch lives only here). */
+static int plan(mca_daemon_t *d, char *err, size_t errlen) {
+    mca_coord_work_t *work = malloc(sizeof *work);
+    if (!work) {
+        return MCA_ENOMEM;
+    }
+    const double *qp[MCA_MAX_ARMS] = {NULL};
+    for (int a = 0; a < d->n_arms; a++) {
+        qp[a] = d->q[a];
+    }
+    const int64_t t0 = now_ns();
+    const int rc = mca_controller_plan(&d->ctrl, qp, work);
+    free(work);
+    if (rc != MCA_OK) {
+        mca_errbuf_printf(err, errlen, "%s: coordination plan failed: %s", d->cell.source, mca_strerror(rc));
+        return rc;
+    }
+    const mca_coord_t *c = &d->ctrl.coord;
+    for (int k = 0; k < c->n_pairs; k++) {
+        const mca_coord_pair_t *p = &c->pair[k];
+        fprintf(d->opts.log,
+                "<6>mcad: coordination: arms %d and %d kept %.3f m apart: %d of %d cells blocked, %d + %d "
+                "gates\n",
+                p->a, p->b, p->d_block, p->blocked, p->n_a * p->n_b, p->gates_a, p->gates_b);
+    }
+    if (c->unplanned > 0) {
+        fprintf(d->opts.log, "<5>mcad: coordination: %d pair(s) without a schedule: left to the back-off\n",
+                c->unplanned);
+    }
+    if (c->n_pairs + c->unplanned > 0) {
+        fprintf(d->opts.log, "<6>mcad: coordination planned in %.0f ms\n", (double)(now_ns() - t0) * 1e-6);
+    }
+    return MCA_OK;
+}
+
 int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen) {
     if (!out || !cell || !opts) {
@@ -532,6 +568,9 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     }
     for (int a = 0; a < d->n_arms && rc == MCA_OK; a++) {
         rc = handshake(d, a, err, errlen);
+    }
+    if (rc == MCA_OK) {
+        rc = plan(d, err, errlen);
     }
     if (rc == MCA_OK && cell->rt.cpu >= 0 && !opts->virtual_time) {
         /* before DDS starts its threads: they, the CSV/log drainer and the supervisor inherit this mask */

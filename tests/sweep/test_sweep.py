@@ -99,11 +99,11 @@ REGRESSIONS = ["jaco-mico:411"]
 STOP_REGRESSIONS = ["jaco-mico:19"]
 
 
-def run_sweep(tool, sim, work, name, args, timeout, seed=1):
-    """mca_sweep.py on jaco-mico tasks with args, its work files under work/name; (the JSON it wrote, what it
-    printed)."""
+def run_sweep(tool, sim, work, name, args, timeout, seed=1, kind="jaco-mico"):
+    """mca_sweep.py on `kind` tasks (jaco-mico) with args, its work files under work/name; (the JSON it wrote, what
+    it printed)."""
     out = os.path.join(work, name + ".json")
-    cmd = [sys.executable, tool, "--sim", sim, "--kind", "jaco-mico", "--seed", str(seed), "--jobs", "2", "--work",
+    cmd = [sys.executable, tool, "--sim", sim, "--kind", kind, "--seed", str(seed), "--jobs", "2", "--work",
            os.path.join(work, name), "--json", out] + args
     print(" ".join(cmd))
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
@@ -164,6 +164,37 @@ def path_first(sim, tool, work):
     check(t0["runs"]["mca-ts"]["task"]["cls"] == "safe-stop" and
           "jaco-mico:0 " in printed and "blocked by arm0 at its path's end" in printed,
           "jaco-mico:0: unfinished, named as blocked by arm0 standing at its path's end")
+
+
+def coordinate(sim, tool, work):
+    """Issue 29: who passes first, planned at start-up (mca/coord.h). Three pick-and-place tasks (seed 1) that
+    deadlocked in the shared place zone without the plan (backing off put one arm back into the other's way)
+    complete with it, on their paths, exact points met, d1 kept; without it (--no-coordinate) they deadlock
+    again, so this test fails when the plan is taken out. A crossing task whose fixed paths meet whoever goes first
+    (jaco-mico:7) ends named: no schedule."""
+    os.makedirs(work, exist_ok=True)
+    ids = ["pnp-jaco-mico:1", "pnp-jaco-mico:8", "pnp-jaco-mico:10"]
+    args = ["--n", "30", "--only", ",".join(ids), "--schemes", "mca-ts", "--no-stop"]
+    on, _ = run_sweep(tool, sim, work, "on", args, 300, kind="pnp-jaco-mico")
+    off, _ = run_sweep(tool, sim, work, "off", args + ["--no-coordinate"], 300, kind="pnp-jaco-mico")
+    check(len(on["tasks"]) == 3 and len(off["tasks"]) == 3, "3 + 3 tasks run")
+    for t in on["tasks"]:
+        r = t["runs"]["mca-ts"]["task"]
+        check(r["cls"] in ("completed", "late") and r["exact_missed"] == 0 and r["coord_pairs"] == 1,
+              "%s: done with the plan (%s, %s exact points missed, %s pair planned)" %
+              (t["id"], r["cls"], r["exact_missed"], r["coord_pairs"]))
+        check(r["min_d"] >= t["d1"] and r["path_error_max"] <= 0.02,
+              "%s: least distance %.4f m >= d1 %.3f, path error max %.4f m" %
+              (t["id"], r["min_d"], t["d1"], r["path_error_max"]))
+    stuck = [t["id"] for t in off["tasks"] if t["runs"]["mca-ts"]["task"]["cls"] not in ("completed", "late")]
+    check(len(stuck) >= 2, "without the plan at least 2 of the 3 deadlock for good (%s)" % stuck)
+    d, printed = run_sweep(tool, sim, work, "cross", ["--n", "10", "--only", "7", "--schemes", "mca-ts", "--no-stop"],
+                           300)
+    r = d["tasks"][0]["runs"]["mca-ts"]["task"]
+    check(r["coord_unplanned"] == 1 and r["min_d"] >= d["tasks"][0]["d1"] and
+          "no schedule: the predicted arms meet on every order of passing" in printed,
+          "jaco-mico:7: no schedule exists, the task is named so, d1 kept (%s unplanned, least %.4f m)" %
+          (r["coord_unplanned"], r["min_d"]))
 
 
 def three(sim, scn, work):
@@ -285,6 +316,8 @@ def main():
         regress(sim, sys.argv[3], sys.argv[4], sys.argv[5] if len(sys.argv) > 5 else None)
     elif mode == "path-first":
         path_first(sim, sys.argv[3], sys.argv[4])
+    elif mode == "coordinate":
+        coordinate(sim, sys.argv[3], sys.argv[4])
     elif mode == "three":
         three(sim, sys.argv[3], sys.argv[4])
     elif mode == "pnp":

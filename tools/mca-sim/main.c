@@ -26,12 +26,15 @@ static void usage(FILE *f) {
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm] [--stop-at T] [--fault-at T:KIND]\n"
         "               [--dec-limit X] [--pdnn-budget-us U] [--w-path W] [--w-tube W] [--dump-capped]\n"
+        "               [--no-coordinate]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows);\n"
         "                 --dump-capped adds the unconverged ones as NAME.json.capped (QPs to look at)\n"
         "  --euler        integrate qdot directly instead of the in-process sim backend\n"
         "  --summary F    JSON summary of every run (for tests)\n"
+        "  --no-coordinate  mca-ts without the start-up plan of who passes first where fixed paths meet\n"
+        "                 (docs/scheme.md, Coordination)\n"
         "  --stop-at T    stop request at task time T s, as SIGTERM to mcad (brakes through the controller)\n"
         "  --fault-at T:KIND  latch controller fault KIND at T s (pdnn-not-converged, fake-attractor, "
         "distance,\n"
@@ -104,6 +107,9 @@ int main(int argc, char **argv) {
             return 0;
         } else if (!strcmp(a, "--euler")) {
             o.use_backend = 0;
+            continue;
+        } else if (!strcmp(a, "--no-coordinate")) {
+            o.no_coordinate = 1;
             continue;
         } else if (!strcmp(a, "--dump-capped")) {
             o.dump_capped = 1;
@@ -407,7 +413,7 @@ int main(int argc, char **argv) {
             for (int a = 0; a < scn.n_arms; a++) {
                 fprintf(f, "%s%d", a ? "," : "", r->end_done[a]);
             }
-            fprintf(f, "]");
+            fprintf(f, "],\"coord_pairs\":%d,\"coord_unplanned\":%d", r->coord_pairs, r->coord_unplanned);
             fprintf(f,
                     ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"
                     "\"exact_solves\":[%d,%d,%d]",

@@ -60,6 +60,9 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     if (o->w_path > 0.0) {
         cfg->ts.w_path = o->w_path;
     }
+    if (o->no_coordinate) {
+        cfg->ts.coordinate = 0;
+    }
     if (o->pdnn_budget_us >= 0) {
         cfg->pdnn_budget_steps = mca_pdnn_budget_steps((int64_t)o->pdnn_budget_us * 1000);
     }
@@ -343,6 +346,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         r->end_tau[a] = ip->tau[a];
         r->end_done[a] = ip->tau[a] >= mca_path_end_time(&cfg->path[a]);
     }
+    r->coord_pairs = ctrl->coord.n_pairs;
+    r->coord_unplanned = ctrl->coord.unplanned;
     r->pdnn_steps_mean = steps_n ? steps_sum / steps_n : 0.0;
     r->completed &= r->exact_missed == 0;
     if (n_perr > 0) {

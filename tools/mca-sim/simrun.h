@@ -26,14 +26,15 @@ typedef struct mca_simrun_opts {
     int use_backend;      /**< 1: sim backend (default), 0: Euler integration q += qdot dt */
     const char *csv_path; /**< per-tick CSV, NULL: none */
     const char *dump_dir; /**< QP dumps (mca_qp_dump_json), NULL: none */
-    int dump_every;  /**< dump every Nth tick (default 1; and every max(1, N/5)th tick with binding rows) */
-    int dump_max;    /**< most dumps per run (0: no limit) */
-    double w_tube;   /**< > 0: mca-ts's quadratic slack weight with a tube */
-    double w_path;   /**< > 0: mca-ts's exact slack weight (mca_timescale_params_t.w_path) */
-    int dump_capped; /**< 1: also the picked ticks whose PDNN ended unconverged, as NAME.json.capped (their
-                          phi is the solver's last iterate, not an answer: for a look at the QP itself) */
-    double duration; /**< <= 0: the scenario's */
-    double settle;   /**< seconds to run on after the arms stopped following a fault */
+    int dump_every;    /**< dump every Nth tick (default 1; and every max(1, N/5)th tick with binding rows) */
+    int dump_max;      /**< most dumps per run (0: no limit) */
+    double w_tube;     /**< > 0: mca-ts's quadratic slack weight with a tube */
+    double w_path;     /**< > 0: mca-ts's exact slack weight (mca_timescale_params_t.w_path) */
+    int no_coordinate; /**< 1: mca-ts without the start-up plan of who passes first (mca/coord.h) */
+    int dump_capped;   /**< 1: also the picked ticks whose PDNN ended unconverged, as NAME.json.capped (their
+                            phi is the solver's last iterate, not an answer: for a look at the QP itself) */
+    double duration;   /**< <= 0: the scenario's */
+    double settle;     /**< seconds to run on after the arms stopped following a fault */
     int pdnn_max_steps; /**< > 0: override */
     int pdnn_budget_us; /**< >= 0: the step budget of this time budget (mca_pdnn_budget_steps; 0: none); < 0:
                              the cell's, half the period (mcad's default rt.pdnn_budget_us) */
@@ -95,6 +96,8 @@ typedef struct mca_simrun_result {
     double end_ee[MCA_MAX_ARMS][3]; /**< the tool tips */
     double end_tau[MCA_MAX_ARMS];   /**< the path clocks [s] */
     int end_done[MCA_MAX_ARMS];     /**< 1: the arm's clock had reached its path's end */
+    int coord_pairs;                /**< pairs of arms ordered by the start-up plan (mca/coord.h) */
+    int coord_unplanned; /**< pairs on fixed paths for which no schedule exists (the predicted arms meet) */
     double path_time_lost_s;   /**< task time at completion (or at the end) minus the paths' nominal end */
     int deadlocks;             /**< mca-ts deadlocks detected */
     double max_slack;          /**< mca-ts: largest tracking slack [m/s] */

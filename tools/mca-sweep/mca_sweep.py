@@ -591,7 +591,7 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
                lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
                max_err=r.get("max_err"))
     det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "exact_points", "exact_missed",
-                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau", "end_done",
+                                      "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau", "end_done", "coord_pairs", "coord_unplanned",
                                       "solves", "solves_unconverged", "solve_steps", "exact_solves")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
@@ -709,6 +709,8 @@ def run_task(sim, kind, seed, i, a):
     extra = ["--dec-limit", str(a.dec_limit)] if a.dec_limit and sim.dec_limit else []
     if a.ideal_arms:
         extra.append("--euler")  # arms that realise every command exactly (no rate limit)
+    if a.no_coordinate:
+        extra.append("--no-coordinate")
     runs, errs = sim.run(task["scenario"], os.path.join(wd, "task.json"), schemes, extra)
     task["errors"] = errs
     mvn = runs.get("mvn")
@@ -874,7 +876,7 @@ def table(tasks, schemes, sim, a):
             summary["solver/%s" % s] = dict(solves=n, unconverged=un)
     # every unfinished task named: where it ended (the closest pair, its distance, the tool tips, the clocks),
     # and whether an arm that had finished was in the way (no path rate can move it: the paths conflict at rest)
-    blocked_by_done = {}
+    blocked_by_done, no_schedule = {}, {}
     for t in reach:
         for s in schemes:
             r = t["runs"].get(s, {}).get("task", {})
@@ -885,12 +887,20 @@ def table(tasks, schemes, sim, a):
                     s, t["id"], r.get("reason", ""), p[0], p[1], p[2], p[3], r["end_distance"],
                     " ".join("[%.3f %.3f %.3f]" % tuple(e) for e in r["end_ee"]),
                     "/".join("%.2f" % x for x in r["end_tau"]),
-                    "; blocked by %s at its path's end" % ", ".join("arm%d" % a for a in done) if done else ""))
+                    ("; blocked by %s at its path's end" % ", ".join("arm%d" % a for a in done) if done else "") +
+                    ("; no schedule: the predicted arms meet on every order of passing" if r.get("coord_unplanned")
+                     else "")))
                 if done:
                     blocked_by_done[s] = blocked_by_done.get(s, 0) + 1
+                if r.get("coord_unplanned"):
+                    no_schedule[s] = no_schedule.get(s, 0) + 1
     for s, n in sorted(blocked_by_done.items()):
         lines.append("unfinished %s: %d blocked by an arm standing at its path's end" % (s, n))
         summary["blocked_by_done/%s" % s] = n
+    for s, n in sorted(no_schedule.items()):
+        lines.append("unfinished %s: %d without a coordination schedule (fixed paths that meet whoever goes first)"
+                     % (s, n))
+        summary["no_schedule/%s" % s] = n
     # distances: where the tasks start and how near the arms come (does avoidance matter?)
     d0 = sorted(t["start_distance"] for t in reach)
     if d0:
@@ -952,6 +962,8 @@ def main():
     ap.add_argument("--elastic", action="store_true",
                     help="crossing kinds: write `tracking: elastic` into every generated path (the L2 slack that "
                     "passes by leaving the path; default: path first)")
+    ap.add_argument("--no-coordinate", action="store_true",
+                    help="mca-sim --no-coordinate: mca-ts without the start-up plan of who passes first")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
     if not os.access(a.sim, os.X_OK):

@@ -36,6 +36,7 @@
 #include "mca/apf.h"
 #include "mca/armdist.h"
 #include "mca/chain.h"
+#include "mca/coord.h"
 #include "mca/limits.h"
 #include "mca/path.h"
 #include "mca/pdnn.h"
@@ -77,6 +78,8 @@ typedef struct mca_timescale_params {
     double d1_margin; /**< the rows brake towards d1 + d1_margin (at most halfway to d2) [m] (0.005): what
                            the arms overshoot the rows by (rate limits, a capped solve, a turning normal)
                            stays above d1, where the distance fault still is */
+    int coordinate; /**< 1: mca_controller_plan orders the arms where their fixed paths meet (mca/coord.h) (1)
+                     */
     double dec_limit[MCA_MAX_ARMS]; /**< least joint deceleration of each arm for the stoppability bound
                                          [rad/s^2] (0: bound off) */
 } mca_timescale_params_t;
@@ -286,10 +289,22 @@ typedef struct mca_controller {
     /* mca-ts and braking: the compacted rows' slots in the full row layout (warm starts follow them) */
     int row_key[MCA_QP_MAX_INEQ], n_row_key;
     int brake_row_key[MCA_QP_MAX_INEQ], n_brake_row_key;
+    /* mca-ts: who passes first where fixed paths meet (mca_controller_plan; empty without a plan) */
+    mca_coord_t coord;
+    int gated[MCA_MAX_ARMS]; /**< this tick's rate bound came from a coordination gate */
 } mca_controller_t;
 
 /** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
 int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg);
+
+/**
+ * mca-ts with ts.coordinate: plan the order in which arms on fixed paths pass each other (mca/coord.h), from
+ * the configuration the task starts at (the paths are anchored as the first tick will anchor them). Call it
+ * after mca_controller_init (or _reset) and before the first tick; without it the arms are not ordered and
+ * deadlocks are left to the back-off. Start-up only: work is caller's scratch (sizeof about 3 MB).
+ * @retval MCA_OK (nothing to plan included), MCA_EINVAL
+ */
+int mca_controller_plan(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS], mca_coord_work_t *work);
 
 /** Restart the task: next tick re-anchors paths, clears warm start, memory and any fault. RT safe. */
 void mca_controller_reset(mca_controller_t *ctrl);
