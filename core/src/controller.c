@@ -149,7 +149,6 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->exact_met = ctrl->exact_missed = 0;
     ctrl->exact_error_max = 0.0;
     memset(&ctrl->coord, 0, sizeof ctrl->coord); /* a plan holds for one start */
-    memset(ctrl->gated, 0, sizeof ctrl->gated);
     ctrl->brake_pdnn.h = 0;
     ctrl->n_row_key = ctrl->n_brake_row_key = 0;
 }
@@ -975,7 +974,6 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
         } else if (a == ctrl->deadlock_arm && ctrl->deadlock == MCA_DEADLOCK_WAIT) {
             target[a] = lo[a] = hi[a] = 0.0;
         }
-        ctrl->gated[a] = 0;
         if (ctrl->coord.n_pairs > 0 && hi[a] > 0.0) {
             const double ahead = tp->sigma_max * tp->sigma_max / (2.0 * MCA_TS_GATE_DEC);
             const double gate = mca_coord_gate(&ctrl->coord, a, ctrl->tau, ahead);
@@ -985,7 +983,6 @@ static void ts_plan(mca_controller_t *ctrl, double task_t, double target[], doub
                 if (cap < hi[a]) {
                     hi[a] = fmax(lo[a], cap);
                     target[a] = fmin(target[a], hi[a]);
-                    ctrl->gated[a] = 1;
                 }
             }
         }

@@ -291,7 +291,6 @@ typedef struct mca_controller {
     int brake_row_key[MCA_QP_MAX_INEQ], n_brake_row_key;
     /* mca-ts: who passes first where fixed paths meet (mca_controller_plan; empty without a plan) */
     mca_coord_t coord;
-    int gated[MCA_MAX_ARMS]; /**< this tick's rate bound came from a coordination gate */
 } mca_controller_t;
 
 /** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
