@@ -30,116 +30,8 @@
 #endif
 
 #include "daemon__backends.h" /* mca_backend_get */
-
-#define NS_PER_S 1000000000LL
-
-struct mca_daemon {
-    mca_cell_t cell;
-    mca_daemon_opts_t opts;
-    mca_controller_config_t ccfg;
-    mca_controller_t ctrl;
-    mca_controller_t warm_ctrl; /* scratch copy the loop warms its code on before the first command */
-    mca_tick_info_t warm_info;
-    int n_arms;
-    int dof[MCA_MAX_ARMS];
-    mca_arm_t *arm[MCA_MAX_ARMS];
-    mca_dds_bridge_t *dds;
-    mca_rtlog_t log;
-
-    /* shared with other threads */
-    _Atomic int state;
-    _Atomic uint64_t ticks;
-    _Atomic int stop_request;
-#ifdef MCA_TEST_HOOKS
-    _Atomic int stall_request;
-#endif
-    _Atomic int finished;
-    pthread_t thread;
-    int thread_started;
-
-    /* rt-owned state */
-    mca_arm_feedback_t fb[MCA_MAX_ARMS];
-    int have_fb[MCA_MAX_ARMS];
-    int lost[MCA_MAX_ARMS];
-    uint64_t bus_errors[MCA_MAX_ARMS];
-    int not_servo[MCA_MAX_ARMS];      /* ticks RUNNING with the arm not servoing */
-    int arm_fault_told[MCA_MAX_ARMS]; /* an arm's own fault after the first fault was logged (once) */
-    /* feedback plausibility (mca_feedback_fault_t), bounds set at open */
-    double fb_lo[MCA_MAX_ARMS][MCA_MAX_DOF], fb_hi[MCA_MAX_ARMS][MCA_MAX_DOF]; /* limits -+ margin */
-    double fb_vmax[MCA_MAX_ARMS][MCA_MAX_DOF];                                 /* factor x vel limit */
-    uint32_t fb_frame[MCA_MAX_ARMS];    /* frame id of the last good sample */
-    uint64_t implausible[MCA_MAX_ARMS]; /* samples dropped */
-    int fault_arm, feedback_fault;      /* latched with the fault */
-    mca_arm_command_t cmd[MCA_MAX_ARMS];
-    double q[MCA_MAX_ARMS][MCA_MAX_DOF];
-    double qdot[MCA_MAX_ARMS][MCA_MAX_DOF];
-    double vcmd[MCA_MAX_ARMS][MCA_MAX_DOF]; /* velocity last commanded (braking starts here) */
-    double dec[MCA_MAX_ARMS][MCA_MAX_DOF];  /* braking deceleration per joint (cell dec_limit) */
-    /* braking (mca_controller_brake): one stop at most per run */
-    int brake_active;        /* braking started (brake_t0, brake_deadline valid) */
-    double brake_t0;         /* task time braking began */
-    double brake_deadline;   /* from here on the keep-direction scale-down is forced */
-    double brake_rest_t;     /* task time all commands reached zero (-1: not yet) */
-    uint64_t brake_fallback; /* braking ticks that used the keep-direction fallback (QP or forced) */
-    uint64_t brake_forced;   /* of those, ticks past brake_deadline */
-    int brake_fallback_logged;
-    double brake_max_dv; /* max over braking ticks and joints of |dv| / (dec dt) */
-    /* mca-ts deadlock state as last seen */
-    int deadlock, deadlock_arm, deadlocks;
-    uint32_t frame_id;
-    int fault; /* mca_daemon_fault_t; latched */
-    int ctrl_fault;
-    int fault_code; /* negative MCA_E* for DDS */
-    /* The fault is latched as a code and numbers (no text on the rt path); fault_describe() makes the text
-     * in the non-rt threads (log drainer, summary, DDS publisher), which read these once the record or
-     * snapshot that carries the fault reached them (written once, before, by the loop). */
-    int fault_detail;   /* ARM: ARM_FAULT_*; FEEDBACK: mca_feedback_fault_t; CONTROLLER: mca_ctrl_fault_t */
-    int fault_arm_code; /* ARM: the arm's fault code (reports FAULT, brakes) or state (does not servo) */
-    int fault_count;    /* OVERRUN: periods missed in a row; LOST_FEEDBACK/BUS: cycles without feedback */
-    mca_ctrl_fault_why_t ctrl_why; /* CONTROLLER: the controller's cause (a code and numbers, copied once) */
-    mca_arm_stats_t fault_link;    /* LOST_FEEDBACK: the arm's link counters then (why nothing was taken) */
-    int have_fault_link;
-    double fault_t;
-    int stop_pending; /* BRAKING towards STOPPED (not FAULT) */
-    int consecutive_overruns;
-    uint64_t overruns, skipped;
-    /* running ticks whose PDNN ran out of its budget (mca_budget_hit_t: [0] the clock, [1] the step budget):
-     * repaired answers, no fault; logged the first, then once a second how many more */
-    uint64_t budget_hits[2];
-    uint64_t budget_unlogged;
-    uint64_t stalls;      /* ticks whose commands came > MCA_DAEMON_STALL_PERIODS periods after the last */
-    int64_t stall_max_ns; /* the longest such gap */
-    int64_t sent_ns;      /* when the last tick's commands went out (0: none yet) */
-    int64_t cmd_gap_ns;   /* this tick's commands after the last tick's (CSV cmd_gap_us) */
-    int64_t wake_late_ns; /* this tick woke this late (the loop sets it; 0 in virtual time) */
-    double t_tick;        /* this tick's task time */
-    mca_hist_t jitter, compute, ctrl_time;
-    int64_t jitter_first_due_ns, jitter_last_due_ns; /* the wake-ups in jitter were due in this span */
-    mca_hist_t compute_ab[2];          /* --dds-ab: whole tick with publishing [0] off, [1] on */
-    double compute_ab_short_sum_ns[2]; /* the same, ticks shorter than half a period only */
-    uint64_t compute_ab_short_n[2];
-    double min_d, min_d_t;
-    int64_t min_d_stamp;
-    mca_tick_info_t info;
-    mca_dds_snapshot_t snap;
-    mca_ros2_config_t ros2; /* the bridge's ROS 2 topics (start-up only) */
-    int64_t pct_cache[6];
-    int sched_fifo, mem_locked, dma_fd;
-    int non_rt_pinned; /* rt.cpu: the non-rt threads were moved off the loop's CPU */
-
-    /* CSV: rt -> writer */
-    mca_ring_t csv_ring;
-    unsigned char *csv_storage;
-    FILE *csv;
-    mca_daemon_csv_rec_t csv_rec; /* rt scratch */
-    mca_daemon_csv_rec_t csv_out; /* writer scratch */
-    mca_tick_csv_layout_t csv_layout;
-
-    /* figures: rt -> supervisor, once a second */
-    mca_ring_t sum_ring;
-    _Alignas(8) unsigned char sum_storage[MCA_RING_STORAGE_SIZE(sizeof(mca_daemon_summary_t), 4)];
-    mca_daemon_summary_t sum_rt, sum_main;
-};
+#include "daemon__state.h"
+#include "daemon__plausibility.h"
 
 static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
 static void log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len);
@@ -150,13 +42,6 @@ const char *mca_daemon_state_name(int s) {
     return s >= 0 && s <= MCA_DAEMON_FAULT ? state_names[s] : "?";
 }
 
-static int64_t now_ns(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * NS_PER_S + ts.tv_nsec;
-}
-
-#define LOG0(d, lvl, fmt) mca_rtlog(&(d)->log, lvl, fmt, 0, 0, 0, 0, 0, NULL)
 /* codes of mca_rtlog_code() records (formatted by log_format, non-rt) */
 enum { LOGC_FAULT = 1, LOGC_ARM_FAULT_TOO = 2 };
 /* fault_detail of MCA_DAEMON_FAULT_FEEDBACK when the arm's link refused the feedback (arm_code: its
@@ -165,7 +50,6 @@ enum { LOGC_FAULT = 1, LOGC_ARM_FAULT_TOO = 2 };
 
 /* fault_detail of MCA_DAEMON_FAULT_ARM */
 enum { ARM_FAULT_REPORTS = 1, ARM_FAULT_BRAKES = 2, ARM_FAULT_NOT_SERVO = 3 };
-#define LOGN(d, lvl, fmt, n, a0, a1, a2, a3, txt) mca_rtlog(&(d)->log, lvl, fmt, n, a0, a1, a2, a3, txt)
 
 /* What ROS 2 sees of the cell: names from the scenario and the URDFs, bases, capsule radii. */
 static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err, size_t errlen) {
@@ -213,88 +97,6 @@ static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err,
 /* --dds-ab: tick @p n publishes only in the odd blocks; without it every tick publishes */
 static inline int dds_ab_publishes(const mca_daemon_t *d, uint64_t n) {
     return d->opts.dds_ab_block == 0 || (n / d->opts.dds_ab_block) % 2 == 1;
-}
-
-/* ---------------------------------------------------------------- feedback plausibility (rt) */
-
-static const char *const fb_fault_names[] = {
-    "none",        "joint-count",    "non-finite",    "frame-backwards",
-    "frame-ahead", "position-limit", "velocity-limit"};
-/* what each check means, for the fault text */
-static const char *const fb_fault_what[] = {
-    "",
-    "joint count differs from the cell",
-    "position or velocity NaN/Inf",
-    "frame id runs backwards",
-    "frame id ahead of every command sent",
-    "position outside the joint limits by more than the margin",
-    "velocity above 1.5 x the joint's limit",
-};
-
-const char *mca_feedback_fault_name(int kind) {
-    return kind >= 0 && kind <= MCA_FB_VELOCITY ? fb_fault_names[kind] : "?";
-}
-
-/* Bounds of arm a's plausible feedback from its model (start-up): the URDF limits -+ the margin (plus
- * 6 sigma of a sim arm's measurement noise), MCA_FB_VELOCITY_FACTOR x the velocity limit. */
-static void feedback_bounds(mca_daemon_t *d, int a) {
-    const mca_cell_arm_t *ca = &d->cell.arm[a];
-    const mca_backend_def_t *be = mca_backend_get(ca->backend);
-    const double margin = MCA_FB_POSITION_MARGIN + (be->feedback_margin ? be->feedback_margin(ca) : 0.0);
-    for (int j = 0; j < d->dof[a]; j++) {
-        const mca_joint_model_t *jm = &d->ccfg.chain[a].joint[j];
-        d->fb_lo[a][j] = jm->lower - margin; /* -inf for a continuous joint */
-        d->fb_hi[a][j] = jm->upper + margin;
-        d->fb_vmax[a][j] = MCA_FB_VELOCITY_FACTOR * jm->vel_limit;
-    }
-}
-
-/* The one plausibility check of a feedback sample of arm a (mca_feedback_fault_t, in that order); the
- * frame id only when @p frames (not at start-up: the first sample may answer an earlier run's command).
- * On a failure, *joint (-1: the whole sample), *value and *bound say what failed. */
-static int feedback_check(const mca_daemon_t *d, int a, const mca_arm_feedback_t *fb, int frames, int *joint,
-                          double *value, double *bound) {
-    *joint = -1;
-    if (fb->n != d->dof[a]) {
-        *value = fb->n;
-        *bound = d->dof[a];
-        return MCA_FB_JOINT_COUNT;
-    }
-    if (frames && (int32_t)(fb->frame_id - d->fb_frame[a]) < 0) {
-        *value = fb->frame_id;
-        *bound = d->fb_frame[a];
-        return MCA_FB_FRAME_BACKWARDS;
-    }
-    if (frames && (int32_t)(fb->frame_id - d->frame_id) > 0) {
-        *value = fb->frame_id;
-        *bound = d->frame_id;
-        return MCA_FB_FRAME_AHEAD;
-    }
-    for (int j = 0; j < fb->n; j++) {
-        if (!isfinite(fb->position[j]) || !isfinite(fb->velocity[j])) {
-            *joint = j;
-            *value = isfinite(fb->position[j]) ? fb->velocity[j] : fb->position[j];
-            *bound = 0.0;
-            return MCA_FB_NONFINITE;
-        }
-    }
-    for (int j = 0; j < fb->n; j++) {
-        if (fb->position[j] < d->fb_lo[a][j] || fb->position[j] > d->fb_hi[a][j]) {
-            *joint = j;
-            *value = fb->position[j];
-            *bound = fb->position[j] < d->fb_lo[a][j] ? d->fb_lo[a][j] : d->fb_hi[a][j];
-            return MCA_FB_POSITION;
-        }
-    }
-    for (int j = 0; j < fb->n; j++) {
-        if (fabs(fb->velocity[j]) > d->fb_vmax[a][j]) {
-            *joint = j;
-            *value = fb->velocity[j];
-            *bound = d->fb_vmax[a][j];
-            return MCA_FB_VELOCITY;
-        }
-    }
-    return MCA_FB_OK;
 }
 
 /* ---------------------------------------------------------------- start-up */
@@ -368,7 +170,7 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
                 /* the first tick's command starts from this sample: the same plausibility check */
                 int joint;
                 double value, bound;
-                const int kind = feedback_check(d, a, &fb, 0, &joint, &value, &bound);
+                const int kind = mcad_feedback_check(d, a, &fb, 0, &joint, &value, &bound);
                 if (kind == MCA_FB_JOINT_COUNT) {
                     snprintf(err, errlen, "arm '%s': answers with %d joints, the model has %d",
                              d->cell.scn.arm[a].name, fb.n, d->dof[a]);
@@ -377,8 +179,8 @@ static int handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
                 if (kind != MCA_FB_OK) {
                     snprintf(err, errlen,
                              "arm '%s': implausible feedback at start (%s: %s): joint %d: %g (bound %g)",
-                             d->cell.scn.arm[a].name, fb_fault_names[kind], fb_fault_what[kind], joint, value,
-                             bound);
+                             d->cell.scn.arm[a].name, mca_feedback_fault_name(kind), mcad_fb_fault_what[kind],
+                             joint, value, bound);
                     return MCA_EINVAL;
                 }
                 d->fb_frame[a] = fb.frame_id;
@@ -522,7 +324,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         for (int j = 0; j < d->dof[a]; j++) {
             d->dec[a][j] = cell->arm[a].dec_limit[j] > 0.0 ? cell->arm[a].dec_limit[j] : 10.0;
         }
-        feedback_bounds(d, a);
+        mcad_feedback_bounds(d, a);
     }
     d->fault_arm = -1;
     d->brake_rest_t = -1.0;
@@ -733,7 +535,7 @@ static void fault_describe(const mca_daemon_t *d, int fault, int arm, int detail
         }
         snprintf(buf, len, "arm %s sends implausible feedback (%s): %s", name,
                  mca_feedback_fault_name(detail),
-                 detail > 0 && detail <= MCA_FB_VELOCITY ? fb_fault_what[detail] : "?");
+                 detail > 0 && detail <= MCA_FB_VELOCITY ? mcad_fb_fault_what[detail] : "?");
         break;
     default:
         snprintf(buf, len, "%s", fault ? "?" : "");
@@ -776,10 +578,10 @@ static void feedback_implausible(mca_daemon_t *d, int a, int kind, int joint, do
     if (d->implausible[a]++ == 0) {
         if (joint >= 0) {
             LOGN(d, MCA_LOG_ERR, "arm %g joint %g: implausible feedback, dropped: %g (bound %g): %s", 4, a,
-                 joint, value, bound, fb_fault_what[kind]);
+                 joint, value, bound, mcad_fb_fault_what[kind]);
         } else {
             LOGN(d, MCA_LOG_ERR, "arm %g: implausible feedback, dropped: %g (bound %g): %s", 3, a, value,
-                 bound, 0, fb_fault_what[kind]);
+                 bound, 0, mcad_fb_fault_what[kind]);
         }
     }
     const int state = atomic_load_explicit(&d->state, memory_order_relaxed);
@@ -791,8 +593,8 @@ static void feedback_implausible(mca_daemon_t *d, int a, int kind, int joint, do
     }
 }
 
-/* Read every arm's feedback; checks each sample (feedback_check), counts lost cycles and latches arm/link
- * faults. */
+/* Read every arm's feedback; checks each sample (mcad_feedback_check), counts lost cycles and latches
+ * arm/link faults. */
 static void read_feedback(mca_daemon_t *d, double t) {
     const int running = atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING;
     for (int a = 0; a < d->n_arms; a++) {
@@ -801,7 +603,7 @@ static void read_feedback(mca_daemon_t *d, double t) {
         int joint = -1, kind = MCA_FB_OK;
         double value = 0.0, bound = 0.0;
         if (rc == MCA_OK || rc == MCA_EFAULT) {
-            kind = feedback_check(d, a, &fb, 1, &joint, &value, &bound);
+            kind = mcad_feedback_check(d, a, &fb, 1, &joint, &value, &bound);
         }
         if (kind != MCA_FB_OK) {
             /* not integrated: q, fb and the frame id stay the last good sample's. Not a lost cycle either:
