@@ -85,7 +85,7 @@ struct mca_daemon {
     int fault;                     /* mca_daemon_fault_t; latched */
     int ctrl_fault;
     int fault_code; /* negative MCA_E* for DDS */
-    /* The fault is latched as a code and numbers (no text on the rt path); fault_describe() makes the
+    /* The fault is latched as a code and numbers (no text on the rt path); mcad_fault_describe() makes the
      * text in the non-rt threads (log drainer, summary, DDS publisher), which read these once the record or
      * snapshot that carries the fault reached them (written once, before, by the loop). */
     int fault_detail;   /* ARM: ARM_FAULT_*; FEEDBACK: mca_feedback_fault_t; CONTROLLER: mca_ctrl_fault_t */
