@@ -36,6 +36,7 @@
 #include "daemon__arms.h"
 #include "daemon__stream.h"
 #include "daemon__publish.h"
+#include "daemon__csv.h"
 
 static void compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s);
 
@@ -159,23 +160,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
         rc = mcad_publish_open(d, err, errlen);
     }
     if (rc == MCA_OK && opts->csv_path) {
-        d->csv = fopen(opts->csv_path, "w");
-        const size_t sz = MCA_RING_STORAGE_SIZE(sizeof(mca_daemon_csv_rec_t), MCA_DAEMON_CSV_CAPACITY);
-        d->csv_storage = aligned_alloc(64, sz);
-        if (!d->csv || !d->csv_storage) {
-            mca_errbuf_printf(err, errlen, "%s: cannot write the CSV file", opts->csv_path);
-            rc = MCA_EIO;
-        } else {
-            rc = mca_ring_init(&d->csv_ring, d->csv_storage, sz, sizeof(mca_daemon_csv_rec_t),
-                               MCA_DAEMON_CSV_CAPACITY);
-            memset(d->csv_storage, 0, sz); /* pre-fault */
-            /* mca-sim's columns, plus the daemon state and the commands, numbers exact */
-            d->csv_layout = (mca_tick_csv_layout_t){.n_arms = d->n_arms, .exact = 1, .daemon_cols = 1};
-            for (int a = 0; a < d->n_arms; a++) {
-                d->csv_layout.dof[a] = d->dof[a];
-            }
-            mca_tick_csv_header(d->csv, &d->csv_layout);
-        }
+        rc = mcad_csv_open(d, err, errlen);
     }
     if (rc != MCA_OK) {
         mca_daemon_close(d);
@@ -187,25 +172,6 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
 }
 
 /* ---------------------------------------------------------------- the tick (rt) */
-
-static void push_csv(mca_daemon_t *d, double t, int state, int64_t stamp_ns) {
-    if (!d->csv) {
-        return;
-    }
-    mca_daemon_csv_rec_t *r = &d->csv_rec;
-    r->t = t;
-    r->state = state;
-    memcpy(r->q, d->q, sizeof r->q);
-    for (int a = 0; a < d->n_arms; a++) {
-        for (int j = 0; j < d->dof[a]; j++) {
-            r->qdot_cmd[a][j] = d->cmd[a].velocity[j];
-        }
-    }
-    r->info = d->info;
-    r->cmd_gap_ns = d->cmd_gap_ns;
-    r->wake_ns = stamp_ns;
-    mca_ring_push(&d->csv_ring, r);
-}
 
 /* A running tick whose PDNN ran out of its budget: counted; the first logged with its figures, the ones
  * after it as a count once a second (budget_log_count), so a stalling host does not flood the log ring. */
@@ -365,7 +331,7 @@ int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         mcad_fill_snapshot(d, stamp_ns, state);
         mca_dds_bridge_push(d->dds, &d->snap);
     }
-    push_csv(d, t, state, stamp_ns);
+    mcad_push_csv(d, t, state, stamp_ns);
     atomic_store_explicit(&d->ticks, n + 1, memory_order_release);
     return state;
 }
@@ -618,17 +584,6 @@ int mca_daemon_state(const mca_daemon_t *d) {
     return atomic_load(&((mca_daemon_t *)d)->state);
 }
 
-static void csv_write(mca_daemon_t *d, const mca_daemon_csv_rec_t *r) {
-    const mca_tick_csv_row_t row = {.t = r->t,
-                                    .q = r->q,
-                                    .info = &r->info,
-                                    .state = r->state,
-                                    .qdot_cmd = r->qdot_cmd,
-                                    .cmd_gap_ns = r->cmd_gap_ns,
-                                    .wake_ns = r->wake_ns};
-    mca_tick_csv_row(d->csv, &d->csv_layout, &row);
-}
-
 int mca_daemon_service(mca_daemon_t *d) {
     int n = mca_rtlog_drain(&d->log, d->opts.log);
     if (d->dds) {
@@ -637,15 +592,7 @@ int mca_daemon_service(mca_daemon_t *d) {
         n += mca_dds_bridge_supervise(d->dds, d->opts.log, "mcad: ");
     }
     if (d->csv) {
-        int rows = 0;
-        while (mca_ring_pop(&d->csv_ring, &d->csv_out) == MCA_OK) {
-            csv_write(d, &d->csv_out);
-            rows++;
-        }
-        if (rows) {
-            fflush(d->csv); /* a killed mcad leaves its CSV up to the last drain */
-        }
-        n += rows;
+        n += mcad_csv_drain(d);
     }
     return n;
 }
