@@ -1,53 +1,32 @@
 /* SPDX-License-Identifier: MIT */
-/* The controller daemon's core: arms + controller + DDS, the tick and the real-time loop (mca/daemon.h). */
+/* The controller daemon's core: arms + controller + DDS, the tick and the real-time loop (mca/daemon.h), in
+ * rooms by concern (docs/architecture.md): this file opens and closes a daemon (start-up, shut-down) and
+ * drains its rings (service thread); daemon__state.h holds its state. */
 #include "mca/daemon.h"
 
-#include <errno.h>
-#include <fcntl.h>
-#include <libgen.h> /* dirname */
-#include <limits.h> /* PATH_MAX */
-#include <malloc.h>
 #include <math.h>
-#include <sched.h>
-#ifdef MCA_TEST_HOOKS
-#include <signal.h> /* raise (debug_kill_after_ticks) */
-#endif
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <time.h>
 #include <unistd.h>
 
-#include "mca/dds_bridge.h"
-#include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_printf */
-#include "mca/prefix.h" /* mca_exe_prefix */
 #include "mca/scenario.h"
-#include "mca/tick_csv.h" /* mca_tick_csv_header, mca_tick_csv_row */
-#ifdef MCA_TEST_HOOKS
-#include "mca/daemon_test.h"
-#endif
 
-#include "daemon__backends.h" /* mca_backend_get */
-#include "daemon__state.h"
-#include "daemon__plausibility.h"
-#include "daemon__fault.h"
 #include "daemon__arms.h"
-#include "daemon__stream.h"
-#include "daemon__publish.h"
+#include "daemon__backends.h" /* mca_backend_check_ids */
 #include "daemon__csv.h"
-#include "daemon__summary.h"
-#include "daemon__loop.h"
-#include "daemon__tick.h"
+#include "daemon__fault.h" /* mcad_log_format */
+#include "daemon__loop.h"  /* mcad_pin_non_rt */
+#include "daemon__plausibility.h"
+#include "daemon__publish.h"
+#include "daemon__state.h"
 
 static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
 
 const char *mca_daemon_state_name(int s) {
     return s >= 0 && s <= MCA_DAEMON_FAULT ? state_names[s] : "?";
 }
-
-/* ---------------------------------------------------------------- start-up */
 
 int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen) {
@@ -141,12 +120,6 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     return MCA_OK;
 }
 
-#ifdef MCA_TEST_HOOKS
-void mca_daemon_request_stall(mca_daemon_t *d) {
-    atomic_store(&d->stall_request, 1);
-}
-#endif
-
 int mca_daemon_service(mca_daemon_t *d) {
     int n = mca_rtlog_drain(&d->log, d->opts.log);
     if (d->dds) {
@@ -185,38 +158,3 @@ void mca_daemon_close(mca_daemon_t *d) {
     }
     free(d);
 }
-
-const mca_tick_info_t *mca_daemon_tick_info(const mca_daemon_t *d) {
-    return &d->info;
-}
-
-const mca_controller_t *mca_daemon_controller(const mca_daemon_t *d) {
-    return &d->ctrl;
-}
-
-const double *mca_daemon_positions(const mca_daemon_t *d, int a) {
-    return a >= 0 && a < d->n_arms ? d->q[a] : NULL;
-}
-
-void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, double t) {
-    mca_controller_raise_fault(&d->ctrl, ctrl_fault, t);
-}
-
-const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a) {
-    return a >= 0 && a < d->n_arms ? &d->cmd[a] : NULL;
-}
-
-mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a) {
-    return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
-}
-
-#ifdef MCA_TEST_HOOKS
-mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {
-    if (!d || !arm || a < 0 || a >= d->n_arms) {
-        return NULL;
-    }
-    mca_arm_t *old = d->arm[a];
-    d->arm[a] = arm;
-    return old;
-}
-#endif
