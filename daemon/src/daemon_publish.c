@@ -14,7 +14,6 @@
 #include "mca/errbuf.h" /* mca_errbuf_printf */
 #include "mca/prefix.h" /* mca_exe_prefix */
 
-
 /* What ROS 2 sees of the cell: names from the scenario and the URDFs, bases, capsule radii. */
 static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err, size_t errlen) {
     const mca_cell_t *cell = &d->cell;
