@@ -3,7 +3,8 @@
  * ("backend: NAME"), reads and checks its keys of a cell arm, opens the arm and says what the daemon must
  * know of it; its own section of a cell arm comes with its schema. The cell reader builds the arm schema from
  * the table and looks a backend up by name, the daemon by id; neither switches on names nor knows sections.
- * Private to mca_daemon (cell.c, daemon.c, mcad_main.c). Start-up only, but fault_detail (main thread). */
+ * Private to mca_daemon (cell.c, the daemon's rooms daemon*.c, mcad_main.c). Start-up only, but fault_detail
+ * (main thread). */
 #ifndef MCA_DAEMON__BACKENDS_H
 #define MCA_DAEMON__BACKENDS_H
 

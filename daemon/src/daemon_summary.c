@@ -1,0 +1,199 @@
+/* SPDX-License-Identifier: MIT */
+/* Summary (daemon__summary.h): the run's figures from the loop's data (RT thread once a second, or after the
+ * loop), their read-out and print-out (service thread). */
+#include "daemon__summary.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mca/err.h"
+
+#include "daemon__fault.h" /* mcad_fault_describe, mcad_link_ignored_text */
+
+/* Figures from the loop's own data: call from the loop, or once it has ended (rt safe: no formatting). */
+void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
+    memset(s, 0, sizeof *s);
+    s->state = mca_daemon_state(d);
+    s->ticks = mca_daemon_ticks(d);
+    s->overruns = d->overruns;
+    s->pdnn_budget_time = d->budget_hits[0];
+    s->pdnn_budget_steps = d->budget_hits[1];
+    s->pdnn_budget_us = (double)d->ctrl.cfg.pdnn_budget_ns * 1e-3;
+    s->pdnn_step_budget = mca_controller_step_budget(&d->ctrl.cfg);
+    s->pdnn_max_steps = d->ctrl.cfg.pdnn.max_steps;
+    s->skipped_periods = d->skipped;
+    s->stalls = d->stalls;
+    s->stall_max_ns = d->stall_max_ns;
+    s->jitter_p50_ns = mca_hist_percentile(&d->jitter, 0.5);
+    s->jitter_p99_ns = mca_hist_percentile(&d->jitter, 0.99);
+    s->jitter_p999_ns = mca_hist_percentile(&d->jitter, 0.999);
+    s->jitter_max_ns = d->jitter.max_ns;
+    s->compute_p50_ns = mca_hist_percentile(&d->compute, 0.5);
+    s->compute_p99_ns = mca_hist_percentile(&d->compute, 0.99);
+    s->compute_max_ns = d->compute.max_ns;
+    s->ctrl_p50_ns = mca_hist_percentile(&d->ctrl_time, 0.5);
+    s->ctrl_p99_ns = mca_hist_percentile(&d->ctrl_time, 0.99);
+    s->ctrl_max_ns = d->ctrl_time.max_ns;
+    s->dds_ab_block = d->dds ? d->opts.dds_ab_block : 0;
+    for (int k = 0; k < 2; k++) {
+        s->dds_ab_n[k] = d->compute_ab[k].count;
+        s->dds_ab_p50_ns[k] = mca_hist_percentile(&d->compute_ab[k], 0.5);
+        s->dds_ab_p99_ns[k] = mca_hist_percentile(&d->compute_ab[k], 0.99);
+        s->dds_ab_mean_ns[k] = mca_hist_mean(&d->compute_ab[k]);
+        s->dds_ab_short_n[k] = d->compute_ab_short_n[k];
+        s->dds_ab_short_mean_ns[k] =
+            d->compute_ab_short_n[k] ? d->compute_ab_short_sum_ns[k] / (double)d->compute_ab_short_n[k] : 0.0;
+    }
+    s->min_distance = d->min_d;
+    s->min_distance_t = d->min_d_t;
+    s->fault = d->fault;
+    s->ctrl_fault = d->ctrl_fault;
+    s->fault_arm = d->fault ? d->fault_arm : -1;
+    s->feedback_fault = d->fault == MCA_DAEMON_FAULT_FEEDBACK ? d->feedback_fault : MCA_FB_OK;
+    s->n_arms = d->n_arms;
+    for (int a = 0; a < d->n_arms; a++) {
+        s->implausible_samples += d->implausible[a];
+        memcpy(s->arm_name[a], d->cell.scn.arm[a].name, sizeof s->arm_name[a]);
+        mca_arm_stats(d->arm[a], &s->link[a]);
+    }
+    /* the record, not the text (this runs in the loop once a second): mca_daemon_summary() makes the text */
+    s->fault_detail = d->fault_detail;
+    s->fault_arm_code = d->fault_arm_code;
+    s->fault_count = d->fault_count;
+    s->ctrl_why = d->ctrl_why;
+    s->fault_t = d->fault_t;
+    s->log_dropped = mca_rtlog_dropped(&d->log);
+    if (d->csv) {
+        mca_ring_stats_t rs;
+        mca_ring_stats(&d->csv_ring, &rs);
+        s->csv_dropped = rs.dropped;
+    }
+    s->brake_t = d->brake_active ? d->brake_t0 : -1.0;
+    s->stop_duration_s = d->brake_active && d->brake_rest_t >= 0.0 ? d->brake_rest_t - d->brake_t0 : -1.0;
+    s->brake_fallback_ticks = d->brake_fallback;
+    s->brake_forced_ticks = d->brake_forced;
+    s->max_dv_over_dt_dec = d->brake_max_dv;
+    s->deadlock = d->deadlock;
+    s->deadlock_arm = d->deadlock_arm;
+    s->deadlocks = d->deadlocks;
+    s->sched_fifo = d->sched_fifo;
+    s->mem_locked = d->mem_locked;
+    s->dma_latency_held = d->dma_fd >= 0 || (d->sched_fifo && d->cell.rt.dma_latency && !d->opts.no_rt);
+}
+
+void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
+    if (d->thread_started && !mca_daemon_finished(d)) {
+        /* the loop runs: take its newest published figures (no reads of its live data) */
+        while (mca_ring_pop(&d->sum_ring, &d->sum_main) == MCA_OK) {
+        }
+        *s = d->sum_main;
+        s->state = mca_daemon_state(d);
+        s->ticks = mca_daemon_ticks(d);
+    } else {
+        mcad_compute_summary(d, s);
+    }
+    if (s->fault) {
+        mcad_fault_describe(d, s->fault, s->fault_arm, s->fault_detail, s->fault_arm_code, s->fault_count,
+                            &s->ctrl_why, s->fault_text, sizeof s->fault_text);
+    }
+}
+
+void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
+    fprintf(f,
+            "<6>mcad: summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "
+            "memory locked %s\n",
+            mca_daemon_state_name(s->state), (unsigned long long)s->ticks, (unsigned long long)s->overruns,
+            (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no",
+            s->mem_locked ? "yes" : "no");
+    fprintf(f,
+            "<6>mcad: summary: loop stalls (> %d periods between two ticks' commands) %llu, the longest %.1f "
+            "ms\n",
+            MCA_DAEMON_STALL_PERIODS, (unsigned long long)s->stalls, (double)s->stall_max_ns / 1e6);
+    fprintf(f, "<6>mcad: summary: wake-up jitter p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
+            (double)s->jitter_p50_ns / 1e3, (double)s->jitter_p99_ns / 1e3, (double)s->jitter_p999_ns / 1e3,
+            (double)s->jitter_max_ns / 1e3);
+    fprintf(f,
+            "<6>mcad: summary: compute time (whole tick) p50 %.1f us, p99 %.1f us, max %.1f us; controller "
+            "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
+            (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3, (double)s->compute_max_ns / 1e3,
+            (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3, (double)s->ctrl_max_ns / 1e3);
+    char steps[64];
+    if (s->pdnn_step_budget > 0) {
+        snprintf(steps, sizeof steps, "%d steps (cap %d)", s->pdnn_step_budget, s->pdnn_max_steps);
+    } else {
+        snprintf(steps, sizeof steps, "the cap %d steps", s->pdnn_max_steps);
+    }
+    fprintf(f,
+            "<%d>mcad: summary: PDNN out of its budget (%.3g us, %s): %llu ticks by the clock, %llu by steps "
+            "(no faults: short answers repaired)\n",
+            s->pdnn_budget_time + s->pdnn_budget_steps ? 5 : 6, s->pdnn_budget_us, steps,
+            (unsigned long long)s->pdnn_budget_time, (unsigned long long)s->pdnn_budget_steps);
+    if (s->dds_ab_block && s->dds_ab_n[0] && s->dds_ab_n[1] && s->dds_ab_p50_ns[0] && s->dds_ab_p99_ns[0]) {
+        fprintf(
+            f,
+            "<6>mcad: summary: dds on/off (blocks of %u ticks): whole tick publishing off p50 %.1f us, "
+            "p99 %.1f us, mean %.2f us (%llu ticks); on p50 %.1f us, p99 %.1f us, mean %.2f us (%llu ticks); "
+            "ratio on/off p50 %.3f, p99 %.3f, mean %.3f\n",
+            s->dds_ab_block, (double)s->dds_ab_p50_ns[0] / 1e3, (double)s->dds_ab_p99_ns[0] / 1e3,
+            s->dds_ab_mean_ns[0] / 1e3, (unsigned long long)s->dds_ab_n[0], (double)s->dds_ab_p50_ns[1] / 1e3,
+            (double)s->dds_ab_p99_ns[1] / 1e3, s->dds_ab_mean_ns[1] / 1e3, (unsigned long long)s->dds_ab_n[1],
+            (double)s->dds_ab_p50_ns[1] / (double)s->dds_ab_p50_ns[0],
+            (double)s->dds_ab_p99_ns[1] / (double)s->dds_ab_p99_ns[0],
+            s->dds_ab_mean_ns[1] / s->dds_ab_mean_ns[0]);
+        if (s->dds_ab_short_n[0] && s->dds_ab_short_n[1] && s->dds_ab_short_mean_ns[0] > 0.0) {
+            fprintf(f,
+                    "<6>mcad: summary: dds on/off, ticks shorter than half a period: off mean %.2f us (%llu "
+                    "ticks), "
+                    "on mean %.2f us (%llu ticks); ratio on/off mean %.3f\n",
+                    s->dds_ab_short_mean_ns[0] / 1e3, (unsigned long long)s->dds_ab_short_n[0],
+                    s->dds_ab_short_mean_ns[1] / 1e3, (unsigned long long)s->dds_ab_short_n[1],
+                    s->dds_ab_short_mean_ns[1] / s->dds_ab_short_mean_ns[0]);
+        }
+    }
+    if (isfinite(s->min_distance)) {
+        fprintf(f, "<6>mcad: summary: minimum distance %.4f m at t = %.3f s\n", s->min_distance,
+                s->min_distance_t);
+    } else {
+        fprintf(f, "<6>mcad: summary: minimum distance n/a\n");
+    }
+    if (s->brake_t >= 0.0) {
+        fprintf(f,
+                "<%d>mcad: summary: braking from t = %.3f s, %s %.3f s, keep-direction fallback ticks %llu "
+                "(past the deadline %llu), max |dv|/(dec dt) %.4f\n",
+                s->brake_fallback_ticks ? 4 : 6, s->brake_t,
+                s->stop_duration_s >= 0.0 ? "at rest after" : "not at rest after",
+                s->stop_duration_s >= 0.0 ? s->stop_duration_s : 0.0,
+                (unsigned long long)s->brake_fallback_ticks, (unsigned long long)s->brake_forced_ticks,
+                s->max_dv_over_dt_dec);
+    }
+    if (s->deadlocks || s->deadlock) {
+        fprintf(f, "<6>mcad: summary: deadlocks %d (state now %s)\n", s->deadlocks,
+                s->deadlock == MCA_DEADLOCK_BACK_OFF ? "back-off"
+                : s->deadlock == MCA_DEADLOCK_WAIT   ? "wait"
+                                                     : "none");
+    }
+    if (s->fault) {
+        fprintf(f, "<3>mcad: summary: faults: 1 (at t = %.3f s: %s)\n", s->fault_t, s->fault_text);
+    } else {
+        fprintf(f, "<6>mcad: summary: faults: none\n");
+    }
+    for (int a = 0; a < s->n_arms && a < MCA_MAX_ARMS; a++) {
+        /* what each link took and why it ignored the rest: a field diagnosis starts here */
+        const mca_arm_stats_t *st = &s->link[a];
+        const int unusual =
+            st->rx_bad_length || st->rx_bad_counter || st->rx_implausible || st->bus_errors || st->rx_dropped;
+        char ign[160];
+        mcad_link_ignored_text(st, ign, sizeof ign);
+        fprintf(f, "<%d>mcad: summary: arm %.32s link: commands sent %llu, feedback taken %llu; %s\n",
+                unusual ? 4 : 6, s->arm_name[a], (unsigned long long)st->commands_sent,
+                (unsigned long long)st->feedback_received, ign);
+    }
+    if (s->implausible_samples) {
+        fprintf(f, "<4>mcad: summary: implausible feedback samples dropped %llu\n",
+                (unsigned long long)s->implausible_samples);
+    }
+    if (s->log_dropped || s->csv_dropped) {
+        fprintf(f, "<4>mcad: summary: dropped log records %llu, CSV rows %llu\n",
+                (unsigned long long)s->log_dropped, (unsigned long long)s->csv_dropped);
+    }
+}
