@@ -69,6 +69,7 @@ static void finish(mca_body_dist_t *out, const double p_axis[3], double radius, 
     mca_v3_set(out->n, n);
     out->d = d;
     out->exact = exact;
+    out->iterations = 0;
 }
 
 /* ---- plane ---- */
@@ -434,8 +435,8 @@ static double cyl_escape(const cyl_frame_t *f, const double bl[3], double n[3], 
 int mca_capsule_cylinder_distance(const mca_capsule_t *cap, const mca_body_cylinder_t *cyl,
                                   mca_body_dist_t *out) {
     cyl_frame_t f;
-    double x[3], c[3], lo = 0.0, hi = 1.0, glo, ghi, flo, fhi, t, bestf, best_t;
-    int side = 0, inside = 0;
+    double x[3], c[3], lo = 0.0, hi = 1.0, glo, ghi, flo, fhi, t = 0.0, best_t;
+    int side = 0, inside = 0, iters = 0;
     if (!capsule_ok(cap) || !cyl_ok(cyl, f.w) || out == NULL) {
         return MCA_EINVAL;
     }
@@ -457,25 +458,25 @@ int mca_capsule_cylinder_distance(const mca_capsule_t *cap, const mca_body_cylin
         best_t = 1.0;
     } else {
         /* Illinois regula falsi on f' over the bracket [lo, hi] (f'(lo) < 0 < f'(hi)), bisection after 40
-         * steps; stops when the bracket is MCA_BODY_CYL_TOL_T wide or f' is exactly 0. */
-        best_t = flo <= fhi ? 0.0 : 1.0;
-        bestf = fmin(flo, fhi);
-        for (int it = 0; it < MCA_BODY_CYL_MAX_ITER && hi - lo > MCA_BODY_CYL_TOL_T; it++) {
+         * steps; stops when the bracket is MCA_BODY_CYL_TOL_T wide or f' is exactly 0. The answer is the
+         * bracket's midpoint, not the evaluated point of least f: near the minimum f is flat to rounding,
+         * and the least computed f can lie ~1e-8 away from the root (the sign of f' is what is accurate). */
+        int stationary = 0;
+        for (; iters < MCA_BODY_CYL_MAX_ITER && hi - lo > MCA_BODY_CYL_TOL_T; iters++) {
             double g, fv;
-            t = it < 40 ? lo - glo * (hi - lo) / (ghi - glo) : 0.5 * (lo + hi);
+            t = iters < 40 ? lo - glo * (hi - lo) / (ghi - glo) : 0.5 * (lo + hi);
             if (!(t > lo && t < hi)) {
                 t = 0.5 * (lo + hi);
             }
             fv = cyl_eval(&f, t, x, c, &g);
-            if (fv < bestf) {
-                bestf = fv;
-                best_t = t;
-            }
             if (fv == 0.0) {
                 inside = 1;
+                iters++;
                 break;
             }
             if (g == 0.0) {
+                stationary = 1;
+                iters++;
                 break;
             }
             if (g < 0.0) {
@@ -494,6 +495,7 @@ int mca_capsule_cylinder_distance(const mca_capsule_t *cap, const mca_body_cylin
                 side = 1;
             }
         }
+        best_t = stationary || inside ? t : 0.5 * (lo + hi);
     }
 
     double pa[3], q[3], n[3], diff[3], dist, dummy;
@@ -504,6 +506,7 @@ int mca_capsule_cylinder_distance(const mca_capsule_t *cap, const mca_body_cylin
             mca_v3_add(q, c, cyl->centre);
             seg_point(pa, cap->a, cap->b, f.u, best_t);
             finish(out, pa, cap->radius, q, n, dist - cap->radius, 1);
+            out->iterations = iters;
             return MCA_OK;
         }
     }
@@ -514,6 +517,7 @@ int mca_capsule_cylinder_distance(const mca_capsule_t *cap, const mca_body_cylin
     mca_v3_add(pa, pl, cyl->centre);
     mca_v3_axpy(q, pa, depth, n);
     finish(out, pa, cap->radius, q, n, -(depth + cap->radius), depth > 0.0 ? 0 : 1);
+    out->iterations = iters;
     return MCA_OK;
 }
 

@@ -17,51 +17,52 @@
 #define EXIT_BAD_INPUT 2
 
 static void usage(FILE *f) {
-    fputs(
-        "usage: mca-geom <command> [options]\n"
-        "\n"
-        "commands:\n"
-        "  segdist [--method closed|lsdm|lsdm-cert] [--tol T] [--max-iter N]\n"
-        "      Minimum distance between segments AB and CD. Reads stdin, one pair per line:\n"
-        "        ax ay az bx by bz cx cy cz dx dy dz\n"
-        "      and prints per line: d px py pz ex ey ez iterations   (%.17g; P on AB, E on CD).\n"
-        "      Blank lines and lines whose first non-blank character is '#' are skipped.\n"
-        "      closed (default): exact closed form, iterations = 0.\n"
-        "      lsdm: the paper's LSDM, stops when the distance declines by less than T\n"
-        "            (default 1e-12; the paper uses 1e-5), at most N projections (default 200).\n"
-        "      lsdm-cert: LSDM that stops when a separating-plane certificate proves d within T.\n"
-        "      A line with the wrong count of numbers, a non-number, NaN or inf is an error:\n"
-        "      message with its line number on stderr, exit code 2 (lines before it are answered).\n"
-        "      An LSDM that hits the cap is still printed, with a warning on stderr.\n"
-        "\n"
-        "  fk --robot FILE.urdf [--tip LINK] q1 ... qn\n"
-        "      Forward kinematics at joint angles q [rad] (n = the chain's DOF). Prints\n"
-        "        root x y z / joint i NAME x y z (each joint origin) / ee x y z   (world frame, m).\n"
-        "      Bad URDF, unknown tip link, wrong number of q or non-numeric q: exit code 2.\n"
-        "      LINK defaults to the URDF's single leaf link (tool_tip in config/robots/).\n"
-        "\n"
-        "  armdist --robot-a A.urdf [--base-a x,y,z,roll,pitch,yaw] --qa q1,...,qn\n"
-        "          --robot-b B.urdf [--base-b x,y,z,roll,pitch,yaw] --qb q1,...,qm [--method closed|lsdm]\n"
-        "      Arm-to-arm link distances (capsules: axis distance minus both radii). Prints\n"
-        "        min LINK_A LINK_B d d_axis px py pz ex ey ez   (global minimum, P on A, E on B)\n"
-        "        a_to_b I J ... (per link of A)  /  b_to_a J I ... (per link of B)  /  iterations N\n"
-        "      Bad URDF, bad base or wrong number of q: exit code 2.\n"
-        "\n"
-        "  body\n"
-        "      Link capsule against a fixed body (mca/body.h). Reads stdin, one pair per line:\n"
-        "        KIND ax ay az bx by bz r  BODY...   (capsule A-B, radius r; then by KIND:)\n"
-        "        plane    px py pz nx ny nz                (half-space n.(x - p) <= 0)\n"
-        "        sphere   cx cy cz R\n"
-        "        capsule  cx cy cz dx dy dz R\n"
-        "        box      cx cy cz hx hy hz R00 R01 R02 R10 R11 R12 R20 R21 R22   (R row by row)\n"
-        "        cylinder cx cy cz wx wy wz h R            (axis w, half length h, radius R)\n"
-        "      and prints per line: d px py pz qx qy qz nx ny nz sx sy sz exact   (%.17g; P on the\n"
-        "      capsule's surface, Q on the body, N from the body to the capsule, S on the capsule's axis).\n"
-        "      Bad kind, count or number, or a body the library refuses: exit code 2 (lines before it are\n"
-        "      answered). Blank lines and '#' lines are skipped.\n"
-        "\n"
-        "  --help   this text\n",
-        f);
+    fputs("usage: mca-geom <command> [options]\n"
+          "\n"
+          "commands:\n"
+          "  segdist [--method closed|lsdm|lsdm-cert] [--tol T] [--max-iter N]\n"
+          "      Minimum distance between segments AB and CD. Reads stdin, one pair per line:\n"
+          "        ax ay az bx by bz cx cy cz dx dy dz\n"
+          "      and prints per line: d px py pz ex ey ez iterations   (%.17g; P on AB, E on CD).\n"
+          "      Blank lines and lines whose first non-blank character is '#' are skipped.\n"
+          "      closed (default): exact closed form, iterations = 0.\n"
+          "      lsdm: the paper's LSDM, stops when the distance declines by less than T\n"
+          "            (default 1e-12; the paper uses 1e-5), at most N projections (default 200).\n"
+          "      lsdm-cert: LSDM that stops when a separating-plane certificate proves d within T.\n"
+          "      A line with the wrong count of numbers, a non-number, NaN or inf is an error:\n"
+          "      message with its line number on stderr, exit code 2 (lines before it are answered).\n"
+          "      An LSDM that hits the cap is still printed, with a warning on stderr.\n"
+          "\n"
+          "  fk --robot FILE.urdf [--tip LINK] q1 ... qn\n"
+          "      Forward kinematics at joint angles q [rad] (n = the chain's DOF). Prints\n"
+          "        root x y z / joint i NAME x y z (each joint origin) / ee x y z   (world frame, m).\n"
+          "      Bad URDF, unknown tip link, wrong number of q or non-numeric q: exit code 2.\n"
+          "      LINK defaults to the URDF's single leaf link (tool_tip in config/robots/).\n"
+          "\n"
+          "  armdist --robot-a A.urdf [--base-a x,y,z,roll,pitch,yaw] --qa q1,...,qn\n"
+          "          --robot-b B.urdf [--base-b x,y,z,roll,pitch,yaw] --qb q1,...,qm [--method closed|lsdm]\n"
+          "      Arm-to-arm link distances (capsules: axis distance minus both radii). Prints\n"
+          "        min LINK_A LINK_B d d_axis px py pz ex ey ez   (global minimum, P on A, E on B)\n"
+          "        a_to_b I J ... (per link of A)  /  b_to_a J I ... (per link of B)  /  iterations N\n"
+          "      Bad URDF, bad base or wrong number of q: exit code 2.\n"
+          "\n"
+          "  body\n"
+          "      Link capsule against a fixed body (mca/body.h). Reads stdin, one pair per line:\n"
+          "        KIND ax ay az bx by bz r  BODY...   (capsule A-B, radius r; then by KIND:)\n"
+          "        plane    px py pz nx ny nz                (half-space n.(x - p) <= 0)\n"
+          "        sphere   cx cy cz R\n"
+          "        capsule  cx cy cz dx dy dz R\n"
+          "        box      cx cy cz hx hy hz R00 R01 R02 R10 R11 R12 R20 R21 R22   (R row by row)\n"
+          "        cylinder cx cy cz wx wy wz h R            (axis w, half length h, radius R)\n"
+          "      and prints per line: d px py pz qx qy qz nx ny nz sx sy sz exact iterations   (%.17g; P on "
+          "the\n"
+          "      capsule's surface, Q on the body, N from the body to the capsule, S on the capsule's axis;\n"
+          "      exact 0: the axis enters a cylinder and d is a lower bound; iterations: the cylinder's).\n"
+          "      Bad kind, count or number, or a body the library refuses: exit code 2 (lines before it are\n"
+          "      answered). Blank lines and '#' lines are skipped.\n"
+          "\n"
+          "  --help   this text\n",
+          f);
 }
 
 /* Parse a whole token as a finite double. */
@@ -469,9 +470,9 @@ static int cmd_body(int argc, char **argv) {
             status = EXIT_BAD_INPUT;
             goto out;
         }
-        printf("%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %d\n", r.d,
+        printf("%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %d %d\n", r.d,
                r.p[0], r.p[1], r.p[2], r.q[0], r.q[1], r.q[2], r.n[0], r.n[1], r.n[2], r.p_axis[0],
-               r.p_axis[1], r.p_axis[2], r.exact);
+               r.p_axis[1], r.p_axis[2], r.exact, r.iterations);
     }
 out:
     free(line);

@@ -87,6 +87,8 @@ typedef struct mca_body_dist {
     int exact;        /**< 1: d is the signed distance up to rounding (docs/segdist.md); 0: the capsule's
                            axis enters a cylinder and d is a lower bound (the capsule is no deeper than -d;
                            moving it by -d along n separates it) */
+    int iterations;   /**< root-finder steps of the cylinder (each one point-cylinder distance); 0 for the
+                           closed forms */
 } mca_body_dist_t;
 
 /** Cap on the 1-D root finder of the capsule-cylinder distance (never reached: bisection after 40). */
