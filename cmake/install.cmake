@@ -18,7 +18,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(MCA_EXPORTED core geom errbuf model arm sim_arm sim arm_can canopen dds)
+set(MCA_EXPORTED core body geom errbuf model arm sim_arm sim arm_can canopen dds)
 foreach(lib ${MCA_EXPORTED})
   set(t mca_${lib})
   if(NOT TARGET ${t})

@@ -34,11 +34,13 @@ core_links() {
     b=$(sed -n '/^set_target_properties(mca::core /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
     m=$(sed -n '/^set_target_properties(mca::model /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
     g=$(sed -n '/^set_target_properties(mca::geom /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
+    y=$(sed -n '/^set_target_properties(mca::body /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
     echo "$b" | grep -q 'INTERFACE_LINK_LIBRARIES' && ! echo "$b" | grep -qi 'cyaml\|urdf\|Threads\|ccd' &&
         echo "$m" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*CYAML.*urdfdom' &&
-        echo "$g" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*ccd'
+        echo "$g" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core.*ccd' &&
+        echo "$y" | grep -q 'INTERFACE_LINK_LIBRARIES.*mca::core' && ! echo "$y" | grep -qi 'ccd'
 }
-check "mca::core links no libcyaml, urdfdom, Threads or libccd; mca::model links mca::core, libcyaml, urdfdom; mca::geom mca::core, libccd" core_links
+check "mca::core links no libcyaml, urdfdom, Threads or libccd; mca::model links mca::core, libcyaml, urdfdom; mca::geom mca::core, libccd; mca::body mca::core and no libccd" core_links
 check "etc/mca/cells, etc/mca/dds" test -f "$P/etc/mca/cells/cup_stacking_sim.yaml" -a -f "$P/etc/mca/dds/loopback.xml"
 check "share/mca/robots, scenarios, ros2" test -f "$P/share/mca/robots/jaco2.urdf" -a -f "$P/share/mca/scenarios/cup_stacking.yaml" -a -f "$P/share/mca/ros2/mca.rviz"
 check "share/doc/mca" test -f "$P/share/doc/mca/daemon.md"

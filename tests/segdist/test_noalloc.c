@@ -11,6 +11,7 @@
 #include <ccd/ccd.h>
 
 #include "mca/armdist.h"
+#include "mca/body.h"
 #include "mca/err.h"
 #include "mca/obstacle.h"
 #include "mca/segdist.h"
@@ -111,6 +112,36 @@ int main(void) {
     int rc3 = mca_arm_obstacle_distances(&ca, &ka, both, 2, &ao);
     expect(n_alloc == before && rc3 == MCA_OK,
            "capsule-obstacle / capsule-capsule / arm-obstacles (GJK, SAT, libccd MPR) allocate nothing");
+
+    /* --- mca_body: every kind, separated and penetrating (each branch: segment closed form, box pieces and
+     * SAT, cylinder root finder and escapes) --- */
+    mca_body_t bodies[5];
+    memset(bodies, 0, sizeof bodies);
+    bodies[0].kind = MCA_BODY_PLANE;
+    bodies[0].u.plane.normal[2] = 1.0;
+    bodies[1].kind = MCA_BODY_SPHERE;
+    bodies[1].u.sphere.radius = 0.3;
+    bodies[2].kind = MCA_BODY_CAPSULE;
+    bodies[2].u.capsule = (mca_capsule_t){{0, -1, 0.2}, {0, 1, 0.2}, 0.1};
+    bodies[3].kind = MCA_BODY_BOX;
+    bodies[3].u.box.half[0] = bodies[3].u.box.half[1] = bodies[3].u.box.half[2] = 0.5;
+    bodies[3].u.box.R[0][0] = bodies[3].u.box.R[1][1] = bodies[3].u.box.R[2][2] = 1.0;
+    bodies[4].kind = MCA_BODY_CYLINDER;
+    bodies[4].u.cylinder.axis[2] = 1.0;
+    bodies[4].u.cylinder.half_len = 0.2;
+    bodies[4].u.cylinder.radius = 0.2;
+    const mca_capsule_t caps[3] = {sep, pen, {{-1, 0.7, 1.2}, {1, -0.3, 0.9}, 0.05}};
+    mca_body_dist_t bd;
+    int body_ok = 1;
+    before = n_alloc;
+    for (int k = 0; k < 5; k++) {
+        for (int j = 0; j < 3; j++) {
+            body_ok &= mca_capsule_body_distance(&caps[j], &bodies[k], &bd) == MCA_OK;
+        }
+    }
+    expect(n_alloc == before && body_ok,
+           "mca_capsule_body_distance (plane, sphere, capsule, box, cylinder; separated and penetrating) "
+           "allocates nothing");
 
     /* --- libccd entry points on two overlapping boxes --- */
     box_t b1 = {0.5, {0, 0, 0}}, b2 = {0.5, {0.3, 0.2, 0.1}};

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* mca-geom: command-line access to the geometry of mca_core (segment distances, forward kinematics). */
+/* mca-geom: command-line access to the geometry of mca_core and mca_body (segment distances, forward
+ * kinematics, capsule-body distances). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -7,6 +8,7 @@
 #include <string.h>
 
 #include "mca/armdist.h"
+#include "mca/body.h"
 #include "mca/chain.h"
 #include "mca/err.h"
 #include "mca/segdist.h"
@@ -43,6 +45,21 @@ static void usage(FILE *f) {
           "        min LINK_A LINK_B d d_axis px py pz ex ey ez   (global minimum, P on A, E on B)\n"
           "        a_to_b I J ... (per link of A)  /  b_to_a J I ... (per link of B)  /  iterations N\n"
           "      Bad URDF, bad base or wrong number of q: exit code 2.\n"
+          "\n"
+          "  body\n"
+          "      Link capsule against a fixed body (mca/body.h). Reads stdin, one pair per line:\n"
+          "        KIND ax ay az bx by bz r  BODY...   (capsule A-B, radius r; then by KIND:)\n"
+          "        plane    px py pz nx ny nz                (half-space n.(x - p) <= 0)\n"
+          "        sphere   cx cy cz R\n"
+          "        capsule  cx cy cz dx dy dz R\n"
+          "        box      cx cy cz hx hy hz R00 R01 R02 R10 R11 R12 R20 R21 R22   (R row by row)\n"
+          "        cylinder cx cy cz wx wy wz h R            (axis w, half length h, radius R)\n"
+          "      and prints per line: d px py pz qx qy qz nx ny nz sx sy sz exact iterations   (%.17g; P on "
+          "the\n"
+          "      capsule's surface, Q on the body, N from the body to the capsule, S on the capsule's axis;\n"
+          "      exact 0: the axis enters a cylinder and d is a lower bound; iterations: the cylinder's).\n"
+          "      Bad kind, count or number, or a body the library refuses: exit code 2 (lines before it are\n"
+          "      answered). Blank lines and '#' lines are skipped.\n"
           "\n"
           "  --help   this text\n",
           f);
@@ -339,6 +356,130 @@ static int cmd_armdist(int argc, char **argv) {
     return 0;
 }
 
+/* One capsule-body pair per stdin line (mca/body.h). */
+static int cmd_body(int argc, char **argv) {
+    static const struct {
+        const char *name;
+        mca_body_kind_t kind;
+        int n;
+    } kinds[] = {{"plane", MCA_BODY_PLANE, 6},
+                 {"sphere", MCA_BODY_SPHERE, 4},
+                 {"capsule", MCA_BODY_CAPSULE, 7},
+                 {"box", MCA_BODY_BOX, 15},
+                 {"cylinder", MCA_BODY_CYLINDER, 8}};
+    char *line = NULL;
+    size_t cap = 0;
+    long lineno = 0;
+    int status = 0;
+
+    if (argc > 0) {
+        fprintf(stderr, "mca-geom body: unknown option '%s' (see --help)\n", argv[0]);
+        return EXIT_BAD_INPUT;
+    }
+    while (getline(&line, &cap, stdin) != -1) {
+        double v[22];
+        int n = 0, k = -1, want;
+        char *p = line, *tok, *save = NULL;
+        mca_capsule_t c;
+        mca_body_t b;
+        mca_body_dist_t r;
+
+        lineno++;
+        while (*p == ' ' || *p == '\t') {
+            p++;
+        }
+        if (*p == '#' || *p == '\n' || *p == '\r' || *p == '\0') {
+            continue;
+        }
+        tok = strtok_r(p, " \t\r\n,", &save);
+        for (int i = 0; i < (int)(sizeof kinds / sizeof kinds[0]); i++) {
+            if (strcmp(tok, kinds[i].name) == 0) {
+                k = i;
+            }
+        }
+        if (k < 0) {
+            fflush(stdout);
+            fprintf(
+                stderr,
+                "mca-geom body: stdin line %ld: unknown kind '%s' (plane, sphere, capsule, box, cylinder)\n",
+                lineno, tok);
+            status = EXIT_BAD_INPUT;
+            goto out;
+        }
+        want = 7 + kinds[k].n;
+        for (tok = strtok_r(NULL, " \t\r\n,", &save); tok != NULL; tok = strtok_r(NULL, " \t\r\n,", &save)) {
+            double x;
+            if (n == want) {
+                n++;
+                break;
+            }
+            if (parse_finite(tok, &x) != 0) {
+                fflush(stdout);
+                fprintf(stderr, "mca-geom body: stdin line %ld: field %d '%s' is not a finite number\n",
+                        lineno, n + 2, tok);
+                status = EXIT_BAD_INPUT;
+                goto out;
+            }
+            v[n++] = x;
+        }
+        if (n != want) {
+            fflush(stdout);
+            fprintf(stderr, "mca-geom body: stdin line %ld: %s expects %d numbers after the kind, got %s%d\n",
+                    lineno, kinds[k].name, want, n > want ? "more than " : "", n > want ? want : n);
+            status = EXIT_BAD_INPUT;
+            goto out;
+        }
+        memcpy(c.a, &v[0], sizeof c.a);
+        memcpy(c.b, &v[3], sizeof c.b);
+        c.radius = v[6];
+        memset(&b, 0, sizeof b);
+        b.kind = kinds[k].kind;
+        switch (b.kind) {
+        case MCA_BODY_PLANE:
+            memcpy(b.u.plane.point, &v[7], sizeof b.u.plane.point);
+            memcpy(b.u.plane.normal, &v[10], sizeof b.u.plane.normal);
+            break;
+        case MCA_BODY_SPHERE:
+            memcpy(b.u.sphere.centre, &v[7], sizeof b.u.sphere.centre);
+            b.u.sphere.radius = v[10];
+            break;
+        case MCA_BODY_CAPSULE:
+            memcpy(b.u.capsule.a, &v[7], sizeof b.u.capsule.a);
+            memcpy(b.u.capsule.b, &v[10], sizeof b.u.capsule.b);
+            b.u.capsule.radius = v[13];
+            break;
+        case MCA_BODY_BOX:
+            memcpy(b.u.box.centre, &v[7], sizeof b.u.box.centre);
+            memcpy(b.u.box.half, &v[10], sizeof b.u.box.half);
+            memcpy(b.u.box.R, &v[13], sizeof b.u.box.R);
+            break;
+        default:
+            memcpy(b.u.cylinder.centre, &v[7], sizeof b.u.cylinder.centre);
+            memcpy(b.u.cylinder.axis, &v[10], sizeof b.u.cylinder.axis);
+            b.u.cylinder.half_len = v[13];
+            b.u.cylinder.radius = v[14];
+            break;
+        }
+        if (mca_capsule_body_distance(&c, &b, &r) != MCA_OK) {
+            fflush(stdout);
+            fprintf(stderr,
+                    "mca-geom body: stdin line %ld: invalid input (negative size, zero normal or axis, "
+                    "rotation not "
+                    "orthonormal, or coordinates beyond +-%g m)\n",
+                    lineno, MCA_SEGDIST_MAX_COORD);
+            status = EXIT_BAD_INPUT;
+            goto out;
+        }
+        printf("%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %d %d\n", r.d,
+               r.p[0], r.p[1], r.p[2], r.q[0], r.q[1], r.q[2], r.n[0], r.n[1], r.n[2], r.p_axis[0],
+               r.p_axis[1], r.p_axis[2], r.exact, r.iterations);
+    }
+out:
+    free(line);
+    fflush(stdout);
+    return status;
+}
+
 int main(int argc, char **argv) {
     if (argc < 2) {
         usage(stderr);
@@ -356,6 +497,9 @@ int main(int argc, char **argv) {
     }
     if (strcmp(argv[1], "armdist") == 0) {
         return cmd_armdist(argc - 2, argv + 2);
+    }
+    if (strcmp(argv[1], "body") == 0) {
+        return cmd_body(argc - 2, argv + 2);
     }
     fprintf(stderr, "mca-geom: unknown command '%s' (see mca-geom --help)\n", argv[1]);
     return EXIT_BAD_INPUT;

@@ -17,6 +17,7 @@
 #ifndef MCA_OBSTACLE_H
 #define MCA_OBSTACLE_H
 
+#include "mca/body.h" /* mca_capsule_t */
 #include "mca/chain.h"
 
 #ifdef __cplusplus
@@ -36,11 +37,6 @@ typedef struct mca_obstacle {
     double radius;      /**< cylinder radius [m] */
     double half_height; /**< cylinder half height along its z [m] */
 } mca_obstacle_t;
-
-typedef struct mca_capsule {
-    double a[3], b[3]; /**< axis end points (world) */
-    double radius;     /**< >= 0; 0 is a plain segment */
-} mca_capsule_t;
 
 typedef struct mca_obst_dist {
     double d;        /**< surface distance; negative = penetration depth (approximate, MPR tolerance) */
