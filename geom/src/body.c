@@ -154,17 +154,18 @@ int mca_capsule_capsule_distance(const mca_capsule_t *cap, const mca_capsule_t *
 
 /* ---- box ---- */
 
-/* R^T x: world vector into the box frame */
-static void rot_t(double out[3], const double R[3][3], const double x[3]) {
+/* R^T x: world vector into the box frame (the box, not R[3][3]: gcc's -Wstringop-overflow under ASan took
+ * the array parameter for 9 doubles read from a region of 3) */
+static void rot_t(double out[3], const mca_body_box_t *box, const double x[3]) {
     for (int i = 0; i < 3; i++) {
-        out[i] = R[0][i] * x[0] + R[1][i] * x[1] + R[2][i] * x[2];
+        out[i] = box->R[0][i] * x[0] + box->R[1][i] * x[1] + box->R[2][i] * x[2];
     }
 }
 
 /* R x: box-frame vector into the world */
-static void rot(double out[3], const double R[3][3], const double x[3]) {
+static void rot(double out[3], const mca_body_box_t *box, const double x[3]) {
     for (int i = 0; i < 3; i++) {
-        out[i] = R[i][0] * x[0] + R[i][1] * x[1] + R[i][2] * x[2];
+        out[i] = box->R[i][0] * x[0] + box->R[i][1] * x[1] + box->R[i][2] * x[2];
     }
 }
 
@@ -269,11 +270,11 @@ int mca_capsule_box_distance(const mca_capsule_t *cap, const mca_body_box_t *box
         return MCA_EINVAL;
     }
     mca_v3_sub(rel, cap->a, box->centre);
-    rot_t(al, box->R, rel);
+    rot_t(al, box, rel);
     mca_v3_sub(rel, cap->b, box->centre);
-    rot_t(bl, box->R, rel);
+    rot_t(bl, box, rel);
     mca_v3_sub(u, cap->b, cap->a);
-    rot_t(ul, box->R, u);
+    rot_t(ul, box, u);
 
     /* g(t) = sum_i max(|a_i + t u_i| - h_i, 0)^2 is convex and piecewise quadratic; its breaks are where a
      * coordinate crosses a face plane. On each piece the active faces are fixed (read at the midpoint) and
@@ -330,11 +331,11 @@ int mca_capsule_box_distance(const mca_capsule_t *cap, const mca_body_box_t *box
         mca_v3_sub(diff, x, c);
         dist = mca_v3_norm(diff);
         if (dist > 0.0) {
-            rot(nl, box->R, diff);
+            rot(nl, box, diff);
             n[0] = nl[0] / dist;
             n[1] = nl[1] / dist;
             n[2] = nl[2] / dist;
-            rot(q, box->R, c);
+            rot(q, box, c);
             mca_v3_add(q, q, box->centre);
             seg_point(pa, cap->a, cap->b, u, best_t);
             finish(out, pa, cap->radius, q, n, dist - cap->radius, 1);
@@ -344,10 +345,10 @@ int mca_capsule_box_distance(const mca_capsule_t *cap, const mca_body_box_t *box
     /* the axis touches or enters the box */
     double depth = box_sat(al, bl, ul, box->half, nl, x);
     mca_v3_axpy(ql, x, depth, nl);
-    rot(n, box->R, nl);
-    rot(pa, box->R, x);
+    rot(n, box, nl);
+    rot(pa, box, x);
     mca_v3_add(pa, pa, box->centre);
-    rot(q, box->R, ql);
+    rot(q, box, ql);
     mca_v3_add(q, q, box->centre);
     finish(out, pa, cap->radius, q, n, -(depth + cap->radius), 1);
     return MCA_OK;
