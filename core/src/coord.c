@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "mca/apf.h" /* mca_apf_pinv_apply */
 #include "mca/err.h"
 #include "mca/segdist.h"
 #include "mca/vec3.h"
@@ -32,34 +33,9 @@ static void predict_step(const mca_coord_arm_t *arm, mca_kin_t *kin, double q[],
     for (int i = 0; i < 3; i++) {
         v[i] = rdot[i] + arm->K * (r[i] - kin->ee[i]);
     }
-    double A[3][3]; /* J J^T + lambda^2 I, solved by Cramer's rule (3 x 3, positive definite) */
-    for (int i = 0; i < 3; i++) {
-        for (int k = 0; k < 3; k++) {
-            double s = i == k ? PREDICT_DAMPING * PREDICT_DAMPING : 0.0;
-            for (int j = 0; j < dof; j++) {
-                s += J[i][j] * J[k][j];
-            }
-            A[i][k] = s;
-        }
-    }
-    const double det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-                       A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-                       A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
-    double y[3];
-    for (int i = 0; i < 3; i++) {
-        double M[3][3];
-        memcpy(M, A, sizeof M);
-        for (int k = 0; k < 3; k++) {
-            M[k][i] = v[k];
-        }
-        y[i] = (M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
-                M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
-                M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])) /
-               det;
-    }
     double qd[MCA_MAX_DOF], scale = 1.0;
+    mca_apf_pinv_apply(J, dof, PREDICT_DAMPING * PREDICT_DAMPING, v, qd); /* J^T (J J^T + lambda^2 I)^-1 v */
     for (int j = 0; j < dof; j++) {
-        qd[j] = J[0][j] * y[0] + J[1][j] * y[1] + J[2][j] * y[2];
         if (fabs(qd[j]) > c->joint[j].vel_limit) {
             scale = fmin(scale, c->joint[j].vel_limit / fabs(qd[j]));
         }
