@@ -794,6 +794,17 @@ def pnp_target(tasks, schemes, lines):
                          ("%d (%.1f %%)" % (both, 100.0 * both / n)) if have_pe else "n/a",
                          ("met" if met else "not met") if have_pe and have_ex else
                          "n/a (this mca-sim writes no path_error_max / exact_missed)"))
+        # tasks whose predicted arms meet on every order of passing (mca-ts's start-up plan found no schedule):
+        # the pick-and-place analogue of the crossing kinds' rest conflicts, counted apart, never dropped
+        plan = [t["runs"].get("mca-ts", {}).get("task", {}).get("coord_unplanned") for t in tasks
+                if t["runs"].get(s, {}).get("task", {}).get("cls", "n/a") != "n/a"]
+        if all(u is not None for u in plan):
+            sched = [r for r, u in zip(rs, plan) if u == 0]
+            sdone = sum(1 for r in sched if r["cls"] in ("completed", "late"))
+            out[s].update(with_schedule=len(sched), with_schedule_done=sdone)
+            lines.append("pick and place, %s: of the %d tasks with a coordination schedule %d done (%.1f %%); the other "
+                         "%d have none (fixed paths whose predicted arms meet on every order of passing)" % (
+                             s, len(sched), sdone, 100.0 * sdone / max(1, len(sched)), n - len(sched)))
         if not have_pe:
             lines.append("pick and place, %s: max_err (to the path's current point, an upper bound on the path "
                          "error) <= %.2f m on %d of %d" % (s, PNP_PATH_ERROR, me_ok, n))
