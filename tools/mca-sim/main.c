@@ -392,12 +392,12 @@ int main(int argc, char **argv) {
             }
             fprintf(f, "],\"completed\":%d,\"path_time_lost_s\":%.6g,\"deadlocks\":%d,\"max_slack\":%.3g",
                     r->completed, r->path_time_lost_s, r->deadlocks, r->max_slack);
-            fprintf(
-                f,
-                ",\"path_error_max\":%.6g,\"path_error_p99\":%.6g,\"exact_points\":%d,\"exact_missed\":%d,"
-                "\"exact_error_max\":%.6g,\"pdnn_steps_p50\":%d,\"pdnn_steps_p999\":%d",
-                r->path_error_max, r->path_error_p99, r->exact_points, r->exact_missed, r->exact_error_max,
-                r->pdnn_steps_p50, r->pdnn_steps_p999);
+            fprintf(f,
+                    ",\"path_error_max\":%.6g,\"path_error_p99\":%.6g,\"path_error_brake_max\":%.6g,"
+                    "\"exact_points\":%d,\"exact_missed\":%d,\"exact_error_max\":%.6g,\"pdnn_steps_p50\":%d,"
+                    "\"pdnn_steps_p999\":%d",
+                    r->path_error_max, r->path_error_p99, r->path_error_brake_max, r->exact_points,
+                    r->exact_missed, r->exact_error_max, r->pdnn_steps_p50, r->pdnn_steps_p999);
             fprintf(f, ",\"end_pair\":[%d,%d,%d,%d],\"end_distance\":%.6g,\"end_ee\":[", r->end_pair[0],
                     r->end_pair[1], r->end_pair[2], r->end_pair[3],
                     isfinite(r->end_distance) ? r->end_distance : -1.0);

@@ -233,6 +233,16 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
                 r->sample_d[i] = ip->min_distance;
             }
         }
+        if (ended) {
+            /* braking (a stop or a fault): how far the tool tips of path-first arms leave their paths' curves
+             */
+            for (int a = 0; a < na; a++) {
+                const mca_path_t *pa = &cfg->path[a];
+                if (pa->path_first && (pa->kind == MCA_PATH_CIRCLE || pa->kind == MCA_PATH_WAYPOINTS)) {
+                    r->path_error_brake_max = fmax(r->path_error_brake_max, mca_path_distance(pa, ip->ee[a]));
+                }
+            }
+        }
         if (r->fault) {
             r->min_distance_after_fault = fmin(r->min_distance_after_fault, ip->min_distance);
         } else if (running) {

@@ -79,7 +79,9 @@ typedef struct mca_simrun_result {
     int dump_skipped_capped; /**< ticks --dump-every picked but not dumped: PDNN at its cap (not converged) */
     int completed; /**< 1: every arm's path clock reached its path's end (no fault) and every exact waypoint
                         was met */
-    double path_error_max;  /**< the tool tips' largest distance to their paths' curves while running [m] */
+    double path_error_max; /**< the tool tips' largest distance to their paths' curves while running [m] */
+    double path_error_brake_max; /**< the same while braking after a stop or a fault (path-first circle and
+                                      waypoint arms; the stop keeps the rows, not the path) [m] */
     double path_error_p99;  /**< its 99th percentile over the running ticks (each tick: the arms' largest) */
     int exact_points;       /**< exact waypoints reached (met or missed) */
     int exact_missed;       /**< of those, missed (farther than exact_tolerance while on the point) */

@@ -590,7 +590,7 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
     det = dict(min_d=round(dmin, 6), fault=fault, fault_t=r.get("fault_t"), completed=int(completed) if has_c else None,
                lost=lost, deadlocks=r.get("deadlocks"), stopped=r.get("stopped"), ticks=r.get("ticks"),
                max_err=r.get("max_err"))
-    det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "exact_points", "exact_missed",
+    det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "path_error_brake_max", "exact_points", "exact_missed",
                                       "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau", "end_done", "coord_pairs", "coord_unplanned",
                                       "solves", "solves_unconverged", "solve_steps", "exact_solves")})
     if dmin < d1:
@@ -885,6 +885,14 @@ def table(tasks, schemes, sim, a):
                                         max(r["exact_solves"][1] for r in rs), max(r["exact_solves"][2] for r in rs),
                                         un, 100.0 * un / n))
             summary["solver/%s" % s] = dict(solves=n, unconverged=un)
+    # the path error while braking after the stop request (the stop keeps the rows, not the path: docs/scheme.md
+    # section 11): the stop runs' largest, per scheme
+    for s in schemes:
+        pe = sorted(t["runs"][s]["stop"]["path_error_brake_max"] for t in reach
+                    if t["runs"].get(s, {}).get("stop", {}).get("path_error_brake_max") is not None)
+        if pe:
+            lines.append("braking  %-6s path error after the stop request over %d stop runs: p50 %.4f m, p99 %.4f m, "
+                         "max %.4f m" % (s, len(pe), pe[len(pe) // 2], pe[int(0.99 * (len(pe) - 1))], pe[-1]))
     # every unfinished task named: where it ended (the closest pair, its distance, the tool tips, the clocks),
     # and whether an arm that had finished was in the way (no path rate can move it: the paths conflict at rest)
     blocked_by_done, no_schedule = {}, {}
