@@ -65,12 +65,12 @@ demo: build
 bench: build
 	bash bench/run.sh $(BUILD)
 
-# the random-task sweep of issues 11 and 29 alone (1000 two-arm + 200 three-arm + 400 pick-and-place tasks):
+# the random-task sweep alone (1000 two-arm + 200 three-arm + 400 pick-and-place tasks):
 # out/bench/sweep.txt, sweep-{two,three,pnp}.json
 sweep: build
 	bash tools/mca-sweep/run_full.sh $(BUILD) $${MCA_BENCH_OUT:-$(CURDIR)/out/bench}
 
-# issue 29 item 3: sweep tasks through mcad at 1 kHz (sim arms, --no-dds, SCHED_FIFO on CPU 1) with cyclictest
+# sweep tasks through mcad at 1 kHz (sim arms, --no-dds, SCHED_FIFO on CPU 1) with cyclictest
 # beside it, against the same tasks in virtual time (docs/sweep.md "Real time"); needs root; not in `make test`.
 # SWEEP_RT_N tasks per kind (default 25: 50 pick-and-place + 50 crossing), out/sweep-rt/sweep-rt.txt
 SWEEP_RT_N ?= 25

@@ -176,7 +176,7 @@ if have "$BDDS" && have "$MON"; then
     "$BDDS" --ticks $DDS_TICKS --config "$ROOT/config/dds/loopback.xml" --domain $((DOMAIN + 1)) --monitor "$MON" \
         --fifo $FIFO >"$RAW/bench_dds.txt" 2>&1
 fi
-SYNTH=$B/dds/mca-dds-synth
+SYNTH=$B/tools/mca-dds-synth/mca-dds-synth
 if have "$SYNTH" && have "$MON"; then
     step "dds: latency, $LAT_N samples at 1 kHz"
     "$SYNTH" --domain $((DOMAIN + 2)) --config "$ROOT/config/dds/loopback.xml" --ticks $LAT_N --wait-readers 1 \

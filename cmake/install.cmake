@@ -52,7 +52,7 @@ install(FILES "${CMAKE_BINARY_DIR}/mcaConfig.cmake" "${CMAKE_BINARY_DIR}/mcaConf
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/mca)
 
 install(TARGETS mcad RUNTIME DESTINATION ${CMAKE_INSTALL_SBINDIR})
-# mcad's DDS publisher process (issue 16): found by mcad in its own prefix's libexec/mca (then MCA_LIBEXECDIR,
+# mcad's DDS publisher process: found by mcad in its own prefix's libexec/mca (then MCA_LIBEXECDIR,
 # daemon/CMakeLists.txt)
 install(TARGETS mca-dds-bridge RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/mca)
 set(MCA_INSTALLED_TOOLS mca-sim mca-monitor mca-record mca-geom mca-armsim mca-drivesim mca-stopcheck

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Bus-load budget of the CANopen backend (issue 15; docs/canopen.md prints this script's table).
+"""Bus-load budget of the CANopen backend (docs/canopen.md prints this script's table).
 
 Per SYNC cycle with N drives the bus carries: one SYNC (0 bytes), and per drive one RPDO1
 (controlword + target, 6 bytes), one TPDO1 (statusword + position, 6 bytes) and one TPDO2 (velocity +

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* The arm backends of mcad: sim, socketcan, canopen (daemon__backends.h, docs/daemon.md).
+/* The arm backends of mcad: sim, socketcan, canopen here, and those in a folder of their own (replay)
+ * (daemon__backends.h, docs/daemon.md).
  *
  * A static const table, not backends registering themselves from constructors: the backends live in static
  * libraries (mca_sim, mca_arm_can, mca_canopen), whose objects the linker leaves out when nothing names
@@ -322,7 +323,14 @@ static void canopen_describe(const mca_cell_arm_t *ca, int n_joints, char *buf, 
 
 /* ---------------------------------------------------------------- the table */
 
-static const mca_backend_def_t backends[] = {
+/* The backends in a folder of their own (daemon/backends/NAME/NAME.c, each defining mca_backend_NAME and
+ * taking its id from MCA_CELL_BACKEND_FOLDER up): adding one is its folder and its name on this line. */
+#define MCA_FOLDER_BACKENDS(X) X(replay)
+
+#define MCA_FOLDER_BACKEND_DECL(name) extern const mca_backend_def_t mca_backend_##name;
+MCA_FOLDER_BACKENDS(MCA_FOLDER_BACKEND_DECL)
+
+static const mca_backend_def_t builtin[] = {
     {
         .name = "sim",
         .id = MCA_CELL_BACKEND_SIM,
@@ -355,13 +363,17 @@ static const mca_backend_def_t backends[] = {
         .describe = canopen_describe,
     },
 };
+
+#define MCA_FOLDER_BACKEND_ENTRY(name) &mca_backend_##name,
+static const mca_backend_def_t *const backends[] = {&builtin[0], &builtin[1], &builtin[2],
+                                                    MCA_FOLDER_BACKENDS(MCA_FOLDER_BACKEND_ENTRY)};
 #define N_BACKENDS (sizeof backends / sizeof backends[0])
 _Static_assert(N_BACKENDS <= MCA_BACKEND_MAX, "raise MCA_BACKEND_MAX");
 
 const mca_backend_def_t *mca_backend_find(const char *name) {
     for (size_t i = 0; name && i < N_BACKENDS; i++) {
-        if (strcmp(backends[i].name, name) == 0) {
-            return &backends[i];
+        if (strcmp(backends[i]->name, name) == 0) {
+            return backends[i];
         }
     }
     return NULL;
@@ -369,8 +381,8 @@ const mca_backend_def_t *mca_backend_find(const char *name) {
 
 const mca_backend_def_t *mca_backend_get(mca_cell_backend_t id) {
     for (size_t i = 0; i < N_BACKENDS; i++) {
-        if (backends[i].id == id) {
-            return &backends[i];
+        if (backends[i]->id == id) {
+            return backends[i];
         }
     }
     return NULL;
@@ -402,7 +414,7 @@ static const mca_backend_def_t *backend_of(const mca_cell_arm_t *ca) {
 }
 
 const mca_backend_def_t *mca_backend_at(size_t i) {
-    return i < N_BACKENDS ? &backends[i] : NULL;
+    return i < N_BACKENDS ? backends[i] : NULL;
 }
 
 void mca_backend_names(char *buf, size_t len) {
@@ -412,7 +424,7 @@ void mca_backend_names(char *buf, size_t len) {
     }
     buf[0] = 0;
     for (size_t i = 0; i < N_BACKENDS && n < len; i++) {
-        const int w = snprintf(buf + n, len - n, "%s%s", i ? ", " : "", backends[i].name);
+        const int w = snprintf(buf + n, len - n, "%s%s", i ? ", " : "", backends[i]->name);
         n += w > 0 ? (size_t)w : 0;
     }
 }

@@ -149,7 +149,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (rc == MCA_OK && cell->dds.enabled && !opts->no_dds) {
         rc = mcad_publish_open(d, err, errlen);
     }
-    if (rc == MCA_OK && opts->csv_path) {
+    if (rc == MCA_OK && (opts->csv_path || opts->record_path)) {
         rc = mcad_csv_open(d, err, errlen);
     }
     if (rc != MCA_OK) {
@@ -168,7 +168,7 @@ int mca_daemon_service(mca_daemon_t *d) {
          */
         n += mca_dds_bridge_supervise(d->dds, d->opts.log, "mcad: ");
     }
-    if (d->csv) {
+    if (d->csv_storage) {
         n += mcad_csv_drain(d);
     }
     return n;
@@ -192,6 +192,9 @@ void mca_daemon_close(mca_daemon_t *d) {
     mca_daemon_service(d);
     if (d->csv) {
         fclose(d->csv);
+    }
+    if (d->rec) {
+        fclose(d->rec);
     }
     free(d->csv_storage);
     if (d->dma_fd >= 0) {

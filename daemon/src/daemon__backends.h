@@ -71,7 +71,7 @@ const mca_backend_def_t *mca_backend_get(mca_cell_backend_t id);
  * err, LINE that of the arm's backend key in cell->source (0 when the file cannot be read). Start-up. */
 int mca_backend_check_ids(const mca_cell_t *cell, char *err, size_t errlen);
 
-/* The known names, ", "-separated ("sim, socketcan, canopen"), for messages. */
+/* The known names, ", "-separated ("sim, socketcan, canopen, replay"), for messages. */
 void mca_backend_names(char *buf, size_t len);
 
 /* Every backend in turn: i from 0 until NULL. */

@@ -127,10 +127,11 @@ struct mca_daemon {
     mca_dds_snapshot_t snap;
     mca_ros2_config_t ros2; /* the bridge's ROS 2 topics (start-up only) */
 
-    /* ---- CSV: rt -> writer (daemon_csv.c) */
+    /* ---- CSV and recording: rt -> writer (daemon_csv.c) */
     mca_ring_t csv_ring;
-    unsigned char *csv_storage;
+    unsigned char *csv_storage; /* the ring's: set when either file is written */
     FILE *csv;
+    FILE *rec;
     mca_daemon_csv_rec_t csv_rec; /* rt scratch */
     mca_daemon_csv_rec_t csv_out; /* writer scratch */
     mca_tick_csv_layout_t csv_layout;

@@ -63,7 +63,7 @@ void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->ctrl_why = d->ctrl_why;
     s->fault_t = d->fault_t;
     s->log_dropped = mca_rtlog_dropped(&d->log);
-    if (d->csv) {
+    if (d->csv_storage) {
         mca_ring_stats_t rs;
         mca_ring_stats(&d->csv_ring, &rs);
         s->csv_dropped = rs.dropped;

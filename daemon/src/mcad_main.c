@@ -30,29 +30,31 @@
 #endif
 
 static void usage(FILE *f) {
-    fprintf(f,
-            "usage: " MCAD_NAME " [options] CELL.yaml\n"
-            "  --check            load and check the cell file, print what it configures, exit\n"
-            "  --csv FILE         write one CSV row per tick (from a non-real-time thread)\n"
-            "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
-            "  --no-dds           do not publish on DDS\n"
-            "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
-            "  --clear-faults     clear a FAULT an arm reports at start-up (latched from an earlier run;\n"
-            "                     logged); without it mcad refuses to start (exit 1)\n"
-            "  --histogram FILE   at exit, write the loop's wake-up latency histogram to FILE, as\n"
-            "                     cyclictest -h does (bench/rt compares the two)\n"
-            "  --dds-ab N         DDS cost benchmark: publish only in every other block of N ticks and\n"
-            "                     print the whole tick's time with publishing off and on (one run)\n"
-            "  -h, --help\n"
+    fprintf(
+        f, "usage: " MCAD_NAME " [options] CELL.yaml\n"
+           "  --check            load and check the cell file, print what it configures, exit\n"
+           "  --csv FILE         write one CSV row per tick (from a non-real-time thread)\n"
+           "  --record FILE      record what the controller read each tick, bit for bit (the replay backend\n"
+           "                     plays it again; docs/daemon.md)\n"
+           "  --stop-after SEC   brake and stop after SEC seconds of running (overrides the cell)\n"
+           "  --no-dds           do not publish on DDS\n"
+           "  --no-rt            no SCHED_FIFO / mlockall / cpu_dma_latency (debugging, sanitizers)\n"
+           "  --clear-faults     clear a FAULT an arm reports at start-up (latched from an earlier run;\n"
+           "                     logged); without it mcad refuses to start (exit 1)\n"
+           "  --histogram FILE   at exit, write the loop's wake-up latency histogram to FILE, as\n"
+           "                     cyclictest -h does (bench/rt compares the two)\n"
+           "  --dds-ab N         DDS cost benchmark: publish only in every other block of N ticks and\n"
+           "                     print the whole tick's time with publishing off and on (one run)\n"
+           "  -h, --help\n"
 #ifdef MCA_TEST_HOOKS
-            "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
-            "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
-            "4 ended while stalled.\n"
-            "This is the test build (test hooks: debug_* cell keys, SIGUSR1); never run it with real arms.\n"
+           "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 stalls the loop (test hook).\n"
+           "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault,\n"
+           "4 ended while stalled.\n"
+           "This is the test build (test hooks: debug_* cell keys, SIGUSR1); never run it with real arms.\n"
 #else
-            "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 prints a status line (nothing else);\n"
-            "SIGHUP is ignored.\n"
-            "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault.\n"
+           "Signals: SIGTERM/SIGINT brake to zero and exit; SIGUSR1 prints a status line (nothing else);\n"
+           "SIGHUP is ignored.\n"
+           "Exit status: 0 stopped cleanly, 1 start-up failed, 2 bad cell file or usage, 3 ended in fault.\n"
 #endif
     );
 }
@@ -120,6 +122,7 @@ int main(int argc, char **argv) {
     static const struct option longopts[] = {
         {"check", no_argument, NULL, 'k'},
         {"csv", required_argument, NULL, 'c'},
+        {"record", required_argument, NULL, 'r'},
         {"stop-after", required_argument, NULL, 's'},
         {"no-dds", no_argument, NULL, 'D'},
         {"no-rt", no_argument, NULL, 'R'},
@@ -143,6 +146,9 @@ int main(int argc, char **argv) {
             break;
         case 'c':
             opts.csv_path = optarg;
+            break;
+        case 'r':
+            opts.record_path = optarg;
             break;
         case 's': {
             char *end;

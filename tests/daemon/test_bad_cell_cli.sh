@@ -123,7 +123,7 @@ expect d1_ge_d2 "d1: 0.04" "d1: 0.15" "d1: 0.15" "d1/d2" "need 0 <= d1 < d2 (got
 expect missing_urdf "$URDF${NL}    base_xyz: [0.0, 0.6" "/nonexistent/pa11.urdf${NL}    base_xyz: [0.0, 0.6" \
     "pa11.urdf" "arms[1].urdf" "file '/nonexistent/pa11.urdf' not found"
 expect unknown_backend "backend: socketcan" "backend: ethercat" "ethercat" "arms[1].backend" \
-    "unknown backend 'ethercat' (known: sim, socketcan, canopen)"
+    "unknown backend 'ethercat' (known: sim, socketcan, canopen, replay)"
 expect dof_mismatch "q0: [0.0, 0.3, 0.0, 0.8, 0.0, 0.5, 0.0, 0.0]" "q0: [0.0, 0.3, 0.0]" "q0: [0.0, 0.3, 0.0]" \
     "arms[0].q0" "3 values but"
 expect q0_outside_limits "q0: [0.1, 0.3," "q0: [9.0, 0.3," "q0: [9.0" "arms[1].q0[0]: 9" "outside joint"

@@ -264,7 +264,7 @@ static void test_unknown_backend_id(void **state) {
     assert_null(d);
     char prefix[600];
     snprintf(prefix, sizeof prefix,
-             "%s:%d: arms[1].backend: unknown backend id 7 (known: sim, socketcan, canopen)", p,
+             "%s:%d: arms[1].backend: unknown backend id 7 (known: sim, socketcan, canopen, replay)", p,
              line_of(p, "backend: socketcan"));
     assert_string_equal(err, prefix);
 }
@@ -711,7 +711,7 @@ static void test_arm_error_lines(void **state) {
     write_fast_urdf();
     static const struct arm_case cases[] = {
         {"a_backend", B_SIM, "backend: sim", "backend: ethercat", "backend:", MCA_ECONFIG, "arms[%d].backend",
-         "unknown backend 'ethercat' (known: sim, socketcan, canopen)", 0, 0, 0},
+         "unknown backend 'ethercat' (known: sim, socketcan, canopen, replay)", 0, 0, 0},
         {"a_sc_noif", B_SOCKETCAN, "    interface: vcan#\n", "", NULL, MCA_EPARSE, "arms[%d].interface",
          "required with backend socketcan", 0, 0, 0},
         {"a_sc_noid", B_SOCKETCAN, "    id_base: 0x140\n", "", NULL, MCA_EPARSE, "arms[%d].id_base",

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Seeded random-task sweep through mca-sim (issue 11, "yield instead of fault"; pick and place: issue 29).
+"""Seeded random-task sweep through mca-sim ("yield instead of fault"; pick and place; docs/sweep.md).
 
 usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three|pnp-jaco-mico|pnp-pa10[,...]] [--n N] [--seed S]
                     [--only ID[,ID...]] [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT]
@@ -34,7 +34,7 @@ Every reachable task runs under each scheme, and again with a stop request at a 
   safe-stop     a named fault, the stop request or an unresolved deadlock, and >= d1 all the way.
 Prints one table (rows scheme x {task, with stop}; counts and % of the reachable tasks, path_error_max p50/max
 over the runs), the unreachable count, the deadlock count and the fault names, the start and least distances,
-for pick and place issue 29's target (>= 95 % completed with every exact point met and path_error_max <=
+for pick and place the target (>= 95 % completed with every exact point met and path_error_max <=
 0.02 m), and writes --json OUT with every task's details. --tolerance X writes `tolerance: X` into every
 generated path (when this mca-sim takes the key). Summary fields this mca-sim does not write (completed,
 path_time_lost_s, deadlocks, path_error_max, exact_missed, ...) are reported "n/a"; without `completed` a run
@@ -57,7 +57,7 @@ import xml.etree.ElementTree as ET
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ROBOTS = os.path.join(ROOT, "config", "robots")
 CLASSES = ("completed", "late", "exact-missed", "safe-stop", "unsafe")
-PNP_PATH_ERROR = 0.02  # issue 29's bound on path_error_max for pick and place [m]
+PNP_PATH_ERROR = 0.02  # the bound on path_error_max for pick and place [m]
 
 # Kinova home (deg [275, 167.5, 57.5, 240, 82.5, 75]); joint 1 turns the arm about its base
 KINOVA_HOME = [4.7997, 2.9234, 1.0036, 4.1888, 1.4399, 1.3090]
@@ -243,7 +243,7 @@ def draw_path(rng, start, other_tip, vmax, max_reach):
     return dict(kind="waypoints", points=[[round(x, 4) for x in p] for p in pts], durations=durs), far, sum(durs)
 
 
-# summary fields that not every mca-sim writes (issue 11: completion; issue 29: path error and exact points)
+# summary fields that not every mca-sim writes (completion; path error and exact points)
 SUMMARY_FIELDS = ("completed", "path_time_lost_s", "deadlocks", "path_error_max", "path_error_p99", "exact_points",
                   "exact_missed", "exact_error_max")
 
@@ -256,7 +256,7 @@ def load_summary(path):
     return json.loads(re.sub(r'(?<=[:\[,])(-?)(inf|nan)\b', lambda m: m.group(1) + fix[m.group(2)], txt))
 
 
-# ---------------------------------------------------------------- pick and place (issue 29 item 3)
+# ---------------------------------------------------------------- pick and place
 
 # Boxes in the cell's frame: origin at arm 0's base, `along` the base line towards arm 1's base, `front` across
 # it to the side the arms work on, z up: ranges [m] of (along, front, z). The place zone lies between the bases
@@ -764,7 +764,7 @@ def run_task(sim, kind, seed, i, a):
 
 
 def pnp_target(tasks, schemes, lines):
-    """Issue 29's target for pick and place, per scheme over the task runs: >= 95 % completed (late included)
+    """The target for pick and place, per scheme over the task runs: >= 95 % completed (late included)
     with every exact point met, and path_error_max <= PNP_PATH_ERROR; a line each and a dict."""
     out = {}
     for s in schemes:
@@ -872,7 +872,7 @@ def table(tasks, schemes, sim, a):
             if v and v["reasons"]:
                 lines.append("reasons %-6s %-9s %s" % (s, "task" if mode == "task" else "with stop",
                                                      json.dumps(v["reasons"], sort_keys=True)))
-    # the solver's work per tick, running and braking, task and stop runs (issue 29 item 2)
+    # the solver's work per tick, running and braking, task and stop runs
     for s in schemes:
         rs = [t["runs"][s][m] for t in reach for m in ("task", "stop") if t["runs"].get(s, {}).get(m, {}).get("solves")]
         if rs:

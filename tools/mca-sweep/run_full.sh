@@ -1,8 +1,8 @@
 #!/bin/bash
 # SPDX-License-Identifier: MIT
-# The full random-task sweep of issue 11 (bench step MCA_BENCH_SWEEP=1, `make sweep`):
+# The full random-task sweep (bench step MCA_BENCH_SWEEP=1, `make sweep`):
 # 1000 two-arm tasks (500 two PA10+, 500 JACO2 + MICO2) in one table, the 200 three-arm tasks in another,
-# and issue 29's pick and place (200 pnp-jaco-mico + 200 pnp-pa10) in a third.
+# and the pick and place (200 pnp-jaco-mico + 200 pnp-pa10) in a third.
 # usage: tools/mca-sweep/run_full.sh BUILD_DIR OUT_DIR     (env MCA_SWEEP_SEED, default 1; MCA_SWEEP_JOBS, default nproc)
 # Writes OUT_DIR/sweep.txt (the tables) and OUT_DIR/sweep-two.json, OUT_DIR/sweep-three.json, OUT_DIR/sweep-pnp.json
 # (every task).

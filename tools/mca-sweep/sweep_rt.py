@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Sweep tasks through mcad at 1 kHz on the sim backend, cyclictest beside it (issue 29 item 3, `make sweep-rt`).
+"""Sweep tasks through mcad at 1 kHz on the sim backend, cyclictest beside it (`make sweep-rt`).
 
 usage: sweep_rt.py --build BUILD [--n 25] [--kind pnp-jaco-mico,pnp-pa10,jaco-mico,pa10] [--seed 1]
                    [--scheme mca-ts] [--cpu 1] [--priority 80] [--out DIR] [--jobs 2]
@@ -19,7 +19,7 @@ usage: sweep_rt.py --build BUILD [--n 25] [--kind pnp-jaco-mico,pnp-pa10,jaco-mi
    faults, the controller tick's p99/max, and the controller ticks over 250 us, each checked against
    cyclictest: explained when a cyclictest wake-up due within 2 ms of the tick's wake-up was >= 100 us late.
    mcad's CSV has no exact points: the virtual-time class `exact-missed` counts as reaching the path ends.
-Prints the per-task table and issue 29's checks; writes OUT/sweep-rt.json and OUT/sweep-rt.txt.
+Prints the per-task table and its checks (docs/sweep.md); writes OUT/sweep-rt.json and OUT/sweep-rt.txt.
 Needs root (SCHED_FIFO) and cyclictest (rt-tests); without SCHED_FIFO it says so and runs anyway.
 """
 import argparse

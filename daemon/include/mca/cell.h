@@ -29,7 +29,13 @@ typedef enum mca_cell_backend {
     MCA_CELL_BACKEND_SIM = 0,       /**< in-process simulated arm (mca/sim_backend.h) */
     MCA_CELL_BACKEND_SOCKETCAN = 1, /**< SocketCAN CAN FD (mca/arm_can.h) */
     MCA_CELL_BACKEND_CANOPEN = 2, /**< CiA 402 drives, one node per joint, one bus per arm (mca/canopen.h) */
+    /** The backends in a folder of their own (daemon/backends/NAME/, docs/daemon.md "Backends") take the ids
+     *  from here up, each its own (replay: MCA_CELL_BACKEND_FOLDER + 0). */
+    MCA_CELL_BACKEND_FOLDER = 16,
 } mca_cell_backend_t;
+
+/** Room for a backend's own settings in each cell arm (mca_cell_arm_t.backend_own). */
+#define MCA_CELL_BACKEND_OWN_SIZE 512
 
 /** What a streamed arm follows (task.stream; numbering as mca_ros2_stream_kind_t). */
 typedef enum mca_cell_stream_kind {
@@ -71,6 +77,13 @@ typedef struct mca_cell_arm {
     double sim_noise_pos;   /**< measurement noise sigma [rad] */
     int sim_ideal;          /**< not in cell files (mca-sim --euler): the sim arm follows the command exactly,
                                  q += v dt, no limits, lag or rate limits */
+    /** A backend's own settings: its read in the registry keeps them here and its open reads them, as a
+     *  struct of its own (a backend in a folder of its own adds no field to this struct). */
+    union {
+        unsigned char bytes[MCA_CELL_BACKEND_OWN_SIZE];
+        double align_d;
+        int64_t align_i;
+    } backend_own;
 } mca_cell_arm_t;
 
 /** ROS 2-native topics of the DDS bridge (dds.ros2 in the cell, docs/ros2.md); each on by default. */

@@ -96,9 +96,12 @@ const char *mca_daemon_state_name(int state);
 
 /** Options not in the cell file. */
 typedef struct mca_daemon_opts {
-    int no_dds;            /**< 1: do not publish (overrides the cell) */
-    int no_rt;             /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
-    const char *csv_path;  /**< per-tick CSV (written by a non-rt thread), NULL: none */
+    int no_dds;           /**< 1: do not publish (overrides the cell) */
+    int no_rt;            /**< 1: no SCHED_FIFO, mlockall, dma latency (tests under sanitizers) */
+    const char *csv_path; /**< per-tick CSV (written by a non-rt thread), NULL: none */
+    /** per-tick recording of what the controller read, bit for bit (mca/tick_rec.h; written by a non-rt
+     *  thread; the replay backend plays it into the loop again), NULL: none */
+    const char *record_path;
     double stop_after;     /**< > 0: overrides the cell's stop_after [s] */
     uint32_t dds_ab_block; /**< > 0: DDS cost benchmark: publish only in every other block of this many
                             *   ticks and time the whole tick of both kinds of block (summary dds_ab_*) */
@@ -126,6 +129,12 @@ typedef struct mca_daemon_csv_rec {
     mca_tick_info_t info;
     int64_t cmd_gap_ns; /**< this tick's commands after the last tick's (0 for the first) */
     int64_t wake_ns;    /**< the tick's wake-up, CLOCK_MONOTONIC ns (virtual time: the virtual clock) */
+    /* the rest of the feedback the controller read, for the recording (mca/tick_rec.h) */
+    double v[MCA_MAX_ARMS][MCA_MAX_DOF]; /**< measured velocities (NaN: none yet) */
+    uint32_t fresh;                      /**< bit a: arm a's feedback of this tick was new and taken */
+    int32_t arm_state[MCA_MAX_ARMS];     /**< the feedback's mca_arm_state_t */
+    uint32_t fault_code[MCA_MAX_ARMS];   /**< the feedback's enum mca_arm_fault */
+    int64_t fb_stamp_ns[MCA_MAX_ARMS];   /**< the feedback's receive stamp */
 } mca_daemon_csv_rec_t;
 
 #define MCA_DAEMON_CSV_CAPACITY 4096
