@@ -151,7 +151,7 @@ static int sim_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err
     sc.noise_pos = ca->sim_noise_pos;
     sc.seed = 1 + (uint64_t)o->arm;
     sc.stamp_monotonic = !o->virtual_time;
-    if (ca->sim_ideal) {
+    if (o->ideal) {
         /* mca-sim --euler: q += v dt with v the command, nothing limited */
         sc.ideal = 1;
         for (int j = 0; j < sc.n; j++) {

@@ -18,6 +18,7 @@
 #include "daemon__arms.h"
 #include "daemon__backends.h" /* mca_backend_check_ids */
 #include "daemon__csv.h"
+#include "daemon__drive.h" /* mcad_open */
 #include "daemon__fault.h" /* mcad_log_format */
 #include "daemon__loop.h"  /* mcad_pin_non_rt */
 #include "daemon__plausibility.h"
@@ -68,6 +69,11 @@ static int plan(mca_daemon_t *d, char *err, size_t errlen) {
 
 int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen) {
+    return mcad_open(out, cell, opts, NULL, err, errlen);
+}
+
+int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_t *opts,
+              const mcad_drive_t *drive, char *err, size_t errlen) {
     if (!out || !cell || !opts) {
         return MCA_EINVAL;
     }
@@ -90,6 +96,12 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (!d->opts.log) {
         d->opts.log = stderr;
     }
+    if (drive) {
+        d->drive = *drive;
+    }
+    d->drive.stop_k = -1;
+    d->drive.fault_k = -1;
+    d->drive.fired = 0;
     d->dma_fd = -1;
     atomic_store(&d->state, MCA_DAEMON_INIT);
     mca_rtlog_init(&d->log, "mcad");
@@ -103,8 +115,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     d->min_d = INFINITY;
     d->min_d_t = 0.0;
     int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
-    if (rc == MCA_OK && opts->config_hook) {
-        opts->config_hook(&d->ccfg, opts->config_hook_arg);
+    if (rc == MCA_OK && d->drive.controller_config) {
+        d->drive.controller_config(&d->ccfg, d->drive.controller_config_arg);
     }
     if (rc == MCA_OK) {
         rc = mca_controller_init(&d->ctrl, &d->ccfg);
@@ -137,7 +149,7 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     if (rc == MCA_OK) {
         rc = plan(d, err, errlen);
     }
-    if (rc == MCA_OK && cell->rt.cpu >= 0 && !opts->virtual_time) {
+    if (rc == MCA_OK && cell->rt.cpu >= 0 && !d->drive.virtual_time) {
         /* before DDS starts its threads: they, the CSV/log drainer and the supervisor inherit this mask */
         mcad_pin_non_rt(d);
     }

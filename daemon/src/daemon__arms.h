@@ -6,7 +6,7 @@
  *
  * Calling context: mcad_open_arm and mcad_handshake at start-up (mca_daemon_open; the handshake sleeps a
  * period between reads unless in virtual time, and logs with fprintf); mcad_read_feedback and
- * mcad_send_commands on the RT thread (the loop, or the caller of mca_daemon_step): no allocation, no
+ * mcad_send_commands on the RT thread (the loop, or the driver through mca_drive_step): no allocation, no
  * locks, no blocking I/O, logs through d->log only. */
 #ifndef MCA_DAEMON__ARMS_H
 #define MCA_DAEMON__ARMS_H

@@ -32,7 +32,8 @@ typedef struct mca_backend_open_args {
     int arm;                               /* index in the cell */
     const mca_chain_t *chain;              /* the arm's model */
     const double *fb_lo, *fb_hi, *fb_vmax; /* the daemon's plausible feedback per joint (its check) */
-    int virtual_time;                      /* mca_daemon_opts_t.virtual_time */
+    int virtual_time;                      /* the driver's virtual time (mca/daemon_drive.h) */
+    int ideal;                             /* the driver's ideal arm: follows its command exactly (sim) */
 } mca_backend_open_args_t;
 
 /* What a backend does with its arm's interface (the cell's bus clash check, whatever the arms' order). */

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* The real-time loop and its timing (daemon_loop.c): the loop thread (mcad-loop: pinned, SCHED_FIFO where
- * permitted, a warm-up on a scratch controller, then one mca_daemon_step per period on a grid half a period
+ * permitted, a warm-up on a scratch controller, then one mcad_step per period on a grid half a period
  * off CLOCK_MONOTONIC's whole periods; wake-up jitter, compute time, overruns), the process's real-time
  * set-up (mlockall, /dev/cpu_dma_latency, the non-rt threads off the loop's CPU) and what other threads ask
  * of the loop (mca/daemon.h: mca_daemon_start, _request_stop, _finished, _ticks, _state, _join,

@@ -2,11 +2,11 @@
 /* The daemon's state (struct mca_daemon, opaque outside mca_daemon): one struct, its fields grouped by the
  * room that owns them (writes them); the other rooms read them as their comments say. Private to the
  * daemon's rooms (daemon.c, daemon_loop.c, daemon_tick.c, daemon_arms.c, daemon_plausibility.c,
- * daemon_fault.c, daemon_stream.c, daemon_publish.c, daemon_csv.c, daemon_summary.c, daemon_seams.c).
+ * daemon_fault.c, daemon_stream.c, daemon_publish.c, daemon_csv.c, daemon_summary.c, daemon_drive.c).
  *
  * Calling context: none of its own (a struct and helpers). Fields marked "shared with other threads" are
  * atomics; every other field is written by one thread at a time: start-up (mca_daemon_open) before the
- * loop starts, then the RT thread (the loop, or the caller of mca_daemon_step in virtual time), then
+ * loop starts, then the RT thread (the loop, or the driver through mca_drive_step), then
  * shut-down once the loop has ended. The service thread reads only what a ring record or the fault latch
  * (written once, before the record that carries it) hands it. */
 #ifndef MCA_DAEMON__STATE_H
@@ -24,6 +24,21 @@
 
 #define NS_PER_S 1000000000LL
 
+/* What the virtual-time driver (mca/daemon_drive.h, daemon_drive.c) asks of the daemon; all zero (and the
+ * schedule empty) under mcad's loop. */
+typedef struct mcad_drive {
+    int driven;       /* opened by mca_drive_open: mca_daemon_start refuses it */
+    int virtual_time; /* the caller's clock: sim arms stamp it, no handshake sleep, no pinning, no publisher
+                         grid, no stall count */
+    uint32_t ideal_arms; /* bit a: arm a follows its command exactly */
+    void (*controller_config)(mca_controller_config_t *, void *); /* before the controller's init */
+    void *controller_config_arg;
+    /* the schedule, by tick index (llround(t / dt)); < 0: none. Written and read by the driving thread */
+    long long stop_k, fault_k;
+    int fault_kind;
+    unsigned fired; /* mca_drive_event bits */
+} mcad_drive_t;
+
 struct mca_daemon {
     /* ---- set at open (daemon.c), read-only after */
     mca_cell_t cell;
@@ -33,6 +48,7 @@ struct mca_daemon {
     int n_arms;
     int dof[MCA_MAX_ARMS];
     mca_rtlog_t log;
+    mcad_drive_t drive; /* the driver's settings (daemon_drive.c); its schedule changes between steps */
 
     /* ---- loop and timing (daemon_loop.c) */
     /* shared with other threads */

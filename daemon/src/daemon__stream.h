@@ -3,7 +3,7 @@
  * mailbox (a seqlock read), turned into each arm's reference velocity for the controller; a stream silent
  * for brake_after is a fault (through daemon__fault.h). Private to mca_daemon.
  *
- * Calling context: RT thread (mca_daemon_step, RUNNING only): no allocation, no locks, never waits. */
+ * Calling context: RT thread (mcad_step, RUNNING only): no allocation, no locks, never waits. */
 #ifndef MCA_DAEMON__STREAM_H
 #define MCA_DAEMON__STREAM_H
 

@@ -3,7 +3,7 @@
  * to the supervisor once a second through a ring; their read-out (mca_daemon_summary, with the fault's
  * text) and print-out (mca_daemon_print_summary). Private to mca_daemon.
  *
- * Calling context: mcad_compute_summary on the RT thread (once a second, from mca_daemon_step: no
+ * Calling context: mcad_compute_summary on the RT thread (once a second, from mcad_step: no
  * formatting, no allocation) or once the loop has ended; mca_daemon_summary from ONE non-rt thread (the
  * supervisor; it formats the fault's text); mca_daemon_print_summary anywhere off the RT path. */
 #ifndef MCA_DAEMON__SUMMARY_H

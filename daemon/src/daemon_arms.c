@@ -24,7 +24,8 @@ int mcad_open_arm(mca_daemon_t *d, int a, char *err, size_t errlen) {
                                        .fb_lo = d->fb_lo[a],
                                        .fb_hi = d->fb_hi[a],
                                        .fb_vmax = d->fb_vmax[a],
-                                       .virtual_time = d->opts.virtual_time};
+                                       .virtual_time = d->drive.virtual_time,
+                                       .ideal = (int)((d->drive.ideal_arms >> a) & 1u)};
     const int rc = mca_backend_get(ca->backend)->open(&d->arm[a], &o, berr, sizeof berr);
     if (rc != MCA_OK) {
         if (err && errlen) {
@@ -111,7 +112,7 @@ int mcad_handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
         for (int j = 0; j < c.n; j++) {
             c.flags[j] = 0;
         }
-        if (!d->opts.virtual_time) {
+        if (!d->drive.virtual_time) {
             struct timespec ts = {0, d->cell.rt.period_ns};
             nanosleep(&ts, NULL);
         }
@@ -250,7 +251,7 @@ void mcad_send_commands(mca_daemon_t *d, int servo) {
     const int64_t sent = now_ns();
     d->cmd_gap_ns = d->sent_ns ? sent - d->sent_ns : 0;
     d->sent_ns = sent;
-    if (!d->opts.virtual_time && d->cmd_gap_ns > MCA_DAEMON_STALL_PERIODS * d->cell.rt.period_ns) {
+    if (!d->drive.virtual_time && d->cmd_gap_ns > MCA_DAEMON_STALL_PERIODS * d->cell.rt.period_ns) {
         d->stalls++;
         d->stall_max_ns = d->cmd_gap_ns > d->stall_max_ns ? d->cmd_gap_ns : d->stall_max_ns;
         if (d->stalls <= MCA_DAEMON_STALLS_LOGGED) {

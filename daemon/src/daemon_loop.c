@@ -20,6 +20,7 @@
 
 #include "daemon__fault.h"   /* mcad_latch_fault */
 #include "daemon__publish.h" /* mcad_dds_ab_publishes */
+#include "daemon__tick.h"    /* mcad_step */
 
 /* rt.cpu set: the calling (main, supervising) thread, and so every thread created from it later (DDS,
  * Cyclone's own, the loop before it pins itself), leaves the loop's CPU. Start-up. */
@@ -114,7 +115,7 @@ static void *rt_main(void *arg) {
             LOGN(d, MCA_LOG_WARNING, "cannot pin the loop to CPU %g", 1, d->cell.rt.cpu, 0, 0, 0, NULL);
         }
     }
-    if (!d->opts.virtual_time) {
+    if (!d->drive.virtual_time) {
         warm_up(d);
     }
     const int64_t period = d->cell.rt.period_ns;
@@ -164,7 +165,7 @@ static void *rt_main(void *arg) {
             atomic_store(&d->stop_request, 1);
         }
         d->wake_late_ns = wake - next;
-        const int state = mca_daemon_step(d, t, wake);
+        const int state = mcad_step(d, t, wake);
         const int64_t end = now_ns();
         mca_hist_record(&d->compute, end - wake);
         if (d->opts.dds_ab_block) {
@@ -181,7 +182,7 @@ static void *rt_main(void *arg) {
             /* one more zero command so the arms see the servo released, then leave (before the overrun
              * count: the last tick has no next period to miss, and the wake-up histogram's span ends at its
              * wake-up, so periods skipped after it would count outside that span) */
-            mca_daemon_step(d, t + (double)period * 1e-9, now_ns());
+            mcad_step(d, t + (double)period * 1e-9, now_ns());
             break;
         }
         next += period;
@@ -207,6 +208,10 @@ static void *rt_main(void *arg) {
 }
 
 int mca_daemon_start(mca_daemon_t *d) {
+    if (d->drive.driven) {
+        return MCA_EINVAL; /* its driver steps it (mca/daemon_drive.h): one thread ticks a daemon, never two
+                            */
+    }
     FILE *log = d->opts.log;
     /* The loop's own clock: the PDNN's share of the period (rt.pdnn_budget_us, default half). Running out is
      * a named fault, not an overrun. A caller that steps the daemon itself (mca-sim in virtual time, the

@@ -98,7 +98,7 @@ int mcad_publish_open(mca_daemon_t *d, char *err, size_t errlen) {
         rc = ros2_config(d, &d->ros2, err, errlen);
         dc.ros2 = &d->ros2;
     }
-    if (!opts->virtual_time) {
+    if (!d->drive.virtual_time) {
         /* the publisher wakes on the loop's grid, just after a publishing tick has pushed: the push then
          * makes no system call (only a late tick finds the publisher parked and wakes it) */
         dc.wake_period_ns = (uint64_t)cell->dds.publish_divisor * (uint64_t)cell->rt.period_ns;

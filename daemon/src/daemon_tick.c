@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* One tick (daemon__tick.h): mca_daemon_step, from feedback to commands, snapshot and CSV row (RT thread). */
+/* One tick (daemon__tick.h): mcad_step, from feedback to commands, snapshot and CSV row (RT thread). */
 #include "daemon__tick.h"
 
 #include <math.h>
@@ -62,7 +62,7 @@ static void deadlock_watch(mca_daemon_t *d, double t) {
     d->deadlocks = in->deadlocks;
 }
 
-int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
+int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     d->t_tick = t;
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
     if (state == MCA_DAEMON_READY) {

@@ -3,8 +3,8 @@
  * dec_limit on its own, ignoring the other arm; stopped while two arms approach fast with a low dec_limit
  * the arms coasted below d1. Now every stop brakes through mca_controller_brake (collision rows inside the
  * deceleration box). This test runs the same stop both ways from the same state, in virtual time through
- * mca_daemon_step on the sim backend:
- *   new: mca_daemon_request_stop, then mca_daemon_step to rest (the daemon's braking);
+ * mca_drive_step on the sim backend:
+ *   new: mca_daemon_request_stop, then mca_drive_step to rest (the daemon's braking);
  *   old: the per-joint ramp re-enacted here (commands written to the same sim arms, distances measured by
  *        mca_controller_observe on a copy of the daemon's controller).
  * and asserts old < d1 <= new, every per-tick velocity change <= dec_limit dt, and the stop's length bound.
@@ -18,6 +18,7 @@
 
 #include "mca/cell.h"
 #include "mca/daemon.h"
+#include "mca/daemon_drive.h"
 #include "mca/err.h"
 #include "mca/scenario.h"
 #include "mca/sim_backend.h"
@@ -34,16 +35,16 @@ typedef struct {
 } outcome_t;
 
 static mca_daemon_t *open_at(const mca_cell_t *cell, int k_stop, double dt, int *ok) {
-    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .virtual_time = 1, .log = stderr};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}};
     mca_daemon_t *d = NULL;
     char err[512] = "";
-    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+    if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fprintf(stderr, "open: %s\n", err);
         exit(2);
     }
     *ok = 1;
     for (int k = 0; k < k_stop; k++) {
-        if (mca_daemon_step(d, k * dt, 0) != MCA_DAEMON_RUNNING) {
+        if (mca_drive_step(d, k * dt, 0) != MCA_DAEMON_RUNNING) {
             *ok = 0;
         }
     }
@@ -61,11 +62,11 @@ static outcome_t run(const mca_cell_t *cell, double T) {
         mca_daemon_close(d);
         return r;
     }
-    const mca_controller_t *ctrl = mca_daemon_controller(d);
+    const mca_controller_t *ctrl = mca_drive_controller(d);
     const int na = ctrl->cfg.n_arms;
     r.vmax = 0.0;
     for (int a = 0; a < na; a++) {
-        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        const mca_arm_command_t *c = mca_drive_last_command(d, a);
         for (int j = 0; j < c->n; j++) {
             r.vmax = fmax(r.vmax, fabs(c->velocity[j]) / cell->arm[a].dec_limit[j]);
         }
@@ -74,13 +75,13 @@ static outcome_t run(const mca_cell_t *cell, double T) {
     r.d_new = INFINITY;
     int k = K, st;
     do {
-        st = mca_daemon_step(d, k * dt, 0);
-        r.d_new = fmin(r.d_new, mca_daemon_tick_info(d)->min_distance);
+        st = mca_drive_step(d, k * dt, 0);
+        r.d_new = fmin(r.d_new, mca_drive_tick_info(d)->min_distance);
         k++;
     } while (st == MCA_DAEMON_BRAKING && k < K + 100000);
     for (int i = 0; i < 50; i++, k++) { /* the arms' own last cycles */
-        mca_daemon_step(d, k * dt, 0);
-        r.d_new = fmin(r.d_new, mca_daemon_tick_info(d)->min_distance);
+        mca_drive_step(d, k * dt, 0);
+        r.d_new = fmin(r.d_new, mca_drive_tick_info(d)->min_distance);
     }
     mca_daemon_service(d);
     mca_daemon_summary_t s;
@@ -93,7 +94,7 @@ static outcome_t run(const mca_cell_t *cell, double T) {
     /* old: the same state, each joint ramped down on its own */
     d = open_at(cell, K, dt, &r.ok);
     mca_controller_t *obs = malloc(sizeof *obs);
-    memcpy(obs, mca_daemon_controller(d), sizeof *obs);
+    memcpy(obs, mca_drive_controller(d), sizeof *obs);
     double v[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
     const double *qp[MCA_MAX_ARMS];
     mca_arm_command_t cmd[MCA_MAX_ARMS];
@@ -101,9 +102,9 @@ static outcome_t run(const mca_cell_t *cell, double T) {
         qp[a] = q[a];
     }
     for (int a = 0; a < na; a++) {
-        cmd[a] = *mca_daemon_last_command(d, a);
+        cmd[a] = *mca_drive_last_command(d, a);
         memcpy(v[a], cmd[a].velocity, sizeof v[a]);
-        memcpy(q[a], mca_daemon_positions(d, a), sizeof q[a]);
+        memcpy(q[a], mca_drive_positions(d, a), sizeof q[a]);
     }
     r.d_old = INFINITY;
     int n = 0, moving = 1;
@@ -112,7 +113,7 @@ static outcome_t run(const mca_cell_t *cell, double T) {
     for (k = K; moving && k < K + 100000; k++, n++) {
         moving = 0;
         for (int a = 0; a < na; a++) {
-            mca_arm_t *arm = mca_daemon_arm(d, a);
+            mca_arm_t *arm = mca_drive_arm(d, a);
             mca_arm_feedback_t fb;
             if (n > 0 && mca_arm_read(arm, &fb) == MCA_OK) {
                 memcpy(q[a], fb.position, sizeof q[a]);
@@ -122,7 +123,7 @@ static outcome_t run(const mca_cell_t *cell, double T) {
             r.d_old = fmin(r.d_old, info.min_distance);
         }
         for (int a = 0; a < na; a++) {
-            mca_arm_t *arm = mca_daemon_arm(d, a);
+            mca_arm_t *arm = mca_drive_arm(d, a);
             for (int j = 0; j < cmd[a].n; j++) {
                 const double step = cell->arm[a].dec_limit[j] * dt;
                 v[a][j] = fabs(v[a][j]) <= step ? 0.0 : v[a][j] - (v[a][j] > 0 ? step : -step);
@@ -142,7 +143,7 @@ static outcome_t run(const mca_cell_t *cell, double T) {
     }
     for (int a = 0; a < na; a++) { /* where the arms came to rest */
         mca_arm_feedback_t fb;
-        if (mca_arm_read(mca_daemon_arm(d, a), &fb) == MCA_OK) {
+        if (mca_arm_read(mca_drive_arm(d, a), &fb) == MCA_OK) {
             memcpy(q[a], fb.position, sizeof q[a]);
         }
     }

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* The daemon's tick in virtual time (mca_daemon_step, sim backend, no real-time loop), its braking ramp
+/* The daemon's tick in virtual time (mca_drive_step, sim backend, no real-time loop), its braking ramp
  * and faults; bus errors through the CAN link code; the latency histogram against sorted samples; the
  * rt log ring. */
 #include <setjmp.h>
@@ -67,9 +67,9 @@ static mca_daemon_t *open_daemon(mca_cell_t *cell) {
     if (rc != MCA_OK) {
         fail_msg("%s", err);
     }
-    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = stderr};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
-    rc = mca_daemon_open(&d, cell, &o, err, sizeof err);
+    rc = mca_drive_open(&d, cell, &o, err, sizeof err);
     if (rc != MCA_OK) {
         fail_msg("%s", err);
     }
@@ -83,7 +83,7 @@ static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, i
     double prev[MCA_MAX_ARMS][MCA_MAX_DOF];
     double vmax = 0.0;
     for (int a = 0; a < na; a++) {
-        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        const mca_arm_command_t *c = mca_drive_last_command(d, a);
         for (int j = 0; j < c->n; j++) {
             prev[a][j] = c->velocity[j];
             vmax = fmax(vmax, fabs(c->velocity[j]) / cell->arm[a].dec_limit[j]);
@@ -92,10 +92,10 @@ static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, i
     int n = 0, st;
     do {
         *t += 0.001;
-        st = mca_daemon_step(d, *t, 0);
+        st = mca_drive_step(d, *t, 0);
         n++;
         for (int a = 0; a < na; a++) {
-            const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+            const mca_arm_command_t *c = mca_drive_last_command(d, a);
             for (int j = 0; j < c->n; j++) {
                 const double step = fabs(c->velocity[j] - prev[a][j]);
                 if (step > cell->arm[a].dec_limit[j] * 0.001 + 1e-12) {
@@ -115,7 +115,7 @@ static int brake_and_check(mca_daemon_t *d, const mca_cell_t *cell, double *t, i
     print_message("  braking: %d ticks, slowest joint needs %d\n", n, expect);
     assert_true(n >= expect && n <= expect + 1);
     for (int a = 0; a < na; a++) {
-        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        const mca_arm_command_t *c = mca_drive_last_command(d, a);
         for (int j = 0; j < c->n; j++) {
             assert_true(c->velocity[j] == 0.0);
         }
@@ -130,10 +130,10 @@ static void test_stop_brakes_within_limits(void **state) {
     mca_daemon_t *d = open_daemon(cell);
     double t = 0.0;
     for (int k = 0; k < 1500; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
     }
     /* the left arm is moving (circle at 3/8 of its period), the right one holds */
-    const mca_arm_command_t *c0 = mca_daemon_last_command(d, 0);
+    const mca_arm_command_t *c0 = mca_drive_last_command(d, 0);
     double vnorm = 0.0;
     for (int j = 0; j < c0->n; j++) {
         vnorm = fmax(vnorm, fabs(c0->velocity[j]));
@@ -145,9 +145,9 @@ static void test_stop_brakes_within_limits(void **state) {
     assert_int_equal(mca_daemon_state(d), MCA_DAEMON_STOPPED);
     /* stopped: zero velocity with the servo released */
     t += 0.001;
-    assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_STOPPED);
+    assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_STOPPED);
     for (int a = 0; a < 2; a++) {
-        const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+        const mca_arm_command_t *c = mca_drive_last_command(d, a);
         for (int j = 0; j < c->n; j++) {
             assert_true(c->velocity[j] == 0.0 && c->flags[j] == 0);
         }
@@ -155,10 +155,10 @@ static void test_stop_brakes_within_limits(void **state) {
     /* the simulated arms did follow and are at rest, in READY (brakes on) after a few cycles */
     for (int k = 0; k < 400; k++) {
         t += 0.001;
-        mca_daemon_step(d, t, 0);
+        mca_drive_step(d, t, 0);
     }
     for (int a = 0; a < 2; a++) {
-        mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, a));
+        mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, a));
         assert_non_null(fw);
         assert_int_equal(fw->state, MCA_ARM_READY);
         for (int j = 0; j < fw->cfg.n; j++) {
@@ -180,16 +180,16 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
     mca_daemon_t *d = open_daemon(cell);
     double t = 0.0;
     for (int k = 0; k < 1200; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
     }
     /* the right arm's firmware goes silent from its next cycle on */
-    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, 1));
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, 1));
     fw->cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_SILENT, .at_cycle = fw->cycle, .duration = 0};
     fw->cfg.n_inject = 1;
     int k = 0, st;
     do {
         t += 0.001;
-        st = mca_daemon_step(d, t, 0);
+        st = mca_drive_step(d, t, 0);
         k++;
     } while (st == MCA_DAEMON_RUNNING && k < 100);
     /* lost_feedback_cycles = 5: the 5th tick without feedback is the fault (the first silent read is
@@ -207,7 +207,7 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
      * firmware: nothing came since, so the link's counters now are the ones then) */
     print_message("  %s\n", s.fault_text);
     mca_arm_stats_t ls;
-    assert_int_equal(mca_arm_stats(mca_daemon_arm(d, 1), &ls), MCA_OK);
+    assert_int_equal(mca_arm_stats(mca_drive_arm(d, 1), &ls), MCA_OK);
     unsigned long long taken, len_ign, ctr_ign, id_ign, impl_ign, bus, dropped;
     const char *link = strstr(s.fault_text, "(link: ");
     assert_non_null(link);
@@ -240,8 +240,8 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
                 dropped == ls.rx_dropped);
     /* a fault latches: still FAULT, zero commands, servo released */
     t += 0.001;
-    assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_FAULT);
-    const mca_arm_command_t *c = mca_daemon_last_command(d, 0);
+    assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_FAULT);
+    const mca_arm_command_t *c = mca_drive_last_command(d, 0);
     for (int j = 0; j < c->n; j++) {
         assert_true(c->velocity[j] == 0.0 && c->flags[j] == 0);
     }
@@ -256,15 +256,15 @@ static void test_arm_fault_is_a_fault(void **state) {
     mca_daemon_t *d = open_daemon(cell);
     double t = 0.0;
     for (int k = 0; k < 500; k++, t += 0.001) {
-        mca_daemon_step(d, t, 0);
+        mca_drive_step(d, t, 0);
     }
-    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, 0));
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, 0));
     fw->cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_ACTUATOR, .at_cycle = fw->cycle, .joint = 1};
     fw->cfg.n_inject = 1;
     int st = MCA_DAEMON_RUNNING;
     for (int k = 0; k < 10 && st == MCA_DAEMON_RUNNING; k++) {
         t += 0.001;
-        st = mca_daemon_step(d, t, 0);
+        st = mca_drive_step(d, t, 0);
     }
     assert_int_equal(st, MCA_DAEMON_BRAKING);
     mca_daemon_summary_t s;
@@ -289,28 +289,28 @@ static void test_start_in_fault(void **state) {
     mca_cell_t *cell = calloc(1, sizeof *cell);
     char err[1024] = "";
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
-    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = stderr};
+    mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
-    const int rc = mca_daemon_open(&d, cell, &o, err, sizeof err);
+    const int rc = mca_drive_open(&d, cell, &o, err, sizeof err);
     print_message("  without --clear-faults: %s (%s)\n", err, mca_strerror(rc));
     assert_int_equal(rc, MCA_EFAULT);
     assert_null(d);
     assert_non_null(strstr(err, "arm 'left' reports FAULT INJECTED"));
     assert_non_null(strstr(err, "--clear-faults"));
-    o.clear_faults = 1;
+    o.daemon.clear_faults = 1;
     err[0] = 0;
-    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+    if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("with --clear-faults: %s", err);
     }
     assert_int_equal(mca_daemon_state(d), MCA_DAEMON_READY);
     double t = 0.0;
     int st = MCA_DAEMON_READY;
     for (int k = 0; k < 300; k++, t += 0.001) {
-        st = mca_daemon_step(d, t, 0);
+        st = mca_drive_step(d, t, 0);
     }
     assert_int_equal(st, MCA_DAEMON_RUNNING);
     for (int a = 0; a < 2; a++) {
-        const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, a));
+        const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, a));
         assert_int_equal(fw->state, MCA_ARM_SERVOING);
     }
     mca_daemon_close(d);
@@ -323,13 +323,13 @@ static void test_arm_not_servoing_is_a_fault(void **state) {
     mca_cell_t *cell = calloc(1, sizeof *cell);
     mca_daemon_t *d = open_daemon(cell);
     /* every command to the right arm is lost before its firmware: it stays READY, brakes on */
-    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, 1));
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, 1));
     fw->cfg.inject[0] = (mca_sim_inject_t){.kind = MCA_SIM_INJ_DROP_RX, .at_cycle = fw->cycle, .duration = 0};
     fw->cfg.n_inject = 1;
     double t = 0.0;
     int k = 0, st;
     do {
-        st = mca_daemon_step(d, t, 0);
+        st = mca_drive_step(d, t, 0);
         t += 0.001;
         k++;
     } while (st == MCA_DAEMON_RUNNING && k < 1000);
@@ -350,10 +350,10 @@ static void test_distance_fault(void **state) {
     write_cell(NULL, "[0.0, -0.5, 0.0]");
     mca_cell_t *cell = calloc(1, sizeof *cell);
     mca_daemon_t *d = open_daemon(cell);
-    const int st = mca_daemon_step(d, 0.0, 0);
+    const int st = mca_drive_step(d, 0.0, 0);
     assert_true(st == MCA_DAEMON_BRAKING || st == MCA_DAEMON_FAULT);
     double t = 0.0;
-    while (mca_daemon_step(d, t += 0.001, 0) == MCA_DAEMON_BRAKING) {
+    while (mca_drive_step(d, t += 0.001, 0) == MCA_DAEMON_BRAKING) {
     }
     mca_daemon_summary_t s;
     mca_daemon_summary(d, &s);
@@ -446,9 +446,9 @@ static void test_bus_error_keeps_feedback(void **state) {
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
     FILE *log = tmpfile();
     assert_non_null(log);
-    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = log};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = log}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
-    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+    if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("%s", err);
     }
     static canproxy_t p;
@@ -466,7 +466,7 @@ static void test_bus_error_keeps_feedback(void **state) {
     p.err_with_fb = 1;
     double t = 0.0;
     for (int k = 0; k < 300; k++, t += 0.001) {
-        const int st = mca_daemon_step(d, t, 0);
+        const int st = mca_drive_step(d, t, 0);
         if (st != MCA_DAEMON_RUNNING) {
             mca_daemon_summary_t s;
             mca_daemon_summary(d, &s);
@@ -481,7 +481,7 @@ static void test_bus_error_keeps_feedback(void **state) {
     assert_int_equal(p.reads_eio, 0);
     /* the daemon ran on the CAN-decoded feedback: its command's position reference is that feedback's
      * position plus one step; the wire quantises positions to 1e-6 rad */
-    const mca_arm_command_t *c = mca_daemon_last_command(d, 1);
+    const mca_arm_command_t *c = mca_drive_last_command(d, 1);
     for (int j = 0; j < c->n; j++) {
         assert_true(fabs(c->position_ref[j] - c->velocity[j] * 0.001 - p.link.fb.position[j]) < 1e-12);
         assert_true(fabs(p.link.fb.position[j] - fw->q[j]) < 1e-3);
@@ -490,11 +490,11 @@ static void test_bus_error_keeps_feedback(void **state) {
     /* one feedback lost with the error still pending: that read reports it (MCA_EIO, a lost cycle) */
     p.err_with_fb = 0;
     p.drop_fb = 1;
-    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
+    assert_int_equal(mca_drive_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
     assert_int_equal(p.reads_eio, 1);
     p.drop_fb = 0;
     for (int k = 0; k < 20; k++) {
-        assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
     }
     assert_int_equal(p.reads_eio, 1);
 
@@ -503,7 +503,7 @@ static void test_bus_error_keeps_feedback(void **state) {
     proxy_error_frame(&p, CAN_ERR_BUSOFF);
     int k = 0, st;
     do {
-        st = mca_daemon_step(d, t += 0.001, 0);
+        st = mca_drive_step(d, t += 0.001, 0);
         k++;
     } while (st == MCA_DAEMON_RUNNING && k < 100);
     assert_int_equal(st, MCA_DAEMON_BRAKING);
@@ -610,9 +610,9 @@ static const mca_arm_ops_t fbproxy_ops = {.name = "fbproxy",
 
 static mca_daemon_t *open_with_fbproxy(const mca_cell_t *cell, int a, fbproxy_t *p, FILE *log) {
     char err[1024] = "";
-    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = log};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = log}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
-    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+    if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("%s", err);
     }
     memset(p, 0, sizeof *p);
@@ -626,7 +626,7 @@ static mca_daemon_t *open_with_fbproxy(const mca_cell_t *cell, int a, fbproxy_t 
 /* both daemons sent bit-identical commands to every arm */
 static void assert_same_commands(mca_daemon_t *x, mca_daemon_t *y, int tick) {
     for (int a = 0; a < 2; a++) {
-        const mca_arm_command_t *cx = mca_daemon_last_command(x, a), *cy = mca_daemon_last_command(y, a);
+        const mca_arm_command_t *cx = mca_drive_last_command(x, a), *cy = mca_drive_last_command(y, a);
         assert_int_equal(cx->n, cy->n);
         for (int j = 0; j < cx->n; j++) {
             if (cx->velocity[j] != cy->velocity[j] || cx->position_ref[j] != cy->position_ref[j] ||
@@ -667,12 +667,12 @@ static void run_fb_case(const fb_case_t *fc) {
     mca_daemon_t *r = open_with_fbproxy(cell, fc->arm, &pr, log_ref);
     double t = 0.0;
     for (int k = 0; k < K; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
-        assert_int_equal(mca_daemon_step(r, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(r, t, 0), MCA_DAEMON_RUNNING);
         assert_same_commands(d, r, k);
     }
     /* the left arm moves on its circle (a quarter of the way), the right one holds (small commands) */
-    const mca_joint_model_t *jm = &mca_daemon_controller(d)->cfg.chain[fc->arm].joint[fc->joint];
+    const mca_joint_model_t *jm = &mca_drive_controller(d)->cfg.chain[fc->arm].joint[fc->joint];
     double value = fc->value;
     if (fc->kind == MCA_FB_POSITION) {
         value = fc->over > 0 ? jm->upper + fc->over : jm->lower + fc->over;
@@ -685,23 +685,23 @@ static void run_fb_case(const fb_case_t *fc) {
     p.value = value;
     pr.drop_next = 1;
     mca_daemon_request_stop(r);
-    const int st = mca_daemon_step(d, t, 0);
-    assert_int_equal(mca_daemon_step(r, t, 0), MCA_DAEMON_BRAKING);
+    const int st = mca_drive_step(d, t, 0);
+    assert_int_equal(mca_drive_step(r, t, 0), MCA_DAEMON_BRAKING);
     assert_int_equal(st, MCA_DAEMON_BRAKING);
     /* the first braking command: from the last good sample, not the bad one */
     assert_same_commands(d, r, K);
-    const mca_arm_command_t *c = mca_daemon_last_command(d, fc->arm);
+    const mca_arm_command_t *c = mca_drive_last_command(d, fc->arm);
     for (int j = 0; j < c->n; j++) {
         assert_true(c->position_ref[j] == good.position[j] + c->velocity[j] * 0.001);
         assert_true(c->flags[j] == (MCA_ACT_SERVO_ENABLE | MCA_ACT_BRAKE_RELEASE));
     }
-    assert_true(mca_daemon_positions(d, fc->arm)[fc->joint] == good.position[fc->joint]);
+    assert_true(mca_drive_positions(d, fc->arm)[fc->joint] == good.position[fc->joint]);
     /* the whole stop is the reference's: the arms brake from the last good state */
     int n = 0, sd, sr;
     do {
         t += 0.001;
-        sd = mca_daemon_step(d, t, 0);
-        sr = mca_daemon_step(r, t, 0);
+        sd = mca_drive_step(d, t, 0);
+        sr = mca_drive_step(r, t, 0);
         assert_same_commands(d, r, K + ++n);
         assert_true(n < 10000);
     } while (sd == MCA_DAEMON_BRAKING || sr == MCA_DAEMON_BRAKING);
@@ -809,16 +809,16 @@ static void test_plausible_bounds_and_after_fault(void **state) {
     mca_daemon_t *d = open_with_fbproxy(cell, 1, &p, stderr);
     double t = 0.0;
     for (int k = 0; k < 100; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
     }
-    const mca_joint_model_t jm1 = mca_daemon_controller(d)->cfg.chain[1].joint[1]; /* copied: d is reopened */
+    const mca_joint_model_t jm1 = mca_drive_controller(d)->cfg.chain[1].joint[1]; /* copied: d is reopened */
     const mca_joint_model_t *jm = &jm1;
     /* inside the margin: taken (the controller may then fault on its own bounds; the sample was used) */
     p.corrupt = MCA_FB_POSITION;
     p.joint = 1;
     p.value = jm->upper + 0.04;
-    mca_daemon_step(d, t += 0.001, 0);
-    assert_true(mca_daemon_positions(d, 1)[1] == jm->upper + 0.04);
+    mca_drive_step(d, t += 0.001, 0);
+    assert_true(mca_drive_positions(d, 1)[1] == jm->upper + 0.04);
     mca_daemon_summary_t s;
     mca_daemon_summary(d, &s);
     assert_true(s.fault != MCA_DAEMON_FAULT_FEEDBACK && s.implausible_samples == 0);
@@ -826,28 +826,28 @@ static void test_plausible_bounds_and_after_fault(void **state) {
 
     d = open_with_fbproxy(cell, 1, &p, stderr);
     for (int k = 0; k < 100; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
     }
     p.corrupt = MCA_FB_VELOCITY;
     p.joint = 1;
     p.value = 1.4 * jm->vel_limit;
-    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
+    assert_int_equal(mca_drive_step(d, t += 0.001, 0), MCA_DAEMON_RUNNING);
     mca_daemon_summary(d, &s);
     assert_true(s.fault == MCA_DAEMON_FAULT_NONE && s.implausible_samples == 0);
     /* now a NaN: the fault; then, braking and in FAULT, more bad samples are dropped and counted */
     p.corrupt = MCA_FB_NONFINITE;
     p.value = NAN;
-    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_BRAKING);
+    assert_int_equal(mca_drive_step(d, t += 0.001, 0), MCA_DAEMON_BRAKING);
     p.corrupt = MCA_FB_POSITION;
     p.value = 1e6;
-    mca_daemon_step(d, t += 0.001, 0);
+    mca_drive_step(d, t += 0.001, 0);
     int st;
-    while ((st = mca_daemon_step(d, t += 0.001, 0)) == MCA_DAEMON_BRAKING) {
+    while ((st = mca_drive_step(d, t += 0.001, 0)) == MCA_DAEMON_BRAKING) {
     }
     assert_int_equal(st, MCA_DAEMON_FAULT);
     p.corrupt = MCA_FB_FRAME_AHEAD;
-    assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_FAULT);
-    assert_true(isfinite(mca_daemon_positions(d, 1)[1]) && mca_daemon_positions(d, 1)[1] < 1e3);
+    assert_int_equal(mca_drive_step(d, t += 0.001, 0), MCA_DAEMON_FAULT);
+    assert_true(isfinite(mca_drive_positions(d, 1)[1]) && mca_drive_positions(d, 1)[1] < 1e3);
     mca_daemon_summary(d, &s);
     assert_int_equal(s.feedback_fault, MCA_FB_NONFINITE);
     assert_int_equal(s.fault_arm, 1);
@@ -867,24 +867,24 @@ static void test_distances_while_braking(void **state) {
     char err[1024] = "", csv[512];
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
     snprintf(csv, sizeof csv, "/tmp/mca-test-daemon-%d.csv", (int)getpid());
-    mca_daemon_opts_t o = {.no_dds = 1, .no_rt = 1, .log = stderr, .csv_path = csv};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr, .csv_path = csv}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
-    if (mca_daemon_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+    if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("%s", err);
     }
     double t = 0.0;
     for (int k = 0; k < 1500; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
         mca_daemon_service(d);
     }
     mca_daemon_request_stop(d);
     int st;
     do {
-        st = mca_daemon_step(d, t += 0.001, 0);
+        st = mca_drive_step(d, t += 0.001, 0);
         mca_daemon_service(d);
     } while (st == MCA_DAEMON_BRAKING);
     for (int k = 0; k < 20; k++) {
-        assert_int_equal(mca_daemon_step(d, t += 0.001, 0), MCA_DAEMON_STOPPED);
+        assert_int_equal(mca_drive_step(d, t += 0.001, 0), MCA_DAEMON_STOPPED);
         mca_daemon_service(d);
     }
     mca_daemon_summary_t s;
@@ -965,15 +965,17 @@ static void budget_run(const char *scheme, int steps, uint64_t *by_time, uint64_
     mca_cell_t *cell = calloc(1, sizeof *cell);
     char err[1024] = "";
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
-    mca_daemon_opts_t o = {
-        .no_dds = 1, .no_rt = 1, .log = stderr, .config_hook = budget_hook, .config_hook_arg = &steps};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr},
+                                .wall_clock = 1,
+                                .controller_config = budget_hook,
+                                .controller_config_arg = &steps};
     mca_daemon_t *d = NULL;
-    assert_int_equal(mca_daemon_open(&d, cell, &o, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_drive_open(&d, cell, &o, err, sizeof err), MCA_OK);
     uint64_t hits[3] = {0, 0, 0};
     double t = 0.0;
     for (int k = 0; k < 500; k++, t += 0.001) {
-        assert_int_equal(mca_daemon_step(d, t, 0), MCA_DAEMON_RUNNING);
-        const mca_tick_info_t *in = mca_daemon_tick_info(d);
+        assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
+        const mca_tick_info_t *in = mca_drive_tick_info(d);
         assert_int_equal(in->fault, MCA_CTRL_FAULT_NONE);
         hits[in->pdnn_budget_hit]++;
     }

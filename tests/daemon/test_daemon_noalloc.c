@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* Issue 13: no heap allocation anywhere in mca_daemon_step after start-up, on every path: running ticks with
+/* Issue 13: no heap allocation anywhere in mca_drive_step after start-up, on every path: running ticks with
  * the DDS bridge (publishing every tick) and the CSV ring, a stop (braking through mca_controller_brake to
  * STOPPED), the controller's PDNN fault on the negative task and its braking, an injected controller fault,
  * lost feedback, an arm's own FAULT, an arm that does not servo, and the ticks in FAULT afterwards.
@@ -7,7 +7,7 @@
  * The counter replaces malloc itself (this executable defines malloc, calloc, realloc, free, memalign,
  * posix_memalign, aligned_alloc, valloc and pvalloc, forwarding to glibc's __libc_* functions), so calls from
  * every library count, libc's own and C++ operator new included; it counts only on the thread that steps and
- * only while mca_daemon_step runs (the DDS publisher and Cyclone's threads allocate on their own). It checks
+ * only while mca_drive_step runs (the DDS publisher and Cyclone's threads allocate on their own). It checks
  * itself first (a malloc while armed must count). Not under the sanitizers (they replace malloc too): nosan.
  * argv[1] = source dir, argv[2] = DDS domain, argv[3] = mca-dds-bridge (the DDS publisher process, as mcad
  * runs it). FAILS on any allocation. */
@@ -21,6 +21,7 @@
 
 #include "mca/cell.h"
 #include "mca/daemon.h"
+#include "mca/daemon_drive.h"
 #include "mca/err.h"
 #include "mca/sim_backend.h"
 
@@ -85,7 +86,7 @@ static int failures;
 /* one step, counted */
 static int step(mca_daemon_t *d, double t) {
     armed = 1;
-    const int st = mca_daemon_step(d, t, (int64_t)llround(t * 1e9));
+    const int st = mca_drive_step(d, t, (int64_t)llround(t * 1e9));
     armed = 0;
     return st;
 }
@@ -101,14 +102,10 @@ static mca_daemon_t *open_cell(const char *path, int dds, char *csv) {
     cell.dds.domain = domain;
     snprintf(cell.dds.config, sizeof cell.dds.config, "%s/config/dds/loopback.xml", src); /* traffic on lo */
     cell.dds.publish_divisor = 1;
-    mca_daemon_opts_t o = {.no_rt = 1,
-                           .no_dds = !dds,
-                           .log = stderr,
-                           .csv_path = csv,
-                           .virtual_time = 1,
-                           .dds_bridge_exe = bridge_exe};
+    const mca_drive_opts_t o = {
+        .daemon = {.no_dds = !dds, .log = stderr, .csv_path = csv, .dds_bridge_exe = bridge_exe}};
     mca_daemon_t *d = NULL;
-    if (mca_daemon_open(&d, &cell, &o, err, sizeof err) != MCA_OK) {
+    if (mca_drive_open(&d, &cell, &o, err, sizeof err) != MCA_OK) {
         fprintf(stderr, "open: %s\n", err);
         exit(1);
     }
@@ -179,7 +176,7 @@ static void injected(const char *what, const char *cell, int pre, int arm, mca_s
     double t = 0.0;
     int k = pre ? run(d, &t, pre, -1) : 0;
     const long before = allocs;
-    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, arm));
+    mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, arm));
     fw->cfg.inject[0] = (mca_sim_inject_t){.kind = kind, .at_cycle = fw->cycle, .joint = 1, .duration = 0};
     fw->cfg.n_inject = 1;
     k = run(d, &t, 5000, MCA_DAEMON_FAULT);
@@ -247,7 +244,7 @@ int main(int argc, char **argv) {
     run(d, &t, 500, -1);
     before = allocs;
     armed = 1;
-    mca_daemon_inject_fault(d, MCA_CTRL_FAULT_NAN, t);
+    mca_drive_fault_at(d, MCA_CTRL_FAULT_NAN, t); /* latched in the next step, counted with it */
     armed = 0;
     k = run(d, &t, 20000, MCA_DAEMON_FAULT);
     k += run(d, &t, 50, -1);
@@ -275,9 +272,9 @@ int main(int argc, char **argv) {
     unlink(csv);
     unlink(inline_cell);
     if (failures) {
-        printf("FAIL: %d of the runs above allocated inside mca_daemon_step\n", failures);
+        printf("FAIL: %d of the runs above allocated inside mca_drive_step\n", failures);
         return 1;
     }
-    printf("OK: no allocation inside mca_daemon_step on any path\n");
+    printf("OK: no allocation inside mca_drive_step on any path\n");
     return 0;
 }

@@ -16,6 +16,7 @@
 
 #include "mca/cell.h"
 #include "mca/daemon.h"
+#include "mca/daemon_drive.h"
 #include "mca/err.h"
 #include "mca/tick_rec.h"
 
@@ -56,10 +57,9 @@ static mca_daemon_t *open_cell(const char *path, const char *record) {
         fprintf(stderr, "%s\n", err);
     }
     assert_int_equal(rc, MCA_OK);
-    const mca_daemon_opts_t o = {
-        .no_dds = 1, .no_rt = 1, .virtual_time = 1, .log = stderr, .record_path = record};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr, .record_path = record}};
     mca_daemon_t *d = NULL;
-    rc = mca_daemon_open(&d, cell, &o, err, sizeof err);
+    rc = mca_drive_open(&d, cell, &o, err, sizeof err);
     if (rc != MCA_OK) {
         fprintf(stderr, "%s\n", err);
     }
@@ -72,13 +72,13 @@ static void test_replay_bit_equal(void **state) {
     (void)state;
     /* the recorded run: mcad's tick in virtual time on sim arms */
     mca_daemon_t *d = open_cell(sim_cell, rec_path);
-    const double dt = mca_daemon_controller(d)->cfg.dt;
+    const double dt = mca_drive_controller(d)->cfg.dt;
     int budget = 0;
     for (int k = 0; k < TICKS; k++) {
         const double t = k * dt;
-        assert_int_equal(mca_daemon_step(d, t, (int64_t)llround(t * 1e9)), MCA_DAEMON_RUNNING);
+        assert_int_equal(mca_drive_step(d, t, (int64_t)llround(t * 1e9)), MCA_DAEMON_RUNNING);
         mca_daemon_service(d);
-        budget += mca_daemon_tick_info(d)->pdnn_budget_hit != MCA_BUDGET_NONE;
+        budget += mca_drive_tick_info(d)->pdnn_budget_hit != MCA_BUDGET_NONE;
     }
     mca_daemon_close(d);
     assert_int_equal(budget, 0);
@@ -94,11 +94,11 @@ static void test_replay_bit_equal(void **state) {
     int differ = 0, moving = 0;
     for (size_t k = 0; k < rf.n; k++) {
         const mca_tick_rec_t *r = &rf.rec[k];
-        assert_int_equal(mca_daemon_step(d, r->t, r->stamp_ns), r->state);
+        assert_int_equal(mca_drive_step(d, r->t, r->stamp_ns), r->state);
         mca_daemon_service(d);
-        budget += mca_daemon_tick_info(d)->pdnn_budget_hit != MCA_BUDGET_NONE;
+        budget += mca_drive_tick_info(d)->pdnn_budget_hit != MCA_BUDGET_NONE;
         for (int a = 0; a < 2; a++) {
-            const mca_arm_command_t *c = mca_daemon_last_command(d, a);
+            const mca_arm_command_t *c = mca_drive_last_command(d, a);
             const size_t n = sizeof(double) * (size_t)rf.header.dof[a];
             if (memcmp(c->velocity, r->qdot_cmd[a], n) != 0) {
                 if (differ++ == 0) {

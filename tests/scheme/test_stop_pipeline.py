@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 11, stops through mcad's own pipeline in virtual time (mca-sim drives mca_daemon_step):
+"""Issue 11, stops through mcad's own pipeline in virtual time (mca-sim drives mca_drive_step):
 1. cross circles under mca-ts, a stop request (--stop-at, as SIGTERM) mid-task at several instants and
    dec_limit 0.5, 2 and 5 rad/s^2 (--dec-limit, the daemon's braking box and the sim arm's): the run ends
    STOPPED with the arms at rest, min_distance (task and braking) >= d1, max_dv_over_dt_dec <= 1 (every

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* mca-sim: run a scenario in virtual time through mcad's tick (mca_daemon_step: the same controller tick,
+/* mca-sim: run a scenario in virtual time through mcad's tick (mca_drive_step: the same controller tick,
  * fault latching and braking) and print a Table-I style report.
  *   mca-sim --scenario FILE [--scheme mca|mca-ts|mvn|apf[,...]] [--csv OUT] [--dump-qp DIR] [--dump-every N]
  *           [--dump-max N] [--form componentwise|normal] [--euler] [--duration S] [--summary FILE]

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* Virtual-time runner of a scenario through mcad's tick (mca_daemon_step); see simrun.h. */
+/* Virtual-time runner of a scenario through mcad's tick (mca/daemon_drive.h); see simrun.h. */
 #include "simrun.h"
 
 #include <math.h>
@@ -11,6 +11,7 @@
 #include "mca/arm.h"
 #include "mca/cell.h"
 #include "mca/daemon.h"
+#include "mca/daemon_drive.h"
 #include "mca/err.h"
 #include "mca/qp_dump.h"
 #include "mca/scenario.h"
@@ -78,9 +79,10 @@ int mca_simrun_fault_from_name(const char *name) {
 }
 
 /* The run is mcad's pipeline in virtual time: a cell around the scenario (sim backend arms), the daemon
- * opened without thread, DDS or real-time settings, and mca_daemon_step once per tick (the same tick,
- * fault latching and braking through mca_controller_brake as mcad). This function only drives it (stop
- * and fault injection at their instants, the end of the run) and collects the figures. */
+ * opened by its virtual-time driver (mca/daemon_drive.h: no thread, DDS or real-time settings) and
+ * mca_drive_step once per tick (the same tick, fault latching and braking through mca_controller_brake as
+ * mcad). This function only drives it (the stop and the fault scheduled at their instants, the end of the
+ * run) and collects the figures. */
 int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun_result_t *r, char *err,
                size_t errlen) {
     memset(r, 0, sizeof *r);
@@ -101,26 +103,25 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         goto out;
     }
     for (int a = 0; a < scn->n_arms; a++) {
-        cell->arm[a].sim_ideal = !o->use_backend;
         if (o->dec_limit > 0.0) {
             for (int j = 0; j < MCA_MAX_DOF; j++) {
                 cell->arm[a].dec_limit[j] = o->dec_limit;
             }
         }
     }
-    mca_daemon_opts_t dopts = {.no_dds = 1,
-                               .no_rt = 1,
-                               .virtual_time = 1,
-                               .log = stderr,
-                               .config_hook = apply_overrides,
-                               .config_hook_arg = (void *)o};
-    rc = mca_daemon_open(&d, cell, &dopts, err, errlen);
+    const mca_drive_opts_t dopts = {.daemon = {.no_dds = 1, .log = stderr},
+                                    .ideal_arms = o->use_backend ? 0u : (1u << scn->n_arms) - 1u,
+                                    .controller_config = apply_overrides,
+                                    .controller_config_arg = (void *)o};
+    rc = mca_drive_open(&d, cell, &dopts, err, errlen);
     if (rc != MCA_OK) {
         goto out;
     }
-    const mca_controller_t *ctrl = mca_daemon_controller(d);
+    const mca_controller_t *ctrl = mca_drive_controller(d);
     const mca_controller_config_t *cfg = &ctrl->cfg;
-    const mca_tick_info_t *ip = mca_daemon_tick_info(d);
+    const mca_tick_info_t *ip = mca_drive_tick_info(d);
+    mca_drive_stop_at(d, o->stop_at);                  /* as SIGTERM; < 0: none */
+    mca_drive_fault_at(d, o->fault_kind, o->fault_at); /* "injected fault KIND at t = T s"; < 0: none */
     const int na = cfg->n_arms;
     r->budget_steps = mca_controller_step_budget(cfg);
     const double dt = cfg->dt;
@@ -130,8 +131,6 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         o->scheme == MCA_SCHEME_MCA_TS ? (o->overtime < 0.0 ? duration : o->overtime) : 0.0;
     const int n_ticks_ts = n_ticks + (int)llround(overtime / dt);
     const int max_ticks = n_ticks_ts + (int)llround((o->settle + 5.0) / dt);
-    const int stop_k = o->stop_at >= 0.0 ? (int)llround(o->stop_at / dt) : -1;
-    const int fault_k = o->fault_at >= 0.0 && o->fault_kind > 0 ? (int)llround(o->fault_at / dt) : -1;
     double nominal_end = 0.0;
     for (int a = 0; a < cfg->n_arms; a++) {
         nominal_end = fmax(nominal_end, mca_path_end_time(&cfg->path[a]));
@@ -177,17 +176,11 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         if (!ended && k >= n_ticks && (o->scheme != MCA_SCHEME_MCA_TS || ip->paths_done || k >= n_ticks_ts)) {
             break;
         }
-        if (k == stop_k) {
-            mca_daemon_request_stop(d); /* as SIGTERM */
-            r->stop_requested = 1;
-        }
-        if (k == fault_k) {
-            mca_daemon_inject_fault(d, o->fault_kind, t); /* named "injected fault KIND at t = T s" */
-        }
         struct timespec c0, c1;
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
-        const int state = mca_daemon_step(d, t, (int64_t)llround(t * 1e9));
+        const int state = mca_drive_step(d, t, (int64_t)llround(t * 1e9));
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+        r->stop_requested = (mca_drive_fired(d) & MCA_DRIVE_STOPPED) != 0;
         mca_daemon_service(d);
         cpu[k] = (int64_t)(c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec);
         cns[k] = ip->compute_ns;
@@ -276,7 +269,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         if (csv) {
             double q[MCA_MAX_ARMS][MCA_MAX_DOF];
             for (int a = 0; a < na; a++) {
-                memcpy(q[a], mca_daemon_positions(d, a), sizeof q[a]);
+                memcpy(q[a], mca_drive_positions(d, a), sizeof q[a]);
             }
             const mca_tick_csv_row_t row = {.t = t, .q = q, .info = ip, .dist = ctrl->dist};
             mca_tick_csv_row(csv, &csv_layout, &row);
@@ -329,7 +322,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             /* at rest: every simulated joint's true velocity zero after this tick's cycle */
             int moving = 0;
             for (int a = 0; a < na; a++) {
-                const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_daemon_arm(d, a));
+                const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, a));
                 for (int j = 0; fw && j < fw->cfg.n; j++) {
                     moving |= fabs(fw->v[j]) > 1e-9;
                 }

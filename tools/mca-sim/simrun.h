@@ -1,10 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /** @file simrun.h
  * Run one scenario in virtual time through mcad's own pipeline: a cell around the scenario (every arm on
- * the in-process sim backend), mca_daemon_open in virtual time (no thread, no DDS) and mca_daemon_step
- * per tick, so the tick, the fault latching and the braking (mca_controller_brake) are the daemon's.
- * --euler makes the sim arms ideal integrators (q += qdot dt). Used by mca-sim and by tests/scheme. Not
- * real-time code (it writes CSV/JSON).
+ * the in-process sim backend), opened and stepped by the daemon's virtual-time driver (mca/daemon_drive.h:
+ * no thread, no DDS, mca_drive_step per tick), so the tick, the fault latching and the braking
+ * (mca_controller_brake) are the daemon's. --euler makes the sim arms ideal (q += qdot dt). Used by mca-sim
+ * and by tests/scheme. Not real-time code (it writes CSV/JSON).
  */
 #ifndef MCA_SIMRUN_H
 #define MCA_SIMRUN_H

@@ -75,8 +75,6 @@ typedef struct mca_cell_arm {
     double sim_lag_tau;     /**< first-order velocity lag [s] */
     int sim_latency_cycles; /**< command transport delay [cycles] */
     double sim_noise_pos;   /**< measurement noise sigma [rad] */
-    int sim_ideal;          /**< not in cell files (mca-sim --euler): the sim arm follows the command exactly,
-                                 q += v dt, no limits, lag or rate limits */
     /** A backend's own settings: its read in the registry keeps them here and its open reads them, as a
      *  struct of its own (a backend in a folder of its own adds no field to this struct). */
     union {

@@ -18,9 +18,9 @@
  * Then STOPPED/FAULT command zero velocity with the servo released (the arm's brakes take over). The
  * reason is logged and published.
  *
- * Context: open/close and mca_daemon_start/join are start-up/shut-down; mca_daemon_step is rt (no
+ * Context: open/close and mca_daemon_start/join are start-up/shut-down; the loop's tick is rt (no
  * allocation, no locks, no blocking I/O; logs via mca/rtlog.h); the request/read-out functions are
- * any thread.
+ * any thread. A caller that steps the tick itself, in virtual time, uses mca/daemon_drive.h.
  */
 #ifndef MCA_DAEMON_H
 #define MCA_DAEMON_H
@@ -103,17 +103,12 @@ typedef struct mca_daemon_opts {
      *  thread; the replay backend plays it into the loop again), NULL: none */
     const char *record_path;
     double stop_after;     /**< > 0: overrides the cell's stop_after [s] */
-    uint32_t dds_ab_block; /**< > 0: DDS cost benchmark: publish only in every other block of this many
-                            *   ticks and time the whole tick of both kinds of block (summary dds_ab_*) */
+    uint32_t dds_ab_block; /**< > 0: DDS cost benchmark of the loop (mcad --dds-ab, the bench): publish only
+                            *   in every other block of this many ticks and time the whole tick of both kinds
+                            *   of block (summary dds_ab_*); a measurement of the real loop, so not part of
+                            *   the virtual-time driver (which ignores it) */
     FILE *log;             /**< where log lines go (stderr) */
     int clear_faults;      /**< 1: clear an arm FAULT latched at start-up (logged); 0: refuse to start */
-    /** 1: virtual time (mca-sim): the caller drives mca_daemon_step (never mca_daemon_start), sim backend
-     *  arms stamp virtual time k dt, start-up does not sleep between handshake reads. */
-    int virtual_time;
-    /** Start-up: called with the controller config built from the cell, before the controller's init
-     *  (mca-sim's solver overrides). NULL: none. */
-    void (*config_hook)(mca_controller_config_t *cfg, void *arg);
-    void *config_hook_arg;
     /** The DDS publisher program (mca-dds-bridge, run as a process of its own). NULL: the one next
      *  to the running executable, else in its prefix's libexec/mca (PREFIX/sbin/mcad ->
      *  PREFIX/libexec/mca, mca/prefix.h), else MCA_LIBEXECDIR's (the configured install's libexec/mca). */
@@ -222,7 +217,8 @@ typedef struct mca_daemon mca_daemon_t; /**< opaque */
 int mca_daemon_open(mca_daemon_t **d, const mca_cell_t *cell, const mca_daemon_opts_t *opts, char *err,
                     size_t errlen);
 
-/** Start the real-time loop thread (SCHED_FIFO where permitted, else a warning and SCHED_OTHER). */
+/** Start the real-time loop thread (SCHED_FIFO where permitted, else a warning and SCHED_OTHER).
+ *  @retval MCA_OK, or MCA_EINVAL for a daemon a driver opened (mca/daemon_drive.h: it steps it itself) */
 int mca_daemon_start(mca_daemon_t *d);
 
 /** Ask the loop to brake and stop (any thread, async-signal safe). */
@@ -253,29 +249,7 @@ const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d, int64_t *firs
 /** Close arms, DDS (publishing the final status) and free (shut-down). NULL is allowed. */
 void mca_daemon_close(mca_daemon_t *d);
 
-/**
- * One tick without the timing loop (rt): read feedback, controller, commands, DDS snapshot.
- * Used by the loop and by tests that drive the daemon in virtual time.
- * @param t  task time [s] of this tick
- * @return the state after the tick
- */
-int mca_daemon_step(mca_daemon_t *d, double t, int64_t stamp_ns);
-
-/** The last tick's report (the controller's; while braking/stopped its distances are current, its solver
- *  figures the last running tick's). Not while the loop thread runs. */
-const mca_tick_info_t *mca_daemon_tick_info(const mca_daemon_t *d);
-/** The controller (per-pair distances, last QP). Not while the loop thread runs. */
-const mca_controller_t *mca_daemon_controller(const mca_daemon_t *d);
-/** Joint positions of arm a the last tick used (NULL if a is out of range). Not while the loop runs. */
-const double *mca_daemon_positions(const mca_daemon_t *d, int a);
-/** Latch a controller fault (mca_ctrl_fault_t) as if the next tick had found it: RUNNING -> BRAKING ->
- *  FAULT through the same path (mca-sim --fault-at; rt safe, from the thread that steps). */
-void mca_daemon_inject_fault(mca_daemon_t *d, int ctrl_fault, double t);
-
-/** Last command sent to arm a (tests). NULL if a is out of range. */
-const mca_arm_command_t *mca_daemon_last_command(const mca_daemon_t *d, int a);
-/** Arm handle (tests: sim backend fault injection). */
-mca_arm_t *mca_daemon_arm(mca_daemon_t *d, int a);
+/* Stepping the daemon in virtual time instead of the loop (mca-sim, the tests): mca/daemon_drive.h. */
 
 #ifdef __cplusplus
 }

@@ -41,7 +41,7 @@ typedef struct mca_tick_rec_header {
 
 /** One tick: the feedback the controller read (after the daemon's checks), then what the tick sent. */
 typedef struct mca_tick_rec {
-    double t;         /**< the task time mca_daemon_step was given [s] */
+    double t;         /**< the tick's task time [s] */
     int64_t stamp_ns; /**< the tick's wake-up (virtual time: the virtual clock) */
     int32_t state;    /**< mca_daemon_state_t after the tick */
     uint32_t fresh;   /**< bit a: arm a's feedback of this tick was new and taken (else a lost cycle) */

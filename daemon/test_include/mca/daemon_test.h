@@ -21,6 +21,7 @@
 
 #include "mca/arm.h"
 #include "mca/daemon.h"
+#include "mca/daemon_drive.h" /* what the tests drive with besides these */
 
 #ifdef __cplusplus
 extern "C" {
