@@ -135,14 +135,14 @@ typedef struct mca_cell {
     mca_cell_dds_t dds;
     mca_cell_rt_t rt;
     double stop_after; /**< [s] of running after which the daemon stops by itself; 0 = never */
-#ifdef MCA_TEST_HOOKS
-    /* the test build's cell keys (mca/daemon_test.h); the production build rejects debug_* keys */
+    /* The test build's cell keys (mca/daemon_test.h). Every binary has these fields, so mca_cell_t has one
+     * layout whichever library built it; the production build refuses the keys (MCA_ENOTSUP), so they stay
+     * 0 there, and only the test build's code reads them. */
     uint64_t debug_stall_after_ticks; /**< the loop stalls after this many ticks; 0 = never */
     int debug_start_in_fault;         /**< sim backend arms start with a latched firmware fault (INJECTED), as
                                            if left from an earlier run (mcad --clear-faults) */
     uint64_t debug_kill_after_ticks;  /**< the daemon dies (SIGKILL, nothing braked) after this many ticks, as
                                            a crash would; 0 = never */
-#endif
 } mca_cell_t;
 
 /**

@@ -5,7 +5,7 @@
  * ("production holds no test hooks"): they reject the debug_* cell keys and give SIGUSR1 no power over the
  * loop (docs/daemon.md, "Test hooks").
  *
- * Cell keys of the test build (fields of mca_cell_t under MCA_TEST_HOOKS):
+ * Cell keys of the test build (fields of mca_cell_t in every build; only this one loads them):
  *   debug_stall_after_ticks: N   the loop stops ticking after N ticks (until a stop request)
  *   debug_kill_after_ticks: N    mcad-test SIGKILLs itself after N ticks (a crash: only the arms' own
  *                                watchdogs brake them)
