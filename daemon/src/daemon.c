@@ -25,10 +25,9 @@
 #include "daemon__publish.h"
 #include "daemon__state.h"
 
-static const char *const state_names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
-
 const char *mca_daemon_state_name(int s) {
-    return s >= 0 && s <= MCA_DAEMON_FAULT ? state_names[s] : "?";
+    const char *name = mca_dds_state_name(s); /* the states' one set of names (mca/dds_bridge.h) */
+    return name ? name : "?";
 }
 
 /* mca-ts: the order in which arms on fixed paths pass each other, planned from where the arms stand

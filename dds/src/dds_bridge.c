@@ -102,6 +102,22 @@ static double mono_s(void) {
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
+/* The wire's ControllerStatus.state carries mca_dds_state_t values as int32 (the IDL's comment says why
+ * not the enum type): the IDL's enumerators must have the same values. */
+_Static_assert(MCA_DDS_STATE_INIT == (int)mca_dds_STATE_INIT &&
+                   MCA_DDS_STATE_READY == (int)mca_dds_STATE_READY &&
+                   MCA_DDS_STATE_RUNNING == (int)mca_dds_STATE_RUNNING &&
+                   MCA_DDS_STATE_BRAKING == (int)mca_dds_STATE_BRAKING &&
+                   MCA_DDS_STATE_STOPPED == (int)mca_dds_STATE_STOPPED &&
+                   MCA_DDS_STATE_FAULT == (int)mca_dds_STATE_FAULT,
+               "mca_dds_state_t and the IDL's ControllerState number the states alike");
+
+const char *mca_dds_state_name(int state) {
+    static const char *const names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
+    _Static_assert(sizeof names / sizeof names[0] == MCA_DDS_STATE_FAULT + 1, "a name per state");
+    return state >= MCA_DDS_STATE_INIT && state <= MCA_DDS_STATE_FAULT ? names[state] : NULL;
+}
+
 void mca_dds_config_default(mca_dds_config_t *cfg) {
     if (cfg == NULL) {
         return;

@@ -672,8 +672,8 @@ int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64
 }
 
 static const char *state_name(int32_t s) {
-    static const char *const names[] = {"init", "ready", "running", "braking", "stopped", "fault"};
-    return s >= 0 && s <= 5 ? names[s] : "unknown";
+    const char *name = mca_dds_state_name(s);
+    return name ? name : "unknown";
 }
 
 int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st,

@@ -19,6 +19,7 @@
 
 #include "mca/controller.h"
 #include "mca/limits.h"
+#include "mca/ros2.h" /* mca_ros2_stream_kind_t: the stream kinds' one numbering */
 #include "mca/scenario.h"
 
 #ifdef __cplusplus
@@ -37,11 +38,13 @@ typedef enum mca_cell_backend {
 /** Room for a backend's own settings in each cell arm (mca_cell_arm_t.backend_own). */
 #define MCA_CELL_BACKEND_OWN_SIZE 512
 
-/** What a streamed arm follows (task.stream; numbering as mca_ros2_stream_kind_t). */
+/** What a streamed arm follows (task.stream): the bridge's kinds, so a cell arm's kind is handed to the
+ *  bridge (mca_ros2_config_t.stream) as it is. */
 typedef enum mca_cell_stream_kind {
-    MCA_CELL_STREAM_NONE = 0,
-    MCA_CELL_STREAM_TWIST = 1, /**< geometry_msgs/TwistStamped on /<ns>/<arm>/target_twist */
-    MCA_CELL_STREAM_POSE = 2,  /**< geometry_msgs/PoseStamped on /<ns>/<arm>/target_pose */
+    MCA_CELL_STREAM_NONE = MCA_ROS2_STREAM_NONE,
+    MCA_CELL_STREAM_TWIST =
+        MCA_ROS2_STREAM_TWIST, /**< geometry_msgs/TwistStamped on /<ns>/<arm>/target_twist */
+    MCA_CELL_STREAM_POSE = MCA_ROS2_STREAM_POSE, /**< geometry_msgs/PoseStamped on /<ns>/<arm>/target_pose */
 } mca_cell_stream_kind_t;
 
 /** A streamed task (task.stream, docs/ros2.md): each arm's tool tip follows a ROS 2 topic. */

@@ -3,7 +3,7 @@
  * The controller daemon's core (used by mcad and its tests): a cell's arms, controller and DDS bridge,
  * the per-tick step and the 1 kHz real-time loop around it.
  *
- * States (same numbering as mca_dds_state_t):
+ * States (their values and names are mca_dds_state_t's, the one numbering the wire carries too):
  *   INIT -> READY (arms answered, DDS up) -> RUNNING (ticking the controller)
  *   RUNNING --(stop request: SIGTERM/SIGINT, stop_after)--> BRAKING --(all commands at 0)--> STOPPED
  *   RUNNING --(fault)--> BRAKING --(all commands at 0)--> FAULT
@@ -33,6 +33,7 @@
 #include "mca/arm.h"
 #include "mca/cell.h"
 #include "mca/controller.h"
+#include "mca/dds_bridge.h" /* mca_dds_state_t: the states' one numbering */
 #include "mca/ring.h"
 #include "mca/rtlog.h"
 #include "mca/rtstats.h"
@@ -42,12 +43,12 @@ extern "C" {
 #endif
 
 typedef enum mca_daemon_state {
-    MCA_DAEMON_INIT = 0,
-    MCA_DAEMON_READY = 1,
-    MCA_DAEMON_RUNNING = 2,
-    MCA_DAEMON_BRAKING = 3,
-    MCA_DAEMON_STOPPED = 4,
-    MCA_DAEMON_FAULT = 5,
+    MCA_DAEMON_INIT = MCA_DDS_STATE_INIT,
+    MCA_DAEMON_READY = MCA_DDS_STATE_READY,
+    MCA_DAEMON_RUNNING = MCA_DDS_STATE_RUNNING,
+    MCA_DAEMON_BRAKING = MCA_DDS_STATE_BRAKING,
+    MCA_DAEMON_STOPPED = MCA_DDS_STATE_STOPPED,
+    MCA_DAEMON_FAULT = MCA_DDS_STATE_FAULT,
 } mca_daemon_state_t;
 
 /** Daemon fault causes (besides the controller's, which are reported as MCA_DAEMON_FAULT_CONTROLLER). */

@@ -54,7 +54,9 @@ extern "C" {
 /** Longest frame id (bytes, without NUL), = string<32> in the IDL. */
 #define MCA_DDS_FRAME_ID_MAX 32
 
-/** Controller state; same numbering as mca::dds::ControllerState. */
+/** Controller state: the one numbering of the daemon's states (mca_daemon_state_t takes its values from
+ *  here) and of the wire's mca::dds::ControllerState (dds_bridge.c asserts at compile time that the IDL's
+ *  enumerators have these values). */
 typedef enum mca_dds_state {
     MCA_DDS_STATE_INIT = 0,
     MCA_DDS_STATE_READY = 1,
@@ -63,6 +65,10 @@ typedef enum mca_dds_state {
     MCA_DDS_STATE_STOPPED = 4,
     MCA_DDS_STATE_FAULT = 5,
 } mca_dds_state_t;
+
+/** The states' one set of names: "init", "ready", "running", "braking", "stopped", "fault"; NULL for a
+ *  value no state has (the caller says how it prints one: mcad "?", the ROS 2 diagnostics "unknown"). */
+const char *mca_dds_state_name(int state);
 
 /** One arm at one tick: measured state and the command sent. Entries [n_dof..] are ignored. */
 typedef struct mca_dds_arm_snapshot {
