@@ -249,6 +249,16 @@ int main(int argc, char **argv) {
     k = run(d, &t, 20000, MCA_DAEMON_FAULT);
     k += run(d, &t, 50, -1);
     report("injected controller fault (NaN), braking, FAULT", d, k, before);
+    {
+        /* the scheduled fault acted: a run with no fault would count nothing for this path */
+        mca_daemon_summary_t s;
+        mca_daemon_summary(d, &s);
+        if (s.state != MCA_DAEMON_FAULT || !strstr(s.fault_text, "injected")) {
+            printf("FAIL: the scheduled fault did not end in FAULT (state %s, fault '%s')\n",
+                   mca_daemon_state_name(s.state), s.fault_text);
+            failures++;
+        }
+    }
     mca_daemon_close(d);
 
     /* 4. a streamed task (ROS 2 targets, issue 14), DDS with its ROS 2 topics every tick: the loop reads the
