@@ -173,7 +173,11 @@ int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_
 }
 
 int mca_daemon_service(mca_daemon_t *d) {
+    /* the fault's text to the DDS publisher as soon as this thread sees the latch, and no later than the
+     * drain of the log record that names the fault (latched before that record was pushed) */
+    mcad_fault_text_to_dds(d);
     int n = mca_rtlog_drain(&d->log, d->opts.log);
+    mcad_fault_text_to_dds(d);
     if (d->dds) {
         /* the DDS publisher process: its death noticed, logged, a restart after the back-off (never blocks)
          */

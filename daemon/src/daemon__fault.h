@@ -6,9 +6,9 @@
  *
  * Calling context: mcad_latch_fault, mcad_ctrl_fault_code and mcad_brake_tick on the RT thread (no
  * allocation, no locks, no text: a code and numbers, logged through d->log). mcad_fault_describe,
- * mcad_link_ignored_text and mcad_log_format off the RT path: the service thread (mcad_log_format is d->log's
- * formatter, called by mca_rtlog_drain), the summary and shut-down; they read the latched fault once the
- * record or snapshot that carries it reached them. */
+ * mcad_link_ignored_text, mcad_fault_text_to_dds and mcad_log_format off the RT path: the service thread
+ * (mcad_log_format is d->log's formatter, called by mca_rtlog_drain), the summary and shut-down; they read
+ * the latched fault once the record or snapshot that carries it reached them. */
 #ifndef MCA_DAEMON__FAULT_H
 #define MCA_DAEMON__FAULT_H
 
@@ -39,6 +39,8 @@ void mcad_link_ignored_text(const mca_arm_stats_t *st, char *buf, size_t len);
 /* Non-rt: the text of a latched fault. */
 void mcad_fault_describe(const mca_daemon_t *d, int fault, int arm, int detail, int arm_code, int count,
                          const mca_ctrl_fault_why_t *ctrl_why, char *buf, size_t len);
+/* Service thread: once a fault is latched, hand its text to the DDS publisher (once; nothing without DDS). */
+void mcad_fault_text_to_dds(mca_daemon_t *d);
 /* Service thread: d->log's formatter of mca_rtlog_code() records (mca_rtlog_formatter_t; arg is d). */
 void mcad_log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len);
 

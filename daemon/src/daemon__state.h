@@ -111,6 +111,10 @@ struct mca_daemon {
     mca_arm_stats_t fault_link;    /* LOST_FEEDBACK: the arm's link counters then (why nothing was taken) */
     int have_fault_link;
     double fault_t;
+    /* shared with the service thread: 1 once the fields above hold a latched fault (release; the service
+     * thread hands its text to the DDS publisher after an acquire load, daemon_fault.c) */
+    _Atomic int fault_latched;
+    int fault_text_handed;                 /* service thread: the publisher has the fault's text */
     int stop_pending;                      /* BRAKING towards STOPPED (not FAULT) */
     double dec[MCA_MAX_ARMS][MCA_MAX_DOF]; /* braking deceleration per joint (cell dec_limit) */
     /* braking (mca_controller_brake): one stop at most per run */

@@ -29,6 +29,7 @@ void mcad_latch_fault(mca_daemon_t *d, int fault, int code, double t, int arm, i
     d->fault_count = count;
     d->ctrl_why = ctrl_why ? *ctrl_why : (mca_ctrl_fault_why_t){0};
     d->stop_pending = 0;
+    atomic_store_explicit(&d->fault_latched, 1, memory_order_release);
     atomic_store(&d->state, MCA_DAEMON_BRAKING);
     mca_rtlog_code(&d->log, MCA_LOG_ERR, LOGC_FAULT, 1, t, 0, 0, 0, NULL);
 }
@@ -131,6 +132,18 @@ static void fault_text_of(const mca_daemon_t *d, char *buf, size_t len) {
                         &d->ctrl_why, buf, len);
 }
 
+/* The DDS publisher (another process) cannot call mcad_fault_describe(): the service thread hands it the
+ * latched fault's text once, as soon as it sees the latch (not as a side effect of formatting its log line,
+ * which a full log ring may drop). */
+void mcad_fault_text_to_dds(mca_daemon_t *d) {
+    if (d->dds && !d->fault_text_handed && atomic_load_explicit(&d->fault_latched, memory_order_acquire)) {
+        char txt[256];
+        fault_text_of(d, txt, sizeof txt);
+        mca_dds_bridge_fault_text(d->dds, d->fault_code, txt);
+        d->fault_text_handed = 1;
+    }
+}
+
 /* mca_rtlog_code() records (the drainer, non-rt) */
 void mcad_log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t len) {
     const mca_daemon_t *d = arg;
@@ -138,11 +151,6 @@ void mcad_log_format(void *arg, const mca_rtlog_rec_t *rec, char *buf, size_t le
         char txt[256];
         fault_text_of(d, txt, sizeof txt);
         snprintf(buf, len, "fault at t = %.3f s: braking both arms: %s", rec->arg[0], txt);
-        if (d->dds) {
-            /* the DDS publisher (another process) cannot call mcad_fault_describe(): it gets the text from
-             * here */
-            mca_dds_bridge_fault_text(d->dds, d->fault_code, txt);
-        }
     } else if (rec->code == LOGC_ARM_FAULT_TOO) {
         char txt[192];
         mcad_fault_describe(d, MCA_DAEMON_FAULT_ARM, (int)rec->arg[1],

@@ -181,7 +181,7 @@ void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
     st->state = (mca_dds_state_t)state;
     st->fault_code = d->fault ? d->fault_code : 0;
     st->fault_text[0] =
-        0; /* the publisher gets it from mcad_log_format (mca_dds_bridge_fault_text): no text here */
+        0; /* the publisher gets it from the service thread (mcad_fault_text_to_dds): no text here */
     st->ticks = s->tick;
     st->overruns = d->overruns;
     st->skipped_periods = d->skipped;
