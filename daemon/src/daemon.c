@@ -22,7 +22,7 @@
 #include "daemon__fault.h" /* mcad_log_format */
 #include "daemon__loop.h"  /* mcad_pin_non_rt */
 #include "daemon__plausibility.h"
-#include "daemon__publish.h"
+#include "daemon__publish.h" /* mcad_dds_log_line */
 #include "daemon__state.h"
 
 const char *mca_daemon_state_name(int s) {
@@ -181,7 +181,7 @@ int mca_daemon_service(mca_daemon_t *d) {
     if (d->dds) {
         /* the DDS publisher process: its death noticed, logged, a restart after the back-off (never blocks)
          */
-        n += mca_dds_bridge_supervise(d->dds, d->opts.log, "mcad: ");
+        n += mca_dds_bridge_supervise(d->dds, mcad_dds_log_line, d->opts.log);
     }
     if (d->csv_storage) {
         n += mcad_csv_drain(d);

@@ -200,6 +200,13 @@ void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
 }
 
 /* Shut-down: the final status with the run's figures, then the bridge's own summary lines. */
+void mcad_dds_log_line(void *arg, int level, const char *text) {
+    FILE *f = arg;
+    if (f) {
+        fprintf(f, "<%d>mcad: %s\n", level, text);
+    }
+}
+
 void mcad_publish_close(mca_daemon_t *d) {
     /* final status with the run's figures */
     mca_daemon_summary_t s;

@@ -14,6 +14,7 @@
 #include <pthread.h>
 #include <sched.h>  /* SCHED_FIFO */
 #include <signal.h> /* kill */
+#include <stdarg.h> /* va_list: tell */
 #include <spawn.h>  /* posix_spawn: vfork semantics, no copy-on-write of the owner's locked memory */
 #include <stdatomic.h>
 #include <stdio.h>
@@ -1037,13 +1038,24 @@ static void record_death(mca_dds_bridge_t *b, const char *why, double delay) {
                           memory_order_release);
 }
 
-int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *prefix) {
+/* One line of the supervisor to the caller's log (printf-like; non-rt). */
+static void tell(mca_dds_log_fn log, void *arg, int level, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void tell(mca_dds_log_fn log, void *arg, int level, const char *fmt, ...) {
+    char line[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    log(arg, level, line);
+}
+
+int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, mca_dds_log_fn log, void *log_arg) {
     if (bridge == NULL || !bridge->process ||
         atomic_load_explicit(&bridge->shm->stop, memory_order_relaxed)) {
         return 0;
     }
     mca_dds_bridge_t *b = bridge;
-    const char *pre = prefix != NULL ? prefix : "";
     const double now = mono_s();
     int lines = 0;
     if (b->pid > 0) {
@@ -1056,11 +1068,11 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                 b->announced = gen;
                 if (log != NULL && (b->deaths == 0 || log_this_death(b->quick_deaths))) {
                     const int failed = atomic_load(&b->shm->open_rc) != MCA_OK;
-                    fprintf(log,
-                            "<5>%sdds bridge restarted: pid %d (restart %llu), publishing again%s%.*s%s\n",
-                            pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
-                            failed ? " (NOT: its DDS set-up failed: " : "",
-                            failed ? (int)sizeof b->shm->open_err : 0, b->shm->open_err, failed ? ")" : "");
+                    tell(log, log_arg, 5,
+                         "dds bridge restarted: pid %d (restart %llu), publishing again%s%.*s%s", (int)b->pid,
+                         (unsigned long long)atomic_load(&b->shm->restarts),
+                         failed ? " (NOT: its DDS set-up failed: " : "",
+                         failed ? (int)sizeof b->shm->open_err : 0, b->shm->open_err, failed ? ")" : "");
                     lines++;
                 }
             }
@@ -1070,12 +1082,11 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                 atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
                 b->up_logged = 1;
                 if (log != NULL) {
-                    fprintf(
-                        log,
-                        "<5>%sdds bridge up again: pid %d (restart %llu) has lived %.0f s after %d deaths "
-                        "in a row, publishing\n",
-                        pre, (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts),
-                        now - b->started_s, b->quick_deaths);
+                    tell(log, log_arg, 5,
+                         "dds bridge up again: pid %d (restart %llu) has lived %.0f s after %d deaths "
+                         "in a row, publishing",
+                         (int)b->pid, (unsigned long long)atomic_load(&b->shm->restarts), now - b->started_s,
+                         b->quick_deaths);
                     lines++;
                 }
             }
@@ -1092,11 +1103,10 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
                     b->progress_s = now;
                 } else if (now - b->progress_s > MCA_DDS_BRIDGE_HUNG_S) {
                     if (log != NULL) {
-                        fprintf(
-                            log,
-                            "<3>%sdds bridge (pid %d) hung: nothing published for %.1f s with %llu snapshots "
-                            "waiting: killing it\n",
-                            pre, (int)b->pid, now - b->progress_s, (unsigned long long)rs.pending);
+                        tell(log, log_arg, 3,
+                             "dds bridge (pid %d) hung: nothing published for %.1f s with %llu snapshots "
+                             "waiting: killing it",
+                             (int)b->pid, now - b->progress_s, (unsigned long long)rs.pending);
                     }
                     kill(b->pid, SIGKILL); /* reaped and restarted by the next calls */
                     b->hung++;
@@ -1128,16 +1138,15 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
         b->backoff_s = delay;
         record_death(b, why, delay);
         if (log != NULL && log_this_death(b->quick_deaths)) {
-            fprintf(
-                log,
-                "<3>%sdds bridge (pid %d) died: %s; restart %llu in %.1f s (%d deaths in a row; the loop and "
-                "the arms are not affected)%s\n",
-                pre, (int)dead, why, (unsigned long long)atomic_load(&b->shm->restarts) + 1u, delay,
-                b->quick_deaths,
-                b->quick_deaths == MCA_DDS_BRIDGE_LOG_ALL
-                    ? "; it is restarted for as long as mcad runs, from now on every " STR(
-                          MCA_DDS_BRIDGE_LOG_EVERY) "th death of this series is logged"
-                    : "");
+            tell(log, log_arg, 3,
+                 "dds bridge (pid %d) died: %s; restart %llu in %.1f s (%d deaths in a row; the loop and "
+                 "the arms are not affected)%s",
+                 (int)dead, why, (unsigned long long)atomic_load(&b->shm->restarts) + 1u, delay,
+                 b->quick_deaths,
+                 b->quick_deaths == MCA_DDS_BRIDGE_LOG_ALL
+                     ? "; it is restarted for as long as mcad runs, from now on every " STR(
+                           MCA_DDS_BRIDGE_LOG_EVERY) "th death of this series is logged"
+                     : "");
             return lines + 1;
         }
         return lines;
@@ -1155,8 +1164,9 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *pr
         b->next_start_s = now + MCA_DDS_BRIDGE_BACKOFF_MAX_S;
         record_death(b, "not started", MCA_DDS_BRIDGE_BACKOFF_MAX_S);
         if (log != NULL && log_this_death(b->quick_deaths)) {
-            fprintf(log, "<3>%sdds bridge: %s: next try in %.1f s (the loop and the arms are not affected)\n",
-                    pre, why, MCA_DDS_BRIDGE_BACKOFF_MAX_S);
+            tell(log, log_arg, 3,
+                 "dds bridge: %s: next try in %.1f s (the loop and the arms are not affected)", why,
+                 MCA_DDS_BRIDGE_BACKOFF_MAX_S);
             lines++;
         }
     }

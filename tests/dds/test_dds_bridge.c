@@ -656,6 +656,11 @@ static int wait_published(mca_dds_bridge_t *b, uint64_t n, mca_dds_stats_t *st) 
     return 0;
 }
 
+/* The supervisor's lines as a program would print them (mca_dds_log_fn; arg: the FILE). */
+static void test_log_line(void *arg, int level, const char *text) {
+    fprintf((FILE *)arg, "<%d>test: %s\n", level, text);
+}
+
 /* Process mode (issue 16): the publisher is the program mca-dds-bridge. Killed with SIGSEGV, it is reaped,
  * logged and restarted by mca_dds_bridge_supervise(); the restarted one publishes the newest snapshot of the
  * backlog at once (the others count as stale) and then every new one; destroy ends it after the final status.
@@ -704,7 +709,7 @@ static void test_process_mode_restart(void **state) {
     setvbuf(log, NULL, _IONBF, 0);
     assert_int_equal(kill(pid0, CRASH_SIGNAL), 0);
     for (int i = 0; i < 1000 && st.deaths == 0; ++i) {
-        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_supervise(b, test_log_line, log);
         mca_dds_bridge_stats(b, &st);
         const struct timespec nap = {0, 2 * 1000 * 1000};
         nanosleep(&nap, NULL);
@@ -717,7 +722,7 @@ static void test_process_mode_restart(void **state) {
         mca_dds_bridge_push(b, &snap);
     }
     for (int i = 0; i < 2500 && strstr(logbuf, "restarted") == NULL; ++i) {
-        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_supervise(b, test_log_line, log);
         const struct timespec nap = {0, 2 * 1000 * 1000};
         nanosleep(&nap, NULL);
     }
@@ -892,7 +897,7 @@ static void test_process_mode_hung_bridge_killed(void **state) {
     mca_dds_bridge_push(b, &snap);
     k++;
     assert_true(wait_published(b, 1, &st));
-    mca_dds_bridge_supervise(b, log, "test: "); /* starts the hang watch */
+    mca_dds_bridge_supervise(b, test_log_line, log); /* starts the hang watch */
     assert_int_equal(kill(pid0, SIGSTOP), 0);
     struct timespec t0, now;
     clock_gettime(CLOCK_MONOTONIC, &t0);
@@ -901,7 +906,7 @@ static void test_process_mode_hung_bridge_killed(void **state) {
         mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms);
         mca_dds_bridge_push(b, &snap);
         k++;
-        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_supervise(b, test_log_line, log);
         mca_dds_bridge_stats(b, &st);
         if (hung_after < 0.0 && st.hung > 0) {
             clock_gettime(CLOCK_MONOTONIC, &now);
@@ -918,7 +923,7 @@ static void test_process_mode_hung_bridge_killed(void **state) {
     assert_int_equal(st.restarts, 1);
     const uint64_t published = st.published;
     for (int i = 0; i < 500 && st.published == published; ++i) { /* the restarted one publishes */
-        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_supervise(b, test_log_line, log);
         mca_dds_bridge_stats(b, &st);
         nanosleep(&(struct timespec){0, 10 * 1000 * 1000}, NULL);
     }
@@ -960,19 +965,19 @@ static void test_process_mode_never_gives_up(void **state) {
     for (int n = 0; n < n_kills; n++) {
         /* the running publisher (the first, or the n-th restart) dies */
         for (int i = 0; i < 1500 && (st.pid == 0 || st.restarts != (uint64_t)n); ++i) {
-            mca_dds_bridge_supervise(b, log, "test: ");
+            mca_dds_bridge_supervise(b, test_log_line, log);
             mca_dds_bridge_stats(b, &st);
             nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
         }
         assert_true(st.pid > 0);
         assert_int_equal(st.restarts, (uint64_t)n);
         for (int i = 0; i < 150; ++i) { /* it makes its DDS entities (as with the peer: ~0.5 s, then dies) */
-            mca_dds_bridge_supervise(b, log, "test: ");
+            mca_dds_bridge_supervise(b, test_log_line, log);
             nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
         }
         assert_int_equal(kill(st.pid, CRASH_SIGNAL), 0);
         for (int i = 0; i < 1500 && st.deaths == (uint64_t)n; ++i) {
-            mca_dds_bridge_supervise(b, log, "test: ");
+            mca_dds_bridge_supervise(b, test_log_line, log);
             mca_dds_bridge_stats(b, &st);
             nanosleep(&(struct timespec){0, 2 * 1000 * 1000}, NULL);
         }
@@ -990,7 +995,7 @@ static void test_process_mode_never_gives_up(void **state) {
         mca_dds_synth_fill(&snap, k, (int64_t)(1000 + k), &mn, &ms);
         mca_dds_bridge_push(b, &snap);
         k++;
-        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_supervise(b, test_log_line, log);
         mca_dds_bridge_stats(b, &st);
         nanosleep(&(struct timespec){0, 5 * 1000 * 1000}, NULL);
     }
@@ -1010,7 +1015,7 @@ static void test_process_mode_never_gives_up(void **state) {
     assert_int_equal(restarted, MCA_DDS_BRIDGE_LOG_ALL);
     /* after the thinned-out ones, a publisher that lives is said to be up (after MCA_DDS_BRIDGE_UP_S) */
     for (int i = 0; i < 1500 && strstr(logbuf, "dds bridge up again") == NULL; ++i) {
-        mca_dds_bridge_supervise(b, log, "test: ");
+        mca_dds_bridge_supervise(b, test_log_line, log);
         nanosleep(&(struct timespec){0, 5 * 1000 * 1000}, NULL);
     }
     print_message("%s", strstr(logbuf, "dds bridge up again") ? strstr(logbuf, "dds bridge up again") : "");

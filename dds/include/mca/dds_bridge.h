@@ -243,10 +243,14 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
  */
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
 
+/** Where a library's line goes: @p level is syslog's (3 error, 5 notice), @p text one line without its level
+ *  or a program's name and without the newline; the caller (mcad, a tool, a test) prints it as it logs. */
+typedef void (*mca_dds_log_fn)(void *arg, int level, const char *text);
+
 /**
  * Process mode: notice a dead publisher (waitpid, WNOHANG: never blocks) or a hung one (nothing published for
- * MCA_DDS_BRIDGE_HUNG_S while snapshots wait: logged and killed), log a death with its cause on log
- * (`<3>PREFIXdds bridge (pid N) died: signal 11 (SIGSEGV); restart 1 in 0.5 s ...`), restart it when its
+ * MCA_DDS_BRIDGE_HUNG_S while snapshots wait: told and killed), tell a death with its cause to @p log
+ * (level 3, `dds bridge (pid N) died: signal 11 (SIGSEGV); restart 1 in 0.5 s ...`), restart it when its
  * back-off has passed (the restarted one publishes the newest snapshot and the current status at once, and
  * the restart count, deaths and back-off on /diagnostics), log that it is up again; it never gives up (capped
  * back-off, MCA_DDS_BRIDGE_BACKOFF_*; logging thinned out after MCA_DDS_BRIDGE_LOG_ALL deaths in a row; the
@@ -254,9 +258,10 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
  * A mailbox the dead publisher was writing is closed as a target received long ago (task.stream brakes).
  * Call it every few ms from ONE non-rt thread, the one that created the bridge (the publisher process
  * ends with that thread: PR_SET_PDEATHSIG). In-process mode: does nothing. Context: non-rt.
- * @return lines written to log
+ * The library prints nothing: its lines go to @p log (NULL: none are made).
+ * @return lines given to log
  */
-int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, FILE *log, const char *prefix);
+int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, mca_dds_log_fn log, void *log_arg);
 
 /**
  * The text of the fault whose code the snapshots carry (written once per bridge): the publisher uses it for
