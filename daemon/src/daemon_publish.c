@@ -85,6 +85,14 @@ static int find_bridge_exe(const mca_daemon_opts_t *opts, char *out, size_t len)
     return access(out, X_OK) == 0 ? MCA_OK : MCA_ENOENT;
 }
 
+/* Cyclone's own messages (mca_dds_log_drain) as mcad printed them: "<LEVEL>mcad: dds: TEXT". */
+static void cyclone_line(void *arg, int level, const char *text) {
+    FILE *f = arg;
+    if (f) {
+        fprintf(f, "<%d>mcad: dds: %s\n", level, text);
+    }
+}
+
 /* DDS at start-up: the bridge process (mca-dds-bridge) with the cell's ROS 2 topics. */
 int mcad_publish_open(mca_daemon_t *d, char *err, size_t errlen) {
     const mca_cell_t *cell = &d->cell; /* the cell and options as mca_daemon_open took them */
@@ -120,7 +128,7 @@ int mcad_publish_open(mca_daemon_t *d, char *err, size_t errlen) {
     rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc, why, sizeof why) : rc;
     if (rc != MCA_OK) {
         /* Cyclone's reason (a security file missing, a certificate refused, ...) was captured: say it */
-        mca_dds_log_drain(d->opts.log, "<3>mcad: dds: ");
+        mca_dds_log_drain(3, cyclone_line, d->opts.log);
         mca_dds_log_capture(0);
     }
     if (rc != MCA_OK && !(err && err[0])) {

@@ -210,7 +210,7 @@ void mca_dds_log_capture(int on) {
     dds_set_log_sink(on ? capture_sink : NULL, NULL);
 }
 
-int mca_dds_log_drain(FILE *f, const char *prefix) {
+int mca_dds_log_drain(int level, mca_dds_log_fn log, void *arg) {
     static char out[LOG_LINES][LOG_LINE_MAX]; /* one drainer (the daemon's supervisor) */
     static uint64_t reps[LOG_LINES];
     pthread_mutex_lock(&captured.lock);
@@ -220,17 +220,19 @@ int mca_dds_log_drain(FILE *f, const char *prefix) {
     captured.n = 0;
     pthread_mutex_unlock(&captured.lock);
     const uint64_t lost = atomic_exchange_explicit(&captured.lost, 0u, memory_order_relaxed);
-    for (int i = 0; i < n && f != NULL; i++) {
+    char line[LOG_LINE_MAX + 64];
+    for (int i = 0; i < n && log != NULL; i++) {
         if (reps[i] > 0) {
-            fprintf(f, "%s%s (and %llu times more)\n", prefix ? prefix : "", out[i],
-                    (unsigned long long)reps[i]);
+            snprintf(line, sizeof line, "%.*s (and %llu times more)", LOG_LINE_MAX - 1, out[i],
+                     (unsigned long long)reps[i]);
+            log(arg, level, line);
         } else {
-            fprintf(f, "%s%s\n", prefix ? prefix : "", out[i]);
+            log(arg, level, out[i]);
         }
     }
-    if (lost > 0 && f != NULL) {
-        fprintf(f, "%s%llu more Cyclone DDS messages not shown\n", prefix ? prefix : "",
-                (unsigned long long)lost);
+    if (lost > 0 && log != NULL) {
+        snprintf(line, sizeof line, "%llu more Cyclone DDS messages not shown", (unsigned long long)lost);
+        log(arg, level, line);
     }
     return n;
 }

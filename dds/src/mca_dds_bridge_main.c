@@ -33,6 +33,12 @@ static void usage(void) {
  * as errors ("<3>mcad: dds: ...", the reason mcad's start-up failed: a missing security file, a bad XML). */
 static atomic_int drain_stop;
 
+/* Cyclone's messages, as mcad's (this process speaks for mcad's DDS side): "<LEVEL>mcad: dds: TEXT". */
+static void cyclone_line(void *arg, int level, const char *text) {
+    (void)arg;
+    fprintf(stderr, "<%d>mcad: dds: %s\n", level, text);
+}
+
 static void *drain_main(void *arg) {
     const mca_dds_shm_t *shm = arg;
     while (!atomic_load(&drain_stop)) {
@@ -41,7 +47,7 @@ static void *drain_main(void *arg) {
         if (atomic_load_explicit(&shm->ready_gen, memory_order_acquire) ==
                 atomic_load_explicit(&shm->start_gen, memory_order_acquire) &&
             atomic_load_explicit(&shm->open_rc, memory_order_acquire) == MCA_OK) {
-            mca_dds_log_drain(stderr, "<4>mcad: dds: ");
+            mca_dds_log_drain(4, cyclone_line, NULL);
         }
     }
     return NULL;
@@ -98,7 +104,7 @@ int main(int argc, char **argv) {
     if (drain_started) {
         pthread_join(drain, NULL); /* one drainer at a time (mca_dds_log_drain) */
     }
-    mca_dds_log_drain(stderr, rc == MCA_OK ? "<4>mcad: dds: " : "<3>mcad: dds: ");
+    mca_dds_log_drain(rc == MCA_OK ? 4 : 3, cyclone_line, NULL);
     if (rc != MCA_OK) {
         fprintf(stderr, "<3>" PREFIX "DDS set-up failed: %s: %.*s\n", mca_strerror(rc),
                 (int)sizeof shm->open_err, shm->open_err);

@@ -38,6 +38,7 @@
 #include <stdio.h> /* FILE */
 
 #include "mca/armdist.h" /* mca_arm_distances_t */
+#include "mca/dds_log.h" /* mca_dds_log_fn */
 #include "mca/limits.h"
 #include "mca/ros2.h"
 
@@ -242,10 +243,6 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
  * one FUTEX_WAKE (non-blocking); never waits, never fails. Context: rt, from ONE thread only (the loop).
  */
 void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *snap);
-
-/** Where a library's line goes: @p level is syslog's (3 error, 5 notice), @p text one line without its level
- *  or a program's name and without the newline; the caller (mcad, a tool, a test) prints it as it logs. */
-typedef void (*mca_dds_log_fn)(void *arg, int level, const char *text);
 
 /**
  * Process mode: notice a dead publisher (waitpid, WNOHANG: never blocks) or a hung one (nothing published for

@@ -11,6 +11,8 @@
 
 #include <dds/dds.h>
 
+#include "mca/dds_log.h" /* mca_dds_log_fn */
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -66,9 +68,10 @@ int mca_dds_create_subscriber(dds_entity_t pp, const char *partition, dds_entity
  */
 void mca_dds_log_capture(int on);
 
-/** Print the captured messages to f, each after prefix, then how many were lost since the last drain.
- *  Context: non-rt. @return messages printed */
-int mca_dds_log_drain(FILE *f, const char *prefix);
+/** Hand the captured messages to @p log at @p level, one line each (a repeated one with "(and N times
+ *  more)"), then how many were lost since the last drain; NULL log: they are dropped. The library prints
+ *  nothing. Context: non-rt, one drainer at a time. @return messages drained */
+int mca_dds_log_drain(int level, mca_dds_log_fn log, void *arg);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,21 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/dds_log.h
+ * How the DDS library hands its lines to whoever logs: it prints nothing itself (mcad and the programs
+ * log, with their own name and syslog level prefix). Context: the callback is called from the thread that
+ * called the library function that takes it.
+ */
+#ifndef MCA_DDS_LOG_H
+#define MCA_DDS_LOG_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Where a library's line goes: @p level is syslog's (3 error, 4 warning, 5 notice), @p text one line
+ *  without a level, a program's name or the newline; the caller prints it as it logs. */
+typedef void (*mca_dds_log_fn)(void *arg, int level, const char *text);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
