@@ -13,7 +13,7 @@ wake-up due within CYC_WINDOW_NS of the tick's wake-up was at least CYC_LATE_US 
     stop(cyc, f)
     wk = wakeups(path, launch_ns)                       # [(due ns, latency us)]
     late = late_dues(wk)
-    explained(wake_ns, late)                            # for each tick to judge
+    explained(wake_ns, late)                            # for each tick to judge (span_ns: a gap before it)
 """
 import re
 import signal
@@ -49,11 +49,16 @@ def stop(p, f):
 
 
 def wakeups(path, launch_ns):
-    """[(due ns, latency us)] of cyclictest -v: wake-up i due at t0 + i * its interval (the "Thread 0 Interval:"
-    line; cyclictest 2.40 prints thread 0's interval plus -d's distance, default 500 us, under -v though it runs
-    at the given one: -d 0 is passed so that the printed interval is the real one)."""
+    """[(due ns, latency us)] of cyclictest -v. Its thread starts at t0 (the aligned second + 250 us) and is first
+    due one interval later; each wake-up is due one interval after the last, except after a wake-up later than
+    that: then cyclictest skips the periods already past (its "while (now > next) next += interval") and logs
+    nothing for them. So the dues are rebuilt in order from the latencies, not taken as t0 + i * interval: that
+    placed every wake-up after a cyclictest overrun one interval too early per skipped period (seen in a sched
+    trace of the loop's CPU: a 1.1 ms stall both saw, which the index put 3 ms away). The interval is the
+    "Thread 0 Interval:" line; cyclictest 2.40 prints thread 0's interval plus -d's distance, default 500 us,
+    under -v though it runs at the given one: -d 0 is passed so that the printed interval is the real one."""
     t0 = (launch_ns // 10**9 + 1) * 10**9 + 250000
-    out, step = [], 10**6
+    out, step, due = [], 10**6, None
     with open(path, errors="replace") as f:
         for line in f:
             m = re.match(r"^Thread 0 Interval:\s*(\d+)", line)
@@ -61,18 +66,27 @@ def wakeups(path, launch_ns):
                 step = int(m.group(1)) * 1000
             m = re.match(r"^\s*0:\s*(\d+):\s*(\d+)\s*$", line)
             if m:
-                out.append((t0 + int(m.group(1)) * step, int(m.group(2))))
+                due = t0 + step if due is None else due
+                lat = int(m.group(2))
+                out.append((due, lat))
+                now = due + lat * 1000
+                due += step
+                while now > due:
+                    due += step
     return out
 
 
 def late_dues(wk, late_us=CYC_LATE_US):
-    """The due times of the wake-ups at least late_us late."""
-    return [d for d, us in wk if us >= late_us]
+    """The wake-ups at least late_us late, as (due ns, latency ns): cyclictest was held up over [due, due + latency]."""
+    return [(d, us * 1000) for d, us in wk if us >= late_us]
 
 
-def explained(wake_ns, late, window_ns=CYC_WINDOW_NS):
-    """A tick woken at wake_ns (CLOCK_MONOTONIC) is the machine's: a late cyclictest wake-up was due near it."""
-    return any(abs(d - wake_ns) <= window_ns for d in late)
+def explained(wake_ns, late, window_ns=CYC_WINDOW_NS, span_ns=0):
+    """A tick woken at wake_ns (CLOCK_MONOTONIC) after span_ns without one (an overrun's gap; 0: the tick alone) is
+    the machine's: cyclictest was held up (a late wake-up's [due, due + latency]) within window_ns of
+    [wake_ns - span_ns, wake_ns]. The span matters for stalls longer than the window: cyclictest logs one late
+    wake-up at a stall's start and none for the periods it skips, so the tick at the stall's end is far from it."""
+    return any(d - window_ns <= wake_ns and d + lat + window_ns >= wake_ns - span_ns for d, lat in late)
 
 
 def covers(wk, t0_ns, t1_ns):
