@@ -152,6 +152,7 @@ void mca_controller_reset(mca_controller_t *ctrl) {
     ctrl->exact_met = ctrl->exact_missed = 0;
     ctrl->exact_error_max = 0.0;
     memset(&ctrl->coord, 0, sizeof ctrl->coord); /* a plan holds for one start */
+    memset(ctrl->rate, 0, sizeof ctrl->rate);
     ctrl->brake_pdnn.h = 0;
     ctrl->n_row_key = ctrl->n_brake_row_key = 0;
 }
@@ -162,7 +163,8 @@ int mca_controller_plan(mca_controller_t *ctrl, const double *const q[MCA_MAX_AR
     }
     const mca_controller_config_t *cfg = &ctrl->cfg;
     memset(&ctrl->coord, 0, sizeof ctrl->coord);
-    if (cfg->scheme != MCA_SCHEME_MCA_TS || !cfg->ts.coordinate) {
+    memset(ctrl->rate, 0, sizeof ctrl->rate);
+    if (cfg->scheme != MCA_SCHEME_MCA_TS) {
         return MCA_OK;
     }
     mca_path_t paths[MCA_MAX_ARMS];
@@ -175,6 +177,13 @@ int mca_controller_plan(mca_controller_t *ctrl, const double *const q[MCA_MAX_AR
         paths[a] = cfg->path[a];
         mca_path_anchor(&paths[a], kin.ee);
         arms[a] = (mca_coord_arm_t){&cfg->chain[a], &paths[a], q[a], cfg->sp.K};
+        if (mca_path_rate_plan(&arms[a], cfg->ts.dec_limit[a], cfg->ts.sigma_max, work->q, &ctrl->rate[a]) !=
+            MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
+    if (!cfg->ts.coordinate) {
+        return MCA_OK;
     }
     /* the predicted arms kept out of each other's bands (d2) where a schedule allows, else nearer */
     return mca_coord_plan(arms, cfg->n_arms, cfg->sp.d2, cfg->sp.d1 + 2.0 * cfg->ts.d1_margin, work,

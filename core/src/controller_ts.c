@@ -134,6 +134,16 @@ void mca_ctrl__ts_plan(mca_controller_t *ctrl, double task_t, double target[], d
         } else if (a == ctrl->deadlock_arm && ctrl->deadlock == MCA_DEADLOCK_WAIT) {
             target[a] = lo[a] = hi[a] = 0.0;
         }
+        /* sigma's own stop bound: no faster than the arm can still stop on its curved path */
+        /* (never lower than the arm can slow to in this tick: where the prediction missed, the arm slows as
+         * fast as it can on its path instead of leaving it) */
+        const double lim =
+            fmax(mca_path_rate_at(&ctrl->rate[a], ctrl->tau[a]),
+                 ctrl->sigma[a] - mca_path_rate_decel(&ctrl->rate[a], ctrl->tau[a]) * ctrl->cfg.dt);
+        if (lim < hi[a]) {
+            hi[a] = fmax(lo[a], lim);
+            target[a] = fmin(target[a], hi[a]);
+        }
         if (ctrl->coord.n_pairs > 0 && hi[a] > 0.0) {
             const double ahead = tp->sigma_max * tp->sigma_max / (2.0 * MCA_TS_GATE_DEC);
             const double gate = mca_coord_gate(&ctrl->coord, a, ctrl->tau, ahead);

@@ -46,8 +46,11 @@ static void predict_step(const mca_coord_arm_t *arm, mca_kin_t *kin, double q[],
     mca_chain_clamp_q(c, q);
 }
 
-/* The arm's link points at the start of each cell of path time, predicted alone. */
-static int predict(const mca_coord_arm_t *arm, double h, int n, double pts[][MCA_MAX_POINTS][3]) {
+int mca_coord_predict(const mca_coord_arm_t *arm, double h, int n, double q_out[][MCA_MAX_DOF]) {
+    if (!arm || !arm->chain || !arm->path || !arm->q0 || !q_out || !(h > 0.0) || n < 1 ||
+        n > MCA_COORD_MAX_CELLS) {
+        return MCA_EINVAL;
+    }
     double q[MCA_MAX_DOF];
     memcpy(q, arm->q0, sizeof(double) * (size_t)arm->chain->dof);
     mca_kin_t kin;
@@ -62,6 +65,22 @@ static int predict(const mca_coord_arm_t *arm, double h, int n, double pts[][MCA
             }
             predict_step(arm, &kin, q, t);
             t += PREDICT_DT;
+        }
+        memcpy(q_out[k], q, sizeof q_out[k]);
+    }
+    return MCA_OK;
+}
+
+/* The arm's link points at the start of each cell of path time, predicted alone. */
+static int predict(const mca_coord_arm_t *arm, double h, int n, double q[][MCA_MAX_DOF],
+                   double pts[][MCA_MAX_POINTS][3]) {
+    if (mca_coord_predict(arm, h, n, q) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    for (int k = 0; k < n; k++) {
+        mca_kin_t kin;
+        if (mca_fk(arm->chain, q[k], &kin) != MCA_OK) {
+            return MCA_EINVAL;
         }
         memcpy(pts[k], kin.point, sizeof pts[k]);
     }
@@ -229,7 +248,7 @@ int mca_coord_plan(const mca_coord_arm_t *arms, int n_arms, double d_block, doub
         const double T = mca_path_end_time(arms[a].path);
         h[a] = fmax(MCA_COORD_CELL_S, T / (MCA_COORD_MAX_CELLS - 2));
         n[a] = (int)ceil(T / h[a]) + 1;
-        if (predict(&arms[a], h[a], n[a], work->pts[a]) != MCA_OK) {
+        if (predict(&arms[a], h[a], n[a], work->q, work->pts[a]) != MCA_OK) {
             return MCA_EINVAL;
         }
     }

@@ -30,8 +30,8 @@ const char *mca_daemon_state_name(int s) {
     return name ? name : "?";
 }
 
-/* mca-ts: the order in which arms on fixed paths pass each other, planned from where the arms stand
- * (start-up: the plan's scratch lives only here). */
+/* mca-ts: each arm's path-rate limit and the order in which arms on fixed paths pass each other, planned
+ * from where the arms stand (start-up: the plan's scratch lives only here). */
 static int plan(mca_daemon_t *d, char *err, size_t errlen) {
     mca_coord_work_t *work = malloc(sizeof *work);
     if (!work) {
@@ -47,6 +47,15 @@ static int plan(mca_daemon_t *d, char *err, size_t errlen) {
     if (rc != MCA_OK) {
         mca_errbuf_printf(err, errlen, "%s: coordination plan failed: %s", d->cell.source, mca_strerror(rc));
         return rc;
+    }
+    for (int a = 0; a < d->n_arms; a++) {
+        const mca_path_rate_t *r = &d->ctrl.rate[a];
+        if (r->n > 0 && r->least < d->ctrl.cfg.ts.sigma_max) {
+            fprintf(d->opts.log,
+                    "<6>mcad: path rate: arm %d at most %.3f where its path bends most (to stop on it; "
+                    "sigma_max %.2f)\n",
+                    a, r->least, d->ctrl.cfg.ts.sigma_max);
+        }
     }
     const mca_coord_t *c = &d->ctrl.coord;
     for (int k = 0; k < c->n_pairs; k++) {

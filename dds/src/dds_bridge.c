@@ -27,6 +27,7 @@
 #include <time.h>
 #include <unistd.h> /* syscall */
 
+#include "dds__supervise.h" /* mca_dds_backoff_s, mca_dds_describe_status, mca_dds_log_this_death */
 #include "dds_shm.h"
 #include "mca/dds_qos.h"
 #include "mca/err.h"
@@ -1002,28 +1003,8 @@ static void repair_mailboxes(mca_dds_bridge_t *b) {
     }
 }
 
-static void describe_status(int status, char *buf, size_t len) {
-    if (WIFSIGNALED(status)) {
-        const int sig = WTERMSIG(status);
-        const char *abbrev = sigabbrev_np(sig);
-        snprintf(buf, len, "signal %d (SIG%s)%s", sig, abbrev != NULL ? abbrev : "?",
-                 WCOREDUMP(status) ? ", core dumped" : "");
-    } else if (WIFEXITED(status)) {
-        snprintf(buf, len, "exit status %d", WEXITSTATUS(status));
-    } else {
-        snprintf(buf, len, "wait status 0x%x", (unsigned)status);
-    }
-}
-
 #define STR_(x) #x
 #define STR(x) STR_(x)
-
-/* Every death of a series up to MCA_DDS_BRIDGE_LOG_ALL, then every MCA_DDS_BRIDGE_LOG_EVERY-th: a peer that
- * stays for hours must not fill the journal (it would rate-limit mcad's other lines). The summary and
- * /diagnostics count them all. */
-static int log_this_death(int quick_deaths) {
-    return quick_deaths <= MCA_DDS_BRIDGE_LOG_ALL || quick_deaths % MCA_DDS_BRIDGE_LOG_EVERY == 0;
-}
 
 /* The death as the next publisher puts it on /diagnostics. */
 static void record_death(mca_dds_bridge_t *b, const char *why, double delay) {
@@ -1066,7 +1047,7 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, mca_dds_log_fn log, void 
             if (b->announced != gen &&
                 atomic_load_explicit(&b->shm->ready_gen, memory_order_acquire) == gen) {
                 b->announced = gen;
-                if (log != NULL && (b->deaths == 0 || log_this_death(b->quick_deaths))) {
+                if (log != NULL && (b->deaths == 0 || mca_dds_log_this_death(b->quick_deaths))) {
                     const int failed = atomic_load(&b->shm->open_rc) != MCA_OK;
                     tell(log, log_arg, 5,
                          "dds bridge restarted: pid %d (restart %llu), publishing again%s%.*s%s", (int)b->pid,
@@ -1123,21 +1104,15 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, mca_dds_log_fn log, void 
         repair_mailboxes(b);
         b->quick_deaths = now - b->started_s < MCA_DDS_BRIDGE_STABLE_S ? b->quick_deaths + 1 : 1;
         char why[96];
-        describe_status(status, why, sizeof why);
+        mca_dds_describe_status(status, why, sizeof why);
         /* capped exponential back-off, never a last restart: a peer that crashes every start (docs/dds.md)
          * costs one short-lived process per MCA_DDS_BRIDGE_BACKOFF_MAX_S while it is there, and monitoring
          * is back within that time after it left */
-        double delay = MCA_DDS_BRIDGE_BACKOFF_S;
-        for (int k = 1; k < b->quick_deaths && delay < MCA_DDS_BRIDGE_BACKOFF_MAX_S; k++) {
-            delay *= 2.0;
-        }
-        if (delay > MCA_DDS_BRIDGE_BACKOFF_MAX_S) {
-            delay = MCA_DDS_BRIDGE_BACKOFF_MAX_S;
-        }
+        const double delay = mca_dds_backoff_s(b->quick_deaths);
         b->next_start_s = now + delay;
         b->backoff_s = delay;
         record_death(b, why, delay);
-        if (log != NULL && log_this_death(b->quick_deaths)) {
+        if (log != NULL && mca_dds_log_this_death(b->quick_deaths)) {
             tell(log, log_arg, 3,
                  "dds bridge (pid %d) died: %s; restart %llu in %.1f s (%d deaths in a row; the loop and "
                  "the arms are not affected)%s",
@@ -1163,7 +1138,7 @@ int mca_dds_bridge_supervise(mca_dds_bridge_t *bridge, mca_dds_log_fn log, void 
         b->backoff_s = MCA_DDS_BRIDGE_BACKOFF_MAX_S;
         b->next_start_s = now + MCA_DDS_BRIDGE_BACKOFF_MAX_S;
         record_death(b, "not started", MCA_DDS_BRIDGE_BACKOFF_MAX_S);
-        if (log != NULL && log_this_death(b->quick_deaths)) {
+        if (log != NULL && mca_dds_log_this_death(b->quick_deaths)) {
             tell(log, log_arg, 3,
                  "dds bridge: %s: next try in %.1f s (the loop and the arms are not affected)", why,
                  MCA_DDS_BRIDGE_BACKOFF_MAX_S);

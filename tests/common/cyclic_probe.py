@@ -4,7 +4,8 @@ from "this VM froze its vCPUs" (1-15 ms a few times a minute here, ~100 ms when 
 
 cyclictest runs one thread per CPU at the priority of the loop under test, 1 ms interval, and records every
 wake-up later than spike_us with its CLOCK_MONOTONIC time; a stall of the loop that cyclictest saw at the
-same moment is the machine's. Used by tests/dds/test_bridge_crash.py and tests/daemon/test_sigusr1.py."""
+same moment is the machine's. Used by tests/daemon/test_sigusr1.py (time lost to stalls); overruns are judged by
+tools/mca-sweep/cyclic_late.py (sweep_rt.py, tests/dds/test_bridge_crash.py)."""
 import os
 import re
 import signal

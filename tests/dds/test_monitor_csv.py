@@ -68,16 +68,22 @@ MONITOR = None  # the binary under test (main)
 
 
 def check_threads_fifo(pid, prio):
-    """Every thread of pid SCHED_FIFO at prio once Cyclone's threads exist (its receive thread takes the
-    samples); /proc/PID/task/TID/stat fields 40 and 41 are rt_priority and policy (1: SCHED_FIFO)."""
+    """Every thread of pid and of its DDS child (the participant's process, mca/dds_child.h) SCHED_FIFO at prio
+    once Cyclone's threads exist (its receive thread takes the samples); /proc/PID/task/TID/stat fields 40 and
+    41 are rt_priority and policy (1: SCHED_FIFO)."""
     threads = {}
     for _ in range(100):  # up to 10 s for the participant's threads on a loaded machine
         threads = {}
-        for tid in os.listdir(f"/proc/{pid}/task"):
+        try:
+            with open(f"/proc/{pid}/task/{pid}/children") as f:
+                pids = [pid] + [int(x) for x in f.read().split()]
+        except OSError:
+            pids = [pid]
+        for tid in [f"{p}/task/{t}" for p in pids for t in os.listdir(f"/proc/{p}/task")]:
             try:
-                with open(f"/proc/{pid}/task/{tid}/stat") as f:
+                with open(f"/proc/{tid}/stat") as f:
                     stat = f.read()
-                with open(f"/proc/{pid}/task/{tid}/comm") as f:
+                with open(f"/proc/{tid}/comm") as f:
                     name = f.read().strip()
             except OSError:
                 continue

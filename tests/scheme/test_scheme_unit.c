@@ -17,6 +17,7 @@
 #include "mca/chain.h"
 #include "mca/controller.h"
 #include "mca/err.h"
+#include "mca/path_rate.h"
 #include "mca/scenario.h"
 #include "mca/scheme.h"
 #include "mca/urdf.h"
@@ -27,6 +28,65 @@
 #endif
 #define PA10 MCA_SOURCE_DIR "/config/robots/pa10plus.urdf"
 #define SCN(x) MCA_SOURCE_DIR "/config/scenarios/" x
+
+/* ------------------------------------------------------------------ sigma's own stop bound (mca/path_rate.h)
+ */
+
+/* The limit against a second computation: central differences of the arm's predicted configurations along its
+ * path time (no Jacobian, no pseudo-inverse) give q_ss; no cell's limit may exceed the local bound
+ * sqrt(theta dec / |q_ss,j|) they imply (beyond the differences' own error), the limit binds on cup stacking
+ * at dec 0.5 rad/s^2, and each cell's limit can be slowed to the next one's at the cell's deceleration. */
+static void test_path_rate_limit(void **state) {
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    static double qw[MCA_COORD_MAX_CELLS][MCA_MAX_DOF], qf[MCA_COORD_MAX_CELLS][MCA_MAX_DOF];
+    static mca_path_rate_t r;
+    char err[512];
+    assert_int_equal(mca_scenario_load(SCN("cup_stacking.yaml"), &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
+                     MCA_OK);
+    const double dec = 0.5, theta = MCA_PATH_RATE_CURVE_SHARE, hf = 0.02;
+    int bound_somewhere = 0;
+    for (int a = 0; a < cfg.n_arms; a++) {
+        mca_kin_t kin;
+        assert_int_equal(mca_fk(&cfg.chain[a], s.arm[a].q0, &kin), MCA_OK);
+        mca_path_t path = cfg.path[a];
+        mca_path_anchor(&path, kin.ee);
+        const mca_coord_arm_t arm = {&cfg.chain[a], &path, s.arm[a].q0, cfg.sp.K};
+        assert_int_equal(mca_path_rate_plan(&arm, dec, 1.5, qw, &r), MCA_OK);
+        assert_true(r.n > 10 && r.h >= MCA_COORD_CELL_S);
+        bound_somewhere |= r.least < 1.0;
+        for (int k = 0; k + 1 < r.n; k++) {
+            assert_true(r.sigma[k] > 0.0f && r.sigma[k] <= 1.5f);
+            const double lhs = (double)r.sigma[k] * r.sigma[k];
+            const double rhs = (double)r.sigma[k + 1] * r.sigma[k + 1] + 2.0 * r.decel[k] * r.h;
+            assert_true(lhs <= rhs * (1.0 + 1e-5) + 1e-9);
+        }
+        /* the second computation over the path's first 10 s (512 samples at 0.02 s) */
+        const int nf = MCA_COORD_MAX_CELLS;
+        assert_int_equal(mca_coord_predict(&arm, hf, nf, qf), MCA_OK);
+        int checked = 0;
+        for (int k = 1; (k + 1) * r.h < (nf - 2) * hf; k++) {
+            const int i = (int)lround(k * r.h / hf);
+            double local = 1.5;
+            for (int j = 0; j < cfg.chain[a].dof; j++) {
+                const double qss = (qf[i + 1][j] - 2.0 * qf[i][j] + qf[i - 1][j]) / (hf * hf);
+                if (fabs(qss) > 1e-9) {
+                    local = fmin(local, sqrt(theta * dec / fabs(qss)));
+                }
+            }
+            if (r.sigma[k] > 1.15 * local + 0.02) {
+                print_error("arm %d cell %d: limit %.4f above the differences' bound %.4f\n", a, k,
+                            r.sigma[k], local);
+                fail();
+            }
+            checked++;
+        }
+        assert_true(checked > 50);
+    }
+    assert_true(bound_somewhere); /* at dec 0.5 the curve limits cup stacking's arms */
+}
 
 /* ------------------------------------------------------------------ S(d) (13) */
 
@@ -1421,6 +1481,7 @@ int main(void) {
         cmocka_unit_test(test_controller_brake),
         cmocka_unit_test(test_tube_bounds),
         cmocka_unit_test(test_path_distance_tolerance),
+        cmocka_unit_test(test_path_rate_limit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

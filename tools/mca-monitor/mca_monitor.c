@@ -4,7 +4,11 @@
  * Distances sample, and at exit the end-to-end latency (tick stamp -> receipt here, same host clock).
  * Samples are taken in a data-available listener, i.e. on Cyclone's receiving thread as they arrive (as
  * ddsperf's default subscriber does): a waitset would add the wake-up of a second thread to every
- * sample's latency. The main thread only draws and keeps time.
+ * sample's latency.
+ * The DDS participant lives in a child process (mca/dds_child.h) that hands each sample to this process over
+ * a pipe: a peer that crashes libddsc 0.10.2 (docs/dds.md) kills the child, not the view or the CSV; the
+ * child is restarted with mcad's capped back-off, the deaths and the gaps are said, and at exit counted.
+ * This process keeps the view, the CSV and the figures; it creates no DDS entity.
  * Exit 0 on success or Ctrl-C, 1 on a run-time error, 2 on bad usage. */
 #include <errno.h>
 #include <getopt.h>
@@ -19,6 +23,7 @@
 #include <unistd.h>
 
 #include "mca/dds_bridge.h" /* MCA_DDS_TOPIC_*, MCA_MAX_PAIRS */
+#include "mca/dds_child.h"  /* the participant in a supervised child */
 #include "mca/dds_qos.h"
 #include "mca/err.h"
 #include "mca/prog.h" /* mca_prog_parse_u64, mca_prog_on_stop_signals, mca_prog_ns_summary */
@@ -55,10 +60,27 @@ typedef struct status_view {
  * distance samples must not relabel those (seen: tick 2999 shown BRAKING, mcad braked from tick 3000). */
 enum { PENDING_MAX = 32 };
 
+/* The child's side: its readers, and one lock for its two senders (the listener, its main thread). */
+typedef struct child {
+    pthread_mutex_t lock;
+    dds_entity_t rd, rs; /* Distances, ControllerStatus readers */
+    int fd;              /* the pipe to the parent */
+    int broken;          /* the parent is gone */
+    unsigned long long domain;
+    const char *config, *partition;
+    int keep_all; /* --csv: every sample (keep-all history) */
+} child_t;
+
+/* The frames the child sends. */
+enum { FRAME_STATUS = 1, FRAME_DISTANCES = 2 };
+
+typedef struct dist_frame {
+    int64_t rx;          /* when the child took it (CLOCK_MONOTONIC, one clock for both processes) */
+    mca_dds_Distances d; /* its sequences not sent (loaned memory) */
+} dist_frame_t;
+
 typedef struct monitor {
-    pthread_mutex_t lock; /* the listener (Cyclone's thread) and the main thread's drawing */
-    dds_entity_t rd, rs;  /* Distances, ControllerStatus readers */
-    int64_t last_rx;      /* when distances last came */
+    int64_t last_rx; /* when distances last came */
     unsigned long long count;
     int done;        /* --count reached */
     int write_error; /* the CSV could not be written */
@@ -96,16 +118,11 @@ static void apply_statuses(monitor_t *m, uint64_t tick) {
     }
 }
 
-static void push_status(monitor_t *m, const mca_dds_ControllerStatus *s) {
+static void push_status(monitor_t *m, const status_view_t *s) {
     if (m->n_pending == PENDING_MAX) {
         apply_oldest_status(m);
     }
-    status_view_t *v = &m->pending[m->n_pending++];
-    v->tick = s->tick;
-    v->state = s->state;
-    v->fault_code = s->fault_code;
-    v->dropped = s->snapshots_dropped;
-    snprintf(v->fault_text, sizeof v->fault_text, "%s", s->fault_text);
+    m->pending[m->n_pending++] = *s;
 }
 
 static int64_t now_ns(void) {
@@ -192,65 +209,157 @@ static int csv_row(monitor_t *m, const mca_dds_Distances *d, int64_t rx) {
     return n < 0 ? -1 : 0;
 }
 
-/* Take what arrived at rx: statuses first (each applied from its own tick on), then distances. Caller
- * holds m->lock. */
-static void take_all(monitor_t *m, int64_t rx) {
+/* The child: take what arrived at rx and send it, statuses first (each applied from its own tick on), then
+ * distances. Caller holds ch->lock. */
+static void take_all(child_t *ch, int64_t rx) {
     enum { BATCH = 64 };
     void *buf[BATCH];
     dds_sample_info_t info[BATCH];
     memset(buf, 0, sizeof buf);
-    int n = dds_take(m->rs, buf, info, BATCH, BATCH);
+    int n = dds_take(ch->rs, buf, info, BATCH, BATCH);
     for (int i = 0; i < n; ++i) {
-        if (info[i].valid_data) {
-            push_status(m, buf[i]);
+        if (info[i].valid_data && !ch->broken) {
+            const mca_dds_ControllerStatus *s = buf[i];
+            status_view_t v = {.tick = s->tick,
+                               .state = s->state,
+                               .fault_code = s->fault_code,
+                               .dropped = s->snapshots_dropped};
+            snprintf(v.fault_text, sizeof v.fault_text, "%s", s->fault_text);
+            ch->broken = mca_dds_child_send(ch->fd, FRAME_STATUS, &v, sizeof v, NULL, 0) != 0;
         }
     }
     if (n > 0) {
-        dds_return_loan(m->rs, buf, n);
+        dds_return_loan(ch->rs, buf, n);
     }
     memset(buf, 0, sizeof buf);
-    n = dds_take(m->rd, buf, info, BATCH, BATCH);
+    n = dds_take(ch->rd, buf, info, BATCH, BATCH);
     /* a sample that arrived while this callback waited for the lock came after rx: it was received by the
      * time of the take (never before its stamp; dds.monitor_csv saw "received before it was stamped") */
     const int64_t taken = n > 0 ? now_ns() : rx;
-    for (int i = 0; i < n && !m->done; ++i) {
+    for (int i = 0; i < n && !ch->broken; ++i) {
         if (!info[i].valid_data) {
             continue;
         }
         const mca_dds_Distances *d = buf[i];
-        const int64_t rx_d = d->stamp_ns > rx ? taken : rx;
-        apply_statuses(m, d->tick);
-        pair_view_t *pv = &m->pair[d->pair_id];
-        pv->seen = 1;
-        pv->last = *d;
-        pv->last.link_distance_a._buffer = NULL; /* loaned memory: do not keep pointers */
-        pv->last.link_distance_b._buffer = NULL;
-        if (csv_row(m, d, rx_d) != 0) {
-            m->write_error = 1;
-        }
-        if (m->n_lat < m->cap_lat) {
-            m->lat[m->n_lat++] = rx_d - d->stamp_ns;
-        }
-        m->samples++;
-        if (m->count > 0 && m->samples >= m->count) {
-            m->done = 1;
-        }
+        dist_frame_t f;
+        memset(&f, 0, sizeof f);
+        f.rx = d->stamp_ns > rx ? taken : rx;
+        f.d = *d;
+        f.d.link_distance_a._buffer = NULL; /* loaned memory: do not send pointers */
+        f.d.link_distance_b._buffer = NULL;
+        ch->broken = mca_dds_child_send(ch->fd, FRAME_DISTANCES, &f, sizeof f, NULL, 0) != 0;
     }
     if (n > 0) {
-        dds_return_loan(m->rd, buf, n);
-        m->last_rx = rx;
+        dds_return_loan(ch->rd, buf, n);
     }
 }
 
 static void on_data_available(dds_entity_t reader, void *arg) {
     (void)reader;
-    monitor_t *m = arg;
-    const int64_t rx = now_ns(); /* before the lock: the receipt, not the wait for a redraw */
-    pthread_mutex_lock(&m->lock);
-    if (m->rd > 0 && m->rs > 0) { /* both readers exist (the first may deliver before the second is made) */
-        take_all(m, rx);
+    child_t *ch = arg;
+    const int64_t rx = now_ns(); /* before the lock: the receipt, not the wait for the other sender */
+    pthread_mutex_lock(&ch->lock);
+    if (ch->rd > 0 && ch->rs > 0) { /* both readers exist (the first may deliver before the second is made) */
+        take_all(ch, rx);
     }
-    pthread_mutex_unlock(&m->lock);
+    pthread_mutex_unlock(&ch->lock);
+}
+
+/* The child process: the participant, the readers, samples to the parent until it asks to stop. */
+static int child_main(int fd, void *arg) {
+    child_t *ch = arg;
+    ch->fd = fd;
+    pthread_mutex_init(&ch->lock, NULL);
+    dds_entity_t dom = 0, pp = 0;
+    char err[320] = "";
+    if (mca_dds_open_participant((uint32_t)ch->domain, ch->config, &pp, &dom, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, "mca-monitor: %s\n", err);
+        return 1;
+    }
+    dds_qos_t *qs = mca_dds_qos_stream();
+    dds_qos_t *qst = mca_dds_qos_status();
+    /* Reader history is not part of QoS matching: keep 1 s for the live view, and everything that
+     * reached this process when recording (--csv records every sample even if we fall behind). */
+    if (ch->keep_all) {
+        dds_qset_history(qs, DDS_HISTORY_KEEP_ALL, 0);
+    } else {
+        dds_qset_history(qs, DDS_HISTORY_KEEP_LAST, 1024);
+    }
+    const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
+    const dds_entity_t ts =
+        dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
+    dds_entity_t sub = DDS_RETCODE_ERROR; /* a DDS code: the reader creation below passes it on */
+    if (mca_dds_create_subscriber(pp, ch->partition, &sub, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, "mca-monitor: %s\n", err);
+    }
+    dds_listener_t *lst = dds_create_listener(ch);
+    dds_lset_data_available(lst, on_data_available);
+    pthread_mutex_lock(&ch->lock);
+    const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, lst) : (td > 0 ? sub : td);
+    const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, lst) : (ts > 0 ? sub : ts);
+    ch->rd = rd;
+    ch->rs = rs;
+    pthread_mutex_unlock(&ch->lock);
+    dds_delete_listener(lst);
+    dds_delete_qos(qs);
+    dds_delete_qos(qst);
+    int rc = 0;
+    if (rd < 0 || rs < 0) {
+        fprintf(stderr, "mca-monitor: cannot create readers: %s\n", dds_strretcode(rd < 0 ? rd : rs));
+        rc = 1;
+    } else {
+        pthread_mutex_lock(&ch->lock);
+        ch->broken = mca_dds_child_ready(fd) != 0;
+        pthread_mutex_unlock(&ch->lock);
+        while (!mca_dds_child_stopping() && !ch->broken) {
+            const struct timespec tick = {0, 10000000}; /* 10 ms */
+            nanosleep(&tick, NULL);
+            pthread_mutex_lock(&ch->lock);
+            take_all(ch, now_ns()); /* what came before the listeners were set (none after: they take it) */
+            pthread_mutex_unlock(&ch->lock);
+        }
+        /* no listener runs after this (dds_set_listener waits for one that runs): then the rest is sent */
+        dds_set_listener(rd, NULL);
+        dds_set_listener(rs, NULL);
+        pthread_mutex_lock(&ch->lock);
+        take_all(ch, now_ns());
+        pthread_mutex_unlock(&ch->lock);
+    }
+    dds_delete(pp);
+    if (dom > 0) {
+        dds_delete(dom);
+    }
+    return rc;
+}
+
+/* The parent: one frame of the child. */
+static int on_frame(void *ctx, uint32_t kind, const void *data, size_t len) {
+    monitor_t *m = ctx;
+    if (kind == FRAME_STATUS && len == sizeof(status_view_t)) {
+        status_view_t v;
+        memcpy(&v, data, sizeof v);
+        push_status(m, &v);
+    } else if (kind == FRAME_DISTANCES && len == sizeof(dist_frame_t) && !m->done) {
+        dist_frame_t f;
+        memcpy(&f, data, sizeof f);
+        const mca_dds_Distances *d = &f.d;
+        apply_statuses(m, d->tick);
+        pair_view_t *pv = &m->pair[d->pair_id];
+        pv->seen = 1;
+        pv->last = *d;
+        if (csv_row(m, d, f.rx) != 0) {
+            m->write_error = 1;
+        }
+        if (m->n_lat < m->cap_lat) {
+            m->lat[m->n_lat++] = f.rx - d->stamp_ns;
+        }
+        m->samples++;
+        m->last_rx = f.rx;
+        if (m->count > 0 && m->samples >= m->count) {
+            m->done = 1;
+        }
+    }
+    return 0;
 }
 
 /* every integer option: 0..max, the error said */
@@ -335,7 +444,6 @@ int main(int argc, char **argv) {
     }
 
     static monitor_t m;
-    pthread_mutex_init(&m.lock, NULL);
     m.count = count;
     m.tty = isatty(STDOUT_FILENO);
     m.color = m.tty && !no_color;
@@ -357,57 +465,28 @@ int main(int argc, char **argv) {
 
     mca_prog_on_stop_signals(on_signal);
 
+    static child_t ch;
+    ch.domain = domain;
+    ch.config = config;
+    ch.partition = partition;
+    ch.keep_all = csv_path != NULL;
+    static mca_dds_child_t kid;
     int rc = 0;
-    dds_entity_t dom = 0, pp = 0;
-    char err[320] = "";
-    if (mca_dds_open_participant((uint32_t)domain, config, &pp, &dom, err, sizeof err) != MCA_OK) {
-        fprintf(stderr, "mca-monitor: %s\n", err);
-        free(m.lat);
-        if (m.csv != NULL) {
-            fclose(m.csv);
-        }
-        return 1;
-    }
-    dds_qos_t *qs = mca_dds_qos_stream();
-    dds_qos_t *qst = mca_dds_qos_status();
-    /* Reader history is not part of QoS matching: keep 1 s for the live view, and everything that
-     * reached this process when recording (--csv records every sample even if we fall behind). */
-    if (csv_path != NULL) {
-        dds_qset_history(qs, DDS_HISTORY_KEEP_ALL, 0);
-    } else {
-        dds_qset_history(qs, DDS_HISTORY_KEEP_LAST, 1024);
-    }
-    const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
-    const dds_entity_t ts =
-        dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
-    dds_entity_t sub = DDS_RETCODE_ERROR; /* a DDS code: the reader creation below passes it on */
-    if (mca_dds_create_subscriber(pp, partition, &sub, err, sizeof err) != MCA_OK) {
-        fprintf(stderr, "mca-monitor: %s\n", err);
-    }
-    dds_listener_t *lst = dds_create_listener(&m);
-    dds_lset_data_available(lst, on_data_available);
-    pthread_mutex_lock(&m.lock);
-    const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, lst) : (td > 0 ? sub : td);
-    const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, lst) : (ts > 0 ? sub : ts);
-    m.rd = rd;
-    m.rs = rs;
-    pthread_mutex_unlock(&m.lock);
-    dds_delete_listener(lst);
-    dds_delete_qos(qs);
-    dds_delete_qos(qst);
-    if (rd < 0 || rs < 0) {
-        fprintf(stderr, "mca-monitor: cannot create readers: %s\n", dds_strretcode(rd < 0 ? rd : rs));
+    if (mca_dds_child_start(&kid, "mca-monitor", child_main, &ch, stderr) != 0) {
+        fprintf(stderr, "mca-monitor: cannot start its DDS process: %s\n", strerror(errno));
         rc = 1;
         goto out;
     }
     const int64_t t_start = now_ns();
     int64_t last_draw = 0;
     while (!g_stop) {
-        const struct timespec tick = {0, 10000000}; /* 10 ms: --count and --duration end within it */
-        nanosleep(&tick, NULL);
+        /* 10 ms: --count and --duration end within it */
+        const int prc = mca_dds_child_poll(&kid, 10, on_frame, &m);
+        if (prc < 0) {
+            rc = 1; /* its set-up failed (it said why) */
+            break;
+        }
         const int64_t now = now_ns();
-        pthread_mutex_lock(&m.lock);
-        take_all(&m, now); /* what came before the listeners were set (none after: they take it at once) */
         if (now - m.last_rx > 50000000LL) {
             apply_statuses(&m, UINT64_MAX); /* no distances for 50 ms: the newest status is current */
         }
@@ -422,15 +501,12 @@ int main(int argc, char **argv) {
             draw(&m);
             last_draw = now;
         }
-        pthread_mutex_unlock(&m.lock);
         if (done || (duration > 0.0 && (double)(now - t_start) * 1e-9 >= duration)) {
             break;
         }
     }
-    /* no listener runs after this (dds_set_listener waits for one that runs): then the rest is read */
-    dds_set_listener(rd, NULL);
-    dds_set_listener(rs, NULL);
-    pthread_mutex_lock(&m.lock);
+    /* the child takes and sends the rest, then exits */
+    mca_dds_child_stop(&kid, on_frame, &m);
 out:
     apply_statuses(&m, UINT64_MAX);
     if (m.csv != NULL && fclose(m.csv) != 0) {
@@ -448,10 +524,12 @@ out:
                 (unsigned long long)m.dropped);
     }
     fprintf(stderr, "\n");
-    free(m.lat);
-    dds_delete(pp);
-    if (dom > 0) {
-        dds_delete(dom);
+    if (kid.deaths > 0) {
+        char line[256];
+        mca_dds_child_describe(&kid, line, sizeof line);
+        fprintf(stderr, "mca-monitor: %s\n", line);
     }
+    mca_dds_child_free(&kid);
+    free(m.lat);
     return rc;
 }

@@ -12,6 +12,14 @@
  * their 4-byte encapsulation header as the writer sent them, nothing decoded or encoded again. log_time is
  * when mca-record took the sample (CLOCK_REALTIME), publish_time the writer's source timestamp.
  *
+ * The DDS participant lives in a child process (mca/dds_child.h) that sends each topic it subscribes and
+ * each sample to this process over a pipe; this process alone writes the file. A peer that crashes libddsc
+ * 0.10.2 (docs/dds.md) kills the child, not the recording: the file stays one valid MCAP, the child is
+ * restarted with mcad's capped back-off, and the gaps (no participant from a death to the next child up)
+ * are said on stderr and written into the file as the metadata record "mca-record". A latched
+ * (transient-local) sample a restarted child receives again, byte for byte the last one recorded on its
+ * topic, is not recorded twice.
+ *
  * Exit 0 after --duration or SIGINT/SIGTERM (the file is closed with its summary and index either way),
  * 1 on a run-time error, 2 on bad usage. */
 #include <errno.h>
@@ -25,8 +33,9 @@
 
 #include <dds/dds.h>
 
-#include "mca/cell.h"    /* mca_cell_load: --cell */
-#include "mca/dds_qos.h" /* mca_dds_open_participant, MCA_DDS_MAX_DOMAIN */
+#include "mca/cell.h"      /* mca_cell_load: --cell */
+#include "mca/dds_child.h" /* the participant in a supervised child */
+#include "mca/dds_qos.h"   /* mca_dds_open_participant, MCA_DDS_MAX_DOMAIN */
 #include "mca/err.h"
 #include "mca/prog.h" /* mca_prog_parse_u64, mca_prog_on_stop_signals, mca_prog_no_operands */
 #include "mcap_writer.h"
@@ -50,30 +59,68 @@ static void on_signal(int sig) {
     g_stop = 1;
 }
 
+/* The child's side: its participant, a reader per recorded topic, the pipe to the parent. */
 typedef struct topic {
     char dds_name[256]; /* "rt/cell/left/joint_states" */
-    char name[256];     /* as recorded: "/cell/left/joint_states" (ROS 2 name), or the DDS name */
     const rec_type_t *type;
     dds_entity_t reader;
-    uint16_t channel;
-    uint32_t seq;
-    uint64_t bytes;
 } topic_t;
 
 typedef struct recorder {
+    unsigned long long domain;
+    const char *config;
     dds_entity_t pp;
-    mcap_writer_t *w;
+    int fd;     /* the pipe to the parent */
+    int broken; /* the parent is gone */
     const char *patterns[MAX_PATTERNS];
     int n_patterns;
     topic_t topic[MAX_TOPICS];
     int n_topics;
     char skipped[MAX_TOPICS][256]; /* topics seen that are not recorded (said once) */
     int n_skipped;
-    uint16_t schema[32]; /* schema id per known type (index in rec_types), 0: not written yet */
     unsigned char *scratch;
     size_t scratch_cap;
-    int quiet;
 } recorder_t;
+
+/* The frames the child sends: a topic it subscribed (then its channel's metadata, rosbag2's QoS YAML), a
+ * sample (then its CDR). */
+enum { FRAME_TOPIC = 1, FRAME_SAMPLE = 2 };
+
+typedef struct topic_frame {
+    uint16_t local; /* the child's number of the topic */
+    uint16_t type;  /* index in rec_types */
+    uint8_t transient_local;
+    char dds_name[256];
+} topic_frame_t;
+
+typedef struct sample_frame {
+    uint64_t log_time, publish_time;
+    uint16_t local;
+} sample_frame_t;
+
+/* The parent's side: the file and its channels, for as long as it runs (children come and go). */
+typedef struct channel {
+    char dds_name[256];
+    char name[256]; /* as recorded: "/cell/left/joint_states" (ROS 2 name), or the DDS name */
+    const rec_type_t *type;
+    uint16_t channel;
+    uint32_t seq;
+    int transient_local;
+    unsigned char *last; /* a latched topic's last sample: a restarted child receives it again */
+    size_t last_len;
+    uint64_t child; /* the child (its start number) that sent the last sample */
+} channel_t;
+
+typedef struct sink {
+    mcap_writer_t *w;
+    channel_t ch[MAX_TOPICS];
+    int n_ch;
+    int16_t map[MAX_TOPICS]; /* the current child's topic number -> ch, set by its topic frames */
+    uint16_t schema[32];     /* schema id per known type (index in rec_types), 0: not written yet */
+    uint64_t repeats;        /* latched samples received again and not recorded twice */
+    int quiet;
+    const mca_dds_child_t *kid; /* its start count tells a restarted child's samples */
+} sink_t;
 
 static int64_t now_ns(clockid_t clk) {
     struct timespec ts;
@@ -158,7 +205,7 @@ static void qos_yaml(const dds_qos_t *q, char *out, size_t len) {
 }
 
 /* The schema of type t, written on first use; 0 on error. */
-static uint16_t schema_of(recorder_t *r, const rec_type_t *t) {
+static uint16_t schema_of(sink_t *r, const rec_type_t *t) {
     size_t n = 0;
     const rec_type_t *all = rec_types(&n);
     const size_t k = (size_t)(t - all);
@@ -176,7 +223,8 @@ static uint16_t schema_of(recorder_t *r, const rec_type_t *t) {
     return r->schema[k];
 }
 
-/* A writer was discovered: a reader for its topic if it is new, known and selected. */
+/* In the child: a writer was discovered: a reader for its topic if it is new, known and selected, and the
+ * topic to the parent. */
 static int add_topic(recorder_t *r, const dds_builtintopic_endpoint_t *ep) {
     char name[256];
     recorded_name(ep->topic_name, name, sizeof name);
@@ -205,7 +253,6 @@ static int add_topic(recorder_t *r, const dds_builtintopic_endpoint_t *ep) {
     topic_t *tp = &r->topic[r->n_topics];
     memset(tp, 0, sizeof *tp);
     snprintf(tp->dds_name, sizeof tp->dds_name, "%s", ep->topic_name);
-    snprintf(tp->name, sizeof tp->name, "%s", name);
     tp->type = t;
 
     /* the writer's reliability, durability and partition; everything it sends kept until taken */
@@ -240,20 +287,15 @@ static int add_topic(recorder_t *r, const dds_builtintopic_endpoint_t *ep) {
         skip_once(r, name, "no reader");
         return 0;
     }
-
-    const char *keys[] = {"offered_qos_profiles"};
-    const char *vals[] = {yaml};
-    const uint16_t sid = schema_of(r, t);
-    tp->channel = sid != 0 ? mcap_writer_channel(r->w, sid, name, "cdr", 1, keys, vals) : 0;
-    if (tp->channel == 0) {
-        fprintf(stderr, PROG ": %s: cannot write its channel: %s\n", name, strerror(errno));
-        return -1;
-    }
+    size_t n_types = 0;
+    topic_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.local = (uint16_t)r->n_topics;
+    f.type = (uint16_t)(t - rec_types(&n_types));
+    f.transient_local = dk != DDS_DURABILITY_VOLATILE;
+    snprintf(f.dds_name, sizeof f.dds_name, "%s", ep->topic_name);
     r->n_topics++;
-    if (!r->quiet) {
-        fprintf(stderr, PROG ": recording %s (%s)\n", name, t->ros_name);
-    }
-    return 0;
+    return mca_dds_child_send(r->fd, FRAME_TOPIC, &f, sizeof f, yaml, strlen(yaml));
 }
 
 static int discover(recorder_t *r, dds_entity_t pubs) {
@@ -279,7 +321,7 @@ static int discover(recorder_t *r, dds_entity_t pubs) {
     return rc;
 }
 
-/* Everything each reader holds, into the file. */
+/* In the child: everything each reader holds, to the parent. */
 static int drain(recorder_t *r) {
     struct ddsi_serdata *sd[BATCH];
     dds_sample_info_t info[BATCH];
@@ -306,11 +348,13 @@ static int drain(recorder_t *r) {
                     }
                     if (rc == 0) {
                         ddsi_serdata_to_ser(sd[i], 0, size, r->scratch);
-                        const uint64_t pub =
+                        sample_frame_t f;
+                        memset(&f, 0, sizeof f);
+                        f.local = (uint16_t)k;
+                        f.log_time = log_time;
+                        f.publish_time =
                             info[i].source_timestamp > 0 ? (uint64_t)info[i].source_timestamp : log_time;
-                        rc = mcap_writer_message(r->w, tp->channel, ++tp->seq, log_time, pub, r->scratch,
-                                                 size);
-                        tp->bytes += size;
+                        rc = mca_dds_child_send(r->fd, FRAME_SAMPLE, &f, sizeof f, r->scratch, size);
                     }
                 }
                 ddsi_serdata_unref(sd[i]);
@@ -323,16 +367,169 @@ static int drain(recorder_t *r) {
     return rc;
 }
 
-static void progress(const recorder_t *r, double elapsed, int final) {
+/* The child process: the participant, discovery, the samples to the parent until it asks to stop. */
+static int child_main(int fd, void *arg) {
+    recorder_t *r = arg;
+    r->fd = fd;
+    char err[320] = "";
+    dds_entity_t dom = 0;
+    if (mca_dds_open_participant((uint32_t)r->domain, r->config, &r->pp, &dom, err, sizeof err) != MCA_OK) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return 1;
+    }
+    int rc = 0;
+    const dds_entity_t pubs = dds_create_reader(r->pp, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, NULL, NULL);
+    if (pubs < 0) {
+        fprintf(stderr, PROG ": cannot read the discovered writers: %s\n", dds_strretcode(pubs));
+        rc = 1;
+    } else if (mca_dds_child_ready(fd) != 0) {
+        rc = 1;
+    }
+    while (rc == 0 && !mca_dds_child_stopping()) {
+        const struct timespec tick = {0, 10000000}; /* 10 ms */
+        nanosleep(&tick, NULL);
+        if (discover(r, pubs) != 0 || drain(r) != 0) {
+            rc = 1; /* the parent is gone */
+        }
+    }
+    if (rc == 0) {
+        rc = drain(r) != 0; /* what arrived since the last round */
+    }
+    free(r->scratch);
+    dds_delete(r->pp);
+    if (dom > 0) {
+        dds_delete(dom);
+    }
+    return rc;
+}
+
+/* In the parent: one frame of the child, into the file. */
+static int on_frame(void *ctx, uint32_t kind, const void *data, size_t len) {
+    sink_t *s = ctx;
+    if (kind == FRAME_TOPIC && len >= sizeof(topic_frame_t)) {
+        topic_frame_t f;
+        memcpy(&f, data, sizeof f);
+        f.dds_name[sizeof f.dds_name - 1] = '\0';
+        size_t n_types = 0;
+        const rec_type_t *all = rec_types(&n_types);
+        if (f.local >= MAX_TOPICS) {
+            return 0;
+        }
+        s->map[f.local] = -1; /* until it has its channel */
+        if (f.type >= n_types) {
+            return 0;
+        }
+        int k = 0;
+        while (k < s->n_ch && strcmp(s->ch[k].dds_name, f.dds_name) != 0) {
+            k++;
+        }
+        if (k == s->n_ch) { /* first seen: its channel (a restarted child's topics have theirs) */
+            if (s->n_ch == MAX_TOPICS) {
+                return 0;
+            }
+            channel_t *c = &s->ch[k];
+            memset(c, 0, sizeof *c);
+            snprintf(c->dds_name, sizeof c->dds_name, "%s", f.dds_name);
+            recorded_name(f.dds_name, c->name, sizeof c->name);
+            c->type = &all[f.type];
+            c->transient_local = f.transient_local;
+            char yaml[1024];
+            const size_t ny = len - sizeof f < sizeof yaml - 1 ? len - sizeof f : sizeof yaml - 1;
+            memcpy(yaml, (const unsigned char *)data + sizeof f, ny);
+            yaml[ny] = '\0';
+            const char *keys[] = {"offered_qos_profiles"};
+            const char *vals[] = {yaml};
+            const uint16_t sid = schema_of(s, c->type);
+            c->channel = sid != 0 ? mcap_writer_channel(s->w, sid, c->name, "cdr", 1, keys, vals) : 0;
+            if (c->channel == 0) {
+                fprintf(stderr, PROG ": %s: cannot write its channel: %s\n", c->name, strerror(errno));
+                return -1;
+            }
+            s->n_ch++;
+            if (!s->quiet) {
+                fprintf(stderr, PROG ": recording %s (%s)\n", c->name, c->type->ros_name);
+            }
+        }
+        s->map[f.local] = (int16_t)k;
+    } else if (kind == FRAME_SAMPLE && len >= sizeof(sample_frame_t)) {
+        sample_frame_t f;
+        memcpy(&f, data, sizeof f);
+        if (f.local >= MAX_TOPICS || s->map[f.local] < 0) {
+            return 0;
+        }
+        channel_t *c = &s->ch[s->map[f.local]];
+        const unsigned char *cdr = (const unsigned char *)data + sizeof f;
+        const size_t size = len - sizeof f;
+        if (c->transient_local) {
+            /* the first sample a restarted child got of a latched topic: the writer's history again, not
+             * recorded twice if it is the sample recorded last (a writer may well send one value twice) */
+            const int first_of_child = c->child != s->kid->starts;
+            c->child = s->kid->starts;
+            if (first_of_child && c->last != NULL && c->last_len == size && memcmp(c->last, cdr, size) == 0) {
+                s->repeats++;
+                return 0;
+            }
+            unsigned char *p = realloc(c->last, size > 0 ? size : 1);
+            if (p != NULL) {
+                memcpy(p, cdr, size);
+                c->last = p;
+                c->last_len = size;
+            }
+        }
+        return mcap_writer_message(s->w, c->channel, ++c->seq, f.log_time, f.publish_time, cdr, size);
+    }
+    return 0;
+}
+
+static void progress(const sink_t *s, const mca_dds_child_t *kid, double elapsed, int final) {
     char line[4096];
     int at = snprintf(line, sizeof line, PROG ": %s%.1f s, %llu messages, %.2f MB", final ? "recorded " : "",
-                      elapsed, (unsigned long long)mcap_writer_messages(r->w),
-                      (double)mcap_writer_bytes(r->w) / 1e6);
-    for (int k = 0; k < r->n_topics && at > 0 && (size_t)at < sizeof line; ++k) {
-        at += snprintf(line + at, sizeof line - (size_t)at, "%s %s %u", k == 0 ? ":" : ",", r->topic[k].name,
-                       r->topic[k].seq);
+                      elapsed, (unsigned long long)mcap_writer_messages(s->w),
+                      (double)mcap_writer_bytes(s->w) / 1e6);
+    if (kid->deaths > 0 && at > 0 && (size_t)at < sizeof line) {
+        at +=
+            snprintf(line + at, sizeof line - (size_t)at, " (DDS child died %llu times, %u gaps %.2f s)",
+                     (unsigned long long)kid->deaths, kid->n_gaps + (unsigned)kid->in_gap, kid->gap_total_s);
+    }
+    for (int k = 0; k < s->n_ch && at > 0 && (size_t)at < sizeof line; ++k) {
+        at += snprintf(line + at, sizeof line - (size_t)at, "%s %s %u", k == 0 ? ":" : ",", s->ch[k].name,
+                       s->ch[k].seq);
     }
     fprintf(stderr, "%s\n", line);
+}
+
+/* The gaps into the file (metadata "mca-record": times as log_time, CLOCK_REALTIME ns) and on stderr. */
+static int write_gaps(sink_t *s, const mca_dds_child_t *kid, int64_t mono_to_real_ns, int64_t t0_mono) {
+    enum { KEYS = 4 + MCA_DDS_CHILD_GAPS };
+    static char kbuf[KEYS][32], vbuf[KEYS][96];
+    const char *keys[KEYS], *vals[KEYS];
+    size_t n = 0;
+    snprintf(kbuf[n], sizeof kbuf[n], "dds_child_deaths");
+    snprintf(vbuf[n++], sizeof vbuf[0], "%llu", (unsigned long long)kid->deaths);
+    snprintf(kbuf[n], sizeof kbuf[n], "gaps");
+    snprintf(vbuf[n++], sizeof vbuf[0], "%u", kid->n_gaps);
+    snprintf(kbuf[n], sizeof kbuf[n], "gap_seconds");
+    snprintf(vbuf[n++], sizeof vbuf[0], "%.6f", kid->gap_total_s);
+    snprintf(kbuf[n], sizeof kbuf[n], "latched_repeats_skipped");
+    snprintf(vbuf[n++], sizeof vbuf[0], "%llu", (unsigned long long)s->repeats);
+    for (uint32_t g = 0; g < kid->n_gaps && g < MCA_DDS_CHILD_GAPS; ++g) {
+        const mca_dds_child_gap_t *x = &kid->gaps[g];
+        const int64_t from = (int64_t)(x->from_s * 1e9) + mono_to_real_ns;
+        const int64_t to = (int64_t)(x->to_s * 1e9) + mono_to_real_ns;
+        snprintf(kbuf[n], sizeof kbuf[n], "gap_%u", g + 1);
+        /* from and to (log_time ns), deaths in it */
+        snprintf(vbuf[n++], sizeof vbuf[0], "%lld %lld %u", (long long)from, (long long)to, x->deaths);
+        fprintf(stderr,
+                PROG ": gap %u: no DDS participant from %.2f s to %.2f s of the recording (%.2f s, %u "
+                     "death(s))\n",
+                g + 1, x->from_s - (double)t0_mono * 1e-9, x->to_s - (double)t0_mono * 1e-9,
+                x->to_s - x->from_s, x->deaths);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        keys[i] = kbuf[i];
+        vals[i] = vbuf[i];
+    }
+    return mcap_writer_metadata(s->w, "mca-record", n, keys, vals);
 }
 
 static int parse_seconds(const char *s, const char *opt, double min, double *out) {
@@ -348,6 +545,7 @@ static int parse_seconds(const char *s, const char *opt, double min, double *out
 
 int main(int argc, char **argv) {
     static recorder_t r;
+    static sink_t sink;
     static mca_cell_t cell;
     unsigned long long domain = 0;
     int have_domain = 0;
@@ -397,7 +595,7 @@ int main(int argc, char **argv) {
             }
             break;
         case 'q':
-            r.quiet = 1;
+            sink.quiet = 1;
             break;
         case 'h':
             usage(stdout);
@@ -441,39 +639,40 @@ int main(int argc, char **argv) {
         }
     }
     mca_prog_on_stop_signals(on_signal);
-    char err[320] = "";
-    dds_entity_t dom = 0;
-    if (mca_dds_open_participant((uint32_t)domain, config, &r.pp, &dom, err, sizeof err) != MCA_OK) {
-        fprintf(stderr, PROG ": %s\n", err);
-        return 1;
+    r.domain = domain;
+    r.config = config;
+    for (int k = 0; k < MAX_TOPICS; ++k) {
+        sink.map[k] = -1;
     }
     int rc = 0;
-    r.w = mcap_writer_open(out, "ros2", "mca-record", 1u << 20);
-    if (r.w == NULL) {
+    sink.w = mcap_writer_open(out, "ros2", "mca-record", 1u << 20);
+    if (sink.w == NULL) {
         fprintf(stderr, PROG ": cannot write '%s': %s\n", out, strerror(errno));
-        rc = 1;
-        goto out;
+        return 1;
     }
-    const dds_entity_t pubs = dds_create_reader(r.pp, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, NULL, NULL);
-    if (pubs < 0) {
-        fprintf(stderr, PROG ": cannot read the discovered writers: %s\n", dds_strretcode(pubs));
+    static mca_dds_child_t kid;
+    sink.kid = &kid;
+    if (mca_dds_child_start(&kid, PROG, child_main, &r, stderr) != 0) {
+        fprintf(stderr, PROG ": cannot start its DDS process: %s\n", strerror(errno));
         rc = 1;
     }
     const int64_t t0 = now_ns(CLOCK_MONOTONIC);
+    const int64_t mono_to_real = now_ns(CLOCK_REALTIME) - t0;
     int64_t next_progress = t0 + (int64_t)(every * 1e9);
     while (rc == 0 && !g_stop) {
-        const struct timespec tick = {0, 10000000}; /* 10 ms */
-        nanosleep(&tick, NULL);
-        if (discover(&r, pubs) != 0 || drain(&r) != 0) {
-            fprintf(stderr, PROG ": write error on '%s': %s\n", out, strerror(errno));
-            rc = 1;
+        const int prc = mca_dds_child_poll(&kid, 10, on_frame, &sink);
+        if (prc != 0) {
+            if (prc > 0) {
+                fprintf(stderr, PROG ": write error on '%s': %s\n", out, strerror(errno));
+            }
+            rc = 1; /* a write error, or the child's set-up failed (it said why) */
             break;
         }
         const int64_t now = now_ns(CLOCK_MONOTONIC);
         if (every > 0.0 && now >= next_progress) {
-            progress(&r, (double)(now - t0) * 1e-9, 0);
+            progress(&sink, &kid, (double)(now - t0) * 1e-9, 0);
             next_progress += (int64_t)(every * 1e9);
-            if (mcap_writer_flush(r.w) != 0) { /* what was recorded survives a crash of this process */
+            if (mcap_writer_flush(sink.w) != 0) { /* what was recorded survives a crash of this process */
                 fprintf(stderr, PROG ": write error on '%s': %s\n", out, strerror(errno));
                 rc = 1;
             }
@@ -482,20 +681,22 @@ int main(int argc, char **argv) {
             break;
         }
     }
-    if (rc == 0 && drain(&r) != 0) { /* what arrived since the last round */
-        rc = 1;
-    }
+    mca_dds_child_stop(&kid, on_frame, &sink); /* it takes what arrived and sends it */
     const double elapsed = (double)(now_ns(CLOCK_MONOTONIC) - t0) * 1e-9;
-    progress(&r, elapsed, 1);
-    if (mcap_writer_close(r.w) != 0) {
+    progress(&sink, &kid, elapsed, 1);
+    if (kid.deaths > 0 || sink.repeats > 0) {
+        char line[256];
+        mca_dds_child_describe(&kid, line, sizeof line);
+        fprintf(stderr, PROG ": %s; %llu latched samples received again, not recorded twice\n", line,
+                (unsigned long long)sink.repeats);
+    }
+    if (write_gaps(&sink, &kid, mono_to_real, t0) != 0 || mcap_writer_close(sink.w) != 0) {
         fprintf(stderr, PROG ": write error on '%s': %s\n", out, strerror(errno));
         rc = 1;
     }
-out:
-    free(r.scratch);
-    dds_delete(r.pp);
-    if (dom > 0) {
-        dds_delete(dom);
+    for (int k = 0; k < sink.n_ch; ++k) {
+        free(sink.ch[k].last);
     }
+    mca_dds_child_free(&kid);
     return rc;
 }

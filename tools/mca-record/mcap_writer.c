@@ -18,6 +18,8 @@ enum {
     OP_MESSAGE_INDEX = 0x07,
     OP_CHUNK_INDEX = 0x08,
     OP_STATISTICS = 0x0B,
+    OP_METADATA = 0x0C,
+    OP_METADATA_INDEX = 0x0D,
     OP_SUMMARY_OFFSET = 0x0E,
     OP_DATA_END = 0x0F,
 };
@@ -154,6 +156,8 @@ struct mcap_writer {
     chunk_index_t *chunks;
     size_t n_chunks, cap_chunks;
     uint64_t messages, t_first, t_last;
+    buf_t metadata_index; /* metadata index records, for the summary */
+    uint32_t n_metadata;
 };
 
 static void emit(mcap_writer_t *w, const void *p, size_t n) {
@@ -412,6 +416,39 @@ uint64_t mcap_writer_bytes(const mcap_writer_t *w) {
     return w->pos + w->chunk.n;
 }
 
+int mcap_writer_metadata(mcap_writer_t *w, const char *name, size_t n, const char *const *keys,
+                         const char *const *values) {
+    if (write_chunk(w) != 0) { /* a metadata record stands between chunks, not in one */
+        return -1;
+    }
+    buf_t b = {0};
+    const size_t at = rec_begin(&b, OP_METADATA);
+    put_str(&b, name);
+    size_t map = 0;
+    for (size_t i = 0; i < n; ++i) {
+        map += 8 + strlen(keys[i]) + strlen(values[i]);
+    }
+    put_u32(&b, (uint32_t)map);
+    for (size_t i = 0; i < n; ++i) {
+        put_str(&b, keys[i]);
+        put_str(&b, values[i]);
+    }
+    rec_end(&b, at);
+    const uint64_t offset = w->pos, length = b.n;
+    emit_buf(w, &b);
+    free(b.p);
+    const size_t ix = rec_begin(&w->metadata_index, OP_METADATA_INDEX);
+    put_u64(&w->metadata_index, offset);
+    put_u64(&w->metadata_index, length);
+    put_str(&w->metadata_index, name);
+    rec_end(&w->metadata_index, ix);
+    w->n_metadata++;
+    if (w->metadata_index.oom) {
+        w->error = ENOMEM;
+    }
+    return w->error ? failed(w) : 0;
+}
+
 /* One summary offset record for the group [start, end) of records with opcode op. */
 static void summary_offset(buf_t *b, uint8_t op, uint64_t start, uint64_t end) {
     const size_t at = rec_begin(b, OP_SUMMARY_OFFSET);
@@ -442,7 +479,7 @@ int mcap_writer_close(mcap_writer_t *w) {
     put_u16(&b, w->n_schemas);
     put_u32(&b, w->n_ch);
     put_u32(&b, 0); /* attachments */
-    put_u32(&b, 0); /* metadata */
+    put_u32(&b, w->n_metadata);
     put_u32(&b, (uint32_t)w->n_chunks);
     put_u64(&b, w->messages ? w->t_first : 0);
     put_u64(&b, w->messages ? w->t_last : 0);
@@ -471,6 +508,8 @@ int mcap_writer_close(mcap_writer_t *w) {
         put_u64(&b, ci->size);
         rec_end(&b, at);
     }
+    const uint64_t s_mi = s0 + b.n;
+    buf_put(&b, w->metadata_index.p, w->metadata_index.n);
     const uint64_t s_end = s0 + b.n;
     if (w->n_schemas > 0) {
         summary_offset(&b, OP_SCHEMA, s0, s_ch);
@@ -480,7 +519,10 @@ int mcap_writer_close(mcap_writer_t *w) {
     }
     summary_offset(&b, OP_STATISTICS, s_stat, s_ci);
     if (w->n_chunks > 0) {
-        summary_offset(&b, OP_CHUNK_INDEX, s_ci, s_end);
+        summary_offset(&b, OP_CHUNK_INDEX, s_ci, s_mi);
+    }
+    if (w->n_metadata > 0) {
+        summary_offset(&b, OP_METADATA_INDEX, s_mi, s_end);
     }
     /* footer: the summary CRC covers the summary and the footer up to its summary_offset_start field */
     put_u8(&b, OP_FOOTER);
@@ -510,6 +552,7 @@ int mcap_writer_close(mcap_writer_t *w) {
     free(w->ch);
     free(w->chunks);
     free(w->schemas.p);
+    free(w->metadata_index.p);
     free(w->chunk.p);
     free(w);
     errno = error;

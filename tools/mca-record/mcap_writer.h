@@ -30,6 +30,11 @@ uint16_t mcap_writer_channel(mcap_writer_t *w, uint16_t schema_id, const char *t
 int mcap_writer_message(mcap_writer_t *w, uint16_t ch, uint32_t sequence, uint64_t log_time,
                         uint64_t publish_time, const void *data, size_t len);
 
+/** A metadata record (name, n key/value pairs) between chunks, indexed in the summary: what the recorder
+ *  knows of the recording itself (its gaps). 0 or -1 (write error, errno set). */
+int mcap_writer_metadata(mcap_writer_t *w, const char *name, size_t n, const char *const *keys,
+                         const char *const *values);
+
 /** Writes the open chunk (if it holds messages) and flushes the file: what was recorded so far survives a
  *  crash of the recorder (the file then lacks its summary and footer, `mcap recover` mends it). */
 int mcap_writer_flush(mcap_writer_t *w);

@@ -34,12 +34,13 @@ import time
 
 import yaml
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cyclic_late  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 LOST_THR = 0.1
-CTRL_LIMIT_NS = 250000  # a controller tick over this ...
-CYC_LATE_US = 100       # ... is explained by a cyclictest wake-up this late ...
-CYC_WINDOW_NS = 2000000  # ... due within this of the tick's wake-up
+CTRL_LIMIT_NS = 250000  # a controller tick over this is judged by cyclic_late (a late cyclictest wake-up near it)
 
 
 def path_end(p, duration):
@@ -95,34 +96,6 @@ class CsvTail:
         return out
 
 
-def run_cyclictest_launch(n_ms, cpu, prio, path):
-    """cyclictest launched between whole seconds (its first wake-up due at the next whole second + 250 us of
-    CLOCK_MONOTONIC); returns (process, launch ns)."""
-    time.sleep((1.1 - time.clock_gettime(time.CLOCK_MONOTONIC) % 1) % 1)
-    launch = time.clock_gettime_ns(time.CLOCK_MONOTONIC)
-    f = open(path, "w")
-    p = subprocess.Popen(["cyclictest", "-m", "-p", str(prio), "-a", str(cpu), "-i", "1000", "-d", "0", "--secaligned=250",
-                          "-l", str(n_ms), "-q", "-v"], stdout=f, stderr=subprocess.STDOUT)
-    return p, launch, f
-
-
-def cyc_wakeups(path, launch):
-    """[(due ns, latency us)] of cyclictest -v: wake-up i due at t0 + i * its interval (the "Thread 0 Interval:"
-    line; cyclictest 2.40 prints thread 0's interval plus -d's distance, default 500 us, under -v though it runs
-    at the given one: -d 0 is passed so that the printed interval is the real one)."""
-    t0 = (launch // 10**9 + 1) * 10**9 + 250000
-    out, step = [], 10**6
-    with open(path, errors="replace") as f:
-        for line in f:
-            m = re.match(r"^Thread 0 Interval:\s*(\d+)", line)
-            if m:
-                step = int(m.group(1)) * 1000
-            m = re.match(r"^\s*0:\s*(\d+):\s*(\d+)\s*$", line)
-            if m:
-                out.append((t0 + int(m.group(1)) * step, int(m.group(2))))
-    return out
-
-
 def run_rt(task, a, wd):
     scn_path = task["scenario"]
     cell = os.path.join(wd, "cell_rt.yaml")
@@ -136,7 +109,7 @@ def run_rt(task, a, wd):
     for x in (csv_path, hist, err, cyc_path):  # an earlier run's CSV would be read as this one's
         if os.path.exists(x):
             os.remove(x)
-    cyc, launch, cf = run_cyclictest_launch(int((max_t + 30) * 1000), a.cpu, a.priority, cyc_path)
+    cyc, launch, cf = cyclic_late.launch(int((max_t + 30) * 1000), a.cpu, a.priority, cyc_path)
     with open(os.path.join(wd, "rt_cyclictest_launch_ns.txt"), "w") as f:
         f.write("%d\n" % launch)
     time.sleep(1.2)  # past cyclictest's first wake-up (the next whole second): it covers mcad's whole span
@@ -167,13 +140,7 @@ def run_rt(task, a, wd):
             time.sleep(0.2)
         rc = p.wait()
     time.sleep(0.1)
-    cyc.send_signal(signal.SIGINT)
-    try:
-        cyc.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        cyc.kill()
-        cyc.wait()
-    cf.close()
+    cyclic_late.stop(cyc, cf)
     # the whole CSV again for the per-tick compute times (the tail above only watched)
     slow, n_rows, ctrl = [], 0, []
     with open(csv_path, newline="") as f:
@@ -183,14 +150,11 @@ def run_rt(task, a, wd):
             ctrl.append(cns)
             if cns > CTRL_LIMIT_NS:
                 slow.append((int(r["wake_ns"]), cns, float(r["t"])))
-    wk = cyc_wakeups(cyc_path, launch)
-    late = [d for d, us in wk if us >= CYC_LATE_US]
-    unexplained = []
-    for w, cns, t in slow:
-        if not any(abs(d - w) <= CYC_WINDOW_NS for d in late):
-            unexplained.append(dict(t=t, compute_us=round(cns / 1e3, 1)))
+    wk = cyclic_late.wakeups(cyc_path, launch)
+    late = cyclic_late.late_dues(wk)
+    unexplained = [dict(t=t, compute_us=round(cns / 1e3, 1)) for w, cns, t in slow if not cyclic_late.explained(w, late)]
     m = re.search(r"due from (\d+) to (\d+) ns", open(hist).read()) if os.path.exists(hist) else None
-    covered = bool(m and wk and wk[0][0] <= int(m.group(1)) and wk[-1][0] >= int(m.group(2)))
+    covered = bool(m) and cyclic_late.covers(wk, int(m.group(1)), int(m.group(2)))
     se = open(err, errors="replace").read()
 
     def grab(rx, cast=int, default=None):

@@ -37,6 +37,7 @@
 #include "mca/armdist.h"
 #include "mca/chain.h"
 #include "mca/coord.h"
+#include "mca/path_rate.h"
 #include "mca/limits.h"
 #include "mca/path.h"
 #include "mca/pdnn.h"
@@ -291,16 +292,21 @@ typedef struct mca_controller {
     int brake_row_key[MCA_QP_MAX_INEQ], n_brake_row_key;
     /* mca-ts: who passes first where fixed paths meet (mca_controller_plan; empty without a plan) */
     mca_coord_t coord;
+    /* mca-ts: each path-first arm's path-rate limit, sigma's own stop bound (mca_controller_plan; n = 0:
+     * none) */
+    mca_path_rate_t rate[MCA_MAX_ARMS];
 } mca_controller_t;
 
 /** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
 int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg);
 
 /**
- * mca-ts with ts.coordinate: plan the order in which arms on fixed paths pass each other (mca/coord.h), from
- * the configuration the task starts at (the paths are anchored as the first tick will anchor them). Call it
- * after mca_controller_init (or _reset) and before the first tick; without it the arms are not ordered and
- * deadlocks are left to the back-off. Start-up only: work is caller's scratch (sizeof about 3 MB).
+ * mca-ts: each path-first arm's path-rate limit (sigma's own stop bound, mca/path_rate.h) and, with
+ * ts.coordinate, the order in which arms on fixed paths pass each other (mca/coord.h), from the configuration
+ * the task starts at (the paths are anchored as the first tick will anchor them). Call it after
+ * mca_controller_init (or _reset) and before the first tick; without it no path rate is limited by the
+ * path's curvature, the arms are not ordered and deadlocks are left to the back-off. Start-up only: work is
+ * caller's scratch (sizeof about 3 MB).
  * @retval MCA_OK (nothing to plan included), MCA_EINVAL
  */
 int mca_controller_plan(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS], mca_coord_work_t *work);

@@ -60,6 +60,7 @@ typedef struct mca_coord_work {
     double pts[MCA_MAX_ARMS][MCA_COORD_MAX_CELLS][MCA_MAX_POINTS][3]; /**< predicted link points per cell */
     float dist[MCA_COORD_MAX_CELLS][MCA_COORD_MAX_CELLS];             /**< least distance per cell [m] */
     unsigned char cell[MCA_COORD_MAX_CELLS][MCA_COORD_MAX_CELLS];     /**< blocked bit, predecessor */
+    double q[MCA_COORD_MAX_CELLS][MCA_MAX_DOF]; /**< one arm's predicted configurations */
 } mca_coord_work_t;
 
 /** What mca_coord_plan needs of one arm. */
@@ -69,6 +70,13 @@ typedef struct mca_coord_arm {
     const double *q0;       /**< configuration at the start */
     double K;               /**< position feedback gain of the prediction [1/s] */
 } mca_coord_arm_t;
+
+/**
+ * The arm's configuration at the start of each cell of path time (k h, k < n), predicted alone: damped
+ * resolved rate towards its path (gain K, no other arm, no rows), joint limits clamped. Start-up only.
+ * @retval MCA_OK, MCA_EINVAL (NULL, h <= 0, n outside [1, MCA_COORD_MAX_CELLS], a configuration FK refuses)
+ */
+int mca_coord_predict(const mca_coord_arm_t *arm, double h, int n, double q_out[][MCA_MAX_DOF]);
 
 /**
  * Plan every pair of coordinated arms. d_block: the distance the plan keeps between the predicted arms;
