@@ -111,6 +111,8 @@ int mca_daemon_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon
     mca_hist_reset(&d->compute_ab[1]);
     d->min_d = INFINITY;
     d->min_d_t = 0.0;
+    d->body_margin = d->body_d = INFINITY;
+    d->body_pair[0] = d->body_pair[1] = d->body_pair[2] = -1;
     int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
     if (rc == MCA_OK && opts->config_hook) {
         opts->config_hook(&d->ccfg, opts->config_hook_arg);

@@ -158,6 +158,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             goto out;
         }
         csv_layout.n_arms = na;
+        csv_layout.body_cols = cfg->n_bodies > 0;
         for (int a = 0; a < na; a++) {
             csv_layout.dof[a] = cfg->chain[a].dof;
         }
