@@ -55,10 +55,19 @@ static double body_sphere(const mca_body_t *b, double c[3]) {
     }
 }
 
-/* A lower bound on the surface distance of link capsule cap (midpoint mid, half length half) to the body
- * whose sphere is (c, R): -INFINITY for the half-space (always measured; it costs ~30 ns). */
-static double lower_bound(const double mid[3], double half, double r, const double c[3], double R) {
-    return R < 0.0 ? -INFINITY : mca_v3_dist(mid, c) - half - r - R;
+/* A lower bound on the surface distance of link capsule cap to the body whose sphere is (c, R): the sphere's
+ * distance to the capsule; -INFINITY for the half-space (always measured; it costs ~30 ns). */
+static double lower_bound(const mca_capsule_t *cap, const double c[3], double R) {
+    if (R < 0.0) {
+        return -INFINITY;
+    }
+    double u[3], w[3];
+    mca_v3_sub(u, cap->b, cap->a);
+    mca_v3_sub(w, c, cap->a);
+    const double uu = mca_v3_dot(u, u);
+    const double t = uu > 0.0 ? fmax(0.0, fmin(1.0, mca_v3_dot(w, u) / uu)) : 0.0;
+    mca_v3_axpy(w, w, -t, u); /* c - (a + t u) */
+    return mca_v3_norm(w) - cap->radius - R;
 }
 
 int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
@@ -82,12 +91,7 @@ int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
                 const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
                                            {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
                                            chain[a]->link_radius[l]};
-                double mid[3];
-                for (int i = 0; i < 3; i++) {
-                    mid[i] = 0.5 * (cap.a[i] + cap.b[i]);
-                }
-                if (!(lower_bound(mid, 0.5 * mca_v3_dist(cap.a, cap.b), cap.radius, c, R) - fb->clearance <
-                      out->margin)) {
+                if (!(lower_bound(&cap, c, R) - fb->clearance < out->margin)) {
                     continue; /* cannot be the least (NaN: measured, and the distance rejects it) */
                 }
                 mca_body_dist_t r;
@@ -181,11 +185,6 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
         const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
                                    {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
                                    ch->link_radius[l]};
-        double mid[3];
-        for (int i = 0; i < 3; i++) {
-            mid[i] = 0.5 * (cap.a[i] + cap.b[i]);
-        }
-        const double half = 0.5 * mca_v3_dist(cap.a, cap.b);
         for (int k = 0; k < n_bodies; k++) {
             const mca_fixed_body_t *fb = &bodies[k];
             if (fb->allow[a] & (1u << l)) {
@@ -203,7 +202,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             }
             double c[3];
             const double R = body_sphere(&fb->body, c);
-            if (!(lower_bound(mid, half, cap.radius, c, R) <= d_cut)) {
+            if (!(lower_bound(&cap, c, R) <= d_cut)) {
                 continue;
             }
             mca_body_dist_t r;
