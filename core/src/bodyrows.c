@@ -49,7 +49,8 @@ static double body_sphere(const mca_body_t *b, double c[3]) {
         return mca_v3_norm(b->u.box.half);
     case MCA_BODY_CYLINDER:
         mca_v3_set(c, b->u.cylinder.centre);
-        return hypot(b->u.cylinder.half_len, b->u.cylinder.radius);
+        return sqrt(b->u.cylinder.half_len * b->u.cylinder.half_len +
+                    b->u.cylinder.radius * b->u.cylinder.radius);
     default:
         return -1.0;
     }
@@ -78,7 +79,7 @@ int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
     out->valid = 0;
     out->margin = out->d = INFINITY;
     out->arm = out->link = out->body = out->kind = -1;
-    for (int k = 0; k < n_bodies; k++) {
+    for (int k = 0; k < n_bodies && k < MCA_MAX_BODIES; k++) {
         const mca_fixed_body_t *fb = &bodies[k];
         double c[3];
         const double R = body_sphere(&fb->body, c);
@@ -164,7 +165,8 @@ static double body_bound(const mca_scheme_params_t *pb, double d, double t_stop)
  * (the link's fastest point moves at most `speed`: sum_j max|qdot_j| |p - o_j|, largest at an end). */
 static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mca_kin_t *kn, int a,
                      const mca_fixed_body_t *bodies, int n_bodies, const mca_scheme_params_t *pb,
-                     double t_stop, mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
+                     const double (*sc)[3], const double *sr, double t_stop,
+                     mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
     const int dof = ch->dof;
     double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF];
     for (int j = 0; j < dof; j++) {
@@ -200,9 +202,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             } else if (t_stop > 0.0) {
                 d_cut = fmax(d_cut, mca_scheme_rows_d1(bp) + t_stop * speed + 1e-9);
             }
-            double c[3];
-            const double R = body_sphere(&fb->body, c);
-            if (!(lower_bound(&cap, c, R) <= d_cut)) {
+            if (!(lower_bound(&cap, sc[k], sr[k]) <= d_cut)) {
                 continue;
             }
             mca_body_dist_t r;
@@ -260,8 +260,10 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
         return MCA_EINVAL;
     }
     mca_scheme_params_t pb[MCA_MAX_BODIES];
+    double sc[MCA_MAX_BODIES][3], sr[MCA_MAX_BODIES]; /* each body's bounding sphere */
     for (int k = 0; k < n_bodies; k++) {
         mca_body_band(p, bodies[k].clearance, &pb[k]);
+        sr[k] = body_sphere(&bodies[k].body, sc[k]);
     }
     const size_t row_bytes = sizeof(double) * (size_t)qp->n;
     for (int a = 0; a < n_arms; a++) {
@@ -273,7 +275,8 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
         const double t_stop = mca_scheme_stop_time(ch, dec ? dec[a] : 0.0);
         mca_body_witness_t own[MCA_MAX_LINKS][MCA_BODY_PAIRS];
         mca_body_witness_t(*ls)[MCA_BODY_PAIRS] = lists ? lists[a] : own;
-        int rc = arm_lists(qp, vo, ch, &kin[a], a, bodies, n_bodies, pb, t_stop, ls);
+        int rc =
+            arm_lists(qp, vo, ch, &kin[a], a, bodies, n_bodies, pb, (const double(*)[3])sc, sr, t_stop, ls);
         if (rc != MCA_OK) {
             return rc;
         }
