@@ -113,6 +113,7 @@ int main(int argc, char **argv) {
             continue;
         } else if (!strcmp(a, "--no-coordinate")) {
             o.no_coordinate = 1;
+            continue;
         } else if (!strcmp(a, "--no-body-rows")) {
             o.no_body_rows = 1;
             continue;
