@@ -67,6 +67,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->fault_residual = 1e-6;
     cfg->eq_tol = 1e-4;
     cfg->fault_distance = 1;
+    cfg->body_rows = 1;
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e3;
     cfg->ts.w_path = 1e4;
@@ -104,9 +105,19 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
             return MCA_EINVAL;
         }
     }
+    if (cfg->n_bodies < 0 || cfg->n_bodies > MCA_MAX_BODIES) {
+        return MCA_EINVAL;
+    }
+    for (int k = 0; k < cfg->n_bodies; k++) {
+        if (mca_body_check(&cfg->body[k]) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
     memset(ctrl, 0, sizeof *ctrl);
     ctrl->cfg = *cfg;
     ctrl->cfg.sp.collision = uses_rows(cfg->scheme);
+    /* the fixed bodies' rows keep slots after each arm's own (none without bodies: the layout of before) */
+    ctrl->cfg.sp.body_pairs = cfg->n_bodies > 0 && cfg->body_rows ? MCA_BODY_PAIRS : 0;
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;
@@ -277,6 +288,12 @@ const char *mca_ctrl_fault_format(const mca_ctrl_fault_why_t *w, char *buf, size
         break;
     case MCA_WHY_INJECTED:
         snprintf(buf, len, "injected fault %s at t = %.3f s", mca_ctrl_fault_name(i[0]), x[0]);
+        break;
+    case MCA_WHY_BELOW_CLEARANCE:
+    case MCA_WHY_BELOW_CLEARANCE_NEXT:
+        snprintf(buf, len, "distance %.4f m %s clearance %.4f m of fixed body %d (arm %d link %d)", x[0],
+                 w->why == MCA_WHY_BELOW_CLEARANCE ? "<" : "predicted to fall below the", x[1], i[2], i[0],
+                 i[1]);
         break;
     default:
         buf[0] = 0;

@@ -25,7 +25,15 @@ static inline mca_ctrl_fault_why_t why_distance(int why, const mca_tick_info_t *
                                   .x = {info->min_distance, d1}};
 }
 
+/* A fixed body's distance fault: the pair and how near (x[1] its clearance). */
+static inline mca_ctrl_fault_why_t why_clearance(int why, const mca_tick_info_t *info) {
+    return (mca_ctrl_fault_why_t){.why = why,
+                                  .i = {info->body_arm, info->body_link, info->body_index},
+                                  .x = {info->body_distance, info->body_distance - info->body_margin}};
+}
+
 /* Latch a fault (the first wins) as a code and numbers: no formatting here, on the 1 kHz path. */
+
 static inline void raise_fault(mca_controller_t *ctrl, int code, mca_ctrl_fault_why_t why) {
     if (ctrl->fault != MCA_CTRL_FAULT_NONE) {
         return;

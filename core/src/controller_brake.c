@@ -76,6 +76,11 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     rc = mca_scheme_near_rows(qp, &si, na, chains, ctrl->kin,
                               (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near, &sp,
                               row_dec, row_priority);
+    if (rc == MCA_OK) {
+        /* and the fixed bodies' (the stop bound is mca-ts's, as the arms') */
+        rc = mca_body_rows(qp, &si, na, chains, ctrl->kin, cfg->body, cfg->n_bodies, &sp, row_dec,
+                           ctrl->body_near);
+    }
     if (rc != MCA_OK) {
         return rc;
     }

@@ -217,6 +217,26 @@ void mca_ctrl__near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_
 }
 
 /* Per link of every arm: the closest link of any other arm, and the global minimum. */
+/* The fixed bodies: the arm-body pair of least margin (d - clearance) into the tick report. */
+static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
+    const mca_chain_t *chains[MCA_MAX_ARMS];
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        chains[a] = &ctrl->cfg.chain[a];
+    }
+    mca_body_nearest_t bn;
+    const int rc =
+        mca_body_nearest(ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body, ctrl->cfg.n_bodies, &bn);
+    info->body_distance = bn.d;
+    info->body_margin = bn.margin;
+    info->body_arm = bn.arm;
+    info->body_link = bn.link;
+    info->body_index = bn.body;
+    info->body_kind = bn.kind;
+    mca_v3_set(info->body_p, bn.valid ? bn.p : (const double[3]){0.0, 0.0, 0.0});
+    mca_v3_set(info->body_q, bn.valid ? bn.q : (const double[3]){0.0, 0.0, 0.0});
+    return rc;
+}
+
 int mca_ctrl__distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     const int na = ctrl->cfg.n_arms;
     for (int a = 0; a < na; a++) {
@@ -268,5 +288,5 @@ int mca_ctrl__distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
             info->link_distance[a][l] = ctrl->crit[a][l].d;
         }
     }
-    return MCA_OK;
+    return body_distances(ctrl, info);
 }

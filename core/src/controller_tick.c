@@ -100,6 +100,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
     info->brake_fallback = 0;
     info->task_t = ctrl && ctrl->started ? t - ctrl->t_start : 0.0;
     info->min_distance = INFINITY;
+    info->body_distance = info->body_margin = INFINITY;
+    info->body_arm = info->body_link = info->body_index = info->body_kind = -1;
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         info->ee_error[a] = 0.0;
         info->path_error[a] = 0.0;
@@ -170,6 +172,10 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_distance(MCA_WHY_BELOW_D1, info, d1));
         goto fault;
     }
+    if (cfg->fault_distance && cfg->body_rows && info->body_margin < 0.0) {
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_clearance(MCA_WHY_BELOW_CLEARANCE, info));
+        goto fault;
+    }
 
     /* 4. scheme */
     if (cfg->scheme == MCA_SCHEME_APF) {
@@ -197,6 +203,16 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
                         (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
             goto fault;
+        }
+        if (sp.collision) {
+            /* the paper's scheme: the fixed bodies' rows in their slots, no stop bound */
+            rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, cfg->n_bodies, &sp, NULL,
+                               ctrl->body_near);
+            if (rc != MCA_OK) {
+                raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
+                            (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
+                goto fault;
+            }
         }
         info->brake = si.brake;
         int ts_off[MCA_MAX_ARMS] = {0};
@@ -244,6 +260,10 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             rc = mca_scheme_near_rows(&ctrl->qp, &si, na, chains, ctrl->kin,
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
                                       &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
+            if (rc == MCA_OK) {
+                rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, cfg->n_bodies, &cfg->sp,
+                                   cfg->ts.dec_limit, ctrl->body_near);
+            }
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
                             (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
@@ -344,8 +364,14 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
             goto fault;
         }
     }
+    if (cfg->fault_distance && cfg->body_rows && ctrl->has_prev && isfinite(info->body_margin) &&
+        isfinite(ctrl->body_margin_prev) && 2.0 * info->body_margin - ctrl->body_margin_prev < 0.0) {
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_clearance(MCA_WHY_BELOW_CLEARANCE_NEXT, info));
+        goto fault;
+    }
     memcpy(ctrl->phi_prev, ctrl->phi, sizeof ctrl->phi_prev);
     ctrl->min_distance_prev = info->min_distance;
+    ctrl->body_margin_prev = info->body_margin;
     ctrl->has_prev = 1;
     ctrl->ticks++;
     info->fault = MCA_CTRL_FAULT_NONE;

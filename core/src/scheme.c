@@ -7,6 +7,7 @@
 
 #include "mca/err.h"
 #include "mca/vec3.h"
+#include "scheme__rows.h"
 
 void mca_scheme_default_params(mca_scheme_params_t *p) {
     memset(p, 0, sizeof *p);
@@ -101,7 +102,7 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
         var_off[a] = n;
         row_off[a] = n_ineq;
         n += chain[a]->dof;
-        n_ineq += rpl * (chain[a]->dof + 1);
+        n_ineq += (rpl + (rpl ? p->body_pairs : 0)) * (chain[a]->dof + 1);
     }
     int rc = mca_qp_reset(qp, n, MCA_TASK_DIM * n_arms, n_ineq);
     if (rc != MCA_OK) {
@@ -136,6 +137,9 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
         }
         if (!rpl) {
             continue;
+        }
+        for (int k = row_off[a] + rpl * (dof + 1); k < row_off[a] + (rpl + p->body_pairs) * (dof + 1); k++) {
+            qp->beta[k] = p->big; /* the fixed bodies' slots (mca_body_rows), inactive until filled */
         }
         /* (10)-(14)/(28): one fixed block of rows per link. */
         for (int l = 0; l <= dof; l++) {
@@ -211,6 +215,7 @@ int mca_scheme_assemble(const mca_scheme_params_t *p, int n_arms, const mca_chai
         for (int a = 0; a < MCA_MAX_ARMS; a++) {
             info->var_off[a] = a < n_arms ? var_off[a] : n;
             info->row_off[a] = a < n_arms ? row_off[a] : n_ineq;
+            info->body_off[a] = a < n_arms && rpl ? row_off[a] + rpl * (chain[a]->dof + 1) : info->row_off[a];
         }
     }
     return bounds_rc;
@@ -239,8 +244,8 @@ static int repeats_previous(const mca_link_critical_t near[][MCA_NEAR_PAIRS], in
 
 /* Row r of arm a (columns vo..vo+dof-1) against the rows kept before it: when one of them is parallel to
  * it, the tighter bound of the two stays in the kept row and 1 is returned (row r is to be dropped). */
-static int merge_parallel(mca_qp_t *qp, int vo, int dof, int r, const int *kept, double *kept_norm,
-                          int n_kept) {
+int mca__scheme_merge_parallel(mca_qp_t *qp, int vo, int dof, int r, const int *kept, double *kept_norm,
+                               int n_kept) {
     double nr = 0.0;
     for (int j = 0; j < dof; j++) {
         nr += qp->U[r][vo + j] * qp->U[r][vo + j];
@@ -314,7 +319,8 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     int n_ineq = 0;
     for (int a = 0; a < n_arms; a++) {
         si->row_off[a] = n_ineq;
-        n_ineq += MCA_NEAR_PAIRS * (chain[a]->dof + 1);
+        si->body_off[a] = n_ineq + MCA_NEAR_PAIRS * (chain[a]->dof + 1);
+        n_ineq += (MCA_NEAR_PAIRS + p->body_pairs) * (chain[a]->dof + 1);
     }
     if (n_ineq > MCA_QP_MAX_INEQ) {
         return MCA_ERANGE;
@@ -330,7 +336,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
     si->active_rows = 0;
     si->brake = 1.0;
     for (int a = n_arms; a < MCA_MAX_ARMS; a++) {
-        si->row_off[a] = n_ineq;
+        si->row_off[a] = si->body_off[a] = n_ineq;
     }
     const double d1m = mca_scheme_rows_d1(p); /* the rows aim above d1 */
     for (int a = 0; a < n_arms; a++) {
@@ -379,7 +385,7 @@ int mca_scheme_near_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const 
                     continue; /* inactive: the same QP, fewer rows to iterate */
                 }
                 qp->beta[r] = share * bound;
-                if (merge_parallel(qp, vo, dof, r, kept, kept_norm, n_kept)) {
+                if (mca__scheme_merge_parallel(qp, vo, dof, r, kept, kept_norm, n_kept)) {
                     qp->beta[r] = p->big;
                     continue;
                 }

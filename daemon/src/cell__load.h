@@ -15,7 +15,7 @@
 #include <stdbool.h>
 
 #include "mca/cell.h"
-#include "mca/scenario.h" /* mca_check_ctx_t, mca_arm_keys_t */
+#include "mca/scenario.h" /* mca_check_ctx_t, mca_arm_keys_t, mca_body_keys_t */
 
 #include "daemon__backends.h" /* MCA_BACKEND_MAX */
 
@@ -86,6 +86,8 @@ struct raw_cell {
     struct raw_solver *solver;
     struct raw_arm *arms;
     unsigned arms_count;
+    mca_body_keys_t *bodies;
+    unsigned bodies_count;
     struct raw_dds *dds;
     struct raw_rt *rt;
     double *stop_after;

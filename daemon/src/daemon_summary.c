@@ -46,6 +46,16 @@ void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     }
     s->min_distance = d->min_d;
     s->min_distance_t = d->min_d_t;
+    s->body_margin = d->body_margin;
+    s->body_distance = d->body_d;
+    s->body_t = d->body_t;
+    memcpy(s->body_pair, d->body_pair, sizeof s->body_pair);
+    {
+        const int k = d->body_pair[2];
+        const mca_fixed_body_t *fb = k >= 0 && k < d->ctrl.cfg.n_bodies ? &d->ctrl.cfg.body[k] : NULL;
+        memcpy(s->body_name, fb ? fb->name : "", fb ? sizeof s->body_name : 1);
+        s->body_kind = fb ? (int)fb->body.kind : -1;
+    }
     s->fault = d->fault;
     s->ctrl_fault = d->ctrl_fault;
     s->fault_arm = d->fault ? d->fault_arm : -1;
@@ -155,6 +165,13 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
                 s->min_distance_t);
     } else {
         fprintf(f, "<6>mcad: summary: minimum distance n/a\n");
+    }
+    if (s->body_pair[0] >= 0) {
+        fprintf(f,
+                "<6>mcad: summary: fixed bodies: least margin %.4f m (distance %.4f m) at t = %.3f s, arm %d "
+                "link %d against %s '%s'\n",
+                s->body_margin, s->body_distance, s->body_t, s->body_pair[0], s->body_pair[1],
+                mca_body_kind_name(s->body_kind), s->body_name);
     }
     if (s->brake_t >= 0.0) {
         fprintf(f,

@@ -62,6 +62,18 @@ static void deadlock_watch(mca_daemon_t *d, double t) {
     d->deadlocks = in->deadlocks;
 }
 
+/* The fixed bodies' pair of least margin over the run (running, stopped and braking ticks alike). */
+static void body_watch(mca_daemon_t *d, double t) {
+    if (d->info.body_margin < d->body_margin) {
+        d->body_margin = d->info.body_margin;
+        d->body_d = d->info.body_distance;
+        d->body_t = t;
+        d->body_pair[0] = d->info.body_arm;
+        d->body_pair[1] = d->info.body_link;
+        d->body_pair[2] = d->info.body_index;
+    }
+}
+
 int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
     d->t_tick = t;
     int state = atomic_load_explicit(&d->state, memory_order_relaxed);
@@ -108,6 +120,7 @@ int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
             d->min_d_t = t;
             d->min_d_stamp = stamp_ns;
         }
+        body_watch(d, t);
         if (rc != MCA_OK) {
             d->ctrl_fault = d->info.fault;
             mcad_latch_fault(d, MCA_DAEMON_FAULT_CONTROLLER, mcad_ctrl_fault_code(d->info.fault), t, -1,
@@ -125,6 +138,7 @@ int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
             d->min_d_t = t;
             d->min_d_stamp = stamp_ns;
         }
+        body_watch(d, t);
     }
     if (state == MCA_DAEMON_BRAKING) {
         /* braking measures the distances too (the minimum covers the braking) */
@@ -134,6 +148,7 @@ int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
             d->min_d_t = t;
             d->min_d_stamp = stamp_ns;
         }
+        body_watch(d, t);
         mcad_send_commands(d, 1);
         if (done) {
             state =

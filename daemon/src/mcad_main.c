@@ -87,6 +87,16 @@ static void print_cell(const mca_cell_t *c) {
         }
         printf("\n");
     }
+    for (int k = 0; k < c->scn.n_bodies; k++) {
+        const mca_scenario_body_t *sb = &c->scn.body[k];
+        printf("  body %d '%s': %s, clearance %.3g m%s, allowed:", k, sb->fb.name,
+               mca_body_kind_name(sb->fb.body.kind), sb->clearance >= 0.0 ? sb->clearance : c->scn.params.d1,
+               sb->clearance >= 0.0 ? "" : " (d1)");
+        for (int j = 0; j < sb->n_allow; j++) {
+            printf("%s %s", j ? "," : "", sb->allow[j]);
+        }
+        printf("%s\n", sb->n_allow ? "" : " none");
+    }
     printf(
         "  rt: period %lld us, priority %d, cpu %d, overrun limit %d, lost feedback %d cycles, PDNN budget "
         "%lld us\n",

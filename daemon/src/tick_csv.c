@@ -33,6 +33,9 @@ void mca_tick_csv_header(FILE *f, const mca_tick_csv_layout_t *l) {
             fprintf(f, ",d_%d_%d", a, b);
         }
     }
+    if (l->body_cols) {
+        fprintf(f, ",body_d,body_margin,body_arm,body_link,body,body_kind");
+    }
     fprintf(f, "\n");
 }
 
@@ -81,6 +84,10 @@ void mca_tick_csv_row(FILE *f, const mca_tick_csv_layout_t *l, const mca_tick_cs
         for (int b = a + 1; b < l->n_arms; b++) {
             fprintf(f, ",%.*g", x, r->dist[a][b].min.d);
         }
+    }
+    if (l->body_cols) {
+        fprintf(f, ",%.*g,%.*g,%d,%d,%d,%s", x, in->body_distance, x, in->body_margin, in->body_arm,
+                in->body_link, in->body_index, mca_body_kind_name(in->body_kind));
     }
     fputc('\n', f);
 }

@@ -37,6 +37,8 @@ struct raw_scn {
     unsigned sample_times_count;
     struct raw_arm *arms;
     unsigned arms_count;
+    mca_body_keys_t *bodies;
+    unsigned bodies_count;
 };
 
 static const cyaml_strval_t kind_strings[] = {
@@ -81,6 +83,40 @@ const cyaml_schema_field_t mca_scenario_path_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_strval_t body_kind_strings[] = {
+    {"plane", MCA_BODY_PLANE}, {"sphere", MCA_BODY_SPHERE},     {"capsule", MCA_BODY_CAPSULE},
+    {"box", MCA_BODY_BOX},     {"cylinder", MCA_BODY_CYLINDER},
+};
+
+static const cyaml_schema_value_t allow_entry = {CYAML_VALUE_STRING(CYAML_FLAG_POINTER, char, 1, 47)};
+
+#define BODY_XYZ(key, m)                                                                                     \
+    CYAML_FIELD_SEQUENCE(key, OPT | CYAML_FLAG_FLOW, mca_body_keys_t, m, &mca_yaml_float_entry, 3, 3)
+
+static const cyaml_schema_field_t body_fields[] = {
+    CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, mca_body_keys_t, name, 1, 31),
+    CYAML_FIELD_ENUM("kind", CYAML_FLAG_DEFAULT, mca_body_keys_t, kind, body_kind_strings,
+                     CYAML_ARRAY_LEN(body_kind_strings)),
+    CYAML_FIELD_FLOAT_PTR("clearance", OPT, mca_body_keys_t, clearance),
+    CYAML_FIELD_SEQUENCE("allow", OPT | CYAML_FLAG_FLOW, mca_body_keys_t, allow, &allow_entry, 0,
+                         MCA_SCENARIO_MAX_ALLOW),
+    BODY_XYZ("point", point),
+    BODY_XYZ("normal", normal),
+    BODY_XYZ("centre", centre),
+    BODY_XYZ("a", a),
+    BODY_XYZ("b", b),
+    BODY_XYZ("half_extents", half_extents),
+    BODY_XYZ("rpy", rpy),
+    BODY_XYZ("axis", axis),
+    CYAML_FIELD_FLOAT_PTR("radius", OPT, mca_body_keys_t, radius),
+    CYAML_FIELD_FLOAT_PTR("half_length", OPT, mca_body_keys_t, half_length),
+    CYAML_FIELD_END,
+};
+
+const cyaml_schema_value_t mca_scenario_body_entry = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, mca_body_keys_t, body_fields),
+};
+
 /* a scenario arm is the model keys alone, every one given (a cell may leave them to its scenario) */
 static const cyaml_schema_field_t arm_fields[] = {
     MCA_YAML_ARM_FIELDS(struct raw_arm, model, CYAML_FLAG_POINTER),
@@ -100,6 +136,7 @@ static const cyaml_schema_field_t scn_fields[] = {
     CYAML_FIELD_SEQUENCE("sample_times", OPT | CYAML_FLAG_FLOW, struct raw_scn, sample_times,
                          &mca_yaml_float_entry, 1, 16),
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_scn, arms, &arm_entry, 1, MCA_MAX_ARMS),
+    MCA_YAML_BODIES_FIELD(struct raw_scn, bodies),
     CYAML_FIELD_END,
 };
 
@@ -139,6 +176,13 @@ static const mca_range_t scn_ranges[] = {
     {"durations", 0.0, 3600.0, 1, 0, "s"},
     {"tolerance", 0.0, 10.0, 0, 0, "m"},
     {"exact_tolerance", 0.0, 1.0, 1, 0, "m"},
+    /* fixed bodies (a table needs less clearance than an arm; a cup or a post fits in 10 m) */
+    {"clearance", 0.0, 1.0, 0, 0, "m"},
+    {"position", -100.0, 100.0, 0, 0, "m"},
+    {"direction", -100.0, 100.0, 0, 0, ""},
+    {"half_extents", 0.0, 10.0, 0, 0, "m"},
+    {"half_length", 0.0, 10.0, 0, 0, "m"},
+    {"body_radius", 0.0, 10.0, 0, 0, "m"},
 };
 
 int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
@@ -582,6 +626,277 @@ int mca_scenario_arm_model(const mca_check_ctx_t *c, int arm, mca_scenario_arm_t
     return MCA_OK;
 }
 
+/* ---------------------------------------------------------------- fixed bodies */
+
+/* An allow entry "ARM", "ARM.base", "ARM.tool" or "ARM.N" against the arms arm[0..n): *arm its index, *link
+ * the link (-1: every link). @return 0, -1 (no such arm), -2 (no such link) */
+static int allow_parse(const char *s, const mca_scenario_arm_t *arm, int n, int *ai, int *link) {
+    const char *dot = strrchr(s, '.');
+    size_t len = strlen(s);
+    *link = -1;
+    char *end = NULL;
+    const char *tail = dot ? dot + 1 : "";
+    long num = dot && *tail ? strtol(tail, &end, 10) : -1;
+    const int has_link = dot && (strcmp(tail, "base") == 0 || strcmp(tail, "tool") == 0 || (end && !*end));
+    if (has_link) {
+        len = (size_t)(dot - s);
+    }
+    for (int a = 0; a < n; a++) {
+        if (strlen(arm[a].name) == len && strncmp(arm[a].name, s, len) == 0) {
+            *ai = a;
+            if (!has_link) {
+                return 0;
+            }
+            const int dof = arm[a].chain.dof;
+            if (strcmp(tail, "base") == 0) {
+                *link = 0;
+            } else if (strcmp(tail, "tool") == 0) {
+                *link = dof;
+            } else if (num >= 0 && (dof == 0 || num <= dof)) {
+                *link = (int)num;
+            } else {
+                return -2;
+            }
+            return 0;
+        }
+    }
+    return -1;
+}
+
+/* "a, b, c": the arms' names (messages) */
+static void arm_names(const mca_scenario_t *scn, char *out, size_t len) {
+    out[0] = 0;
+    for (int a = 0; a < scn->n_arms; a++) {
+        const size_t n = strlen(out);
+        snprintf(out + n, len - n, "%s%s", a ? ", " : "", scn->arm[a].name);
+    }
+}
+
+/* Each kind's keys (and no other): what bodies[i] gives is checked against this. */
+static const struct {
+    int kind;
+    const char *keys; /* required, then optional after '|' */
+} kind_keys[] = {
+    {MCA_BODY_PLANE, "point normal|"},
+    {MCA_BODY_SPHERE, "centre radius|"},
+    {MCA_BODY_CAPSULE, "a b radius|"},
+    {MCA_BODY_BOX, "centre half_extents|rpy"},
+    {MCA_BODY_CYLINDER, "centre half_length radius|axis"},
+};
+
+/* One body's geometry keys: every key given is one of its kind's, every required one given. */
+static int body_keys_check(const mca_check_ctx_t *c, int i, const mca_body_keys_t *k) {
+    const struct {
+        const char *key;
+        int given;
+    } given[] = {
+        {"point", k->point != NULL},   {"normal", k->normal != NULL},
+        {"centre", k->centre != NULL}, {"a", k->a != NULL},
+        {"b", k->b != NULL},           {"half_extents", k->half_extents != NULL},
+        {"rpy", k->rpy != NULL},       {"axis", k->axis != NULL},
+        {"radius", k->radius != NULL}, {"half_length", k->half_length != NULL},
+    };
+    const char *keys = "";
+    for (size_t j = 0; j < sizeof kind_keys / sizeof kind_keys[0]; j++) {
+        if (kind_keys[j].kind == k->kind) {
+            keys = kind_keys[j].keys;
+        }
+    }
+    const char *bar = strchr(keys, '|');
+    const char *kind = mca_body_kind_name(k->kind);
+    char f[64];
+    for (size_t g = 0; g < sizeof given / sizeof given[0]; g++) {
+        const size_t kl = strlen(given[g].key);
+        int in = 0, required = 0;
+        for (const char *p = keys; *p;) {
+            const size_t n = strcspn(p, " |");
+            if (n == kl && strncmp(p, given[g].key, kl) == 0) {
+                in = 1;
+                required = p < bar;
+            }
+            p += n;
+            p += *p != 0;
+        }
+        snprintf(f, sizeof f, "bodies[%d].%s", i, given[g].key);
+        if (given[g].given && !in) {
+            return mca_check_fail(c, MCA_ECONFIG, f, "%s: not a key of a %s (its keys: %.*s%s%s)", f, kind,
+                                  (int)(bar - keys), keys, bar[1] ? ", optional " : "", bar + 1);
+        }
+        if (required && !given[g].given) {
+            return mca_check_fail(c, MCA_ECONFIG, f, "%s: a %s needs %.*s", f, kind, (int)(bar - keys), keys);
+        }
+    }
+    return MCA_OK;
+}
+
+/* 3 numbers of bodies[i].key in the range `range`, into out (left alone when v is NULL). */
+static int body_xyz(const mca_check_ctx_t *c, int i, const char *key, const char *range, const double *v,
+                    double out[3]) {
+    for (int j = 0; v && j < 3; j++) {
+        const int rc = mca_check_range(c, mca_scenario_range(range), v[j], "bodies[%d].%s[%d]", i, key, j);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        out[j] = v[j];
+    }
+    return MCA_OK;
+}
+
+/* A direction (normal, axis): not zero. */
+static int body_dir(const mca_check_ctx_t *c, int i, const char *key, const double *v, double out[3]) {
+    int rc = body_xyz(c, i, key, "direction", v, out);
+    if (rc == MCA_OK && v && !(mca_v3_norm(out) > 1e-9)) {
+        char f[64];
+        snprintf(f, sizeof f, "bodies[%d].%s", i, key);
+        rc = mca_check_fail(c, MCA_ECONFIG, f, "%s: zero vector", f);
+    }
+    return rc;
+}
+
+static int body_num(const mca_check_ctx_t *c, int i, const char *key, const char *range, const double *v,
+                    double *out) {
+    if (!v) {
+        return MCA_OK;
+    }
+    *out = *v;
+    return mca_check_range(c, mca_scenario_range(range), *v, "bodies[%d].%s", i, key);
+}
+
+/* bodies[i] into *sb (a fresh body). */
+static int body_apply(const mca_check_ctx_t *c, int i, const mca_body_keys_t *k, const mca_scenario_t *scn,
+                      mca_scenario_body_t *sb) {
+    memset(sb, 0, sizeof *sb);
+    snprintf(sb->fb.name, sizeof sb->fb.name, "%s", k->name);
+    sb->clearance = -1.0;
+    int rc = body_keys_check(c, i, k);
+    if (rc == MCA_OK) {
+        rc = body_num(c, i, "clearance", "clearance", k->clearance, &sb->clearance);
+    }
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    mca_body_t *b = &sb->fb.body;
+    b->kind = (mca_body_kind_t)k->kind;
+    switch (b->kind) {
+    case MCA_BODY_PLANE:
+        if ((rc = body_xyz(c, i, "point", "position", k->point, b->u.plane.point)) == MCA_OK) {
+            rc = body_dir(c, i, "normal", k->normal, b->u.plane.normal);
+        }
+        break;
+    case MCA_BODY_SPHERE:
+        if ((rc = body_xyz(c, i, "centre", "position", k->centre, b->u.sphere.centre)) == MCA_OK) {
+            rc = body_num(c, i, "radius", "body_radius", k->radius, &b->u.sphere.radius);
+        }
+        break;
+    case MCA_BODY_CAPSULE:
+        if ((rc = body_xyz(c, i, "a", "position", k->a, b->u.capsule.a)) == MCA_OK &&
+            (rc = body_xyz(c, i, "b", "position", k->b, b->u.capsule.b)) == MCA_OK) {
+            rc = body_num(c, i, "radius", "body_radius", k->radius, &b->u.capsule.radius);
+        }
+        break;
+    case MCA_BODY_BOX: {
+        double rpy[3] = {0.0, 0.0, 0.0}, zero[3] = {0.0, 0.0, 0.0};
+        if ((rc = body_xyz(c, i, "centre", "position", k->centre, b->u.box.centre)) == MCA_OK &&
+            (rc = body_xyz(c, i, "half_extents", "half_extents", k->half_extents, b->u.box.half)) == MCA_OK &&
+            (rc = body_xyz(c, i, "rpy", "base_rpy", k->rpy, rpy)) == MCA_OK) {
+            mca_pose_t pose;
+            mca_pose_from_xyz_rpy(&pose, zero, rpy);
+            memcpy(b->u.box.R, pose.R, sizeof b->u.box.R); /* world <- box, its columns the box axes */
+        }
+        break;
+    }
+    case MCA_BODY_CYLINDER:
+        b->u.cylinder.axis[2] = 1.0;
+        if ((rc = body_xyz(c, i, "centre", "position", k->centre, b->u.cylinder.centre)) == MCA_OK &&
+            (rc = body_dir(c, i, "axis", k->axis, b->u.cylinder.axis)) == MCA_OK &&
+            (rc = body_num(c, i, "half_length", "half_length", k->half_length, &b->u.cylinder.half_len)) ==
+                MCA_OK) {
+            rc = body_num(c, i, "radius", "body_radius", k->radius, &b->u.cylinder.radius);
+        }
+        break;
+    }
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    sb->fb.clearance = sb->clearance >= 0.0 ? sb->clearance : 0.0;
+    char f[64];
+    snprintf(f, sizeof f, "bodies[%d]", i);
+    if (mca_body_check(&sb->fb) != MCA_OK) {
+        return mca_check_fail(c, MCA_ECONFIG, f, "%s: not a usable %s", f, mca_body_kind_name(k->kind));
+    }
+    for (unsigned j = 0; k->allow && j < k->allow_count; j++) {
+        int ai, link;
+        const int r = allow_parse(k->allow[j], scn->arm, scn->n_arms, &ai, &link);
+        snprintf(f, sizeof f, "bodies[%d].allow[%u]", i, j);
+        if (r == -1) {
+            char names[160];
+            arm_names(scn, names, sizeof names);
+            return mca_check_fail(c, MCA_ECONFIG, f,
+                                  "%s: no arm '%s' (arms: %s; write ARM, ARM.base, ARM.tool or ARM.N)", f,
+                                  k->allow[j], names);
+        }
+        if (r == -2) {
+            return mca_check_fail(c, MCA_ECONFIG, f, "%s: '%s': arm '%s' has links 0..%d (base, tool)", f,
+                                  k->allow[j], scn->arm[ai].name, scn->arm[ai].chain.dof);
+        }
+        snprintf(sb->allow[sb->n_allow++], sizeof sb->allow[0], "%s", k->allow[j]);
+    }
+    return MCA_OK;
+}
+
+int mca_scenario_bodies_apply(const mca_check_ctx_t *c, const mca_body_keys_t *k, unsigned count,
+                              mca_scenario_t *scn) {
+    for (unsigned i = 0; k && i < count; i++) {
+        mca_scenario_body_t sb;
+        int rc = body_apply(c, (int)i, &k[i], scn, &sb);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        for (unsigned j = 0; j < i; j++) {
+            if (strcmp(k[j].name, k[i].name) == 0) {
+                char f[64];
+                snprintf(f, sizeof f, "bodies[%u].name", i);
+                return mca_check_fail(c, MCA_ECONFIG, f, "%s: '%s' used twice", f, k[i].name);
+            }
+        }
+        int at = scn->n_bodies;
+        for (int b = 0; b < scn->n_bodies; b++) {
+            if (strcmp(scn->body[b].fb.name, sb.fb.name) == 0) {
+                at = b; /* a cell's body of its scenario's name replaces it */
+            }
+        }
+        if (at >= MCA_MAX_BODIES) {
+            char f[64];
+            snprintf(f, sizeof f, "bodies[%u]", i);
+            return mca_check_fail(c, MCA_ECONFIG, f, "%s: more than %d bodies", f, MCA_MAX_BODIES);
+        }
+        scn->body[at] = sb;
+        scn->n_bodies += at == scn->n_bodies;
+    }
+    return MCA_OK;
+}
+
+int mca_scenario_bodies_resolve(const mca_scenario_t *scn, mca_fixed_body_t out[MCA_MAX_BODIES], char *err,
+                                size_t errlen) {
+    for (int k = 0; k < scn->n_bodies && k < MCA_MAX_BODIES; k++) {
+        const mca_scenario_body_t *sb = &scn->body[k];
+        out[k] = sb->fb;
+        out[k].clearance = sb->clearance >= 0.0 ? sb->clearance : scn->params.d1;
+        memset(out[k].allow, 0, sizeof out[k].allow);
+        for (int j = 0; j < sb->n_allow; j++) {
+            int ai, link;
+            if (allow_parse(sb->allow[j], scn->arm, scn->n_arms, &ai, &link) != 0) {
+                mca_errbuf_printf(err, errlen, "%s: bodies '%s': allow '%s' is no link of the arms",
+                                  scn->source, sb->fb.name, sb->allow[j]);
+                return MCA_ECONFIG;
+            }
+            const int dof = scn->arm[ai].chain.dof;
+            out[k].allow[ai] |= link < 0 ? (dof > 0 ? (1u << (dof + 1)) - 1u : ~0u) : 1u << link;
+        }
+    }
+    return MCA_OK;
+}
+
 /* A scenario's parameters are the scheme's (mca_scheme_params_t) and the tick period: these two move
  * them each way, so that the defaults are the scheme's own (mca_scheme_default_params), not a copy. */
 static void params_from_scheme(mca_scenario_params_t *p, const mca_scheme_params_t *sp) {
@@ -663,6 +978,10 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
             goto out;
         }
     }
+    /* the bodies after the arms: their allow lists name links */
+    if ((rc = mca_scenario_bodies_apply(&ctx, raw->bodies, raw->bodies_count, &scn)) != MCA_OK) {
+        goto out;
+    }
     *scn_out = scn;
 out:
     mca_yaml_marks_free(&marks);
@@ -712,6 +1031,15 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
     }
     cfg->sp.collision = uses_rows(scheme);
     params_to_scheme(&cfg->sp, &scn->params);
+    if (scn->n_bodies < 0 || scn->n_bodies > MCA_MAX_BODIES) {
+        mca_errbuf_printf(err, errlen, "%s: %d bodies", scn->source, scn->n_bodies);
+        return MCA_EINVAL;
+    }
+    int rc = mca_scenario_bodies_resolve(scn, cfg->body, err, errlen);
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    cfg->n_bodies = scn->n_bodies;
     cfg->dt = scn->params.dt;
     /* The baselines are run to show what happens without the scheme: no distance fault for them. */
     cfg->fault_distance = uses_rows(scheme);

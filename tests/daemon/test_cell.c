@@ -362,6 +362,58 @@ static void test_scenario_missing(void **state) {
                  NULL);
 }
 
+/* Fixed bodies in a cell: the scenario's one check (file, line, field), against the cell's own arms. */
+static void test_cell_bodies(void **state) {
+    (void)state;
+    const char *body = "bodies:\n"
+                       "  - name: table\n"
+                       "    kind: plane\n"
+                       "    point: [0, 0, 0]\n"
+                       "    normal: [0, 0, 1]\n"
+                       "    clearance: 0.02\n"
+                       "    allow: [left.base, right]\n"
+                       "dds:\n";
+    const char *p = write_variant("bodies", "dds:\n", body);
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    assert_int_equal(cell.scn.n_bodies, 1);
+    mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
+    assert_non_null(cfg);
+    assert_int_equal(mca_cell_controller_config(&cell, cfg, err, sizeof err), MCA_OK);
+    assert_int_equal(cfg->n_bodies, 1);
+    assert_int_equal(cfg->body[0].allow[0], 1u);     /* left.base */
+    assert_int_equal(cfg->body[0].allow[1], 0x1ffu); /* every link of the right arm */
+    free(cfg);
+    char bad[1024];
+    snprintf(bad, sizeof bad, "%s", body);
+    char *at = strstr(bad, "right]");
+    memcpy(at, "rigt] ", 6);
+    p = write_variant("bodies_arm", "dds:\n", bad);
+    expect_error(p, MCA_ECONFIG, line_of(p, "allow:"), "bodies[0].allow[1]", "no arm 'rigt'", "left, right",
+                 NULL);
+    p = write_variant("bodies_clear", "dds:\n",
+                      "bodies:\n  - {name: post, kind: capsule, a: [0, 0, 0], b: [0, 0, 1], radius: 0.05,\n"
+                      "     clearance: 3}\ndds:\n");
+    expect_error(p, MCA_ECONFIG, line_of(p, "clearance: 3"), "bodies[0].clearance", "got 3", NULL);
+    p = write_variant(
+        "bodies_kind", "dds:\n",
+        "bodies:\n  - name: post\n    kind: capsule\n    centre: [0, 0, 0]\n    radius: 0.05\ndds:\n");
+    expect_error(p, MCA_ECONFIG, line_of(p, "centre:"), "bodies[0].centre", "not a key of a capsule", NULL);
+}
+
+/* A cell over a scenario with bodies: they come with it, and a cell body of the same name replaces one. */
+static void test_cell_bodies_over_scenario(void **state) {
+    (void)state;
+    char err[1024] = "";
+    assert_int_equal(
+        mca_cell_load(MCA_SOURCE_DIR "/config/cells/cup_stacking_bodies_sim.yaml", &cell, err, sizeof err),
+        MCA_OK);
+    assert_int_equal(cell.scn.n_bodies, 7);
+    assert_string_equal(cell.scn.body[0].fb.name, "table");
+    assert_true(cell.scn.body[0].clearance == 0.02); /* the cell's, over the scenario's 0.03 */
+    assert_true(cell.scn.body[3].clearance == 0.05);
+}
+
 static void test_socketcan_needs_interface(void **state) {
     (void)state;
     const char *p = write_variant("noif", "    interface: vcan1\n", "");
@@ -935,6 +987,7 @@ int main(void) {
         cmocka_unit_test(test_bus_clash_order),    cmocka_unit_test(test_dof_mismatch),
         cmocka_unit_test(test_q0_outside_limits),  cmocka_unit_test(test_negative_period),
         cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
+        cmocka_unit_test(test_cell_bodies),        cmocka_unit_test(test_cell_bodies_over_scenario),
         cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
         cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
         cmocka_unit_test(test_dds_priority),       cmocka_unit_test(test_ros2_keys),

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -466,8 +467,99 @@ static void test_scenario_top_errors(void **state) {
     remove(p);
 }
 
+/* Fixed bodies (mca_scenario_bodies_apply, shared with cells): each error with its file, line and field. */
+#define PLANE_HEAD "  - name: table\n    kind: plane\n    point: [0, 0, 0]\n"
+static const struct scase body_cases[] = {
+    {"clearance", PLANE_HEAD "    normal: [0, 0, 1]\n    clearance: 2 #@\n", "bodies[0].clearance"},
+    {"normal_zero", PLANE_HEAD "    normal: [0, 0, 0] #@\n", "bodies[0].normal"},
+    {"plane_radius", PLANE_HEAD "    normal: [0, 0, 1]\n    radius: 0.1 #@\n", "bodies[0].radius"},
+    {"cylinder_no_radius",
+     "  - name: cup #@\n    kind: cylinder\n    centre: [0, 0, 0]\n    half_length: 0.05\n",
+     "bodies[0].radius"},
+    {"centre_range", "  - name: ball\n    kind: sphere\n    centre: [0, 0, 500] #@\n    radius: 0.1\n",
+     "bodies[0].centre[2]"},
+    {"box_rpy",
+     "  - name: box\n    kind: box\n    centre: [0, 0, 0]\n    half_extents: [0.1, 0.1, 0.1]\n"
+     "    rpy: [0, 9, 0] #@\n",
+     "bodies[0].rpy[1]"},
+    {"box_half", "  - name: box\n    kind: box\n    centre: [0, 0, 0]\n    half_extents: [0.1, -1, 0.1] #@\n",
+     "bodies[0].half_extents[1]"},
+    {"capsule_radius",
+     "  - name: post\n    kind: capsule\n    a: [0, 0, 0]\n    b: [0, 0, 1]\n    radius: -0.1 #@\n",
+     "bodies[0].radius"},
+    {"allow_arm", PLANE_HEAD "    normal: [0, 0, 1]\n    allow: [circle.base, nobody] #@\n",
+     "bodies[0].allow[1]"},
+    {"allow_link", PLANE_HEAD "    normal: [0, 0, 1]\n    allow: [hold.9] #@\n", "bodies[0].allow[0]"},
+    {"name_twice",
+     PLANE_HEAD "    normal: [0, 0, 1]\n  - name: table #@\n    kind: sphere\n"
+                "    centre: [0, 0, 1]\n    radius: 0.1\n",
+     "bodies[1].name"},
+};
+
+static void test_scenario_body_errors(void **state) {
+    (void)state;
+    static char text[16384];
+    for (size_t c = 0; c < sizeof body_cases / sizeof body_cases[0]; c++) {
+        snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%sbodies:\n%s", good_arms[0],
+                 good_arms[1], body_cases[c].text);
+        expect(body_cases[c].name, text, body_cases[c].field, 0);
+    }
+    /* a key libcyaml does not know: its own line, as every other key's */
+    snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%sbodies:\n%s", good_arms[0], good_arms[1],
+             PLANE_HEAD "    normal: [0, 0, 1]\n    colour: red #@\n");
+    expect_rc("body_unknown_key", text, "bodies[0].colour", 0, MCA_EPARSE);
+}
+
+/* Every kind loads; the allow list resolves to link bits in the arms' order; clearance defaults to d1. */
+static void test_scenario_bodies_good(void **state) {
+    (void)state;
+    static char text[16384];
+    snprintf(text, sizeof text,
+             "name: t\nduration: 1\nd1: 0.04\narms:\n%s%sbodies:\n" PLANE_HEAD
+             "    normal: [0, 0, 2]\n    clearance: 0.02\n    allow: [circle.base, hold]\n"
+             "  - {name: ball, kind: sphere, centre: [1, 0, 0], radius: 0.1, allow: [hold.tool, hold.3]}\n"
+             "  - {name: post, kind: capsule, a: [0, 1, 0], b: [0, 1, 1], radius: 0.05}\n"
+             "  - {name: box, kind: box, centre: [0, 0, 2], half_extents: [0.1, 0.2, 0.3], rpy: [0, 0, "
+             "1.5707963267948966]}\n"
+             "  - {name: cup, kind: cylinder, centre: [0.5, 0.5, 0.05], half_length: 0.05, radius: 0.04}\n",
+             good_arms[0], good_arms[1]);
+    static mca_scenario_t s;
+    char err[512] = "";
+    const char *p = write_tmp("bodies_good", text);
+    const int rc = mca_scenario_load(p, &s, err, sizeof err);
+    if (rc != MCA_OK) {
+        print_error("%s\n", err);
+    }
+    assert_int_equal(rc, MCA_OK);
+    remove(p);
+    assert_int_equal(s.n_bodies, 5);
+    mca_fixed_body_t fb[MCA_MAX_BODIES];
+    assert_int_equal(mca_scenario_bodies_resolve(&s, fb, err, sizeof err), MCA_OK);
+    assert_int_equal(fb[0].body.kind, MCA_BODY_PLANE);
+    assert_true(fb[0].clearance == 0.02);
+    assert_int_equal(fb[0].allow[0], 1u);     /* circle.base: link 0 */
+    assert_int_equal(fb[0].allow[1], 0x1ffu); /* hold: every link of the 8-joint arm */
+    assert_int_equal(fb[1].allow[0], 0u);
+    assert_int_equal(fb[1].allow[1], (1u << 8) | (1u << 3)); /* hold.tool (link 8), hold.3 */
+    assert_true(fb[1].clearance == 0.04);                    /* d1 */
+    assert_int_equal(fb[2].body.kind, MCA_BODY_CAPSULE);
+    assert_int_equal(fb[3].body.kind, MCA_BODY_BOX);
+    /* the box's first axis turned by yaw 90 degrees: world y */
+    assert_true(fabs(fb[3].body.u.box.R[1][0] - 1.0) < 1e-12 && fabs(fb[3].body.u.box.R[0][0]) < 1e-12);
+    assert_int_equal(fb[4].body.kind, MCA_BODY_CYLINDER);
+    assert_true(fb[4].body.u.cylinder.axis[2] == 1.0); /* axis defaults to z */
+    /* the controller's config carries them */
+    static mca_controller_config_t cfg;
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
+                     MCA_OK);
+    assert_int_equal(cfg.n_bodies, 5);
+    assert_int_equal(cfg.body[1].allow[1], (1u << 8) | (1u << 3));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_scenario_body_errors),
+        cmocka_unit_test(test_scenario_bodies_good),
         cmocka_unit_test(test_marks_doc),
         cmocka_unit_test(test_marks_errors),
         cmocka_unit_test(test_marks_bounds),

@@ -71,9 +71,9 @@ void __wrap__ZdaPv(void *p) {
     __real__ZdaPv(p);
 }
 
-enum { CROSS_CIRCLES, CUP_STACKING, NEGATIVE, N_SCENARIOS };
+enum { CROSS_CIRCLES, CUP_STACKING, NEGATIVE, CUP_BODIES, N_SCENARIOS };
 static const char *const scenario_file[N_SCENARIOS] = {"cross_circles.yaml", "cup_stacking.yaml",
-                                                       "negative.yaml"};
+                                                       "negative.yaml", "cup_stacking_bodies.yaml"};
 
 struct variant {
     const char *what;
@@ -234,6 +234,10 @@ int main(int argc, char **argv) {
         {"negative mca-ts deadlock", NEGATIVE, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA_TS, -1, -1, 0, 0, -1, 8000},
         {"cup_stacking mca normal lsdm", CUP_STACKING, MCA_DIST_LSDM, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1,
          16000},
+        /* the fixed bodies' rows (a table and six cylinders), running and braking, both schemes */
+        {"cup_stacking_bodies mca-ts", CUP_BODIES, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA_TS, -1, -1, 0, 0, -1,
+         16000},
+        {"cup_stacking_bodies mca", CUP_BODIES, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1, 16000},
     };
     long faulted = 0, binding = 0, failed = 0;
     for (size_t i = 0; i < sizeof vs / sizeof vs[0]; i++) {

@@ -1329,6 +1329,113 @@ static void test_near_rows(void **state) {
     assert_true(qp.beta[R * 4 + 1] == p.big);
 }
 
+/* The fixed bodies' rows (mca_body_rows): a table under link 4 of a PA10+ (every other link allowed): rows on
+ * the link's witnesses in its slots after the arm's own, -n^T J_P qdot <= 2 min{S_b v_normal, (d - c')/(2T)}
+ * with the body's band [clearance, clearance + d2 - d1]; none for allowed links, none without bodies. */
+static void test_body_rows(void **state) {
+    (void)state;
+    mca_chain_t ch;
+    char err[256];
+    assert_int_equal(mca_chain_load_urdf(&ch, PA10, NULL, err, sizeof err), MCA_OK);
+    const mca_chain_t *chains[1] = {&ch};
+    mca_kin_t kin[1];
+    const double q[MCA_MAX_DOF] = {0.1, 1.2, 0.0, 1.0, 0.0, 0.3, 0.0, 0.0};
+    assert_int_equal(mca_fk(&ch, q, &kin[0]), MCA_OK);
+    const int L = 4;
+    const double zlow = fmin(kin[0].point[L][2], kin[0].point[L + 1][2]);
+    mca_fixed_body_t table = {.name = "table", .clearance = 0.03};
+    table.body.kind = MCA_BODY_PLANE;
+    table.body.u.plane.normal[2] = 1.0;
+    const double d_want = 0.07; /* link 4's surface 7 cm above the table: inside its band (0.03 .. 0.10) */
+    table.body.u.plane.point[2] = zlow - ch.link_radius[L] - d_want;
+    table.allow[0] = ~(1u << L);
+    mca_scheme_params_t p;
+    mca_scheme_default_params(&p);
+    p.body_pairs = MCA_BODY_PAIRS;
+    p.d1_margin = 0.005;
+    static mca_qp_t qp;
+    assert_int_equal(mca_qp_reset(&qp, ch.dof, 3, 0), MCA_OK);
+    for (int j = 0; j < ch.dof; j++) {
+        qp.lb[j] = -ch.joint[j].vel_limit;
+        qp.ub[j] = ch.joint[j].vel_limit;
+    }
+    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_PAIRS];
+    memset(near, 0, sizeof near);
+    mca_scheme_info_t si = {0};
+    const double dec[1] = {2.0};
+    assert_int_equal(mca_scheme_near_rows(&qp, &si, 1, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                          &p, dec, NULL),
+                     MCA_OK);
+    assert_int_equal(qp.n_ineq, (MCA_NEAR_PAIRS + MCA_BODY_PAIRS) * (ch.dof + 1));
+    assert_int_equal(si.body_off[0], MCA_NEAR_PAIRS * (ch.dof + 1));
+    assert_int_equal(si.active_rows, 0);
+    static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, &p, dec, lists), MCA_OK);
+    const mca_body_witness_t *w = &lists[0][L][0];
+    assert_true(w->valid && w->body == 0);
+    assert_true(fabs(w->d - d_want) < 1e-12);
+    assert_true(fabs(w->margin - (d_want - 0.03)) < 1e-12);
+    assert_true(lists[0][L][1].valid); /* the link's other end, above it */
+    assert_true(lists[0][L][1].d > w->d);
+    mca_scheme_params_t pb;
+    mca_body_band(&p, table.clearance, &pb);
+    assert_true(pb.d1 == 0.03 && fabs(pb.d2 - (0.03 + p.d2 - p.d1)) < 1e-15);
+    const double t_stop = mca_scheme_stop_time(&ch, dec[0]);
+    const double d1m = 0.03 + 0.005;
+    const double want =
+        2.0 * fmin(mca_brake_s(d_want, d1m, pb.d2) * p.v_normal, (d_want - d1m) / (2.0 * t_stop));
+    const int r = si.body_off[0] + MCA_BODY_PAIRS * L;
+    assert_true(fabs(qp.beta[r] - want) < 1e-15);
+    double Jp[3][MCA_MAX_DOF];
+    assert_int_equal(mca_jacobian_point(&kin[0], L, w->p, Jp), MCA_OK);
+    for (int j = 0; j < ch.dof; j++) {
+        assert_true(fabs(qp.U[r][j] + Jp[2][j]) < 1e-12); /* the approach speed towards the table: -z */
+    }
+    for (int l = 0; l <= ch.dof; l++) {
+        for (int k = 0; k < MCA_BODY_PAIRS; k++) {
+            if (l != L) {
+                assert_false(lists[0][l][k].valid); /* allowed links: no witnesses, no rows */
+                assert_true(qp.beta[si.body_off[0] + MCA_BODY_PAIRS * l + k] == p.big);
+            }
+        }
+    }
+    assert_true(si.active_rows >= 1 && si.active_rows <= 2);
+    assert_true(si.brake < 1.0);
+    /* link 4 allowed too: no rows; no bodies: nothing happens */
+    table.allow[0] = ~0u;
+    const int before = si.active_rows;
+    mca_scheme_info_t si2 = si;
+    assert_int_equal(mca_scheme_near_rows(&qp, &si2, 1, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                          &p, dec, NULL),
+                     MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, &p, dec, lists), MCA_OK);
+    assert_int_equal(si2.active_rows, 0);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, &p, dec, lists), MCA_OK);
+    assert_int_equal(si2.active_rows, 0);
+    (void)before;
+    /* the paper's layout: slots after each arm's own rows, with collision rows only */
+    p.collision = 1;
+    const double *qq[1] = {q};
+    const double rd[1][3] = {{0, 0, 0}}, rdd[1][3] = {{0, 0, 0}};
+    static mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    memset(crit, 0, sizeof crit);
+    mca_scheme_state_t st;
+    mca_scheme_state_reset(&st);
+    assert_int_equal(mca_scheme_assemble(&p, 1, chains, kin, qq, rd, rdd,
+                                         (const mca_link_critical_t(*)[MCA_MAX_LINKS])crit, NULL, &st, &qp,
+                                         &si),
+                     MCA_OK);
+    assert_int_equal(qp.n_ineq, (1 + MCA_BODY_PAIRS) * (ch.dof + 1));
+    assert_int_equal(si.body_off[0], ch.dof + 1);
+    table.allow[0] = ~(1u << L);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, &p, NULL, lists), MCA_OK);
+    /* no stop bound: 2 S_b v_normal */
+    assert_true(fabs(qp.beta[si.body_off[0] + MCA_BODY_PAIRS * L] -
+                     2.0 * mca_brake_s(d_want, d1m, pb.d2) * p.v_normal) < 1e-15);
+}
+
 /* Braking: every tick within dec dt of the last, at rest in the time the fastest joint needs; the fallback
  * (no distances: non-finite joint input) keeps each arm's direction. */
 static void test_controller_brake(void **state) {
@@ -1479,6 +1586,7 @@ int main(void) {
         cmocka_unit_test(test_pdnn_step_budget),
         cmocka_unit_test(test_near_rows_parallel),
         cmocka_unit_test(test_controller_brake),
+        cmocka_unit_test(test_body_rows),
         cmocka_unit_test(test_tube_bounds),
         cmocka_unit_test(test_path_distance_tolerance),
         cmocka_unit_test(test_path_rate_limit),

@@ -26,7 +26,7 @@ static void usage(FILE *f) {
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm] [--stop-at T] [--fault-at T:KIND]\n"
         "               [--dec-limit X] [--pdnn-budget-us U] [--w-path W] [--w-tube W] [--dump-capped]\n"
-        "               [--no-coordinate]\n"
+        "               [--no-coordinate] [--no-body-rows]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows);\n"
@@ -35,6 +35,9 @@ static void usage(FILE *f) {
         "  --summary F    JSON summary of every run (for tests)\n"
         "  --no-coordinate  mca-ts without the start-up plan of who passes first where fixed paths meet\n"
         "                 (docs/scheme.md, Coordination)\n"
+        "  --no-body-rows the scenario's fixed bodies measured only: no rows, no clearance fault (what the "
+        "run\n"
+        "                 does without them; docs/scheme.md, Fixed bodies)\n"
         "  --stop-at T    stop request at task time T s, as SIGTERM to mcad (brakes through the controller)\n"
         "  --fault-at T:KIND  latch controller fault KIND at T s (pdnn-not-converged, fake-attractor, "
         "distance,\n"
@@ -110,6 +113,9 @@ int main(int argc, char **argv) {
             continue;
         } else if (!strcmp(a, "--no-coordinate")) {
             o.no_coordinate = 1;
+            continue;
+        } else if (!strcmp(a, "--no-body-rows")) {
+            o.no_body_rows = 1;
             continue;
         } else if (!strcmp(a, "--dump-capped")) {
             o.dump_capped = 1;
@@ -340,6 +346,15 @@ int main(int argc, char **argv) {
                "p50 %d, p99.9 %d\n",
                r->scheme, r->path_error_max, r->path_error_p99, r->exact_points, r->exact_missed,
                r->exact_error_max, r->pdnn_steps_p50, r->pdnn_steps_p999);
+        if (r->n_bodies > 0) {
+            const int k = r->body_min_body;
+            printf(
+                "%s: fixed bodies: least margin %.5f m (distance %.5f m) at %.3f s, arm %d link %d against "
+                "%s '%s'; %d ticks inside a clearance\n",
+                r->scheme, r->body_min_margin, r->body_min_distance, r->body_min_t, r->body_min_arm,
+                r->body_min_link, mca_body_kind_name(r->body_min_kind), k >= 0 ? scn.body[k].fb.name : "",
+                r->body_ticks_below);
+        }
         if (r->budget_hits_steps + r->budget_hits_time) {
             printf("%s: %d ticks out of the PDNN's budget (%d at its %d steps, %d by the clock): repaired "
                    "answers, "
@@ -414,6 +429,17 @@ int main(int argc, char **argv) {
                 fprintf(f, "%s%d", a ? "," : "", r->end_done[a]);
             }
             fprintf(f, "],\"coord_pairs\":%d,\"coord_unplanned\":%d", r->coord_pairs, r->coord_unplanned);
+            if (r->n_bodies > 0) {
+                const int k = r->body_min_body;
+                fprintf(
+                    f,
+                    ",\"bodies\":%d,\"body_min_margin\":%.9g,\"body_min_distance\":%.9g,\"body_min_t\":%.6g,"
+                    "\"body_min_pair\":[%d,%d,%d],\"body_min_name\":\"%s\",\"body_min_kind\":\"%s\","
+                    "\"body_ticks_below\":%d",
+                    r->n_bodies, r->body_min_margin, r->body_min_distance, r->body_min_t, r->body_min_arm,
+                    r->body_min_link, k, k >= 0 ? scn.body[k].fb.name : "",
+                    mca_body_kind_name(r->body_min_kind), r->body_ticks_below);
+            }
             fprintf(f,
                     ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"
                     "\"exact_solves\":[%d,%d,%d]",

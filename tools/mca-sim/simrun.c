@@ -64,6 +64,9 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     if (o->no_coordinate) {
         cfg->ts.coordinate = 0;
     }
+    if (o->no_body_rows) {
+        cfg->body_rows = 0;
+    }
     if (o->pdnn_budget_us >= 0) {
         cfg->pdnn_budget_steps = mca_pdnn_budget_steps((int64_t)o->pdnn_budget_us * 1000);
     }
@@ -154,6 +157,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             goto out;
         }
         csv_layout.n_arms = na;
+        csv_layout.body_cols = cfg->n_bodies > 0;
         for (int a = 0; a < na; a++) {
             csv_layout.dof[a] = cfg->chain[a].dof;
         }
@@ -161,6 +165,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     }
     r->min_distance = INFINITY;
     r->min_distance_after_fault = INFINITY;
+    r->n_bodies = cfg->n_bodies;
+    r->body_min_margin = r->body_min_distance = INFINITY;
+    r->body_min_arm = r->body_min_link = r->body_min_body = r->body_min_kind = -1;
     r->brake_t = -1.0;
     r->stop_duration_s = -1.0;
     r->n_samples = scn->n_sample_times;
@@ -221,6 +228,16 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             r->min_distance = ip->min_distance;
             r->min_distance_t = t;
         }
+        if (ip->body_margin < r->body_min_margin) {
+            r->body_min_margin = ip->body_margin;
+            r->body_min_distance = ip->body_distance;
+            r->body_min_t = ip->task_t;
+            r->body_min_arm = ip->body_arm;
+            r->body_min_link = ip->body_link;
+            r->body_min_body = ip->body_index;
+            r->body_min_kind = ip->body_kind;
+        }
+        r->body_ticks_below += ip->body_margin < 0.0;
         for (int i = 0; i < r->n_samples; i++) {
             if (fabs(t - r->sample_t[i]) < 0.5 * dt) {
                 r->sample_d[i] = ip->min_distance;

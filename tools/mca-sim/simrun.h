@@ -31,6 +31,7 @@ typedef struct mca_simrun_opts {
     double w_tube;     /**< > 0: mca-ts's quadratic slack weight with a tube */
     double w_path;     /**< > 0: mca-ts's exact slack weight (mca_timescale_params_t.w_path) */
     int no_coordinate; /**< 1: mca-ts without the start-up plan of who passes first (mca/coord.h) */
+    int no_body_rows;  /**< 1: the fixed bodies measured only, no rows and no fault (the run without them) */
     int dump_capped;   /**< 1: also the picked ticks whose PDNN ended unconverged, as NAME.json.capped (their
                             phi is the solver's last iterate, not an answer: for a look at the QP itself) */
     double duration;   /**< <= 0: the scenario's */
@@ -110,6 +111,13 @@ typedef struct mca_simrun_result {
     int brake_forced_ticks;    /**< of those, past the stop's deadline */
     double max_dv_over_dt_dec; /**< braking: largest per-tick |commanded velocity change| / (dec dt) */
     int daemon_state;          /**< mca_daemon_state_t at the end */
+    /* fixed bodies, every tick (running and braking): the arm-body pair of least margin d - clearance */
+    int n_bodies;
+    double body_min_margin;   /**< [m] (+INF: no bodies); below 0 a link was inside a body's clearance */
+    double body_min_distance; /**< that pair's surface distance [m] */
+    double body_min_t;        /**< task time [s] */
+    int body_min_arm, body_min_link, body_min_body, body_min_kind;
+    int body_ticks_below; /**< ticks with the margin below 0 */
 } mca_simrun_result_t;
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);

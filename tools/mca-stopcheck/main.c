@@ -31,7 +31,10 @@ typedef struct stop_figures {
     double max_stop_s;   /* longest stop */
     long fallback_ticks; /* braking ticks that used the keep-direction fallback */
     long brake_ticks;
-    int task_fault; /* the task's own fault (the last branch then starts from it) */
+    int task_fault;      /* the task's own fault (the last branch then starts from it) */
+    int below_clear;     /* branches with a tick inside a fixed body's clearance */
+    double margin_task;  /* least fixed-body margin d - clearance along the task (+INF: no bodies) */
+    double margin_brake; /* the same over all brakes */
     double task_end;
 } stop_figures_t;
 
@@ -61,7 +64,7 @@ static void branch(mca_controller_t *c, double t, double q[MCA_MAX_ARMS][MCA_MAX
     /* the longest stop the limit allows, with a margin: a brake that lasts longer is reported as such */
     const int max_ticks = (int)(20.0 / (dec * dt)) + 1000;
     mca_tick_info_t info;
-    int k, below = 0;
+    int k, below = 0, inside = 0;
     for (k = 0; k < max_ticks; k++) {
         const int rest = mca_controller_brake(c, t + k * dt, qp, vp, dp, cp, &info);
         if (rest < 0) {
@@ -73,6 +76,8 @@ static void branch(mca_controller_t *c, double t, double q[MCA_MAX_ARMS][MCA_MAX
             f->min_brake = fmin(f->min_brake, info.min_distance);
             below |= info.min_distance < d1;
         }
+        f->margin_brake = fmin(f->margin_brake, info.body_margin);
+        inside |= info.body_margin < 0.0;
         for (int a = 0; a < cfg->n_arms; a++) {
             for (int j = 0; j < cfg->chain[a].dof; j++) {
                 f->max_dv_ratio = fmax(f->max_dv_ratio, fabs(cmd[a][j] - v[a][j]) / (dec * dt));
@@ -89,8 +94,11 @@ static void branch(mca_controller_t *c, double t, double q[MCA_MAX_ARMS][MCA_MAX
         f->min_brake = fmin(f->min_brake, info.min_distance);
         below |= info.min_distance < d1;
     }
+    f->margin_brake = fmin(f->margin_brake, info.body_margin);
+    inside |= info.body_margin < 0.0;
     f->max_stop_s = fmax(f->max_stop_s, (k + 1) * dt);
     f->below_d1 += below;
+    f->below_clear += inside;
     f->branches++;
 }
 
@@ -135,6 +143,7 @@ static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every
     memset(f, 0, sizeof *f);
     f->dec = dec;
     f->min_task = f->min_brake = INFINITY;
+    f->margin_task = f->margin_brake = INFINITY;
     const long n = lround(end / dt), step = lround(every / dt) > 0 ? lround(every / dt) : 1;
     mca_tick_info_t info;
     long k;
@@ -152,6 +161,7 @@ static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every
         if (isfinite(info.min_distance)) {
             f->min_task = fmin(f->min_task, info.min_distance);
         }
+        f->margin_task = fmin(f->margin_task, info.body_margin);
         if (trc != MCA_OK) {
             /* a fault brakes from the last command, exactly as a stop */
             f->task_fault = info.fault;
@@ -229,7 +239,8 @@ int main(int argc, char **argv) {
             return 2;
         }
         const stop_figures_t *f = &fig[n_fig++];
-        const int fail = f->below_d1 > 0 || f->min_task < scn.params.d1 || f->max_dv_ratio > 1.0 + 1e-9;
+        const int fail = f->below_d1 > 0 || f->min_task < scn.params.d1 || f->max_dv_ratio > 1.0 + 1e-9 ||
+                         f->below_clear > 0 || f->margin_task < 0.0;
         bad |= fail;
         printf("%s %s dec %.3g: %d stops, %d below d1; min distance task %.4f m, brakes %.4f m (d1 %.3f); "
                "max |dv| / (dec dt) %.4f; longest stop %.3f s; fallback %ld of %ld braking ticks; task fault "
@@ -237,6 +248,12 @@ int main(int argc, char **argv) {
                scn.name, scheme_name, dec, f->branches, f->below_d1, f->min_task, f->min_brake, scn.params.d1,
                f->max_dv_ratio, f->max_stop_s, f->fallback_ticks, f->brake_ticks,
                mca_ctrl_fault_name(f->task_fault), fail ? "  FAIL" : "");
+        if (scn.n_bodies > 0) {
+            printf(
+                "%s %s dec %.3g: fixed bodies: %d stops inside a clearance; least margin task %.4f m, brakes "
+                "%.4f m\n",
+                scn.name, scheme_name, dec, f->below_clear, f->margin_task, f->margin_brake);
+        }
     }
     if (json) {
         FILE *out = fopen(json, "w");
@@ -251,10 +268,13 @@ int main(int argc, char **argv) {
             fprintf(out,
                     "%s{\"dec\":%.6g,\"stops\":%d,\"below_d1\":%d,\"min_distance_task\":%.9g,"
                     "\"min_distance_brake\":%.9g,\"max_dv_ratio\":%.9g,\"longest_stop_s\":%.6g,"
-                    "\"fallback_ticks\":%ld,\"brake_ticks\":%ld,\"task_fault\":\"%s\",\"task_end_s\":%.6g}",
+                    "\"fallback_ticks\":%ld,\"brake_ticks\":%ld,\"task_fault\":\"%s\",\"task_end_s\":%.6g,"
+                    "\"below_clearance\":%d,\"body_margin_task\":%.9g,\"body_margin_brake\":%.9g}",
                     i ? "," : "", f->dec, f->branches, f->below_d1, f->min_task,
                     isfinite(f->min_brake) ? f->min_brake : -1.0, f->max_dv_ratio, f->max_stop_s,
-                    f->fallback_ticks, f->brake_ticks, mca_ctrl_fault_name(f->task_fault), f->task_end);
+                    f->fallback_ticks, f->brake_ticks, mca_ctrl_fault_name(f->task_fault), f->task_end,
+                    f->below_clear, isfinite(f->margin_task) ? f->margin_task : -1.0,
+                    isfinite(f->margin_brake) ? f->margin_brake : -1.0);
         }
         fprintf(out, "]}\n");
         fclose(out);

@@ -35,6 +35,7 @@
 
 #include "mca/apf.h"
 #include "mca/armdist.h"
+#include "mca/bodyrows.h"
 #include "mca/chain.h"
 #include "mca/coord.h"
 #include "mca/path_rate.h"
@@ -131,10 +132,13 @@ typedef enum mca_ctrl_why {
     MCA_WHY_PDNN_OUTPUT,   /**< the PDNN's output is not finite */
     MCA_WHY_TRACKING, /**< not converged, tracking off: x[0] residual, x[1] ||G phi - alpha||, x[2] min d;
                          i[0] steps */
-    MCA_WHY_NOT_CONVERGED, /**< x[0] residual, x[1] the fault threshold; i[0] steps */
-    MCA_WHY_EQ_RESIDUAL,   /**< x[0] ||G phi - alpha||, x[1] eq_tol */
-    MCA_WHY_INJECTED,      /**< latched from outside the tick (mca_controller_raise_fault): i[0] the fault,
-                              x[0] the time given */
+    MCA_WHY_NOT_CONVERGED,   /**< x[0] residual, x[1] the fault threshold; i[0] steps */
+    MCA_WHY_EQ_RESIDUAL,     /**< x[0] ||G phi - alpha||, x[1] eq_tol */
+    MCA_WHY_INJECTED,        /**< latched from outside the tick (mca_controller_raise_fault): i[0] the fault,
+                                x[0] the time given */
+    MCA_WHY_BELOW_CLEARANCE, /**< a link inside a fixed body's clearance: x[0] distance, x[1] clearance;
+                                i[0..2] arm, link, body */
+    MCA_WHY_BELOW_CLEARANCE_NEXT, /**< as MCA_WHY_BELOW_CLEARANCE, predicted for the next tick */
 } mca_ctrl_why_t;
 
 /** A fault's cause as a code and numbers: the tick fills it without formatting anything (no text on the
@@ -165,10 +169,15 @@ typedef struct mca_controller_config {
     int64_t pdnn_budget_ns; /**< wall time the PDNN may use from the start of a tick (0: none); running out is
                                  a budget event (MCA_BUDGET_TIME), a braking tick's the keep-direction
                                  fallback. mcad: rt.pdnn_budget_us (half the period); mca-sim: none */
-    int pdnn_budget_steps;  /**< the same budget in steps (0: none; mca_pdnn_budget_steps): a solve stops at
-                                 min(pdnn.max_steps, this); stopping here before the cap is a budget event
-                                 (MCA_BUDGET_STEPS), deterministic. mcad and mca-sim alike. Not under the
-                                 scheme mca, whose step limit stays its cap (the paper's figures) */
+    int n_bodies; /**< fixed bodies of the cell (tables, fixtures, cups): every link they do not allow keeps
+                       their clearance through rows of its own (mca/bodyrows.h); 0: none (the arms only) */
+    mca_fixed_body_t body[MCA_MAX_BODIES];
+    int body_rows; /**< 1 (default): the bodies' rows and their distance fault; 0: bodies measured only (the
+                        comparison run of what happens without them: mca-sim --no-body-rows) */
+    int pdnn_budget_steps; /**< the same budget in steps (0: none; mca_pdnn_budget_steps): a solve stops at
+                                min(pdnn.max_steps, this); stopping here before the cap is a budget event
+                                (MCA_BUDGET_STEPS), deterministic. mcad and mca-sim alike. Not under the
+                                scheme mca, whose step limit stays its cap (the paper's figures) */
 } mca_controller_config_t;
 
 /** Wall time of one PDNN step [ns] on the largest QPs the shipped tasks build, measured on the development VM
@@ -200,9 +209,16 @@ typedef struct mca_tick_info {
     int min_arm_b, min_link_b; /**< arm/link with E */
     double min_p[3], min_e[3];
     double link_distance[MCA_MAX_ARMS][MCA_MAX_LINKS]; /**< per link: closest link of any other arm */
-    double brake;                                      /**< smallest S(d) over the links (1: free) */
-    int active_rows;                                   /**< collision rows with a finite bound */
-    int binding_rows; /**< collision rows at their bound (U phi >= beta - 1e-9) */
+    /* fixed bodies: the arm-body pair of least margin d - clearance (body_arm -1: none) */
+    double body_distance;    /**< its surface distance [m] (+INF: no pair) */
+    double body_margin;      /**< d - the body's clearance [m] (+INF: no pair); below 0 is a distance fault */
+    int body_arm, body_link; /**< the link */
+    int body_index;          /**< the body (cfg.body[]) */
+    int body_kind;           /**< its mca_body_kind_t (mca_body_kind_name) */
+    double body_p[3], body_q[3]; /**< witness on the link's axis, on the body */
+    double brake;                /**< smallest S(d) over the links (1: free) */
+    int active_rows;             /**< collision rows with a finite bound */
+    int binding_rows;            /**< collision rows at their bound (U phi >= beta - 1e-9) */
     /* solver */
     int pdnn_steps;
     int pdnn_exact_solves; /**< the polish's exact active-set solves (docs/pdnn.md) */
@@ -250,6 +266,8 @@ typedef struct mca_controller {
     mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
     mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS]
                             [MCA_NEAR_PAIRS]; /**< nearest links (mca-ts, braking) */
+    mca_body_witness_t body_near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS]; /**< fixed bodies' rows */
+    double body_margin_prev; /**< last tick's least body margin (the prediction of the distance fault) */
     mca_scheme_state_t sstate;
     mca_qp_t qp;
     mca_pdnn_t pdnn;

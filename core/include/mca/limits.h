@@ -23,11 +23,17 @@
 /** Collision rows per link under mca-ts and in braking: one per each of the link's nearest witness pairs
  *  against the other arms (mca_scheme_near_rows). */
 #define MCA_NEAR_PAIRS 6
+/** Fixed bodies of a cell (tables, fixtures, cups: mca/bodyrows.h). */
+#define MCA_MAX_BODIES 16
+/** Collision rows per link against the fixed bodies: one per each of the link's nearest witness pairs
+ *  against the bodies not allowed to it (mca_body_rows). */
+#define MCA_BODY_PAIRS 6
 /** QP sizes: phi = all joint velocities (and the mca-ts variables), one 3-row equality per arm, and per
- *  link of every arm up to MCA_NEAR_PAIRS rows (mca-ts; the paper's componentwise form needs 3). */
+ *  link of every arm up to MCA_NEAR_PAIRS rows against the other arms (mca-ts; the paper's componentwise
+ *  form needs 3) and MCA_BODY_PAIRS against the fixed bodies. */
 #define MCA_QP_MAX_VARS (MCA_MAX_ARMS * (MCA_MAX_DOF + MCA_TS_VARS))
 #define MCA_QP_MAX_EQ (MCA_MAX_ARMS * MCA_TASK_DIM)
-#define MCA_QP_MAX_INEQ (MCA_MAX_ARMS * MCA_MAX_LINKS * MCA_NEAR_PAIRS)
+#define MCA_QP_MAX_INEQ (MCA_MAX_ARMS * MCA_MAX_LINKS * (MCA_NEAR_PAIRS + MCA_BODY_PAIRS))
 /** Primal-dual vector length h = vars + eq + ineq. */
 #define MCA_QP_MAX_H (MCA_QP_MAX_VARS + MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ)
 

@@ -45,6 +45,8 @@ typedef struct mca_scheme_params {
     double big;       /**< bound of an inactive row (the PDNN's varpi or less) */
     double d1_margin; /**< mca-ts rows (mca_scheme_near_rows) brake towards d1 + d1_margin, at most halfway to
                          d2 [m]; the distance fault stays at d1 (0 here; the controller sets it for mca-ts) */
+    int body_pairs;   /**< rows per link kept for the fixed bodies after each arm's own rows (mca_body_rows,
+                           mca/bodyrows.h): MCA_BODY_PAIRS with bodies, 0 without (the layout of before) */
 } mca_scheme_params_t;
 
 /** Critical point of one link against the closest link of the other arms. */
@@ -68,8 +70,11 @@ typedef struct mca_scheme_info {
     int active_rows; /**< collision rows with a finite bound */
     double brake;    /**< smallest S(d) over the links with a critical point (1 when none) */
     int var_off[MCA_MAX_ARMS];
-    int row_off[MCA_MAX_ARMS]; /**< first inequality row of each arm */
-    int rows_per_link;         /**< 3 componentwise, 1 normal, 0 MVN */
+    int row_off[MCA_MAX_ARMS];  /**< first inequality row of each arm */
+    int rows_per_link;          /**< 3 componentwise, 1 normal, 0 MVN */
+    int body_off[MCA_MAX_ARMS]; /**< first fixed-body row of each arm: p->body_pairs rows per link follow its
+                                     own rows (mca_scheme_assemble with collision rows, mca_scheme_near_rows)
+                                 */
 } mca_scheme_info_t;
 
 /** Defaults: collision on, normal form, d1 0.05, d2 0.12, K 20, epsilon 5, v_normal 0.5, v_floor 0,

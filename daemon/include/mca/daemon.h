@@ -173,6 +173,11 @@ typedef struct mca_daemon_summary {
     uint64_t dds_ab_short_n[2];                    /**< of those, ticks shorter than half a period */
     double dds_ab_short_mean_ns[2];                /**< their mean: a machine's stall left out */
     double min_distance, min_distance_t;
+    /* fixed bodies: the arm-body pair of least margin d - clearance (body_pair[0] -1: no bodies) */
+    double body_margin, body_distance, body_t;
+    int body_pair[3];   /**< arm, link, body (the cell's bodies, in order) */
+    char body_name[32]; /**< that body's name */
+    int body_kind;      /**< and kind (mca_body_kind_t: mca_body_kind_name) */
     int fault;          /**< mca_daemon_fault_t */
     int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */
     int fault_arm;      /**< the arm the fault is about (ARM, LOST_FEEDBACK, BUS, FEEDBACK), else -1 */

@@ -31,6 +31,8 @@ typedef struct mca_tick_csv_layout {
                           cmd_gap_us, wake_ns after fault (mcad) */
     int pair_cols;   /**< 1: with three or more arms, d_<a>_<b> of every pair last (min_d is only the
                           smallest of them; mca-sim) */
+    int body_cols;   /**< 1: the arm-body pair of least margin last: body_d, body_margin, body_arm,
+                          body_link, body, body_kind (a cell with fixed bodies) */
 } mca_tick_csv_layout_t;
 
 /** One tick's data. Fields a layout does not select are not read (NULL allowed). */

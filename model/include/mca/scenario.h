@@ -49,6 +49,18 @@ typedef struct mca_scenario_params {
     int form;        /**< mca_collision_form_t (0 componentwise, 1 normal) */
 } mca_scenario_params_t;
 
+/** Most entries in one body's allow list. */
+#define MCA_SCENARIO_MAX_ALLOW 16
+
+/** One fixed body of a scenario or cell (the `bodies:` list; docs/scheme.md section 3). Its allow list
+ *  names links by arm name, resolved against the arms' order when the controller's config is made. */
+typedef struct mca_scenario_body {
+    mca_fixed_body_t fb; /**< name, kind, geometry; fb.allow empty (the list below is resolved later) */
+    double clearance;    /**< [m]; < 0: not given, the task's d1 (after any cell override of d1) */
+    int n_allow;
+    char allow[MCA_SCENARIO_MAX_ALLOW][48]; /**< "ARM" (every link), "ARM.base", "ARM.tool", "ARM.N" */
+} mca_scenario_body_t;
+
 typedef struct mca_scenario {
     char name[64];
     char source[512]; /**< file it was loaded from */
@@ -59,6 +71,8 @@ typedef struct mca_scenario {
     mca_scenario_params_t params;
     int n_sample_times; /**< instants for the Table-I style report */
     double sample_times[16];
+    int n_bodies; /**< fixed bodies (tables, fixtures, cups) */
+    mca_scenario_body_t body[MCA_MAX_BODIES];
 } mca_scenario_t;
 
 /**
@@ -246,6 +260,42 @@ const char *mca_config_search_path(void);
  * error names it).
  */
 void mca_config_resolve(char *out, size_t outlen, const char *base_file, const char *rel);
+
+/** One fixed body as a file gives it (NULL where it does not): the `bodies:` entries of scenario and cell
+ *  files alike (the schema: mca_scenario_body_fields, mca/yaml_load.h). */
+typedef struct mca_body_keys {
+    char *name;
+    int kind; /**< mca_body_kind_t */
+    double *clearance;
+    char **allow;
+    unsigned allow_count;
+    double *point, *normal, *centre, *a, *b, *half_extents, *rpy, *axis; /**< 3 values each */
+    unsigned point_count, normal_count, centre_count, a_count, b_count, half_extents_count, rpy_count,
+        axis_count;
+    double *radius, *half_length;
+} mca_body_keys_t;
+
+/**
+ * Check and add the bodies a file gives (k[0..count), at node "bodies") to scn: each kind's keys and no other
+ * (plane: point, normal; sphere: centre, radius; capsule: a, b, radius; box: centre, half_extents, rpy
+ * (optional); cylinder: centre, axis (optional, default z), half_length, radius), every number in its range,
+ * normals and axes not zero, clearance in [0, 1] m; the allow list: "ARM" (every link), "ARM.base" (link 0),
+ * "ARM.tool" (its last link) or "ARM.N" (link N), ARM one of scn's arms (their models loaded). A body named
+ * as one scn has already replaces it (a cell over its scenario's); more than MCA_MAX_BODIES is an error.
+ * The one check of bodies for scenario and cell files.
+ * @retval MCA_OK, MCA_ECONFIG (c->err: "FILE:LINE: bodies[I].FIELD: reason"; scn may be partly changed)
+ */
+int mca_scenario_bodies_apply(const mca_check_ctx_t *c, const mca_body_keys_t *k, unsigned count,
+                              mca_scenario_t *scn);
+
+/**
+ * The controller's bodies from a scenario's: clearance (d1 where not given) and each allow entry resolved to
+ * link bits of the arm of that name in scn's order.
+ * @retval MCA_OK, MCA_ECONFIG (err: an allow entry names no arm of scn, or a link it does not have: a cell
+ *         that changed an arm's model)
+ */
+int mca_scenario_bodies_resolve(const mca_scenario_t *scn, mca_fixed_body_t out[MCA_MAX_BODIES], char *err,
+                                size_t errlen);
 
 /** Defaults: the scheme's (mca_scheme_default_params: d1 0.05, d2 0.12, K 20, epsilon 5, normal form,
  *  v_normal 0.5, v_floor 0) and dt MCA_CONTROLLER_DT (0.001). */

@@ -52,6 +52,14 @@ extern const cyaml_strval_t mca_yaml_form_strings[2];
 /** The schema of a path: mapping (into mca_path_keys_t, mca/scenario.h). */
 extern const cyaml_schema_field_t mca_scenario_path_fields[];
 
+/** The schema of one fixed body (a `bodies:` entry, into mca_body_keys_t, mca/scenario.h). */
+extern const cyaml_schema_value_t mca_scenario_body_entry;
+
+/** libcyaml field of the fixed bodies (mca_body_keys_t *M with unsigned M##_count in struct T), optional at
+ * the top level of both kinds of file. */
+#define MCA_YAML_BODIES_FIELD(T, M)                                                                          \
+    CYAML_FIELD_SEQUENCE("bodies", MCA_YAML_OPT, T, M, &mca_scenario_body_entry, 0, MCA_MAX_BODIES)
+
 /**
  * libcyaml fields of an arm's model (mca_arm_keys_t M, a member of struct T): name, urdf, tip_link,
  * base_xyz, base_rpy, q0, path. NEED: the flags of urdf, base_xyz, q0 and path, which a scenario must give

@@ -1,0 +1,98 @@
+/* SPDX-License-Identifier: MIT */
+/** @file mca/bodyrows.h
+ * The fixed bodies of a cell on the tick (tables, fixtures, cups): each arm link against each body that does
+ * not allow it gets the arm-pair rows' kind of hard row,
+ *
+ *     -n^T J_P qdot_a <= 2 min{ S_b(d) v_normal (d < d2_b only), (d - c_b') / (2 T_a) },
+ *
+ * n the unit normal from the body toward the link (mca/body.h), P the witness on the link's axis, J_P its
+ * positional Jacobian, c_b the body's clearance (its d1), d2_b = c_b + (d2 - d1) (the arm pairs' band
+ * width), c_b' = c_b + d1_margin (at most halfway to d2_b), S_b = S on [c_b', d2_b], T_a the arm's stop time
+ * (mca_scheme_stop_time). The factor 2 is the whole share of the approach budget: a body does not move, so
+ * the arm owns the whole margin (docs/scheme.md, "Fixed bodies"). Per link the MCA_BODY_PAIRS witness pairs
+ * of least margin d - c_b are kept: the closest points and the distances of the link's two ends (for a
+ * capsule body also its two ends against the link): the distance is the least of these, and which one is
+ * least can jump (a link level above a table). Only pairs whose row can bind inside the QP's box are listed
+ * (as the arm pairs': docs/scheme.md section 10), and a cheap bounding-sphere test skips the rest.
+ *
+ * Context: rt (no allocation, no locks, no formatting, bounded time), except mca_body_check (start-up).
+ */
+#ifndef MCA_BODYROWS_H
+#define MCA_BODYROWS_H
+
+#include "mca/body.h"
+#include "mca/chain.h"
+#include "mca/limits.h"
+#include "mca/qp.h"
+#include "mca/scheme.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** One fixed body of a cell, as the controller keeps it. */
+typedef struct mca_fixed_body {
+    char name[32];
+    mca_body_t body;              /**< kind and geometry, world frame (mca/body.h) */
+    double clearance;             /**< [m] what every link it does not allow keeps from it (its d1) */
+    unsigned allow[MCA_MAX_ARMS]; /**< bit l of allow[a]: link l of arm a may touch it (no rows, no fault) */
+} mca_fixed_body_t;
+
+/** One witness pair of a link against a body (a row's data). */
+typedef struct mca_body_witness {
+    int valid;
+    int body;      /**< index into the bodies */
+    double d;      /**< signed surface distance [m] */
+    double margin; /**< d - clearance [m]: the list's order */
+    double p[3];   /**< on the link's axis (the Jacobian's point) */
+    double q[3];   /**< on the body */
+    double n[3];   /**< unit normal from the body toward the link */
+} mca_body_witness_t;
+
+/** The arm-body pair of least margin. */
+typedef struct mca_body_nearest {
+    int valid; /**< 0: no pair (no bodies, or every link allowed) */
+    int arm, link, body, kind;
+    double d, margin; /**< surface distance, d - clearance [m] */
+    double p[3], q[3];
+} mca_body_nearest_t;
+
+/** "plane", "sphere", "capsule", "box", "cylinder"; "unknown" otherwise. */
+const char *mca_body_kind_name(int kind);
+
+/**
+ * A body's geometry and clearance are usable (start-up): finite, clearance >= 0, radii and half extents >= 0,
+ * normal and axis not zero, a box's rotation orthonormal (one probe distance answers).
+ * @retval MCA_OK, MCA_EINVAL
+ */
+int mca_body_check(const mca_fixed_body_t *b);
+
+/** The scheme's parameters for a body of this clearance: d1 = clearance, d2 = clearance + (d2 - d1). */
+void mca_body_band(const mca_scheme_params_t *p, double clearance, mca_scheme_params_t *pb);
+
+/**
+ * The arm-body pair of least margin over every link and every body that does not allow it.
+ * @retval MCA_OK, MCA_EINVAL (NULL, a distance failed: non-finite geometry)
+ */
+int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
+                     const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t *out);
+
+/**
+ * Fill the fixed bodies' rows of a QP whose layout keeps them (p->body_pairs rows per link from
+ * si->body_off[a]: mca_scheme_assemble with collision rows, or mca_scheme_near_rows; call after it, with the
+ * QP's box final, since only witness pairs whose row can bind inside it are listed). Rows are written at the
+ * QP's full width (after mca_scheme_add_timescale their extra columns are 0). Rows that cannot bind, or that
+ * are parallel to one kept before (1e-3) stay inactive (beta = big). Adds to si->active_rows, lowers
+ * si->brake. dec NULL or dec[a] <= 0: no stop bound for arm a (the paper's scheme).
+ * @param[out] lists  lists[a][l]: the witness pairs of each link (rows in this order), may be NULL
+ * @retval MCA_OK (also with no bodies or body_pairs 0: nothing done), MCA_EINVAL
+ */
+int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
+                  const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
+                  const mca_scheme_params_t *p, const double *dec,
+                  mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,327 @@
+/* SPDX-License-Identifier: MIT */
+/* The fixed bodies' rows of the tick; see mca/bodyrows.h and docs/scheme.md, "Fixed bodies". */
+#include "mca/bodyrows.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mca/err.h"
+#include "mca/vec3.h"
+#include "scheme__rows.h"
+
+const char *mca_body_kind_name(int kind) {
+    static const char *const names[] = {
+        [MCA_BODY_PLANE] = "plane", [MCA_BODY_SPHERE] = "sphere",     [MCA_BODY_CAPSULE] = "capsule",
+        [MCA_BODY_BOX] = "box",     [MCA_BODY_CYLINDER] = "cylinder",
+    };
+    return kind >= 0 && kind < (int)(sizeof names / sizeof names[0]) ? names[kind] : "unknown";
+}
+
+int mca_body_check(const mca_fixed_body_t *b) {
+    if (!b || !isfinite(b->clearance) || !(b->clearance >= 0.0)) {
+        return MCA_EINVAL;
+    }
+    /* the distance functions check every kind's geometry: one probe answers */
+    const mca_capsule_t probe = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
+    mca_body_dist_t r;
+    return mca_capsule_body_distance(&probe, &b->body, &r) == MCA_OK ? MCA_OK : MCA_EINVAL;
+}
+
+void mca_body_band(const mca_scheme_params_t *p, double clearance, mca_scheme_params_t *pb) {
+    *pb = *p;
+    pb->d1 = clearance;
+    pb->d2 = clearance + (p->d2 - p->d1);
+}
+
+/* A sphere around a finite body (centre c, radius returned); -1 for the half-space. */
+static double body_sphere(const mca_body_t *b, double c[3]) {
+    switch (b->kind) {
+    case MCA_BODY_SPHERE:
+        mca_v3_set(c, b->u.sphere.centre);
+        return b->u.sphere.radius;
+    case MCA_BODY_CAPSULE:
+        for (int i = 0; i < 3; i++) {
+            c[i] = 0.5 * (b->u.capsule.a[i] + b->u.capsule.b[i]);
+        }
+        return 0.5 * mca_v3_dist(b->u.capsule.a, b->u.capsule.b) + b->u.capsule.radius;
+    case MCA_BODY_BOX:
+        mca_v3_set(c, b->u.box.centre);
+        return mca_v3_norm(b->u.box.half);
+    case MCA_BODY_CYLINDER:
+        mca_v3_set(c, b->u.cylinder.centre);
+        return sqrt(b->u.cylinder.half_len * b->u.cylinder.half_len +
+                    b->u.cylinder.radius * b->u.cylinder.radius);
+    default:
+        return -1.0;
+    }
+}
+
+/* A lower bound on the surface distance of link capsule cap to the body whose sphere is (c, R): the sphere's
+ * distance to the capsule; -INFINITY for the half-space (always measured; it costs ~30 ns). */
+static double lower_bound(const mca_capsule_t *cap, const double c[3], double R) {
+    if (R < 0.0) {
+        return -INFINITY;
+    }
+    double u[3], w[3];
+    mca_v3_sub(u, cap->b, cap->a);
+    mca_v3_sub(w, c, cap->a);
+    const double uu = mca_v3_dot(u, u);
+    const double t = uu > 0.0 ? fmax(0.0, fmin(1.0, mca_v3_dot(w, u) / uu)) : 0.0;
+    mca_v3_axpy(w, w, -t, u); /* c - (a + t u) */
+    return mca_v3_norm(w) - cap->radius - R;
+}
+
+int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
+                     const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t *out) {
+    if (!out || (n_bodies > 0 && (!chain || !kin || !bodies)) || n_arms < 0 || n_arms > MCA_MAX_ARMS) {
+        return MCA_EINVAL;
+    }
+    out->valid = 0;
+    out->margin = out->d = INFINITY;
+    out->arm = out->link = out->body = out->kind = -1;
+    for (int k = 0; k < n_bodies && k < MCA_MAX_BODIES; k++) {
+        const mca_fixed_body_t *fb = &bodies[k];
+        double c[3];
+        const double R = body_sphere(&fb->body, c);
+        for (int a = 0; a < n_arms; a++) {
+            const mca_kin_t *kn = &kin[a];
+            for (int l = 0; l <= chain[a]->dof; l++) {
+                if (fb->allow[a] & (1u << l)) {
+                    continue;
+                }
+                const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
+                                           {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
+                                           chain[a]->link_radius[l]};
+                if (!(lower_bound(&cap, c, R) - fb->clearance < out->margin)) {
+                    continue; /* cannot be the least (NaN: measured, and the distance rejects it) */
+                }
+                mca_body_dist_t r;
+                if (mca_capsule_body_distance(&cap, &fb->body, &r) != MCA_OK) {
+                    return MCA_EINVAL;
+                }
+                const double m = r.d - fb->clearance;
+                if (m < out->margin) {
+                    out->valid = 1;
+                    out->margin = m;
+                    out->d = r.d;
+                    out->arm = a;
+                    out->link = l;
+                    out->body = k;
+                    out->kind = (int)fb->body.kind;
+                    mca_v3_set(out->p, r.p_axis);
+                    mca_v3_set(out->q, r.q);
+                }
+            }
+        }
+    }
+    return MCA_OK;
+}
+
+/* Insert a witness into a link's list (sorted by margin, at most MCA_BODY_PAIRS); a pair found twice (the
+ * closest points at an end) is listed once. */
+static void witness_insert(mca_body_witness_t list[MCA_BODY_PAIRS], int body, double clearance,
+                           const mca_body_dist_t *r) {
+    const double m = r->d - clearance;
+    if (list[MCA_BODY_PAIRS - 1].valid && !(m < list[MCA_BODY_PAIRS - 1].margin)) {
+        return;
+    }
+    for (int i = 0; i < MCA_BODY_PAIRS && list[i].valid; i++) {
+        if (list[i].body == body && mca_v3_dist(list[i].p, r->p_axis) < 1e-9 &&
+            mca_v3_dist(list[i].q, r->q) < 1e-9) {
+            return;
+        }
+    }
+    int k = MCA_BODY_PAIRS;
+    while (k > 0 && (!list[k - 1].valid || m < list[k - 1].margin)) {
+        k--;
+    }
+    if (k >= MCA_BODY_PAIRS) {
+        return;
+    }
+    memmove(&list[k + 1], &list[k], (size_t)(MCA_BODY_PAIRS - 1 - k) * sizeof list[0]);
+    mca_body_witness_t *w = &list[k];
+    w->valid = 1;
+    w->body = body;
+    w->d = r->d;
+    w->margin = m;
+    mca_v3_set(w->p, r->p_axis);
+    mca_v3_set(w->q, r->q);
+    mca_v3_set(w->n, r->n);
+}
+
+/* The larger of x and y; unlike fmax, a NaN is kept. */
+static inline double max_or_nan(double x, double y) {
+    return x < y ? y : (isnan(y) ? y : x);
+}
+
+/* The row bound of a witness at distance d (the band pb, stop time t_stop), the share of a fixed body (2:
+ * the whole budget) applied; p->big when no bound applies. */
+static double body_bound(const mca_scheme_params_t *pb, double d, double t_stop) {
+    const double b = mca_scheme_row_bound(pb, d, t_stop);
+    return b < pb->big ? 2.0 * b : pb->big;
+}
+
+/* Arm a's witness lists: per link, the pairs whose row can bind with the joint speeds inside the QP's box
+ * (the link's fastest point moves at most `speed`: sum_j max|qdot_j| |p - o_j|, largest at an end). */
+static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mca_kin_t *kn, int a,
+                     const mca_fixed_body_t *bodies, int n_bodies, const mca_scheme_params_t *pb,
+                     const double (*sc)[3], const double *sr, double t_stop,
+                     mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
+    const int dof = ch->dof;
+    double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF];
+    for (int j = 0; j < dof; j++) {
+        qmax[j] = max_or_nan(fabs(qp->lb[vo + j]), fabs(qp->ub[vo + j]));
+        for (int m = j + 1; m <= dof + 1; m++) {
+            lever[m][j] = mca_v3_dist(kn->point[m], kn->point[j + 1]);
+        }
+    }
+    for (int l = 0; l <= dof; l++) {
+        mca_body_witness_t *list = lists[l];
+        for (int k = 0; k < MCA_BODY_PAIRS; k++) {
+            list[k].valid = 0;
+        }
+        double speed = 0.0; /* NaN anywhere: NaN, so every pair may bind */
+        for (int j = 0; j < l; j++) {
+            speed += qmax[j] * max_or_nan(lever[l][j], lever[l + 1][j]);
+        }
+        const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
+                                   {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
+                                   ch->link_radius[l]};
+        for (int k = 0; k < n_bodies; k++) {
+            const mca_fixed_body_t *fb = &bodies[k];
+            if (fb->allow[a] & (1u << l)) {
+                continue;
+            }
+            const mca_scheme_params_t *bp = &pb[k];
+            /* beyond d_cut no row of this pair can bind: its S part ends at d2_b, its stop part
+             * 2 (d - c') / (2 T) reaches the link's speed at c' + T speed (1 nm wider: rounding never drops a
+             * row that binds) */
+            double d_cut = bp->d2;
+            if (!isfinite(speed)) {
+                d_cut = INFINITY;
+            } else if (t_stop > 0.0) {
+                d_cut = fmax(d_cut, mca_scheme_rows_d1(bp) + t_stop * speed + 1e-9);
+            }
+            if (!(lower_bound(&cap, sc[k], sr[k]) <= d_cut)) {
+                continue;
+            }
+            mca_body_dist_t r;
+            if (mca_capsule_body_distance(&cap, &fb->body, &r) != MCA_OK) {
+                return MCA_EINVAL;
+            }
+            /* the ends are never nearer than the closest points: a pair whose closest points cannot bind has
+             * no end that can (the bound grows with d) */
+            if (body_bound(bp, r.d, t_stop) > speed) {
+                continue;
+            }
+            witness_insert(list, k, fb->clearance, &r);
+            const double *ends[2] = {cap.a, cap.b};
+            for (int e = 0; e < 2; e++) {
+                const mca_capsule_t pt = {
+                    {ends[e][0], ends[e][1], ends[e][2]}, {ends[e][0], ends[e][1], ends[e][2]}, cap.radius};
+                if (mca_capsule_body_distance(&pt, &fb->body, &r) != MCA_OK) {
+                    return MCA_EINVAL;
+                }
+                if (!(body_bound(bp, r.d, t_stop) > speed)) {
+                    witness_insert(list, k, fb->clearance, &r);
+                }
+            }
+            if (fb->body.kind == MCA_BODY_CAPSULE) {
+                /* and the body's own ends against the link (two capsules' five witness functions) */
+                const mca_capsule_t *bc = &fb->body.u.capsule;
+                const double *bends[2] = {bc->a, bc->b};
+                for (int e = 0; e < 2; e++) {
+                    const mca_body_sphere_t sp = {{bends[e][0], bends[e][1], bends[e][2]}, bc->radius};
+                    if (mca_capsule_sphere_distance(&cap, &sp, &r) != MCA_OK) {
+                        return MCA_EINVAL;
+                    }
+                    if (!(body_bound(bp, r.d, t_stop) > speed)) {
+                        witness_insert(list, k, fb->clearance, &r);
+                    }
+                }
+            }
+        }
+    }
+    return MCA_OK;
+}
+
+int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
+                  const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
+                  const mca_scheme_params_t *p, const double *dec,
+                  mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]) {
+    if (!qp || !si || !p || n_arms < 1 || n_arms > MCA_MAX_ARMS || n_bodies < 0 ||
+        n_bodies > MCA_MAX_BODIES) {
+        return MCA_EINVAL;
+    }
+    if (n_bodies == 0 || p->body_pairs <= 0) {
+        return MCA_OK;
+    }
+    if (!chain || !kin || !bodies || p->body_pairs > MCA_BODY_PAIRS) {
+        return MCA_EINVAL;
+    }
+    mca_scheme_params_t pb[MCA_MAX_BODIES];
+    double sc[MCA_MAX_BODIES][3], sr[MCA_MAX_BODIES]; /* each body's bounding sphere */
+    for (int k = 0; k < n_bodies; k++) {
+        mca_body_band(p, bodies[k].clearance, &pb[k]);
+        sr[k] = body_sphere(&bodies[k].body, sc[k]);
+    }
+    const size_t row_bytes = sizeof(double) * (size_t)qp->n;
+    for (int a = 0; a < n_arms; a++) {
+        const mca_chain_t *ch = chain[a];
+        const int dof = ch->dof, vo = si->var_off[a], b0 = si->body_off[a];
+        if (b0 + p->body_pairs * (dof + 1) > qp->n_ineq) {
+            return MCA_EINVAL; /* the QP keeps no slots for them */
+        }
+        const double t_stop = mca_scheme_stop_time(ch, dec ? dec[a] : 0.0);
+        mca_body_witness_t own[MCA_MAX_LINKS][MCA_BODY_PAIRS];
+        mca_body_witness_t(*ls)[MCA_BODY_PAIRS] = lists ? lists[a] : own;
+        int rc =
+            arm_lists(qp, vo, ch, &kin[a], a, bodies, n_bodies, pb, (const double(*)[3])sc, sr, t_stop, ls);
+        if (rc != MCA_OK) {
+            return rc;
+        }
+        int kept[MCA_BODY_PAIRS * MCA_MAX_LINKS], n_kept = 0;
+        double kept_norm[MCA_BODY_PAIRS * MCA_MAX_LINKS];
+        for (int l = 0; l <= dof; l++) {
+            for (int k = 0; k < p->body_pairs && ls[l][k].valid; k++) {
+                const mca_body_witness_t *w = &ls[l][k];
+                const mca_scheme_params_t *bp = &pb[w->body];
+                const int r = b0 + p->body_pairs * l + k;
+                if (w->d < bp->d2) {
+                    si->brake = fmin(si->brake, mca_brake_s(w->d, mca_scheme_rows_d1(bp), bp->d2));
+                }
+                const double bound = body_bound(bp, w->d, t_stop);
+                if (!(bound < p->big)) {
+                    continue;
+                }
+                double Jp[3][MCA_MAX_DOF];
+                rc = mca_jacobian_point(&kin[a], l, w->p, Jp);
+                if (rc != MCA_OK) {
+                    return rc;
+                }
+                double reach =
+                    0.0; /* the fastest approach the joint limits allow: a row above it never binds */
+                memset(qp->U[r], 0, row_bytes);
+                for (int j = 0; j < dof; j++) {
+                    /* the approach speed towards the body: along -n */
+                    const double u = -(w->n[0] * Jp[0][j] + w->n[1] * Jp[1][j] + w->n[2] * Jp[2][j]);
+                    qp->U[r][vo + j] = u;
+                    reach += fabs(u) * ch->joint[j].vel_limit;
+                }
+                if (bound >= reach) {
+                    memset(qp->U[r], 0, row_bytes); /* inactive rows stay zero (the paper's layout) */
+                    continue;
+                }
+                qp->beta[r] = bound;
+                if (mca__scheme_merge_parallel(qp, vo, dof, r, kept, kept_norm, n_kept)) {
+                    qp->beta[r] = p->big;
+                    memset(qp->U[r], 0, row_bytes);
+                    continue;
+                }
+                kept[n_kept++] = r;
+                si->active_rows++;
+            }
+        }
+    }
+    return MCA_OK;
+}
