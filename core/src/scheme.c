@@ -530,7 +530,10 @@ void mca_scheme_tube_bounds(const double err[3], double radius, double K, double
             hi[i] = INFINITY;
             continue;
         }
-        const double R = fmax(radius / sqrt(3.0), fabs(err[i]));
+        /* never below MCA_TUBE_FLOOR: at rest on a tube of 0 the standing-still point sat on three edges at
+         * once, a vertex the PDNN and its polish could not resolve beside two near-parallel rows
+         * (jaco-mico:132 of seed 1: 24306 ticks unconverged); a micrometre keeps it inside */
+        const double R = fmax(fmax(radius / sqrt(3.0), fabs(err[i])), MCA_TUBE_FLOOR);
         const double keep = (1.0 - K * dt) * err[i];
         /* rounding must not put 0 outside: standing still is the point the feasibility argument needs */
         lo[i] = fmin(0.0, (keep - R) / dt);

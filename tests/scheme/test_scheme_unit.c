@@ -1498,8 +1498,9 @@ static void test_controller_brake(void **state) {
     free(c);
 }
 
-/* The path tube (mca_scheme_tube_bounds): standing still (e = -K err) and 0 are inside it, the first-order
- * error after one tick at either bound is exactly R_i, and an infinite radius gives no tube. */
+/* The path tube (mca_scheme_tube_bounds): standing still (e = -K err) and 0 are inside it (strictly, within
+ * MCA_TUBE_FLOOR of the path), the first-order error after one tick at either bound is exactly R_i, and an
+ * infinite radius gives no tube. */
 static void test_tube_bounds(void **state) {
     (void)state;
     const double K = 20.0, dt = 0.001;
@@ -1510,8 +1511,12 @@ static void test_tube_bounds(void **state) {
             double lo[3], hi[3];
             mca_scheme_tube_bounds(errs[e], radii[r], K, dt, lo, hi);
             for (int i = 0; i < 3; i++) {
-                const double R = fmax(radii[r] / sqrt(3.0), fabs(errs[e][i]));
+                const double R = fmax(fmax(radii[r] / sqrt(3.0), fabs(errs[e][i])), MCA_TUBE_FLOOR);
                 assert_true(lo[i] <= 0.0 && hi[i] >= 0.0);
+                if (fabs(errs[e][i]) < MCA_TUBE_FLOOR) { /* standing still strictly inside, not on an edge */
+                    assert_true(-K * errs[e][i] - lo[i] > 0.5 * (MCA_TUBE_FLOOR - fabs(errs[e][i])) / dt &&
+                                hi[i] + K * errs[e][i] > 0.5 * (MCA_TUBE_FLOOR - fabs(errs[e][i])) / dt);
+                }
                 assert_true(-K * errs[e][i] >= lo[i] - 1e-12 && -K * errs[e][i] <= hi[i] + 1e-12);
                 const double next_lo = (1.0 - K * dt) * errs[e][i] - dt * lo[i];
                 const double next_hi = (1.0 - K * dt) * errs[e][i] - dt * hi[i];

@@ -229,10 +229,15 @@ int mca_scheme_add_timescale(mca_qp_t *qp, int n_arms, const double rdot_d[][3],
 /** The tracking slack e_i (i < 3) of the arm whose mca-ts variables start at phi[ts_off] (its mode). */
 double mca_scheme_ts_slack(const double *phi, int ts_off, int i, const mca_timescale_weights_t *w, int mode);
 
+/** The tube's least half width per axis [m]: a tolerance of 0 means within this (standing still is then
+ * inside the tube, not on three of its edges at once). */
+#define MCA_TUBE_FLOOR 1e-6
+
 /**
  * The path tube as bounds on the slack (real-time safe). With err = r(tau) - f(q), the error after one tick
  * of dt is err + dt (sigma rdot - J qdot) = (1 - K dt) err - dt e to first order; each component is kept
- * within R_i = max(radius / sqrt(3), |err_i|) (so |err| <= radius, or no growth where it is already outside):
+ * within R_i = max(radius / sqrt(3), |err_i|, MCA_TUBE_FLOOR) (so |err| <= radius, or no growth where it is
+ * already outside):
  *   slack_lo_i = ((1 - K dt) err_i - R_i) / dt <= 0 <= slack_hi_i = ((1 - K dt) err_i + R_i) / dt.
  * At rest (qdot = 0, sigma = 0, e = -K err) the error stays err: a point of the tube, always.
  * radius = INFINITY: no tube (bounds +-INFINITY).
