@@ -54,6 +54,9 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import tips_pass  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ROBOTS = os.path.join(ROOT, "config", "robots")
 CLASSES = ("completed", "late", "exact-missed", "safe-stop", "unsafe")
@@ -503,7 +506,8 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
                 draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2, paths=["pick-and-place"] * len(arms),
                 pnp=dict(frame=[[round(x, 6) for x in v] for v in frame], zone=g["zone"], sep=g["sep"],
                          slots=[[round(x, 4) for x in c] for c in slots],
-                         pick_areas=list(g["pick"]), arms=info))
+                         pick_areas=list(g["pick"]), arms=info),
+                tips_blocked=tips_pass.scenario_blocked(scn, tips))
 
 
 class Sim:
@@ -691,7 +695,8 @@ def make_task(sim, kind, seed, i, work, tol=None, elastic=False):
     return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
                 draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2,
                 paths=[p["kind"] for p in paths], towards=fars,
-                rest_conflicts=rest_conflicts(sim, wd, name, kind, arms, paths, duration))
+                rest_conflicts=rest_conflicts(sim, wd, name, kind, arms, paths, duration),
+                tips_blocked=tips_pass.scenario_blocked(scn, tips))
 
 
 def run_task(sim, kind, seed, i, a):
@@ -805,6 +810,18 @@ def pnp_target(tasks, schemes, lines):
             lines.append("pick and place, %s: of the %d tasks with a coordination schedule %d done (%.1f %%); the other "
                          "%d have none (fixed paths whose predicted arms meet on every order of passing)" % (
                              s, len(sched), sdone, 100.0 * sdone / max(1, len(sched)), n - len(sched)))
+        blk = [t.get("tips_blocked") for t in tasks if t["runs"].get(s, {}).get("task", {}).get("cls", "n/a") != "n/a"]
+        if all(b is not None for b in blk):
+            ok = [r for r, b in zip(rs, blk) if not b]
+            okd = sum(1 for r in ok if r["cls"] in ("completed", "late"))
+            okb = sum(1 for r in ok if r["cls"] in ("completed", "late") and r.get("path_error_max") is not None
+                      and r["path_error_max"] <= PNP_PATH_ERROR)
+            out[s].update(tips_pass=len(ok), tips_pass_done=okd, tips_pass_done_and_path_error_ok=okb)
+            lines.append("pick and place, %s: of the %d tasks whose tool tips can pass on their paths %d done (%.1f %%), "
+                         "%d with path_error_max <= %.2f m; the other %d cannot be done on their paths by any "
+                         "controller (tips_pass.py proves it), %d of them done anyway" % (
+                             s, len(ok), okd, 100.0 * okd / max(1, len(ok)), okb, PNP_PATH_ERROR, n - len(ok),
+                             sum(1 for r, b in zip(rs, blk) if b and r["cls"] in ("completed", "late"))))
         if not have_pe:
             lines.append("pick and place, %s: max_err (to the path's current point, an upper bound on the path "
                          "error) <= %.2f m on %d of %d" % (s, PNP_PATH_ERROR, me_ok, n))
@@ -866,6 +883,17 @@ def table(tasks, schemes, sim, a):
                          "them %d (%.1f %%), on the %d others %d" % (
                              len(clear), nr, s, dc, 100.0 * dc / max(1, len(clear)), len(rest), dr))
             summary["clear/%s" % s] = dict(clear=len(clear), done=dc, rest=len(rest), rest_done=dr)
+    # tool tips that cannot pass on their paths whatever the arms do (tips_pass.py): reported apart, never dropped
+    if reach and all("tips_blocked" in t for t in reach):
+        passable = [t for t in reach if not t["tips_blocked"]]
+        for s in schemes:
+            dp, db = [sum(1 for t in ts if t["runs"].get(s, {}).get("task", {}).get("cls") in ("completed", "late"))
+                      for ts in (passable, [t for t in reach if t["tips_blocked"]])]
+            lines.append("tool tips that can pass on their paths: %d of %d reachable; %s done on them %d (%.1f %%), on "
+                         "the %d others (no controller completes them on their paths above d1) %d" % (
+                             len(passable), nr, s, dp, 100.0 * dp / max(1, len(passable)), nr - len(passable), db))
+            summary["tips_pass/%s" % s] = dict(passable=len(passable), done=dp, blocked=nr - len(passable),
+                                               blocked_done=db)
     for s in schemes:
         for mode in ("task", "stop"):
             v = summary.get("%s/%s" % (s, mode))
