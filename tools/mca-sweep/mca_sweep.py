@@ -55,6 +55,7 @@ import time
 import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cells  # noqa: E402
 import tips_pass  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -160,7 +161,7 @@ def fmt(v):
     return "[" + ", ".join("%.6g" % x for x in v) + "]"
 
 
-def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None):
+def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None, bodies=None):
     """The scenario text. A path dict: kind, its keys, and optionally t0, relative (waypoints; default true),
     tolerance and exact (written only when present: the caller leaves them out for an mca-sim without them)."""
     d = KINDS[kind]
@@ -168,6 +169,8 @@ def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None):
          "dt: 0.001", "d1: %g" % d["d1"], "d2: %g" % d["d2"], "K: 20", "epsilon: 5"]
     if exact_tolerance is not None:
         s.append("exact_tolerance: %g" % exact_tolerance)
+    if bodies:
+        s += cells.bodies_yaml(bodies)
     s.append("arms:")
     for i, a in enumerate(arms):
         s += ["  - name: %s" % a["name"], "    urdf: %s" % os.path.join(ROBOTS, a["urdf"]), "    tip_link: tool_tip",
@@ -442,7 +445,25 @@ def task_start(kind, seed, i, work):
     return random.Random("%d:%s:%d" % (seed, kind, i)), "%s:%d" % (kind, i), name, wd
 
 
-def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
+def draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths):
+    """A random cell for the task (cells.py; its own generator, so the task's own draws do not change): bodies
+    whose clearances the start configurations keep (a 2-tick probe with them), or None after 20 draws."""
+    rng = random.Random("%d:%s:%d:cell" % (seed, kind, i))
+    full = [dict(a, urdf=os.path.join(ROBOTS, a["urdf"])) for a in arms]
+    for _ in range(20):
+        bodies = cells.draw_cell(rng, full, tips, paths)
+        if bodies is None:
+            continue
+        scn = os.path.join(wd, "cell_probe.yaml")
+        with open(scn, "w") as f:
+            f.write(scenario_yaml(name + "_cell_probe", kind, arms, 0.002, bodies=bodies))
+        r = sim.run(scn, os.path.join(wd, "cell_probe.json"), ["mvn"])[0].get("mvn")
+        if r is not None and r.get("body_min_margin", -1.0) >= 0.005:
+            return bodies
+    return None
+
+
+def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None, with_cell=False):
     """Pick-and-place task i of kind (seeded by 'seed:kind:i'): both arms at the shipped scenario's placement
     (q0 jittered), each with 2-3 rounds from its own pick area to the shared place zone. Rounds an arm alone
     cannot track under MVN are redrawn (a single-arm run: with MVN every arm's QP is its own)."""
@@ -488,6 +509,9 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
                          picks=[r["pick"] for r in rounds], places=[r["place"] for r in rounds],
                          points=path["points"], exact=path["exact"]))
     duration = round(max(p["total"] for p in paths) + 0.5, 2)
+    bodies = draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths) if with_cell else None
+    if with_cell and bodies is None:
+        return dict(id=tid, error="no random cell clear of the paths and the start in 20 draws")
     out = []
     for p in paths:
         q = {k: v for k, v in p.items() if k in ("kind", "relative", "t0", "points", "durations")}
@@ -499,7 +523,7 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
     scn = os.path.join(wd, "scenario.yaml")
     with open(scn, "w") as f:
         f.write(scenario_yaml(name, kind, arms, duration, out,
-                              exact_tolerance=PNP_EXACT_TOL if sim.keys["exact_tolerance"] else None))
+                              exact_tolerance=PNP_EXACT_TOL if sim.keys["exact_tolerance"] else None, bodies=bodies))
     stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
     g = PNP[kind]
     return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
@@ -507,7 +531,7 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None):
                 pnp=dict(frame=[[round(x, 6) for x in v] for v in frame], zone=g["zone"], sep=g["sep"],
                          slots=[[round(x, 4) for x in c] for c in slots],
                          pick_areas=list(g["pick"]), arms=info),
-                tips_blocked=tips_pass.scenario_blocked(scn, tips))
+                tips_blocked=tips_pass.scenario_blocked(scn, tips), bodies=bodies)
 
 
 class Sim:
@@ -596,9 +620,12 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
                max_err=r.get("max_err"))
     det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "path_error_brake_max", "exact_points", "exact_missed",
                                       "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau", "end_done", "coord_pairs", "coord_unplanned",
-                                      "solves", "solves_unconverged", "solve_steps", "exact_solves")})
+                                      "solves", "solves_unconverged", "solve_steps", "exact_solves",
+                                      "bodies", "body_min_margin", "body_min_name", "body_min_pair", "body_ticks_below")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
+    if r.get("body_ticks_below"):
+        return "unsafe", "below-clearance", det
     if completed and not missed:
         if lost is not None and lost > lost_thr:
             return "late", "lost %.2f s" % lost, det
@@ -651,7 +678,7 @@ def rest_conflicts(sim, wd, name, kind, arms, paths, duration):
     return out
 
 
-def make_task(sim, kind, seed, i, work, tol=None, elastic=False):
+def make_task(sim, kind, seed, i, work, tol=None, elastic=False, with_cell=False):
     """Draw task i of kind (seeded by 'seed:kind:i'), write its scenario; a dict describing it."""
     rng, tid, name, wd = task_start(kind, seed, i, work)
     d2 = KINDS[kind]["d2"]
@@ -688,24 +715,27 @@ def make_task(sim, kind, seed, i, work, tol=None, elastic=False):
             p["tracking"] = "elastic"  # the L2 slack of docs/scheme.md section 10 (no tube)
         elif tol is not None:
             p["tolerance"] = tol
+    bodies = draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths) if with_cell else None
+    if with_cell and bodies is None:
+        return dict(id=tid, error="no random cell clear of the paths and the start in 20 draws")
     scn = os.path.join(wd, "scenario.yaml")
     with open(scn, "w") as f:
-        f.write(scenario_yaml(name, kind, arms, duration, paths))
+        f.write(scenario_yaml(name, kind, arms, duration, paths, bodies=bodies))
     stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
     return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
                 draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2,
                 paths=[p["kind"] for p in paths], towards=fars,
                 rest_conflicts=rest_conflicts(sim, wd, name, kind, arms, paths, duration),
-                tips_blocked=tips_pass.scenario_blocked(scn, tips))
+                tips_blocked=tips_pass.scenario_blocked(scn, tips), bodies=bodies)
 
 
 def run_task(sim, kind, seed, i, a):
     t0 = time.time()
     tol = a.tolerance if sim.keys["tolerance"] else None
     if kind in PNP:
-        task = make_pnp_task(sim, kind, seed, i, a.work, a.max_err, tol)
+        task = make_pnp_task(sim, kind, seed, i, a.work, a.max_err, tol, a.cells)
     else:
-        task = make_task(sim, kind, seed, i, a.work, tol, a.elastic)
+        task = make_task(sim, kind, seed, i, a.work, tol, a.elastic, a.cells)
     if "error" in task:
         task.update(reachable=False, unreachable="generation: " + task["error"], runs={}, seconds=time.time() - t0)
         return task
@@ -724,6 +754,8 @@ def run_task(sim, kind, seed, i, a):
         return task
     reach = mvn.get("fault", 0) == 0 and mvn["max_err"] < a.max_err
     task["mvn_max_err"] = mvn["max_err"]
+    if mvn.get("bodies"):
+        task["mvn_body_ticks_below"] = mvn.get("body_ticks_below", 0)
     task["reachable"] = reach
     if not reach:
         task["unreachable"] = mvn.get("fault_name") if mvn.get("fault") else "max err %.3g m" % mvn["max_err"]
@@ -894,6 +926,23 @@ def table(tasks, schemes, sim, a):
                              len(passable), nr, s, dp, 100.0 * dp / max(1, len(passable)), nr - len(passable), db))
             summary["tips_pass/%s" % s] = dict(passable=len(passable), done=dp, blocked=nr - len(passable),
                                                blocked_done=db)
+    # random cells (--cells): every link keeps each fixed body's clearance (the table, the obstacles)
+    if any(t.get("bodies") for t in reach):
+        mb = [t for t in reach if t.get("mvn_body_ticks_below")]
+        lines.append("cells: %d reachable tasks with a table and 1-3 obstacles; under MVN (no rows) %d of them come "
+                     "below a body's clearance" % (sum(1 for t in reach if t.get("bodies")), len(mb)))
+        for s in schemes:
+            for mode in ("task", "stop"):
+                rs = [t["runs"][s][mode] for t in reach if t["runs"].get(s, {}).get(mode, {}).get("bodies")]
+                if not rs:
+                    continue
+                below = [r for r in rs if r.get("body_ticks_below")]
+                mm = sorted(r["body_min_margin"] for r in rs)
+                lines.append("cells %-6s %-9s %d runs with bodies: %d with ticks below a clearance (%d ticks); least "
+                             "margin p50 %.4f m, min %.4f m" % (
+                                 s, "task" if mode == "task" else "with stop", len(rs), len(below),
+                                 sum(r["body_ticks_below"] for r in below), mm[len(mm) // 2], mm[0]))
+                summary["cells/%s/%s" % (s, mode)] = dict(runs=len(rs), below=len(below), min_margin=mm[0])
     for s in schemes:
         for mode in ("task", "stop"):
             v = summary.get("%s/%s" % (s, mode))
@@ -1011,6 +1060,8 @@ def main():
                     "passes by leaving the path; default: path first)")
     ap.add_argument("--no-coordinate", action="store_true",
                     help="mca-sim --no-coordinate: mca-ts without the start-up plan of who passes first")
+    ap.add_argument("--cells", action="store_true",
+                    help="random cells: a table and 1-3 boxes or posts in every task (cells.py; the same tasks)")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
     if not os.access(a.sim, os.X_OK):
