@@ -484,7 +484,7 @@ static void gather(mca_pdnn_t *s, int n, int to_blocks) {
 
 /* Block b of the split problem as the Eigen side takes it: its slices of ws_B, ws_Bq, Omega and the row
  * factors (filled by split()). */
-static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b, int64_t deadline_ns) {
+static mca_pdnn__problem_t block_problem(mca_pdnn_t *s, int b, int64_t deadline_ns) {
     const int *bl = s->ws_blk[b];
     const mca_pdnn__problem_t p = {bl[1],
                                    bl[3],
@@ -494,7 +494,8 @@ static mca_pdnn__problem_t block_problem(const mca_pdnn_t *s, int b, int64_t dea
                                    &s->ws_Bhi[bl[0] + bl[2]],
                                    &s->ws_Bf[bl[2]],
                                    &s->ws_Bfi[bl[2]],
-                                   deadline_ns};
+                                   deadline_ns,
+                                   &s->ws_Bside[bl[0]]};
     return p;
 }
 
@@ -600,6 +601,9 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
         eqf[i] = pre == MCA_PDNN_PRECOND_ORTH ? rt : 1.0 / s->ws_d[i];
     }
     split(s, n, m, qp->n_eq, eqf, prm.no_split);
+    for (int k = 0; k < n; k++) {
+        s->ws_Bside[k] = warm ? s->side[s->ws_pv[k]] : 0;
+    }
     /* all-zero rows: the fixed point of w = P(w - q) is w = 0 when q >= 0 (inequality); otherwise there is
      * none (infeasible row) and the true residual below reports it */
     for (int k = m - s->ws_nzero; k < m; k++) {
@@ -674,6 +678,9 @@ int mca_pdnn_solve(mca_pdnn_t *s, const mca_qp_t *qp, const mca_pdnn_params_t *p
 
     for (int j = 0; j < n; j++) {
         phi[j] = s->ws_y[j];
+    }
+    for (int k = 0; k < n; k++) {
+        s->side[s->ws_pv[k]] = s->ws_Bside[k];
     }
     if (isfinite(r_true)) {
         memcpy(s->y, s->ws_t, sizeof(double) * (size_t)h);

@@ -20,6 +20,9 @@ typedef struct mca_pdnn__problem {
      *  finv = 1 / f. */
     const double *f, *finv;
     int64_t deadline_ns; /**< CLOCK_MONOTONIC instant to stop at (checked every 16 steps); 0: none */
+    /** n, or NULL: each variable's box side in the last polished answer (0 unknown, 1 lower, 2 upper,
+     *  4 free), the warm polish's seed for the box; overwritten with the sides of an accepted polish */
+    unsigned char *side;
 } mca_pdnn__problem_t;
 
 /** Upper bound on ||N||_2^2: Gershgorin row bound of N^T N. No allocation. */

@@ -20,6 +20,8 @@
 namespace {
 
 constexpr int kMaxN = MCA_QP_MAX_VARS;
+// mca_pdnn__problem_t.side: 0 unknown, 1 at the lower bound, 2 at the upper, kSideFree known to be free
+constexpr unsigned char kSideFree = 4;
 constexpr int kMaxM = MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ;
 
 using VecX = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxN, 1>;
@@ -194,9 +196,12 @@ static int past(int64_t deadline_ns) {
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec >= deadline_ns;
 }
 
-// One polish try from the network's iterate (a = N^T w, b = N x + q). Seed: the active set the projection
-// sees (a variable whose a_j the box clips, a row with w_i - b_i > 0, every equality row); cold: the
-// equality rows alone. Then a dual
+// One polish try from the network's iterate (a = N^T w, b = N x + q). Seed: the box side (or none) each
+// variable had in the last polished answer (`side`, where known), else the active set the projection sees (a
+// variable whose a_j the box clips), a row with w_i - b_i > 0, every equality row; cold: the equality rows
+// alone. The box moves every tick (the acceleration box around the present velocity): a joint held at its
+// bound by a small multiplier leaves the projection's guess although it stays at the bound, and each such
+// miss costs an exact solve to put it back. Then a dual
 // active-set method (Goldfarb-Idnani; with the objective 1/2 |x|^2 each subproblem is kkt_solve): first
 // drop seed members with a negative multiplier, most negative first, until the set is dual feasible; then
 // add the most violated constraint p and move along the segment to the solution with p in the set (the KKT
@@ -206,12 +211,16 @@ static int past(int64_t deadline_ns) {
 // The caller still checks the candidate with the network's residual.
 template <typename AV, typename BV, typename WV>
 static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV &hix, const MapV &low,
-                      const AV &a, const BV &b, const WV &w, int cold, double eps, int64_t deadline_ns,
-                      int *budget, VecX &xc, VecW &wc) {
+                      const AV &a, const BV &b, const WV &w, const unsigned char *side, int cold, double eps,
+                      int64_t deadline_ns, int *budget, VecX &xc, VecW &wc, unsigned char *side_out) {
     const int n = (int)N.cols(), m = (int)N.rows();
     unsigned char set[kMaxN + kMaxM];
     for (int j = 0; j < n; j++) {
-        set[j] = (unsigned char)(cold ? 0 : a(j) <= lox(j) ? 1 : a(j) >= hix(j) ? 2 : 0);
+        if (!cold && side && side[j] != 0) {
+            set[j] = side[j] == kSideFree ? 0 : side[j];
+        } else {
+            set[j] = (unsigned char)(cold ? 0 : a(j) <= lox(j) ? 1 : a(j) >= hix(j) ? 2 : 0);
+        }
     }
     for (int i = 0; i < m; i++) {
         set[n + i] = (unsigned char)(low(i) < 0.0 || (!cold && w(i) - b(i) > 0.0));
@@ -285,6 +294,9 @@ static int polish_try(const MapN &N, const MapV &q, const MapV &lox, const MapV 
             }
         }
         if (p < 0) {
+            for (int j = 0; j < n; j++) {
+                side_out[j] = set[j] != 0 ? set[j] : kSideFree;
+            }
             return 1;
         }
         set[p] = p < n ? (unsigned char)(xc(p) < lox(p) ? 1 : 2) : 1;
@@ -412,6 +424,7 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
         return std::max(exc.lpNorm<Eigen::Infinity>(), ewc.lpNorm<Eigen::Infinity>());
     };
     int tries = 0, next_k = 0, every = kPolishEvery;
+    unsigned char sides[kMaxN];
     double next_r = INFINITY;
     res->polished = 0;
     for (;;) {
@@ -451,8 +464,8 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
             for (int cold = 0; cold < (steps == 0 ? 2 : 1) && !res->polished && tries < polish_max; cold++) {
                 int budget = polish_max - tries; // a try may use what is left: it is one active-set run
                 const int left = budget;
-                const int got = polish_try(N, q, lox, hix, low, a, b, w, cold, 0.1 * tol, p->deadline_ns,
-                                           &budget, xc, wc);
+                const int got = polish_try(N, q, lox, hix, low, a, b, w, p->side, cold, 0.1 * tol,
+                                           p->deadline_ns, &budget, xc, wc, sides);
                 tries += left - budget;
                 if (got) {
                     const double rc = residual_at();
@@ -462,6 +475,9 @@ extern "C" void mca_pdnn__iterate(const mca_pdnn__problem_t *p, double *y, doubl
                         w = wc;
                         r = rc;
                         res->polished = 1;
+                        for (int j = 0; p->side && j < n; j++) {
+                            p->side[j] = sides[j];
+                        }
                     }
                 }
             }

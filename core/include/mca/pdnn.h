@@ -109,6 +109,10 @@ typedef struct mca_pdnn {
     int ws_nblk, ws_nzero;                                                  /**< blocks, all-zero rows */
     unsigned char ws_zero[MCA_QP_MAX_EQ + MCA_QP_MAX_INEQ]; /**< row i of the QP as given is all zero */
     int ws_blk[MCA_QP_MAX_VARS][5];                         /**< c0, nc, r0, nr, offset in B */
+    /** Per variable, the box side it sat at in the last answer a polish gave (0 unknown, 1 lower, 2 upper,
+     *  4 free): the next warm polish starts from these, as a dual active-set solver keeps its working set. */
+    unsigned char side[MCA_QP_MAX_VARS];
+    unsigned char ws_Bside[MCA_QP_MAX_VARS]; /**< the same per block column (block order) */
 } mca_pdnn_t;
 
 /** Defaults: kappa from the rule (adaptive), tol 1e-9, max_steps 20000, big 1e10, gamma 1.9, ORTH,
