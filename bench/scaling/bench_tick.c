@@ -38,6 +38,10 @@
 #include "mca/qp_dump.h"
 #include "mca/scenario.h"
 #include "mca/scheme.h"
+
+/* The stage split re-runs the tick's stages on the state the tick started from: the one reader of the
+ * controller's private state outside core (its struct, not its API). */
+#include "controller__state.h"
 #include "mca/urdf.h"
 
 enum { ST_TICK, ST_FK, ST_DIST, ST_ASM, ST_PDNN, ST_N };
@@ -186,7 +190,7 @@ static void drive_start(drive_state_t *ds, const double q0[MCA_MAX_ARMS][MCA_MAX
 
 /* Run `ticks` more ticks of ctrl (integrating qdot by Euler steps); on a fault the task restarts from q0. */
 static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats_t *s, qp_dump_t *dump) {
-    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const mca_controller_config_t *cfg = mca_controller_get_config(ctrl);
     const int na = cfg->n_arms;
     const double dt = cfg->dt;
     double(*q)[MCA_MAX_DOF] = ds->q;
@@ -257,8 +261,8 @@ static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats
             int64_t t1 = now_ns();
             for (int a = 0; a < na; a++) {
                 for (int b = a + 1; b < na; b++) {
-                    mca_arm_distances(&cfg->chain[a], &ctrl->kin[a], &cfg->chain[b], &ctrl->kin[b],
-                                      cfg->dist_method, &dist_scratch);
+                    mca_arm_distances(&cfg->chain[a], mca_controller_kin(ctrl, a), &cfg->chain[b],
+                                      mca_controller_kin(ctrl, b), cfg->dist_method, &dist_scratch);
                 }
             }
             int64_t t2 = now_ns();
@@ -409,7 +413,7 @@ static int synth_config(mca_controller_config_t *cfg, double q0[MCA_MAX_ARMS][MC
 /* steps mode: ns per PDNN step (the step count the cap and budget count) over every E-th tick's QP. */
 static int run_step_cost(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][MCA_MAX_DOF], int ticks,
                          int every, int steps, FILE *of, const char *name) {
-    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const mca_controller_config_t *cfg = mca_controller_get_config(ctrl);
     const int na = cfg->n_arms;
     static double q[MCA_MAX_ARMS][MCA_MAX_DOF], qd[MCA_MAX_ARMS][MCA_MAX_DOF], phi[MCA_QP_MAX_VARS];
     const double *qs[MCA_MAX_ARMS];
@@ -608,7 +612,7 @@ int main(int argc, char **argv) {
     }
     const int rt = set_fifo(fifo);
     mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
-    mca_controller_t *ctrl = calloc(1, sizeof *ctrl);
+    mca_controller_t *ctrl = calloc(1, mca_controller_size());
     static double q0[MCA_MAX_ARMS][MCA_MAX_DOF];
     char err[1024] = "";
     int rc = MCA_OK;
@@ -686,7 +690,7 @@ int main(int argc, char **argv) {
         fprintf(of,
                 "{\"mode\": \"task\", \"scenario\": \"%s\", \"sched_fifo\": %d, \"qp_dumped\": %d, \"run\": ",
                 scn.name, rt, dump.written);
-        stats_json(of, &s, scn.name, &ctrl->cfg, &ctrl->qp);
+        stats_json(of, &s, scn.name, mca_controller_get_config(ctrl), mca_controller_last_qp(ctrl, NULL));
         fprintf(of, "}\n");
         stats_free(&s);
         if (dump.csv) {
@@ -740,7 +744,7 @@ int main(int argc, char **argv) {
         for (int c = 0; c < nd; c++) {
             /* default gap 0.22 m: the circles (2 R = 0.16 m inwards) bring neighbouring arms inside d2 = 0.12
              */
-            cc[c] = calloc(1, sizeof *cc[c]);
+            cc[c] = calloc(1, mca_controller_size());
             if (!cc[c] || stats_alloc(&ss[c], ticks) != MCA_OK) {
                 return 1;
             }

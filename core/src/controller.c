@@ -5,6 +5,8 @@
 #include "mca/controller.h"
 
 #include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -13,6 +15,15 @@
 
 #include "controller__common.h"
 #include "controller__dist.h"
+
+/* The size mca/controller.h states: the state fits its bound and is not far below it (the figure to plan
+ * for), and malloc's alignment suits it. */
+_Static_assert(sizeof(struct mca_controller) <= MCA_CONTROLLER_SIZE_MAX,
+               "the controller's state outgrew MCA_CONTROLLER_SIZE_MAX: update it and its docs");
+_Static_assert(sizeof(struct mca_controller) > MCA_CONTROLLER_SIZE_MAX / 10 * 9,
+               "the controller's state is far below MCA_CONTROLLER_SIZE_MAX: update it and its docs");
+_Static_assert(_Alignof(struct mca_controller) <= _Alignof(max_align_t),
+               "malloc'd storage must suit the controller's state");
 
 static const char *const fault_names[] = {
     [MCA_CTRL_FAULT_NONE] = "none",
@@ -81,6 +92,64 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         cfg->ts.priority[a] = 1.0;
     }
+}
+
+size_t mca_controller_size(void) {
+    return sizeof(struct mca_controller);
+}
+
+int mca_controller_create(void *storage, size_t size, const mca_controller_config_t *cfg,
+                          mca_controller_t **out) {
+    if (out) {
+        *out = NULL;
+    }
+    if (!storage || !out || size < sizeof(struct mca_controller) ||
+        (uintptr_t)storage % _Alignof(struct mca_controller) != 0) {
+        return MCA_EINVAL;
+    }
+    const int rc = mca_controller_init(storage, cfg);
+    if (rc == MCA_OK) {
+        *out = storage;
+    }
+    return rc;
+}
+
+void mca_controller_copy(mca_controller_t *dst, const mca_controller_t *src) {
+    if (dst && src && dst != src) {
+        memcpy(dst, src, sizeof *dst);
+    }
+}
+
+const mca_controller_config_t *mca_controller_get_config(const mca_controller_t *ctrl) {
+    return &ctrl->cfg;
+}
+
+int mca_controller_started(const mca_controller_t *ctrl) {
+    return ctrl->started;
+}
+
+const mca_kin_t *mca_controller_kin(const mca_controller_t *ctrl, int arm) {
+    return arm >= 0 && arm < MCA_MAX_ARMS ? &ctrl->kin[arm] : NULL;
+}
+
+const mca_arm_distances_t (*mca_controller_distances(const mca_controller_t *ctrl))[MCA_MAX_ARMS] {
+    return (const mca_arm_distances_t(*)[MCA_MAX_ARMS])ctrl->dist;
+}
+
+const mca_path_rate_t *mca_controller_path_rate(const mca_controller_t *ctrl, int arm) {
+    return arm >= 0 && arm < MCA_MAX_ARMS ? &ctrl->rate[arm] : NULL;
+}
+
+const mca_coord_t *mca_controller_coord(const mca_controller_t *ctrl) {
+    return &ctrl->coord;
+}
+
+int mca_controller_set_pdnn_budget(mca_controller_t *ctrl, int64_t budget_ns) {
+    if (!ctrl || budget_ns < 0) {
+        return MCA_EINVAL;
+    }
+    ctrl->cfg.pdnn_budget_ns = budget_ns;
+    return MCA_OK;
 }
 
 /* Schemes with collision rows (and the distance fault). */
@@ -208,6 +277,29 @@ int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]) {
     }
     mca_v3_set(ctrl->cfg.path[arm].stream_v, v);
     return MCA_OK;
+}
+
+int mca_controller_stream_target(mca_controller_t *ctrl, int arm, mca_stream_kind_t kind, const double x[3],
+                                 const mca_stream_law_t *law) {
+    if (!ctrl || !law || (kind != MCA_STREAM_HOLD && !x) || arm < 0 || arm >= ctrl->cfg.n_arms) {
+        return MCA_EINVAL;
+    }
+    double v[3] = {0.0, 0.0, 0.0};
+    const int finite = kind != MCA_STREAM_HOLD && isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]);
+    if (finite && kind == MCA_STREAM_TWIST) {
+        mca_v3_set(v, x);
+    } else if (finite && kind == MCA_STREAM_POSE && ctrl->started) {
+        /* towards the target from where the reference is now */
+        const double *r = ctrl->cfg.path[arm].stream_r;
+        for (int i = 0; i < 3; i++) {
+            v[i] = law->pose_gain * (x[i] - r[i]);
+        }
+    }
+    const double n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int i = 0; i < 3 && n > law->max_speed; i++) {
+        v[i] *= law->max_speed / n;
+    }
+    return mca_controller_stream(ctrl, arm, v);
 }
 
 void mca_controller_clear_fault(mca_controller_t *ctrl) {

@@ -10,7 +10,7 @@
 #include <stdint.h>
 #include <time.h>
 
-#include "mca/controller.h"
+#include "controller__state.h" /* struct mca_controller */
 
 static inline int64_t now_ns(void) {
     struct timespec ts;

@@ -8,7 +8,7 @@
 #ifndef MCA_CONTROLLER__DIST_H
 #define MCA_CONTROLLER__DIST_H
 
-#include "mca/controller.h"
+#include "controller__state.h" /* struct mca_controller */
 
 /* RT: ctrl->crit (per link: the closest link of any other arm) and the tick report's distances, from
  * ctrl->kin. @retval MCA_OK, or mca_arm_distances' error. */

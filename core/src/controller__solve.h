@@ -11,7 +11,7 @@
 
 #include <stdint.h>
 
-#include "mca/controller.h"
+#include "controller__state.h" /* struct mca_controller */
 
 /* RT: mca-ts, an answer that missed the tolerance made one each arm can follow and that keeps the rows. */
 void mca_ctrl__repair_capped(mca_controller_t *ctrl, const mca_scheme_info_t *si, int na, const int ts_off[],

@@ -8,7 +8,7 @@
 #ifndef MCA_CONTROLLER__TS_H
 #define MCA_CONTROLLER__TS_H
 
-#include "mca/controller.h"
+#include "controller__state.h" /* struct mca_controller */
 
 /* Giving way ends where the error reaches this fraction of the tube's per-axis half width. */
 #define MCA_TUBE_EDGE 0.8

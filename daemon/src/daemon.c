@@ -42,22 +42,23 @@ static int plan(mca_daemon_t *d, char *err, size_t errlen) {
         qp[a] = d->q[a];
     }
     const int64_t t0 = now_ns();
-    const int rc = mca_controller_plan(&d->ctrl, qp, work);
+    const int rc = mca_controller_plan(d->ctrl, qp, work);
     free(work);
     if (rc != MCA_OK) {
         mca_errbuf_printf(err, errlen, "%s: coordination plan failed: %s", d->cell.source, mca_strerror(rc));
         return rc;
     }
     for (int a = 0; a < d->n_arms; a++) {
-        const mca_path_rate_t *r = &d->ctrl.rate[a];
-        if (r->n > 0 && r->least < d->ctrl.cfg.ts.sigma_max) {
+        const mca_path_rate_t *r = mca_controller_path_rate(d->ctrl, a);
+        const double sigma_max = mca_controller_get_config(d->ctrl)->ts.sigma_max;
+        if (r->n > 0 && r->least < sigma_max) {
             fprintf(d->opts.log,
                     "<6>mcad: path rate: arm %d at most %.3f where its path bends most (to stop on it; "
                     "sigma_max %.2f)\n",
-                    a, r->least, d->ctrl.cfg.ts.sigma_max);
+                    a, r->least, sigma_max);
         }
     }
-    const mca_coord_t *c = &d->ctrl.coord;
+    const mca_coord_t *c = mca_controller_coord(d->ctrl);
     for (int k = 0; k < c->n_pairs; k++) {
         const mca_coord_pair_t *p = &c->pair[k];
         fprintf(d->opts.log,
@@ -129,8 +130,14 @@ int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_
         d->drive.controller_config(&d->ccfg, d->drive.controller_config_arg);
     }
     if (rc == MCA_OK) {
-        rc = mca_controller_init(&d->ctrl, &d->ccfg);
+        /* the controller and its warm-up copy in storage of their own, allocated here once (core never
+         * allocates; mca_daemon_start locks it with the rest) */
+        const size_t size = mca_controller_size();
+        void *mem = malloc(size);
+        d->warm_ctrl = malloc(size);
+        rc = mem && d->warm_ctrl ? mca_controller_create(mem, size, &d->ccfg, &d->ctrl) : MCA_ENOMEM;
         if (rc != MCA_OK) {
+            free(mem);
             mca_errbuf_printf(err, errlen, "%s: controller init failed: %s", cell->source, mca_strerror(rc));
         }
     }
@@ -223,6 +230,8 @@ void mca_daemon_close(mca_daemon_t *d) {
         fclose(d->rec);
     }
     free(d->csv_storage);
+    free(d->ctrl);
+    free(d->warm_ctrl);
     if (d->dma_fd >= 0) {
         close(d->dma_fd);
     }

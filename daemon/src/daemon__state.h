@@ -44,7 +44,7 @@ struct mca_daemon {
     mca_cell_t cell;
     mca_daemon_opts_t opts;
     mca_controller_config_t ccfg;
-    mca_controller_t ctrl;
+    mca_controller_t *ctrl; /* in storage allocated here at open, before the loop locks memory */
     int n_arms;
     int dof[MCA_MAX_ARMS];
     mca_rtlog_t log;
@@ -61,7 +61,8 @@ struct mca_daemon {
     _Atomic int finished;
     pthread_t thread;
     int thread_started;
-    mca_controller_t warm_ctrl; /* scratch copy the loop warms its code on before the first command */
+    mca_controller_t *warm_ctrl; /* scratch copy the loop warms its code on before the first command (its
+                                    storage allocated at open) */
     mca_tick_info_t warm_info;
     int consecutive_overruns;
     uint64_t overruns, skipped;

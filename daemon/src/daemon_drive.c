@@ -48,7 +48,7 @@ int mca_drive_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         v->fired |= MCA_DRIVE_STOPPED;
     }
     if (v->fault_k >= 0 && !(v->fired & MCA_DRIVE_FAULTED) && k >= v->fault_k) {
-        mca_controller_raise_fault(&d->ctrl, v->fault_kind, t); /* "injected fault KIND at t = T s" */
+        mca_controller_raise_fault(d->ctrl, v->fault_kind, t); /* "injected fault KIND at t = T s" */
         v->fired |= MCA_DRIVE_FAULTED;
     }
     return mcad_step(d, t, stamp_ns);
@@ -74,7 +74,7 @@ const mca_tick_info_t *mca_drive_tick_info(const mca_daemon_t *d) {
 }
 
 const mca_controller_t *mca_drive_controller(const mca_daemon_t *d) {
-    return &d->ctrl;
+    return d->ctrl;
 }
 
 const double *mca_drive_positions(const mca_daemon_t *d, int a) {

@@ -206,7 +206,7 @@ int mcad_brake_tick(mca_daemon_t *d, double t, const double *const qp[MCA_MAX_AR
     }
     int done, fallback = 0;
     if (t < d->brake_deadline) {
-        const int rc = mca_controller_brake(&d->ctrl, t, qp, vl, dl, qd, &d->info);
+        const int rc = mca_controller_brake(d->ctrl, t, qp, vl, dl, qd, &d->info);
         if (rc < 0) {
             done = brake_scale_down(d);
             fallback = 1;
@@ -221,7 +221,7 @@ int mcad_brake_tick(mca_daemon_t *d, double t, const double *const qp[MCA_MAX_AR
                  "scale-down",
                  2, t - d->brake_t0, t, 0, 0, NULL);
         }
-        mca_controller_observe(&d->ctrl, t, qp, &d->info);
+        mca_controller_observe(d->ctrl, t, qp, &d->info);
         done = brake_scale_down(d);
         fallback = 1;
     }

@@ -80,13 +80,13 @@ static void warm_up(mca_daemon_t *d) {
         vm[a] = d->have_fb[a] ? d->fb[a].velocity : NULL;
     }
     const int64_t t0 = now_ns();
-    d->warm_ctrl = d->ctrl;
+    mca_controller_copy(d->warm_ctrl, d->ctrl);
     int64_t last = 0;
     int k;
     for (k = 0; k < MCA_DAEMON_WARM_TICKS; k++) {
         const int64_t s = now_ns();
-        mca_controller_set_velocity(&d->warm_ctrl, vm);
-        mca_controller_tick(&d->warm_ctrl, (double)k * dt, qp, qd, &d->warm_info);
+        mca_controller_set_velocity(d->warm_ctrl, vm);
+        mca_controller_tick(d->warm_ctrl, (double)k * dt, qp, qd, &d->warm_info);
         last = now_ns() - s;
     }
     double v0[MCA_MAX_ARMS][MCA_MAX_DOF];
@@ -95,9 +95,9 @@ static void warm_up(mca_daemon_t *d) {
         vl[a] = v0[a];
     }
     for (int b = 0; b < 3; b++) {
-        mca_controller_brake(&d->warm_ctrl, (double)(k + b) * dt, qp, vl, dl, qd, &d->warm_info);
+        mca_controller_brake(d->warm_ctrl, (double)(k + b) * dt, qp, vl, dl, qd, &d->warm_info);
     }
-    mca_controller_observe(&d->warm_ctrl, (double)k * dt, qp, &d->warm_info);
+    mca_controller_observe(d->warm_ctrl, (double)k * dt, qp, &d->warm_info);
     LOGN(d, MCA_LOG_INFO,
          "warm-up: %g controller ticks and 3 braking ticks in %.1f ms (the last tick %.0f us)", 3, (double)k,
          (double)(now_ns() - t0) * 1e-6, (double)last * 1e-3, 0, NULL);
@@ -217,7 +217,7 @@ int mca_daemon_start(mca_daemon_t *d) {
      * a named fault, not an overrun. A caller that steps the daemon itself (mca-sim in virtual time, the
      * tests) has no period to keep, and its runs stay deterministic. */
     d->ccfg.pdnn_budget_ns = d->cell.rt.pdnn_budget_ns;
-    d->ctrl.cfg.pdnn_budget_ns = d->ccfg.pdnn_budget_ns;
+    mca_controller_set_pdnn_budget(d->ctrl, d->ccfg.pdnn_budget_ns);
     if (!d->opts.no_rt && d->cell.rt.lock_memory) {
         /* keep freed memory in the process, never use mmap for malloc: no page faults after start-up */
         mallopt(M_TRIM_THRESHOLD, -1);

@@ -172,15 +172,16 @@ void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
             as->position_reference[j] = d->cmd[a].position_ref[j];
         }
         /* the capsules' axes as the distances of this tick saw them (ROS 2 markers) */
-        const mca_kin_t *k = &d->ctrl.kin[a];
+        const mca_kin_t *k = mca_controller_kin(d->ctrl, a);
         as->n_points = (uint32_t)k->n_points;
         memcpy(as->point, k->point, sizeof as->point);
     }
     int np = 0;
+    const mca_arm_distances_t(*dist)[MCA_MAX_ARMS] = mca_controller_distances(d->ctrl);
     for (int a = 0; a < d->n_arms; a++) {
         for (int b = a + 1; b < d->n_arms && np < MCA_MAX_PAIRS; b++) {
             /* the bridge's own fill (d1 < d2 holds: the cell loader checked it) */
-            mca_dds_pair_fill(&s->pair[np++], &d->ctrl.dist[a][b], (uint8_t)a, (uint8_t)b, d->ccfg.sp.d1,
+            mca_dds_pair_fill(&s->pair[np++], &dist[a][b], (uint8_t)a, (uint8_t)b, d->ccfg.sp.d1,
                               d->ccfg.sp.d2);
         }
     }

@@ -13,14 +13,16 @@
 /* Figures from the loop's own data: call from the loop, or once it has ended (rt safe: no formatting). */
 void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     memset(s, 0, sizeof *s);
+    /* the configuration the controller runs (the cell's before it was created: an open that failed) */
+    const mca_controller_config_t *cc = d->ctrl ? mca_controller_get_config(d->ctrl) : &d->ccfg;
     s->state = mca_daemon_state(d);
     s->ticks = mca_daemon_ticks(d);
     s->overruns = d->overruns;
     s->pdnn_budget_time = d->budget_hits[0];
     s->pdnn_budget_steps = d->budget_hits[1];
-    s->pdnn_budget_us = (double)d->ctrl.cfg.pdnn_budget_ns * 1e-3;
-    s->pdnn_step_budget = mca_controller_step_budget(&d->ctrl.cfg);
-    s->pdnn_max_steps = d->ctrl.cfg.pdnn.max_steps;
+    s->pdnn_budget_us = (double)cc->pdnn_budget_ns * 1e-3;
+    s->pdnn_step_budget = mca_controller_step_budget(cc);
+    s->pdnn_max_steps = cc->pdnn.max_steps;
     s->skipped_periods = d->skipped;
     s->stalls = d->stalls;
     s->stall_max_ns = d->stall_max_ns;
@@ -52,7 +54,7 @@ void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     memcpy(s->body_pair, d->body_pair, sizeof s->body_pair);
     {
         const int k = d->body_pair[2];
-        const mca_fixed_body_t *fb = k >= 0 && k < d->ctrl.cfg.n_bodies ? &d->ctrl.cfg.body[k] : NULL;
+        const mca_fixed_body_t *fb = k >= 0 && k < cc->n_bodies ? &cc->body[k] : NULL;
         memcpy(s->body_name, fb ? fb->name : "", fb ? sizeof s->body_name : 1);
         s->body_kind = fb ? (int)fb->body.kind : -1;
     }

@@ -109,8 +109,8 @@ int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         for (int a = 0; a < d->n_arms; a++) {
             vm[a] = d->have_fb[a] ? d->fb[a].velocity : NULL;
         }
-        mca_controller_set_velocity(&d->ctrl, vm); /* mca-ts: the next command starts from the real motion */
-        const int rc = mca_controller_tick(&d->ctrl, t, qp, qdp, &d->info);
+        mca_controller_set_velocity(d->ctrl, vm); /* mca-ts: the next command starts from the real motion */
+        const int rc = mca_controller_tick(d->ctrl, t, qp, qdp, &d->info);
         mca_hist_record(&d->ctrl_time, d->info.compute_ns);
         if (d->info.pdnn_budget_hit != MCA_BUDGET_NONE) {
             budget_event(d, t);
@@ -130,7 +130,7 @@ int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
             mcad_send_commands(d, 1);
         }
         deadlock_watch(d, t);
-    } else if (state != MCA_DAEMON_BRAKING && mca_controller_observe(&d->ctrl, t, qp, &d->info) == MCA_OK) {
+    } else if (state != MCA_DAEMON_BRAKING && mca_controller_observe(d->ctrl, t, qp, &d->info) == MCA_OK) {
         /* stopped or in fault: the arms may still move, so the distances are still measured (and
          * published). The solver figures stay the last tick's. */
         if (d->info.min_distance < d->min_d) {

@@ -63,7 +63,7 @@ static outcome_t run(const mca_cell_t *cell, double T) {
         return r;
     }
     const mca_controller_t *ctrl = mca_drive_controller(d);
-    const int na = ctrl->cfg.n_arms;
+    const int na = mca_controller_get_config(ctrl)->n_arms;
     r.vmax = 0.0;
     for (int a = 0; a < na; a++) {
         const mca_arm_command_t *c = mca_drive_last_command(d, a);
@@ -93,8 +93,8 @@ static outcome_t run(const mca_cell_t *cell, double T) {
 
     /* old: the same state, each joint ramped down on its own */
     d = open_at(cell, K, dt, &r.ok);
-    mca_controller_t *obs = malloc(sizeof *obs);
-    memcpy(obs, mca_drive_controller(d), sizeof *obs);
+    mca_controller_t *obs = malloc(mca_controller_size());
+    mca_controller_copy(obs, mca_drive_controller(d));
     double v[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
     const double *qp[MCA_MAX_ARMS];
     mca_arm_command_t cmd[MCA_MAX_ARMS];

@@ -672,7 +672,8 @@ static void run_fb_case(const fb_case_t *fc) {
         assert_same_commands(d, r, k);
     }
     /* the left arm moves on its circle (a quarter of the way), the right one holds (small commands) */
-    const mca_joint_model_t *jm = &mca_drive_controller(d)->cfg.chain[fc->arm].joint[fc->joint];
+    const mca_joint_model_t *jm =
+        &mca_controller_get_config(mca_drive_controller(d))->chain[fc->arm].joint[fc->joint];
     double value = fc->value;
     if (fc->kind == MCA_FB_POSITION) {
         value = fc->over > 0 ? jm->upper + fc->over : jm->lower + fc->over;
@@ -811,7 +812,8 @@ static void test_plausible_bounds_and_after_fault(void **state) {
     for (int k = 0; k < 100; k++, t += 0.001) {
         assert_int_equal(mca_drive_step(d, t, 0), MCA_DAEMON_RUNNING);
     }
-    const mca_joint_model_t jm1 = mca_drive_controller(d)->cfg.chain[1].joint[1]; /* copied: d is reopened */
+    const mca_joint_model_t jm1 =
+        mca_controller_get_config(mca_drive_controller(d))->chain[1].joint[1]; /* copied: d is reopened */
     const mca_joint_model_t *jm = &jm1;
     /* inside the margin: taken (the controller may then fault on its own bounds; the sample was used) */
     p.corrupt = MCA_FB_POSITION;

@@ -52,7 +52,7 @@ static mca_daemon_t *open_driven(const mca_cell_t *cell, uint32_t ideal) {
 
 /* The largest |q_k - (q_{k-1} + cmd_{k-1} dt)| over 300 ticks of the task's start (every arm moving). */
 static double euler_residual(mca_daemon_t *d, double dt) {
-    const int na = mca_drive_controller(d)->cfg.n_arms;
+    const int na = mca_controller_get_config(mca_drive_controller(d))->n_arms;
     double q[MCA_MAX_ARMS][MCA_MAX_DOF], v[MCA_MAX_ARMS][MCA_MAX_DOF], worst = 0.0, moved = 0.0;
     for (int k = 0; k < 300; k++) {
         const double t = k * dt;

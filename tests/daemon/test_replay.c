@@ -72,7 +72,7 @@ static void test_replay_bit_equal(void **state) {
     (void)state;
     /* the recorded run: mcad's tick in virtual time on sim arms */
     mca_daemon_t *d = open_cell(sim_cell, rec_path);
-    const double dt = mca_drive_controller(d)->cfg.dt;
+    const double dt = mca_controller_get_config(mca_drive_controller(d))->dt;
     int budget = 0;
     for (int k = 0; k < TICKS; k++) {
         const double t = k * dt;

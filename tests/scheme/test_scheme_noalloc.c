@@ -114,7 +114,7 @@ static int run(const char *path, const struct variant *v, long *ticks_faulted, l
         cfg.pdnn.no_polish = 1; /* the polish would finish these exactly at step 0: no fault, no cap */
     }
     cfg.dist_method = v->dist;
-    mca_controller_t *c = malloc(sizeof *c);
+    mca_controller_t *c = malloc(mca_controller_size());
     if (!c || mca_controller_init(c, &cfg) != MCA_OK) {
         free(c);
         return -1;

@@ -23,6 +23,9 @@
 #include "mca/urdf.h"
 #include "mca/vec3.h"
 
+/* core's white-box test: the witnesses, the rate scale and the critical links are the state's own */
+#include "controller__state.h"
+
 #ifndef MCA_SOURCE_DIR
 #error MCA_SOURCE_DIR must be defined
 #endif
@@ -598,6 +601,86 @@ static void test_scenario_files(void **state) {
     assert_non_null(strstr(err, "q0"));
 }
 
+/* ------------------------------------------------------------------ the opaque controller, the stream law */
+
+/* The state's storage as mca/controller.h states it (within its bound, create checks size and alignment),
+ * and the streamed targets' law against its arithmetic: a twist as it is, a pose at gain x the gap from the
+ * reference, nothing before the paths are anchored, zero for a hold or a non-finite target, capped. */
+static void test_controller_stream_law(void **state) {
+    (void)state;
+    static mca_scenario_t s;
+    static mca_controller_config_t cfg;
+    char err[512];
+    assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
+    cfg.path[0].kind = MCA_PATH_STREAM; /* arm 0 streamed, arm 1 keeps its circle */
+    for (int i = 0; i < 3; i++) {
+        cfg.path[0].box_lo[i] = -10.0;
+        cfg.path[0].box_hi[i] = 10.0;
+    }
+    const size_t size = mca_controller_size();
+    assert_true(size <= MCA_CONTROLLER_SIZE_MAX && size > MCA_CONTROLLER_SIZE_MAX / 10 * 9);
+    unsigned char *mem = malloc(size + 16);
+    assert_non_null(mem);
+    mca_controller_t *c = (mca_controller_t *)mem;
+    assert_int_equal(mca_controller_create(mem, size - 1, &cfg, &c), MCA_EINVAL);
+    assert_null(c);
+    assert_int_equal(mca_controller_create(mem + 1, size, &cfg, &c), MCA_EINVAL);
+    assert_int_equal(mca_controller_create(mem, size, &cfg, &c), MCA_OK);
+    assert_ptr_equal(c, mem);
+    const mca_path_t *p0 = &mca_controller_get_config(c)->path[0];
+    const mca_stream_law_t law = {.pose_gain = 2.0, .max_speed = 0.5};
+    const double twist[3] = {0.1, -0.2, 0.05}, fast[3] = {0.3, 0.4, 1.2}, bad[3] = {0.1, NAN, 0.0};
+    const double far[3] = {5.0, 5.0, 5.0};
+    /* before the first tick: a pose holds (no reference to start from), a twist is taken as it is */
+    assert_int_equal(mca_controller_started(c), 0);
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_TWIST, twist, &law), MCA_OK);
+    assert_memory_equal(p0->stream_v, twist, sizeof twist);
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_POSE, far, &law), MCA_OK);
+    assert_true(p0->stream_v[0] == 0.0 && p0->stream_v[1] == 0.0 && p0->stream_v[2] == 0.0);
+    /* a twist beyond max_speed: its direction at max_speed (|(0.3, 0.4, 1.2)| = 1.3) */
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_TWIST, fast, &law), MCA_OK);
+    for (int i = 0; i < 3; i++) {
+        assert_true(fabs(p0->stream_v[i] - fast[i] * 0.5 / 1.3) < 1e-14);
+    }
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_TWIST, bad, &law), MCA_OK);
+    assert_true(p0->stream_v[0] == 0.0 && p0->stream_v[1] == 0.0 && p0->stream_v[2] == 0.0);
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_TWIST, twist, &law), MCA_OK);
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_HOLD, NULL, &law), MCA_OK);
+    assert_true(p0->stream_v[0] == 0.0 && p0->stream_v[1] == 0.0 && p0->stream_v[2] == 0.0);
+    /* bad calls: no law, no target, not a stream, no such arm */
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_TWIST, twist, NULL), MCA_EINVAL);
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_POSE, NULL, &law), MCA_EINVAL);
+    assert_int_equal(mca_controller_stream_target(c, 1, MCA_STREAM_TWIST, twist, &law), MCA_EINVAL);
+    assert_int_equal(mca_controller_stream_target(c, 2, MCA_STREAM_TWIST, twist, &law), MCA_EINVAL);
+    /* after the first tick (the reference anchored at the tool tip): a pose at gain x the gap */
+    double q[2][MCA_MAX_DOF], qd[2][MCA_MAX_DOF];
+    memcpy(q[0], s.arm[0].q0, sizeof q[0]);
+    memcpy(q[1], s.arm[1].q0, sizeof q[1]);
+    const double *qs[MCA_MAX_ARMS] = {q[0], q[1]};
+    double *qds[MCA_MAX_ARMS] = {qd[0], qd[1]};
+    mca_tick_info_t info;
+    assert_int_equal(mca_controller_tick(c, 0.0, qs, qds, &info), MCA_OK);
+    assert_int_equal(mca_controller_started(c), 1);
+    double r[3], near[3];
+    memcpy(r, p0->stream_r, sizeof r);
+    assert_true(mca_v3_dist(r, mca_controller_kin(c, 0)->ee) < 1e-12);
+    near[0] = r[0] + 0.01;
+    near[1] = r[1] - 0.02;
+    near[2] = r[2];
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_POSE, near, &law), MCA_OK);
+    for (int i = 0; i < 3; i++) {
+        assert_true(fabs(p0->stream_v[i] - 2.0 * (near[i] - r[i])) < 1e-15);
+    }
+    assert_int_equal(mca_controller_stream_target(c, 0, MCA_STREAM_POSE, far, &law), MCA_OK);
+    assert_true(fabs(mca_v3_norm(p0->stream_v) - 0.5) < 1e-12);
+    /* the budget's setter */
+    assert_int_equal(mca_controller_set_pdnn_budget(c, -1), MCA_EINVAL);
+    assert_int_equal(mca_controller_set_pdnn_budget(c, 250000), MCA_OK);
+    assert_int_equal(mca_controller_get_config(c)->pdnn_budget_ns, 250000);
+    free(mem);
+}
+
 /* ------------------------------------------------------------------ controller faults */
 
 static void test_controller_faults(void **state) {
@@ -607,7 +690,7 @@ static void test_controller_faults(void **state) {
     char err[512];
     assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
     assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
-    mca_controller_t *c = malloc(sizeof *c);
+    mca_controller_t *c = malloc(mca_controller_size());
     assert_non_null(c);
     assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
     double q[2][MCA_MAX_DOF], qd[2][MCA_MAX_DOF];
@@ -691,7 +774,7 @@ static void test_controller_n_arms(void **state) {
     char err[512];
     assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
     assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
-    mca_controller_t *c = malloc(sizeof *c);
+    mca_controller_t *c = malloc(mca_controller_size());
     assert_non_null(c);
     double q[3][MCA_MAX_DOF], qd[3][MCA_MAX_DOF];
     memcpy(q[0], s.arm[0].q0, sizeof q[0]);
@@ -706,8 +789,8 @@ static void test_controller_n_arms(void **state) {
         assert_int_equal(mca_controller_tick(c, 0.001 * k, qs, qds, &info), MCA_OK);
     }
     assert_true(isinf(info.min_distance) && info.active_rows == 0 && info.brake == 1.0);
-    assert_int_equal(c->qp.n, 8);
-    assert_int_equal(c->qp.n_ineq, 9);
+    assert_int_equal(mca_controller_last_qp(c, NULL)->n, 8);
+    assert_int_equal(mca_controller_last_qp(c, NULL)->n_ineq, 9);
     /* three arms: the third a copy of the right arm 1.5 m further along -y (far from both) */
     assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA, err, sizeof err), MCA_OK);
     cfg.n_arms = 3;
@@ -719,9 +802,9 @@ static void test_controller_n_arms(void **state) {
     for (int k = 0; k < 10; k++) {
         assert_int_equal(mca_controller_tick(c, 0.001 * k, qs, qds, &info), MCA_OK);
     }
-    assert_int_equal(c->qp.n, 24);
-    assert_int_equal(c->qp.n_eq, 9);
-    assert_int_equal(c->qp.n_ineq, 27);
+    assert_int_equal(mca_controller_last_qp(c, NULL)->n, 24);
+    assert_int_equal(mca_controller_last_qp(c, NULL)->n_eq, 9);
+    assert_int_equal(mca_controller_last_qp(c, NULL)->n_ineq, 27);
     /* the global minimum is still between arms 0 and 1; every link of arm 2 sees arm 1 as its closest */
     assert_true(info.min_distance > 0.05 && info.min_distance < 0.12);
     assert_true(info.min_arm_a == 0 && info.min_arm_b == 1);
@@ -752,7 +835,7 @@ static void run_ts(const char *scenario, double seconds, ts_tick_fn fn, void *us
     static mca_scenario_t s;
     static mca_controller_config_t cfg;
     load_ts(scenario, &s, &cfg);
-    mca_controller_t *c = malloc(sizeof *c);
+    mca_controller_t *c = malloc(mca_controller_size());
     assert_non_null(c);
     assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
     double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
@@ -787,20 +870,20 @@ static void check_tick(const mca_controller_t *c, const mca_tick_info_t *info, v
     ts_seen_t *seen = user;
     seen->min_d = fmin(seen->min_d, info->min_distance);
     const mca_qp_t *qp = mca_controller_last_qp(c, NULL);
-    const int na = c->cfg.n_arms;
+    const int na = mca_controller_get_config(c)->n_arms;
     int nj = 0;
     for (int a = 0; a < na; a++) {
-        nj += c->cfg.chain[a].dof;
+        nj += mca_controller_get_config(c)->chain[a].dof;
     }
     assert_int_equal(qp->n, nj + MCA_TS_VARS * na);
     double phi[MCA_QP_MAX_VARS] = {0};
-    const double re = 1.0 / sqrt(c->cfg.ts.w_slack);
+    const double re = 1.0 / sqrt(mca_controller_get_config(c)->ts.w_slack);
     for (int a = 0; a < na; a++) {
         const int o = nj + MCA_TS_VARS * a;
         /* sigma = target + rs u, bounded to [lo, hi] with lo = 0 (running, waiting) or -1 (backing off: then
          * hi = 0, a width of exactly 1; running has hi = sigma_max = 1.5): sigma = 0 is u = ub while backing
          * off, u = lb otherwise, and always inside the bounds */
-        assert_true(c->cfg.ts.sigma_max != 1.0);
+        assert_true(mca_controller_get_config(c)->ts.sigma_max != 1.0);
         const double rs = 1.0 / c->ts_scale[a]; /* sigma = target + u / m */
         const double u = fabs((qp->ub[o] - qp->lb[o]) * rs - 1.0) < 1e-9 ? qp->ub[o] : qp->lb[o];
         phi[o] = u;
@@ -893,11 +976,13 @@ typedef struct witness_seen {
  * sum_j max|qdot_j| |p - o_j| over the joints that move p's link (a second, point-wise computation of what
  * the controller bounds per link). */
 static double point_reach(const mca_controller_t *c, int a, int link, const double p[3]) {
-    const mca_kin_t *k = &c->kin[a];
-    const int vo = a == 0 ? 0 : c->cfg.chain[0].dof;
+    const mca_kin_t *k = mca_controller_kin(c, a);
+    const int vo = a == 0 ? 0 : mca_controller_get_config(c)->chain[0].dof;
     double v = 0.0;
     for (int j = 0; j < link; j++) {
-        v += fmax(fabs(c->qp.lb[vo + j]), fabs(c->qp.ub[vo + j])) * mca_v3_dist(p, k->point[j + 1]);
+        v += fmax(fabs(mca_controller_last_qp(c, NULL)->lb[vo + j]),
+                  fabs(mca_controller_last_qp(c, NULL)->ub[vo + j])) *
+             mca_v3_dist(p, k->point[j + 1]);
     }
     return v;
 }
@@ -914,8 +999,9 @@ static void check_witnesses(const mca_controller_t *c, const mca_tick_info_t *in
         return;
     }
     seen->ticks++;
-    const mca_kin_t *k0 = &c->kin[0], *k1 = &c->kin[1];
-    const double *r0 = c->cfg.chain[0].link_radius, *r1 = c->cfg.chain[1].link_radius;
+    const mca_kin_t *k0 = mca_controller_kin(c, 0), *k1 = mca_controller_kin(c, 1);
+    const double *r0 = mca_controller_get_config(c)->chain[0].link_radius,
+                 *r1 = mca_controller_get_config(c)->chain[1].link_radius;
     for (int side = 0; side < 2; side++) {
         const mca_kin_t *km = side ? k1 : k0, *ko = side ? k0 : k1;
         const double *rm = side ? r1 : r0, *ro = side ? r0 : r1;
@@ -949,9 +1035,10 @@ static void check_witnesses(const mca_controller_t *c, const mca_tick_info_t *in
                     }
                     const double bound =
                         mca_scheme_row_bound(
-                            &c->cfg.sp, d,
-                            mca_scheme_stop_time(&c->cfg.chain[side], c->cfg.ts.dec_limit[side])) *
-                        mca_scheme_row_share(c->cfg.ts.priority, side, 1 - side);
+                            &mca_controller_get_config(c)->sp, d,
+                            mca_scheme_stop_time(&mca_controller_get_config(c)->chain[side],
+                                                 mca_controller_get_config(c)->ts.dec_limit[side])) *
+                        mca_scheme_row_share(mca_controller_get_config(c)->ts.priority, side, 1 - side);
                     if (point_reach(c, side, i, p) < bound) {
                         seen->ends_unbindable++;
                         continue;
@@ -1000,7 +1087,7 @@ static void assert_rows_hold(const mca_controller_t *c, double *const qds[MCA_MA
     const mca_qp_t *qp = mca_controller_last_qp(c, &phi);
     int rows = 0;
     for (int i = 0; i < qp->n_ineq; i++) {
-        if (qp->beta[i] < c->cfg.sp.big) {
+        if (qp->beta[i] < mca_controller_get_config(c)->sp.big) {
             double s = 0.0;
             for (int j = 0; j < qp->n; j++) {
                 s += qp->U[i][j] * phi[j];
@@ -1010,15 +1097,15 @@ static void assert_rows_hold(const mca_controller_t *c, double *const qds[MCA_MA
         }
     }
     int off = 0;
-    for (int a = 0; a < c->cfg.n_arms; a++) {
-        for (int j = 0; j < c->cfg.chain[a].dof; j++) {
+    for (int a = 0; a < mca_controller_get_config(c)->n_arms; a++) {
+        for (int j = 0; j < mca_controller_get_config(c)->chain[a].dof; j++) {
             assert_true(qds[a][j] == phi[off + j]);
             if (box) {
                 assert_true(phi[off + j] >= qp->lb[off + j] - 1e-12 &&
                             phi[off + j] <= qp->ub[off + j] + 1e-12);
             }
         }
-        off += c->cfg.chain[a].dof;
+        off += mca_controller_get_config(c)->chain[a].dof;
     }
     print_message("  %d collision rows hold at the command\n", rows);
 }
@@ -1034,7 +1121,7 @@ static void budget_tick(mca_scheme_kind_t scheme) {
     load_ts(SCN("negative.yaml"), &s, &cfg);
     cfg.scheme = scheme;
     cfg.pdnn.no_polish = 1; /* the network's clock checks: with the polish no tick here takes 16 steps */
-    mca_controller_t *c = malloc(sizeof *c), *b = malloc(sizeof *b);
+    mca_controller_t *c = malloc(mca_controller_size()), *b = malloc(mca_controller_size());
     assert_non_null(c);
     assert_non_null(b);
     double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
@@ -1056,7 +1143,7 @@ static void budget_tick(mca_scheme_kind_t scheme) {
     assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
     int k_long = -1;
     for (int k = 0; k < 8000 && k_long < 0; k++) {
-        *b = *c;
+        mca_controller_copy(b, c);
         mca_controller_tick(c, k * cfg.dt, qs, qds, &info);
         if (info.pdnn_steps > 100 || info.fault) {
             k_long = k;
@@ -1072,10 +1159,10 @@ static void budget_tick(mca_scheme_kind_t scheme) {
     assert_true(k_long > 0);
     const int full_steps = info.pdnn_steps, full_fault = info.fault;
     /* that tick again with 1 ns: out of time, a repaired command, no fault */
-    b->cfg.pdnn_budget_ns = 1;
-    mca_controller_t *r = malloc(sizeof *r);
+    mca_controller_set_pdnn_budget(b, 1);
+    mca_controller_t *r = malloc(mca_controller_size());
     assert_non_null(r);
-    *r = *b; /* for the braking below */
+    mca_controller_copy(r, b); /* for the braking below */
     const int rc = mca_controller_tick(b, k_long * cfg.dt, qs, qds, &info);
     print_message(
         "%s, 1 ns budget: tick %d (%d steps without): rc %d, fault %s, budget hit %d after %d steps, "
@@ -1089,7 +1176,7 @@ static void budget_tick(mca_scheme_kind_t scheme) {
     assert_true(info.pdnn_residual > cfg.fault_residual); /* a short answer: the repair was needed */
     assert_rows_hold(b, qds, scheme == MCA_SCHEME_MCA);
     /* with the budget back (a stall passed), what the next ticks would have done without it */
-    b->cfg.pdnn_budget_ns = 0;
+    mca_controller_set_pdnn_budget(b, 0);
     int k_next;
     for (k_next = k_long + 1; k_next < k_long + 50; k_next++) {
         for (int a = 0; a < cfg.n_arms; a++) {
@@ -1137,7 +1224,7 @@ static void test_pdnn_time_budget(void **state) {
 /* Run the negative task (Euler) until its first fault or n ticks; counts budget hits. */
 static int run_negative(mca_controller_config_t *cfg, const mca_scenario_t *s, int n,
                         mca_tick_info_t *fault_info, int *hits, double *qd_sum) {
-    mca_controller_t *c = malloc(sizeof *c);
+    mca_controller_t *c = malloc(mca_controller_size());
     assert_non_null(c);
     assert_int_equal(mca_controller_init(c, cfg), MCA_OK);
     double q[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}}, qd[MCA_MAX_ARMS][MCA_MAX_DOF] = {{0}};
@@ -1446,7 +1533,7 @@ static void test_controller_brake(void **state) {
     assert_int_equal(mca_scenario_load(SCN("cross_circles.yaml"), &s, err, sizeof err), MCA_OK);
     assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
                      MCA_OK);
-    mca_controller_t *c = malloc(sizeof *c);
+    mca_controller_t *c = malloc(mca_controller_size());
     assert_non_null(c);
     assert_int_equal(mca_controller_init(c, &cfg), MCA_OK);
     double q[2][MCA_MAX_DOF], v[2][MCA_MAX_DOF] = {{0}}, cmd[2][MCA_MAX_DOF], dec[2][MCA_MAX_DOF];
@@ -1581,6 +1668,7 @@ int main(void) {
         cmocka_unit_test(test_apf),
         cmocka_unit_test(test_paths),
         cmocka_unit_test(test_scenario_files),
+        cmocka_unit_test(test_controller_stream_law),
         cmocka_unit_test(test_controller_faults),
         cmocka_unit_test(test_controller_n_arms),
         cmocka_unit_test(test_timescale_stand_still_feasible),

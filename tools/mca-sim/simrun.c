@@ -121,7 +121,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         goto out;
     }
     const mca_controller_t *ctrl = mca_drive_controller(d);
-    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const mca_controller_config_t *cfg = mca_controller_get_config(ctrl);
     const mca_tick_info_t *ip = mca_drive_tick_info(d);
     mca_drive_stop_at(d, o->stop_at);                  /* as SIGTERM; < 0: none */
     mca_drive_fault_at(d, o->fault_kind, o->fault_at); /* "injected fault KIND at t = T s"; < 0: none */
@@ -288,7 +288,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             for (int a = 0; a < na; a++) {
                 memcpy(q[a], mca_drive_positions(d, a), sizeof q[a]);
             }
-            const mca_tick_csv_row_t row = {.t = t, .q = q, .info = ip, .dist = ctrl->dist};
+            const mca_tick_csv_row_t row = {
+                .t = t, .q = q, .info = ip, .dist = mca_controller_distances(ctrl)};
             mca_tick_csv_row(csv, &csv_layout, &row);
         }
         /* the ticks --dump-every picks: every Nth, and every N/5th with binding rows */
@@ -366,8 +367,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         r->end_tau[a] = ip->tau[a];
         r->end_done[a] = ip->tau[a] >= mca_path_end_time(&cfg->path[a]);
     }
-    r->coord_pairs = ctrl->coord.n_pairs;
-    r->coord_unplanned = ctrl->coord.unplanned;
+    r->coord_pairs = mca_controller_coord(ctrl)->n_pairs;
+    r->coord_unplanned = mca_controller_coord(ctrl)->unplanned;
     r->pdnn_steps_mean = steps_n ? steps_sum / steps_n : 0.0;
     r->completed &= r->exact_missed == 0;
     if (n_perr > 0) {

@@ -46,7 +46,7 @@ static void usage(void) {
 /* Brake the copy until rest; figures into f. */
 static void branch(mca_controller_t *c, double t, double q[MCA_MAX_ARMS][MCA_MAX_DOF],
                    const double v0[MCA_MAX_ARMS][MCA_MAX_DOF], double dec, stop_figures_t *f) {
-    const mca_controller_config_t *cfg = &c->cfg;
+    const mca_controller_config_t *cfg = mca_controller_get_config(c);
     const double dt = cfg->dt, d1 = cfg->sp.d1;
     double v[MCA_MAX_ARMS][MCA_MAX_DOF], cmd[MCA_MAX_ARMS][MCA_MAX_DOF], decs[MCA_MAX_ARMS][MCA_MAX_DOF];
     const double *qp[MCA_MAX_ARMS], *vp[MCA_MAX_ARMS], *dp[MCA_MAX_ARMS];
@@ -103,7 +103,7 @@ static void branch(mca_controller_t *c, double t, double q[MCA_MAX_ARMS][MCA_MAX
 }
 
 static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every, double dec,
-               stop_figures_t *f, mca_controller_t *ctrl, mca_controller_t *copy) {
+               stop_figures_t *f, void *mem, mca_controller_t *copy) {
     mca_controller_config_t *cfg = malloc(sizeof *cfg);
     char err[512];
     if (!cfg) {
@@ -118,7 +118,8 @@ static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every
     for (int a = 0; a < cfg->n_arms; a++) {
         cfg->ts.dec_limit[a] = dec;
     }
-    rc = mca_controller_init(ctrl, cfg);
+    mca_controller_t *ctrl;
+    rc = mca_controller_create(mem, mca_controller_size(), cfg, &ctrl);
     if (rc != MCA_OK) {
         fprintf(stderr, "mca-stopcheck: controller init: %s\n", mca_strerror(rc));
         free(cfg);
@@ -153,7 +154,7 @@ static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every
         memcpy(v_last, qd, sizeof v_last);
         if (k > 0 && k % step == 0) {
             /* the stop request arrives before this tick: brake from the last command */
-            memcpy(copy, ctrl, sizeof *copy);
+            mca_controller_copy(copy, ctrl);
             memcpy(qb, q, sizeof qb);
             branch(copy, t, qb, (const double(*)[MCA_MAX_DOF])v_last, dec, f);
         }
@@ -168,7 +169,7 @@ static int run(const mca_scenario_t *scn, mca_scheme_kind_t scheme, double every
             char why[192];
             fprintf(stderr, "mca-stopcheck: dec %.3g: task fault at t = %.3f s: %s\n", dec, t,
                     mca_ctrl_fault_format(&info.fault_why, why, sizeof why));
-            memcpy(copy, ctrl, sizeof *copy);
+            mca_controller_copy(copy, ctrl);
             memcpy(qb, q, sizeof qb);
             branch(copy, t, qb, (const double(*)[MCA_MAX_DOF])v_last, dec, f);
             break;
@@ -221,7 +222,9 @@ int main(int argc, char **argv) {
         fprintf(stderr, "mca-stopcheck: %s\n", err);
         return 2;
     }
-    mca_controller_t *ctrl = malloc(sizeof *ctrl), *copy = malloc(sizeof *copy);
+    /* the controller's storage and its braking copy's (mca_controller_create) */
+    void *ctrl = malloc(mca_controller_size());
+    mca_controller_t *copy = malloc(mca_controller_size());
     if (!ctrl || !copy) {
         return 2;
     }

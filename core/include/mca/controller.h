@@ -8,8 +8,9 @@
  *     mca_controller_config_t cfg;
  *     mca_controller_config_from_scenario(&cfg, &scenario, MCA_SCHEME_MCA, err, sizeof err); // or fill
  *     (mca_controller_config_from_scenario is the model library's, mca/scenario.h)
- *     mca_controller_t *ctrl = malloc(sizeof *ctrl);      // ~160 kB: not on a stack
- *     mca_controller_init(ctrl, &cfg);
+ *     void *mem = malloc(mca_controller_size());         // ~1.6 MB: not on a stack; core never allocates
+ *     mca_controller_t *ctrl;
+ *     mca_controller_create(mem, mca_controller_size(), &cfg, &ctrl);
  *     loop: mca_controller_tick(ctrl, t, q, qdot, &info);  // q[a], qdot[a]: arm a's joints
  *
  * Task time: the first tick after init/reset anchors the paths (frame "start") at the arms' current
@@ -23,9 +24,11 @@
  * every later tick commands zero (and reports the same fault) until mca_controller_clear_fault(). The braking
  * profile itself is the arm's / daemon's job.
  *
- * Context: mca_controller_config_from_scenario() (mca_model) and mca_controller_init() are start-up only
- * (URDF parsing allocates). mca_controller_tick(), _reset() and _clear_fault() are real-time safe:
- * no allocation, no I/O, no locks; compute time is measured with CLOCK_MONOTONIC.
+ * Context: mca_controller_config_from_scenario() (mca_model), mca_controller_create(), _init() and _plan()
+ * are start-up only (URDF parsing allocates). mca_controller_tick(), _reset(), _clear_fault(), the setters
+ * and the getters are real-time safe: no allocation, no I/O, no locks; compute time is measured with
+ * CLOCK_MONOTONIC. The state is opaque: what may change while running has a setter, what callers read a
+ * getter.
  */
 #ifndef MCA_CONTROLLER_H
 #define MCA_CONTROLLER_H
@@ -254,68 +257,61 @@ typedef struct mca_tick_info {
     int64_t compute_ns;             /**< CLOCK_MONOTONIC time spent in the tick */
 } mca_tick_info_t;
 
-/** Controller state (~160 kB: keep it static or on the heap; allocated by the caller at start-up). */
-typedef struct mca_controller {
-    mca_controller_config_t cfg;
-    int started; /**< paths anchored */
-    double t_start;
-    int fault;
-    mca_ctrl_fault_why_t fault_why;
-    mca_kin_t kin[MCA_MAX_ARMS];
-    mca_arm_distances_t dist[MCA_MAX_ARMS][MCA_MAX_ARMS]; /**< [a][b], a < b */
-    mca_link_critical_t crit[MCA_MAX_ARMS][MCA_MAX_LINKS];
-    mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS]
-                            [MCA_NEAR_PAIRS]; /**< nearest links (mca-ts, braking) */
-    mca_body_witness_t body_near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS]; /**< fixed bodies' rows */
-    double body_margin_prev; /**< last tick's least body margin (the prediction of the distance fault) */
-    mca_scheme_state_t sstate;
-    mca_qp_t qp;
-    mca_pdnn_t pdnn;
-    double phi[MCA_QP_MAX_VARS];
-    double phi_prev[MCA_QP_MAX_VARS];
-    double min_distance_prev;
-    int has_prev;
-    uint64_t ticks;
-    /* mca-ts */
-    double tau[MCA_MAX_ARMS];   /**< path clocks */
-    double sigma[MCA_MAX_ARMS]; /**< last path rates */
-    double path_end[MCA_MAX_ARMS];
-    double t_prev;     /**< last tick's t (tau advances by sigma (t - t_prev)) */
-    double stall_time; /**< how long every unfinished arm's sigma has been below deadlock_sigma */
-    int deadlock, deadlock_arm, deadlocks;
-    int exact_next[MCA_MAX_ARMS];             /**< the next exact waypoint to check (path point index) */
-    int track_mode[MCA_MAX_ARMS];             /**< mca_tracking_mode_t of each arm in the last QP */
-    double keep_q[MCA_MAX_ARMS][MCA_MAX_DOF]; /**< path with a tube: one keep-direction braking step */
-    double keep_sigma[MCA_MAX_ARMS];          /**< and the path rate that fits it */
-    int giving_way[MCA_MAX_ARMS];   /**< path first: 1 while the arm may slide within its tube (held too long)
-                                     */
-    double held_time[MCA_MAX_ARMS]; /**< how long its path rate has been held below deadlock_sigma [s] */
-    int at_tube_edge[MCA_MAX_ARMS]; /**< this tick's error reached its tube's edge (giving way ends) */
-    double rate_avg[MCA_MAX_ARMS]; /**< path rate averaged over MCA_TS_RATE_AVG_S: held and deadlock see it */
-    int exact_bad[MCA_MAX_ARMS];   /**< 1: the point being checked was missed */
-    int exact_met, exact_missed;
-    double exact_error_max;
-    double deadlock_until;              /**< back-off ends at this task time */
-    double wait_tau[MCA_MAX_ARMS];      /**< WAIT: the others' clocks when it began */
-    int back_offs;                      /**< back-offs of deadlock_arm since the deadlock began */
-    double ts_scale[MCA_MAX_ARMS];      /**< u = ts_scale (sigma - target) in the last QP */
-    double v_meas[MCA_QP_MAX_VARS];     /**< measured joint velocities for the next tick (phi layout) */
-    double box_center[MCA_QP_MAX_VARS]; /**< the joint velocities the acceleration box was centred on */
-    int has_v_meas;
-    /* braking QP (kept apart from the tick's so a fault does not disturb the last tick's dump) */
-    mca_qp_t brake_qp;
-    mca_pdnn_t brake_pdnn;
-    /* mca-ts and braking: the compacted rows' slots in the full row layout (warm starts follow them) */
-    int row_key[MCA_QP_MAX_INEQ], n_row_key;
-    int brake_row_key[MCA_QP_MAX_INEQ], n_brake_row_key;
-    /* mca-ts: who passes first where fixed paths meet (mca_controller_plan; empty without a plan) */
-    mca_coord_t coord;
-    /* mca-ts: each path-first arm's path-rate limit, sigma's own stop bound (mca_controller_plan; n = 0:
-     * none) */
-    mca_path_rate_t rate[MCA_MAX_ARMS];
-} mca_controller_t;
+/** The controller's state: opaque (its fields are core's, core/src/controller__state.h). The caller provides
+ *  its storage, mca_controller_size() bytes aligned for any type (malloc's, or static storage aligned with
+ *  _Alignas(max_align_t)), at start-up: core never allocates (core.rt_symbols checks it), and a daemon that
+ *  locks its memory takes the state into the lock with the rest of what it allocated before mlockall. */
+typedef struct mca_controller mca_controller_t;
 
-/** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
+/** An upper bound of mca_controller_size() [bytes]: 1.7 MB. The state is about 1.6 MB (1 633 544 bytes on
+ *  x86-64: the two QPs and PDNNs, the tick's and the braking's, are most of it), so never on a stack;
+ *  controller.c checks at compile time that the state lies between 90 % of this bound and the bound, so this
+ *  figure stays the size to plan for (docs/architecture.md). */
+#define MCA_CONTROLLER_SIZE_MAX 1700000
+
+/** Bytes of storage a controller needs (sizeof its state, at most MCA_CONTROLLER_SIZE_MAX). */
+size_t mca_controller_size(void);
+
+/**
+ * A controller in the caller's storage, initialised from @p cfg (mca_controller_init). Start-up only.
+ * Nothing inside owns a resource: to destroy it, the caller frees (or reuses) its storage.
+ * @param storage  at least mca_controller_size() bytes, aligned for any type
+ * @param[out] out  the controller (== storage), NULL on error
+ * @retval MCA_OK, MCA_EINVAL (NULL, size too small, storage misaligned, or mca_controller_init's reasons)
+ */
+int mca_controller_create(void *storage, size_t size, const mca_controller_config_t *cfg,
+                          mca_controller_t **out);
+
+/** Copy the whole state of @p src into @p dst (a created controller, or storage as mca_controller_create's,
+ *  which then holds a controller): a scratch copy to warm code on or to branch a run from (RT safe: a memcpy
+ *  of mca_controller_size() bytes, no allocation). */
+void mca_controller_copy(mca_controller_t *dst, const mca_controller_t *src);
+
+/* ---- what a caller reads (getters; RT safe, no copies) */
+
+/** The configuration the controller runs (cfg as mca_controller_init adjusted it: the scheme's collision
+ *  rows, the bodies' slots, mca-ts's form; the setters below change it while running). */
+const mca_controller_config_t *mca_controller_get_config(const mca_controller_t *ctrl);
+
+/** 1 once a tick anchored the paths (task time runs), 0 before the first tick after init / reset. */
+int mca_controller_started(const mca_controller_t *ctrl);
+
+/** Arm @p arm's kinematics as of the last tick / observe / brake (NULL: arm out of range). */
+const mca_kin_t *mca_controller_kin(const mca_controller_t *ctrl, int arm);
+
+/** The arm-to-arm distances of the last tick / observe / brake: [a][b] for a < b (mca/armdist.h). */
+const mca_arm_distances_t (*mca_controller_distances(const mca_controller_t *ctrl))[MCA_MAX_ARMS];
+
+/** mca-ts: arm @p arm's path-rate limit from mca_controller_plan (n = 0: none; NULL: arm out of range). */
+const mca_path_rate_t *mca_controller_path_rate(const mca_controller_t *ctrl, int arm);
+
+/** mca-ts: who passes first where fixed paths meet, from mca_controller_plan (empty without a plan). */
+const mca_coord_t *mca_controller_coord(const mca_controller_t *ctrl);
+
+/** Initialise (or re-initialise, with a new configuration) a created controller, or storage as
+ *  mca_controller_create's (which then holds one; create also checks the storage): every field from @p cfg,
+ *  the task restarted. Start-up only.
+ *  @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
 int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *cfg);
 
 /**
@@ -340,6 +336,35 @@ void mca_controller_reset(mca_controller_t *ctrl);
  */
 int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]);
 
+/** What a streamed target asks of its arm (mca_controller_stream_target). */
+typedef enum mca_stream_kind {
+    MCA_STREAM_HOLD = 0,  /**< no target, or none recent enough: the reference stands still */
+    MCA_STREAM_TWIST = 1, /**< x is the reference's velocity [m/s] */
+    MCA_STREAM_POSE = 2,  /**< x is a position the reference approaches [m] */
+} mca_stream_kind_t;
+
+/** The streamed targets' law (mcad: the cell's task.stream). */
+typedef struct mca_stream_law {
+    double pose_gain; /**< a pose is approached at pose_gain x (x - reference) [1/s] */
+    double max_speed; /**< no reference velocity beyond this [m/s] */
+} mca_stream_law_t;
+
+/**
+ * The streamed targets' control law, then mca_controller_stream (RT safe): arm @p arm's reference velocity
+ * from its target: a twist as it is; a pose approached at law->pose_gain x the gap from where the reference
+ * is now (hold until the first tick anchored the paths); a hold, or any non-finite x: zero; the result
+ * scaled down to at most law->max_speed (the target's source is not trusted with either).
+ * @param x  the target (not read for MCA_STREAM_HOLD)
+ * @retval MCA_OK, MCA_EINVAL (as mca_controller_stream; NULL law, x NULL unless a hold)
+ */
+int mca_controller_stream_target(mca_controller_t *ctrl, int arm, mca_stream_kind_t kind, const double x[3],
+                                 const mca_stream_law_t *law);
+
+/** The PDNN's wall-time budget from the start of a tick [ns] (cfg.pdnn_budget_ns; 0: none), from the next
+ *  tick on: mcad gives its loop half the period once it runs in real time. RT safe.
+ *  @retval MCA_OK, MCA_EINVAL (NULL, negative) */
+int mca_controller_set_pdnn_budget(mca_controller_t *ctrl, int64_t budget_ns);
+
 /** Clear a latched fault (keeps the task clock and anchors). RT safe. */
 void mca_controller_clear_fault(mca_controller_t *ctrl);
 
@@ -359,8 +384,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
 /**
  * Kinematics and distances only, no QP, no command, no fault raised (real-time safe): what a braking or
  * stopped controller still measures. Updates info->t, task_t, n_arms, ee, min_distance with its arms,
- * links and points P/E, and link_distance (and ctrl->kin, ctrl->dist); every other field of info is left
- * as it was (the last tick's solver figures stay readable).
+ * links and points P/E, and link_distance (and mca_controller_kin, _distances); every other field of info is
+ * left as it was (the last tick's solver figures stay readable).
  * @retval MCA_OK, MCA_EINVAL (NULL pointers, non-finite joint position: info's distances untouched)
  */
 int mca_controller_observe(mca_controller_t *ctrl, double t, const double *const q[MCA_MAX_ARMS],

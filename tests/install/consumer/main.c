@@ -1,11 +1,12 @@
 /* SPDX-License-Identifier: MIT */
 /* Uses the installed headers and libraries: loads an installed URDF through the model library
  * (mca_chain_load_urdf, mca::model), loads an installed scenario (two arms; their URDFs found next to it)
- * into a controller config, runs controller ticks through the real-time core (mca_controller_init and
+ * into a controller config, runs controller ticks through the real-time core (mca_controller_create and
  * mca_controller_tick, mca::core), checks a segment distance against its closed form and S(d) of eq. (13),
  * and fills a DDS config (mca::dds).
  * usage: consumer URDF SCENARIO  -> prints "consumer: ok ..." and exits 0 */
 #include <math.h>
+#include <stddef.h> /* max_align_t */
 #include <stdio.h>
 
 #include "mca/chain.h"
@@ -23,7 +24,9 @@ int main(int argc, char **argv) {
     static mca_chain_t chain;
     static mca_scenario_t scn;
     static mca_controller_config_t ccfg;
-    static mca_controller_t ctrl; /* ~160 kB: not on the stack */
+    /* the controller in static storage: its documented bound, aligned as malloc's (not on the stack) */
+    static _Alignas(max_align_t) unsigned char ctrl_mem[MCA_CONTROLLER_SIZE_MAX];
+    mca_controller_t *ctrl = NULL;
     char err[512];
     if (argc < 3) {
         fprintf(stderr, "consumer: usage: consumer URDF SCENARIO\n");
@@ -39,7 +42,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "consumer: %s\n", err);
         return 1;
     }
-    if (scn.n_arms != 2 || mca_controller_init(&ctrl, &ccfg) != MCA_OK) {
+    if (scn.n_arms != 2 || mca_controller_create(ctrl_mem, sizeof ctrl_mem, &ccfg, &ctrl) != MCA_OK) {
         fprintf(stderr, "consumer: %s: %d arms, controller init failed\n", argv[2], scn.n_arms);
         return 1;
     }
@@ -54,7 +57,7 @@ int main(int argc, char **argv) {
     mca_tick_info_t info;
     double moved = 0.0;
     for (int k = 0; k < TICKS; k++) {
-        const int rc = mca_controller_tick(&ctrl, k * ccfg.dt, qp, qdp, &info);
+        const int rc = mca_controller_tick(ctrl, k * ccfg.dt, qp, qdp, &info);
         if (rc != MCA_OK) {
             fprintf(stderr, "consumer: tick %d: %s (fault %s)\n", k, mca_strerror(rc),
                     mca_ctrl_fault_name(info.fault));
