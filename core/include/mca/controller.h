@@ -44,6 +44,7 @@
 #include "mca/pdnn.h"
 #include "mca/qp.h"
 #include "mca/scheme.h"
+#include "mca/track.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -178,6 +179,9 @@ typedef struct mca_controller_config {
                                 min(pdnn.max_steps, this); stopping here before the cap is a budget event
                                 (MCA_BUDGET_STEPS), deterministic. mcad and mca-sim alike. Not under the
                                 scheme mca, whose step limit stays its cap (the paper's figures) */
+    int max_tracks; /**< streamed bodies (mca/track.h) the controller keeps slots for, after the fixed bodies
+                         (0: none); they arrive through mca_controller_set_tracks */
+    mca_ssm_params_t ssm; /**< their speed and separation monitoring (mca_ssm_default) */
 } mca_controller_config_t;
 
 /** Wall time of one PDNN step [ns] on the largest QPs the shipped tasks build, measured on the development VM
@@ -313,6 +317,10 @@ typedef struct mca_controller {
     /* mca-ts: each path-first arm's path-rate limit, sigma's own stop bound (mca_controller_plan; n = 0:
      * none) */
     mca_path_rate_t rate[MCA_MAX_ARMS];
+    /* streamed bodies: cfg.body[n_fixed ..] are the tracks of the last mca_controller_set_tracks */
+    int n_fixed;                                 /**< the cell's fixed bodies */
+    double track_arm_speed, track_stop_time;     /**< v_r and T_s of S_p (set at init) */
+    mca_ssm_terms_t track_terms[MCA_MAX_TRACKS]; /**< each track's S_p as last set */
 } mca_controller_t;
 
 /** @retval MCA_OK, MCA_EINVAL (NULL, n_arms out of range, d1 >= d2, non-positive dt, ...) */
@@ -339,6 +347,15 @@ void mca_controller_reset(mca_controller_t *ctrl);
  * @retval MCA_OK, MCA_EINVAL (NULL, arm out of range, not a stream, non-finite v)
  */
 int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]);
+
+/**
+ * The streamed bodies at time t (the tick's clock): each track becomes a body of the rows with the
+ * protective separation S_p as its clearance, grown while stale (mca_track_body). Call every tick before
+ * mca_controller_tick (or _brake): a stale track grows with t. n = 0 removes them. RT safe (copies).
+ * @retval MCA_OK
+ * @retval MCA_EINVAL  NULL, n above cfg.max_tracks, a track not usable: the bodies stay as they were
+ */
+int mca_controller_set_tracks(mca_controller_t *ctrl, const mca_track_t *tracks, int n, double t);
 
 /** Clear a latched fault (keeps the task clock and anchors). RT safe. */
 void mca_controller_clear_fault(mca_controller_t *ctrl);
