@@ -122,12 +122,7 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     /* the fixed bodies' rows keep slots after each arm's own (none without bodies: the layout of before) */
     ctrl->cfg.sp.body_pairs = cfg->n_bodies + cfg->max_tracks > 0 && cfg->body_rows ? MCA_BODY_PAIRS : 0;
     ctrl->n_fixed = cfg->n_bodies;
-    for (int a = 0; a < cfg->n_arms; a++) {
-        /* S_p's arm terms: the fastest arm and the longest stop (no stop bound: no braking time known) */
-        ctrl->track_arm_speed = fmax(ctrl->track_arm_speed, mca_chain_point_speed(&cfg->chain[a]));
-        ctrl->track_stop_time =
-            fmax(ctrl->track_stop_time, mca_scheme_stop_time(&cfg->chain[a], cfg->ts.dec_limit[a]));
-    }
+    mca_controller_ssm_arms(cfg, &ctrl->track_arm_speed, &ctrl->track_stop_time);
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;
@@ -218,6 +213,15 @@ int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]) {
     }
     mca_v3_set(ctrl->cfg.path[arm].stream_v, v);
     return MCA_OK;
+}
+
+void mca_controller_ssm_arms(const mca_controller_config_t *cfg, double *arm_speed, double *t_stop) {
+    *arm_speed = *t_stop = 0.0;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        /* the fastest arm and the longest stop (dec_limit 0: no braking time known, T_s 0) */
+        *arm_speed = fmax(*arm_speed, mca_chain_point_speed(&cfg->chain[a]));
+        *t_stop = fmax(*t_stop, mca_scheme_stop_time(&cfg->chain[a], cfg->ts.dec_limit[a]));
+    }
 }
 
 int mca_controller_set_tracks(mca_controller_t *ctrl, const mca_track_t *tracks, int n, double t) {

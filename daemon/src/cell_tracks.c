@@ -53,10 +53,11 @@ int mcad_cell_read_tracks(const mca_check_ctx_t ctx, const struct raw_cell *raw,
              "(dds.config naming a Cyclone XML with <Security>, e.g. ../dds/secure.xml; docs/security.md)");
     }
     if (rt->topic) {
-        if (!mca_ros2_name_ok(rt->topic)) {
+        /* the shipped governance protects rt/<ns>/tracked_bodies*: a name outside it would go unprotected */
+        if (!mca_ros2_name_ok(rt->topic) || strncmp(rt->topic, "tracked_bodies", 14) != 0) {
             FAIL(MCA_ECONFIG, LINE("streamed_bodies.topic"),
-                 "streamed_bodies.topic: '%s' is not a ROS 2 name (a letter, then letters, digits and single "
-                 "'_')",
+                 "streamed_bodies.topic: '%s' is not a ROS 2 name beginning with tracked_bodies (what the "
+                 "cell's governance protects: config/security/governance_*.xml)",
                  rt->topic);
         }
         snprintf(ct->topic, sizeof ct->topic, "%s", rt->topic);

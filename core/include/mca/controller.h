@@ -348,6 +348,10 @@ void mca_controller_reset(mca_controller_t *ctrl);
  */
 int mca_controller_stream(mca_controller_t *ctrl, int arm, const double v[3]);
 
+/** S_p's arm terms under cfg (mca/track.h): v_r the fastest point of any arm, T_s the longest stop at the
+ *  arms' ts.dec_limit (0 without one). Any context. */
+void mca_controller_ssm_arms(const mca_controller_config_t *cfg, double *arm_speed, double *t_stop);
+
 /**
  * The streamed bodies at time t (the tick's clock): each track becomes a body of the rows with the
  * protective separation S_p as its clearance, grown while stale (mca_track_body). Call every tick before
