@@ -18,7 +18,8 @@ const char *mca_body_kind_name(int kind) {
 }
 
 int mca_body_check(const mca_fixed_body_t *b) {
-    if (!b || !isfinite(b->clearance) || !(b->clearance >= 0.0)) {
+    if (!b || !isfinite(b->clearance) || !(b->clearance >= 0.0) || !isfinite(b->v[0]) || !isfinite(b->v[1]) ||
+        !isfinite(b->v[2]) || !isfinite(b->grow) || !(b->grow >= 0.0)) {
         return MCA_EINVAL;
     }
     /* the distance functions check every kind's geometry: one probe answers */

@@ -63,8 +63,9 @@ typedef struct mca_body_nearest {
 const char *mca_body_kind_name(int kind);
 
 /**
- * A body's geometry and clearance are usable (start-up): finite, clearance >= 0, radii and half extents >= 0,
- * normal and axis not zero, a box's rotation orthonormal (one probe distance answers).
+ * A body's geometry and clearance are usable (start-up): finite, clearance >= 0, its motion finite (grow >=
+ * 0), radii and half extents >= 0, normal and axis not zero, a box's rotation orthonormal (one probe distance
+ * answers).
  * @retval MCA_OK, MCA_EINVAL
  */
 int mca_body_check(const mca_fixed_body_t *b);
