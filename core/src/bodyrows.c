@@ -18,7 +18,8 @@ const char *mca_body_kind_name(int kind) {
 }
 
 int mca_body_check(const mca_fixed_body_t *b) {
-    if (!b || !isfinite(b->clearance) || !(b->clearance >= 0.0)) {
+    if (!b || !isfinite(b->clearance) || !(b->clearance >= 0.0) || !isfinite(b->v[0]) || !isfinite(b->v[1]) ||
+        !isfinite(b->v[2]) || !isfinite(b->grow) || !(b->grow >= 0.0)) {
         return MCA_EINVAL;
     }
     /* the distance functions check every kind's geometry: one probe answers */
@@ -161,6 +162,11 @@ static double body_bound(const mca_scheme_params_t *pb, double d, double t_stop)
     return b < pb->big ? 2.0 * b : pb->big;
 }
 
+/* The fastest a body's surface approaches anything (0 for a fixed body). */
+static double body_speed(const mca_fixed_body_t *fb) {
+    return mca_v3_norm(fb->v) + fb->grow;
+}
+
 /* Arm a's witness lists: per link, the pairs whose row can bind with the joint speeds inside the QP's box
  * (the link's fastest point moves at most `speed`: sum_j max|qdot_j| |p - o_j|, largest at an end). */
 static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mca_kin_t *kn, int a,
@@ -193,6 +199,8 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
                 continue;
             }
             const mca_scheme_params_t *bp = &pb[k];
+            /* a streamed body's own approach lowers its rows' bounds by at most this (mca/track.h) */
+            const double vs = speed + body_speed(fb);
             /* beyond d_cut no row of this pair can bind: its S part ends at d2_b, its stop part
              * 2 (d - c') / (2 T) reaches the link's speed at c' + T speed (1 nm wider: rounding never drops a
              * row that binds) */
@@ -200,7 +208,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             if (!isfinite(speed)) {
                 d_cut = INFINITY;
             } else if (t_stop > 0.0) {
-                d_cut = fmax(d_cut, mca_scheme_rows_d1(bp) + t_stop * speed + 1e-9);
+                d_cut = fmax(d_cut, mca_scheme_rows_d1(bp) + t_stop * vs + 1e-9);
             }
             if (!(lower_bound(&cap, sc[k], sr[k]) <= d_cut)) {
                 continue;
@@ -211,7 +219,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             }
             /* the ends are never nearer than the closest points: a pair whose closest points cannot bind has
              * no end that can (the bound grows with d) */
-            if (body_bound(bp, r.d, t_stop) > speed) {
+            if (body_bound(bp, r.d, t_stop) > vs) {
                 continue;
             }
             witness_insert(list, k, fb->clearance, &r);
@@ -222,7 +230,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
                 if (mca_capsule_body_distance(&pt, &fb->body, &r) != MCA_OK) {
                     return MCA_EINVAL;
                 }
-                if (!(body_bound(bp, r.d, t_stop) > speed)) {
+                if (!(body_bound(bp, r.d, t_stop) > vs)) {
                     witness_insert(list, k, fb->clearance, &r);
                 }
             }
@@ -235,7 +243,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
                     if (mca_capsule_sphere_distance(&cap, &sp, &r) != MCA_OK) {
                         return MCA_EINVAL;
                     }
-                    if (!(body_bound(bp, r.d, t_stop) > speed)) {
+                    if (!(body_bound(bp, r.d, t_stop) > vs)) {
                         witness_insert(list, k, fb->clearance, &r);
                     }
                 }
@@ -290,10 +298,14 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
                 if (w->d < bp->d2) {
                     si->brake = fmin(si->brake, mca_brake_s(w->d, mca_scheme_rows_d1(bp), bp->d2));
                 }
-                const double bound = body_bound(bp, w->d, t_stop);
+                double bound = body_bound(bp, w->d, t_stop);
                 if (!(bound < p->big)) {
                     continue;
                 }
+                /* a streamed body's approach along n (its velocity, or a stale track's growth) is taken off
+                 * the link's share: the row keeps the relative approach within the bound */
+                const mca_fixed_body_t *fb = &bodies[w->body];
+                bound -= mca_v3_dot(w->n, fb->v) + fb->grow;
                 double Jp[3][MCA_MAX_DOF];
                 rc = mca_jacobian_point(&kin[a], l, w->p, Jp);
                 if (rc != MCA_OK) {

@@ -79,6 +79,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->eq_tol = 1e-4;
     cfg->fault_distance = 1;
     cfg->body_rows = 1;
+    mca_ssm_default(&cfg->ssm);
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e3;
     cfg->ts.w_path = 1e4;
@@ -174,7 +175,9 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
             return MCA_EINVAL;
         }
     }
-    if (cfg->n_bodies < 0 || cfg->n_bodies > MCA_MAX_BODIES) {
+    if (cfg->n_bodies < 0 || cfg->n_bodies > MCA_MAX_BODIES || cfg->max_tracks < 0 ||
+        cfg->max_tracks > MCA_MAX_TRACKS || cfg->n_bodies + cfg->max_tracks > MCA_MAX_BODIES ||
+        (cfg->max_tracks > 0 && mca_ssm_check(&cfg->ssm) != MCA_OK)) {
         return MCA_EINVAL;
     }
     for (int k = 0; k < cfg->n_bodies; k++) {
@@ -186,7 +189,9 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     ctrl->cfg = *cfg;
     ctrl->cfg.sp.collision = uses_rows(cfg->scheme);
     /* the fixed bodies' rows keep slots after each arm's own (none without bodies: the layout of before) */
-    ctrl->cfg.sp.body_pairs = cfg->n_bodies > 0 && cfg->body_rows ? MCA_BODY_PAIRS : 0;
+    ctrl->cfg.sp.body_pairs = cfg->n_bodies + cfg->max_tracks > 0 && cfg->body_rows ? MCA_BODY_PAIRS : 0;
+    ctrl->n_fixed = cfg->n_bodies;
+    mca_controller_ssm_arms(cfg, &ctrl->track_arm_speed, &ctrl->track_stop_time);
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;
@@ -300,6 +305,35 @@ int mca_controller_stream_target(mca_controller_t *ctrl, int arm, mca_stream_kin
         v[i] *= law->max_speed / n;
     }
     return mca_controller_stream(ctrl, arm, v);
+}
+
+void mca_controller_ssm_arms(const mca_controller_config_t *cfg, double *arm_speed, double *t_stop) {
+    *arm_speed = *t_stop = 0.0;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        /* the fastest arm and the longest stop (dec_limit 0: no braking time known, T_s 0) */
+        *arm_speed = fmax(*arm_speed, mca_chain_point_speed(&cfg->chain[a]));
+        *t_stop = fmax(*t_stop, mca_scheme_stop_time(&cfg->chain[a], cfg->ts.dec_limit[a]));
+    }
+}
+
+int mca_controller_set_tracks(mca_controller_t *ctrl, const mca_track_t *tracks, int n, double t) {
+    if (!ctrl || n < 0 || n > ctrl->cfg.max_tracks || (n > 0 && !tracks)) {
+        return MCA_EINVAL;
+    }
+    mca_fixed_body_t body[MCA_MAX_TRACKS];
+    mca_ssm_terms_t terms[MCA_MAX_TRACKS];
+    for (int k = 0; k < n; k++) {
+        if (mca_track_body(&ctrl->cfg.ssm, &tracks[k], t, ctrl->track_arm_speed, ctrl->track_stop_time,
+                           &body[k], &terms[k]) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
+    for (int k = 0; k < n; k++) {
+        ctrl->cfg.body[ctrl->n_fixed + k] = body[k];
+        ctrl->track_terms[k] = terms[k];
+    }
+    ctrl->cfg.n_bodies = ctrl->n_fixed + n;
+    return MCA_OK;
 }
 
 void mca_controller_clear_fault(mca_controller_t *ctrl) {

@@ -72,6 +72,10 @@ struct mca_controller {
     /* mca-ts: each path-first arm's path-rate limit, sigma's own stop bound (mca_controller_plan; n = 0:
      * none) */
     mca_path_rate_t rate[MCA_MAX_ARMS];
+    /* streamed bodies: cfg.body[n_fixed ..] are the tracks of the last mca_controller_set_tracks */
+    int n_fixed;                                 /**< the cell's fixed bodies */
+    double track_arm_speed, track_stop_time;     /**< v_r and T_s of S_p (set at init) */
+    mca_ssm_terms_t track_terms[MCA_MAX_TRACKS]; /**< each track's S_p as last set */
 };
 
 #endif

@@ -135,6 +135,22 @@ static const cyaml_schema_field_t rt_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_schema_field_t tracks_fields[] = {
+    CYAML_FIELD_STRING_PTR("topic", OPT, struct raw_tracks, topic, 1, 31),
+    CYAML_FIELD_INT_PTR("max_bodies", OPT, struct raw_tracks, max_bodies),
+    CYAML_FIELD_FLOAT_PTR("max_age", OPT, struct raw_tracks, max_age),
+    CYAML_FIELD_FLOAT_PTR("lost_after", OPT, struct raw_tracks, lost_after),
+    CYAML_FIELD_FLOAT_PTR("approach_speed_near", OPT, struct raw_tracks, approach_near),
+    CYAML_FIELD_FLOAT_PTR("approach_speed_far", OPT, struct raw_tracks, approach_far),
+    CYAML_FIELD_FLOAT_PTR("approach_switch", OPT, struct raw_tracks, approach_switch),
+    CYAML_FIELD_FLOAT_PTR("reaction_time", OPT, struct raw_tracks, reaction_time),
+    CYAML_FIELD_FLOAT_PTR("latency", OPT, struct raw_tracks, latency),
+    CYAML_FIELD_FLOAT_PTR("intrusion", OPT, struct raw_tracks, intrusion),
+    CYAML_FIELD_FLOAT_PTR("uncertainty_sensor", OPT, struct raw_tracks, z_d),
+    CYAML_FIELD_FLOAT_PTR("uncertainty_arm", OPT, struct raw_tracks, z_r),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t cell_fields[] = {
     CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_cell, name, 1, 63),
     CYAML_FIELD_MAPPING("task", CYAML_FLAG_DEFAULT, struct raw_cell, task, task_fields),
@@ -145,6 +161,7 @@ static const cyaml_schema_field_t cell_fields[] = {
     MCA_YAML_BODIES_FIELD(struct raw_cell, bodies),
     CYAML_FIELD_MAPPING_PTR("dds", OPT, struct raw_cell, dds, dds_fields),
     CYAML_FIELD_MAPPING_PTR("rt", OPT, struct raw_cell, rt, rt_fields),
+    CYAML_FIELD_MAPPING_PTR("streamed_bodies", OPT, struct raw_cell, tracks, tracks_fields),
     CYAML_FIELD_FLOAT_PTR("stop_after", OPT, struct raw_cell, stop_after),
     CYAML_FIELD_INT_PTR("debug_stall_after_ticks", OPT, struct raw_cell, debug_stall_after_ticks),
     CYAML_FIELD_INT_PTR("debug_kill_after_ticks", OPT, struct raw_cell, debug_kill_after_ticks),
@@ -213,6 +230,9 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
         goto out;
     }
     if ((rc = mcad_cell_read_dds(ctx, raw, cell)) != MCA_OK) {
+        goto out;
+    }
+    if ((rc = mcad_cell_read_tracks(ctx, raw, cell)) != MCA_OK) {
         goto out;
     }
     if ((rc = mcad_cell_read_rt(ctx, raw, cell)) != MCA_OK) {
@@ -317,6 +337,10 @@ int mca_cell_controller_config(const mca_cell_t *cell, mca_controller_config_t *
     }
     if (cell->back_off_time > 0.0) {
         cfg->ts.back_off_time = cell->back_off_time;
+    }
+    if (cell->tracks.enabled) {
+        cfg->max_tracks = cell->tracks.max_bodies;
+        cfg->ssm = cell->tracks.ssm;
     }
     return MCA_OK;
 }

@@ -78,6 +78,13 @@ struct raw_rt {
     bool *dma_latency;
 };
 
+struct raw_tracks {
+    char *topic;
+    long long *max_bodies;
+    double *max_age, *lost_after, *approach_near, *approach_far, *approach_switch;
+    double *reaction_time, *latency, *intrusion, *z_d, *z_r;
+};
+
 struct raw_cell {
     char *name;
     struct raw_task task;
@@ -90,6 +97,7 @@ struct raw_cell {
     unsigned bodies_count;
     struct raw_dds *dds;
     struct raw_rt *rt;
+    struct raw_tracks *tracks;
     double *stop_after;
     long long *debug_stall_after_ticks;
     long long *debug_kill_after_ticks;
@@ -125,6 +133,8 @@ int mcad_cell_read_solver(const mca_check_ctx_t ctx, const struct raw_cell *raw,
 int mcad_cell_read_arms(const mca_check_ctx_t ctx, const struct raw_cell *raw, mca_cell_t *cell);
 /* Start-up: dds and dds.ros2 (the namespace defaults to the cell's name). */
 int mcad_cell_read_dds(const mca_check_ctx_t ctx, const struct raw_cell *raw, mca_cell_t *cell);
+/* Start-up: streamed_bodies, refused unless dds.config is a DDS Security configuration (after dds). */
+int mcad_cell_read_tracks(const mca_check_ctx_t ctx, const struct raw_cell *raw, mca_cell_t *cell);
 /* Start-up: rt (period, priority, cpu, limits, the PDNN budget), dds.priority below rt.priority, the
  * controller's dt and the task's tick count at it. */
 int mcad_cell_read_rt(const mca_check_ctx_t ctx, const struct raw_cell *raw, mca_cell_t *cell);

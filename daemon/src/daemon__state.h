@@ -146,6 +146,16 @@ struct mca_daemon {
     int body_pair[3];     /* arm, link, body */
     int64_t pct_cache[6]; /* the summary's percentiles of the last second (the DDS status) */
 
+    /* ---- streamed bodies (daemon_stream.c) */
+    mca_ros2_tracks_t tracks; /* the last message read (kept while the bridge writes the next) */
+    int64_t tracks_since_ns;  /* the first tick's stamp: no message since then counts as lost too */
+    uint64_t tracks_bad;      /* messages the controller refused (the bridge had passed them) */
+    double tracks_lost_age;   /* LOST: the silence when it latched [s] */
+#ifdef MCA_TEST_HOOKS
+    int test_tracks_on; /* the tests' source instead of the bridge (mca_daemon_put_tracks) */
+    mca_ros2_tracks_t test_tracks;
+#endif
+
     /* ---- publishing (daemon_publish.c) */
     mca_dds_bridge_t *dds;
     mca_dds_snapshot_t snap;

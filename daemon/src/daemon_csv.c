@@ -55,7 +55,9 @@ int mcad_csv_open(mca_daemon_t *d, char *err, size_t errlen) {
             (mca_tick_csv_layout_t){.n_arms = d->n_arms,
                                     .exact = 1,
                                     .daemon_cols = 1,
-                                    .body_cols = mca_controller_get_config(d->ctrl)->n_bodies > 0};
+                                    .body_cols = mca_controller_get_config(d->ctrl)->n_bodies +
+                                                     mca_controller_get_config(d->ctrl)->max_tracks >
+                                                 0};
         for (int a = 0; a < d->n_arms; a++) {
             d->csv_layout.dof[a] = d->dof[a];
         }

@@ -72,6 +72,12 @@ void mcad_fault_describe(const mca_daemon_t *d, int fault, int arm, int detail, 
         snprintf(buf, len, "arm %s: no target on its stream for %.3f s (task.stream.brake_after)", name,
                  d->cell.stream.brake_after);
         break;
+    case MCA_DAEMON_FAULT_TRACKS_LOST:
+        snprintf(buf, len,
+                 "streamed bodies lost: no message on /%s/%s for %.3f s (streamed_bodies.lost_after %.3f s)",
+                 d->cell.dds.ros2.ns, d->cell.tracks.topic, d->tracks_lost_age,
+                 d->cell.tracks.ssm.lost_after);
+        break;
     case MCA_DAEMON_FAULT_OVERRUN:
         snprintf(buf, len, "consecutive overruns: %d periods missed in a row (rt.overrun_limit %d)", count,
                  d->cell.rt.overrun_limit);

@@ -30,6 +30,9 @@ static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err,
     rc2->stream_max_speed = cell->stream.max_speed;
     memcpy(rc2->box_lo, cell->stream.box_lo, sizeof rc2->box_lo);
     memcpy(rc2->box_hi, cell->stream.box_hi, sizeof rc2->box_hi);
+    rc2->tracks = cell->tracks.enabled;
+    snprintf(rc2->tracks_topic, sizeof rc2->tracks_topic, "%s", cell->tracks.topic);
+    rc2->max_tracks = (uint32_t)cell->tracks.max_bodies;
     for (int a = 0; a < d->n_arms; a++) {
         rc2->stream[a] = cell->stream.enabled ? cell->arm[a].stream : MCA_ROS2_STREAM_NONE;
         const mca_chain_t *ch = &d->ccfg.chain[a];

@@ -35,3 +35,53 @@ void mcad_stream_targets(mca_daemon_t *d, double t, int64_t now_ns) {
         mca_controller_stream_target(d->ctrl, a, kind, kind == MCA_STREAM_HOLD ? NULL : tg.x, &law);
     }
 }
+
+/* streamed_bodies: the bridge's latest accepted message (a seqlock read, no wait), each body's age on the
+ * controller's clock (since it was received, plus how old it was when sent), into the controller's rows.
+ * The controller checks each body again (the bridge is another process); a message it refuses is no message.
+ * Silence for lost_after, counted from the first tick when nothing came yet, is the named fault: every arm
+ * stops on its path (mcad_brake_tick), the tracks still growing in the braking QP's rows. */
+void mcad_stream_bodies(mca_daemon_t *d, double t, int64_t now_ns) {
+    if (d->tracks_since_ns == 0) {
+        d->tracks_since_ns = now_ns;
+    }
+    mca_ros2_tracks_t tk;
+    int rc;
+#ifdef MCA_TEST_HOOKS
+    if (d->test_tracks_on) {
+        tk = d->test_tracks;
+        rc = MCA_OK;
+    } else
+#endif
+    {
+        rc = mca_dds_bridge_tracks(d->dds, &tk);
+    }
+    if (rc == MCA_OK && tk.accepted > 0 && tk.accepted != d->tracks.accepted) {
+        mca_track_t body[MCA_MAX_TRACKS];
+        const double since = (double)(now_ns - tk.recv_ns) * 1e-9;
+        for (uint32_t k = 0; k < tk.n; k++) {
+            body[k] = tk.body[k];
+            body[k].stamp = t - since - tk.body[k].stamp;
+        }
+        if (mca_controller_set_tracks(d->ctrl, body, (int)tk.n, t) == MCA_OK) {
+            d->tracks = tk;
+        } else {
+            d->tracks_bad++;
+        }
+    } else if (d->tracks.accepted > 0) {
+        /* no new message: the same tracks, older (they grow once stale) */
+        mca_track_t body[MCA_MAX_TRACKS];
+        const double since = (double)(now_ns - d->tracks.recv_ns) * 1e-9;
+        for (uint32_t k = 0; k < d->tracks.n; k++) {
+            body[k] = d->tracks.body[k];
+            body[k].stamp = t - since - d->tracks.body[k].stamp;
+        }
+        (void)mca_controller_set_tracks(d->ctrl, body, (int)d->tracks.n, t);
+    }
+    const int64_t last_ns = d->tracks.accepted > 0 ? d->tracks.recv_ns : d->tracks_since_ns;
+    const double silence = (double)(now_ns - last_ns) * 1e-9;
+    if (silence > d->cell.tracks.ssm.lost_after && d->fault == MCA_DAEMON_FAULT_NONE) {
+        d->tracks_lost_age = silence;
+        mcad_latch_fault(d, MCA_DAEMON_FAULT_TRACKS_LOST, MCA_ETIMEDOUT, t, -1, 0, 0, 0, NULL);
+    }
+}

@@ -90,6 +90,9 @@ int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {
         LOGN(d, MCA_LOG_NOTICE, "stop requested at t = %.3f s: braking to zero", 1, t, 0, 0, 0, NULL);
     }
     mcad_read_feedback(d, t);
+    if (d->cell.tracks.enabled && (state == MCA_DAEMON_RUNNING || state == MCA_DAEMON_BRAKING)) {
+        mcad_stream_bodies(d, t, stamp_ns); /* a lost stream brakes from this tick on */
+    }
     if (d->cell.stream.enabled &&
         atomic_load_explicit(&d->state, memory_order_relaxed) == MCA_DAEMON_RUNNING) {
         mcad_stream_targets(d, t, stamp_ns); /* a stale stream brakes from this tick on */

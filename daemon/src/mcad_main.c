@@ -111,6 +111,30 @@ static void print_cell(const mca_cell_t *c) {
                r->tf_static ? " tf_static" : "", r->markers ? " distance_markers" : "",
                r->diagnostics ? " diagnostics" : "");
     }
+    if (c->tracks.enabled) {
+        static mca_controller_config_t cfg;
+        char err[256];
+        const mca_ssm_params_t *p = &c->tracks.ssm;
+        printf("  streamed bodies: /%s/%s (up to %d), grow after %g s at %g m/s (%g m/s beyond %g m), lost "
+               "after "
+               "%g s\n",
+               c->dds.ros2.ns, c->tracks.topic, c->tracks.max_bodies, p->max_age, p->approach_near,
+               p->approach_far, p->approach_switch, p->lost_after);
+        if (mca_cell_controller_config(c, &cfg, err, sizeof err) == MCA_OK) {
+            double v_r, t_s;
+            mca_controller_ssm_arms(&cfg, &v_r, &t_s);
+            const double v_h[2] = {0.0, p->approach_near};
+            for (int k = 0; k < 2; k++) {
+                mca_ssm_terms_t t;
+                mca_ssm_terms(p, v_h[k], v_r, t_s, &t);
+                printf(
+                    "    S_p %.3f m for a body %s: S_h %.3f + S_r %.3f + S_s %.3f + C %.3f + Z_d %.3f + Z_r "
+                    "%.3f (v_r %.2f m/s, T_r %.3f s, T_s %.3f s)\n",
+                    t.s_p, k ? "approaching at the approach speed (stale)" : "at rest", t.s_h, t.s_r, t.s_s,
+                    t.c, t.z_d, t.z_r, v_r, p->reaction_time + p->latency, t_s);
+            }
+        }
+    }
     if (c->stream.enabled) {
         printf("  stream: max speed %g m/s, pose gain %g 1/s, hold after %g s, brake after %g s, workspace "
                "[%g %g %g] .. [%g %g %g]\n",

@@ -503,7 +503,7 @@ static int publisher_open(publisher_t *b, char *err, size_t errlen) {
     dds_delete_qos(qs);
     dds_delete_qos(qst);
     if (rc == MCA_OK && cfg->has_ros2) {
-        rc = mca_ros2_pub_create(&b->ros2, p, &cfg->ros2, b->shm->box, err, errlen);
+        rc = mca_ros2_pub_create(&b->ros2, p, &cfg->ros2, b->shm->box, &b->shm->tracks, err, errlen);
     }
     if (rc != MCA_OK) {
         publisher_delete_entities(b);
@@ -898,6 +898,13 @@ int mca_dds_bridge_stream_target(mca_dds_bridge_t *bridge, int arm, mca_ros2_tar
     return mca_dds_mailbox_read(&bridge->shm->box[arm], bridge->stream_kind[arm], out);
 }
 
+int mca_dds_bridge_tracks(mca_dds_bridge_t *bridge, mca_ros2_tracks_t *out) {
+    if (bridge == NULL || out == NULL || !bridge->shm->cfg.has_ros2 || !bridge->shm->cfg.ros2.tracks) {
+        return MCA_EINVAL;
+    }
+    return mca_dds_trackbox_read(&bridge->shm->tracks, out);
+}
+
 int mca_dds_bridge_stats(const mca_dds_bridge_t *bridge, mca_dds_stats_t *out) {
     if (bridge == NULL || out == NULL) {
         return MCA_EINVAL;
@@ -1000,6 +1007,12 @@ static void repair_mailboxes(mca_dds_bridge_t *b) {
             atomic_store_explicit(&m->recv_ns, 1, memory_order_relaxed);
             atomic_store_explicit(&m->seq, s + 1u, memory_order_release);
         }
+    }
+    mca_dds_trackbox_t *t = &b->shm->tracks; /* the same for the streamed bodies: lost_after stops */
+    const uint32_t s = atomic_load_explicit(&t->seq, memory_order_relaxed);
+    if (s & 1u) {
+        atomic_store_explicit(&t->recv_ns, 1, memory_order_relaxed);
+        atomic_store_explicit(&t->seq, s + 1u, memory_order_release);
     }
 }
 

@@ -22,7 +22,7 @@
 #include "mca/ros2.h"
 
 #define MCA_DDS_SHM_MAGIC 0x316d73736464616dULL /* "mddssm1" */
-#define MCA_DDS_SHM_VERSION 4u
+#define MCA_DDS_SHM_VERSION 5u
 #define MCA_DDS_CONFIG_PATH_MAX 1023
 
 /** One arm's latest accepted stream target: a seqlock (the publisher's DDS listener writes, the loop reads;
@@ -34,6 +34,19 @@ typedef struct mca_dds_mailbox {
     _Atomic int64_t recv_ns;
     _Atomic uint64_t accepted;
 } mca_dds_mailbox_t;
+
+/** The latest accepted message of streamed bodies: a seqlock as mca_dds_mailbox_t. x[k]: a[3], b[3],
+ *  radius, v[3], age at send (mca_ros2_tracks_t). */
+#define MCA_DDS_TRACK_NUMS 11
+typedef struct mca_dds_trackbox {
+    _Atomic uint32_t seq;
+    _Atomic uint32_t n;
+    _Atomic uint32_t id[MCA_MAX_TRACKS];
+    _Atomic int32_t kind[MCA_MAX_TRACKS];
+    _Atomic double x[MCA_MAX_TRACKS][MCA_DDS_TRACK_NUMS];
+    _Atomic int64_t recv_ns;
+    _Atomic uint64_t accepted;
+} mca_dds_trackbox_t;
 
 /** Settings as plain data (the publisher process gets them from here, not from the owner's pointers). */
 typedef struct mca_dds_shm_config {
@@ -86,6 +99,7 @@ typedef struct mca_dds_shm {
     char fault_text[MCA_DDS_FAULT_TEXT_MAX + 1];
     /* publisher (its DDS listener), read by the loop */
     _Alignas(64) mca_dds_mailbox_t box[MCA_MAX_ARMS];
+    _Alignas(64) mca_dds_trackbox_t tracks;
     /* the snapshot ring; its storage follows at ring_storage_off from the start of the region */
     _Alignas(64) mca_ring_t ring;
     uint64_t ring_storage_off;
@@ -107,5 +121,8 @@ int mca_dds_publisher_process(mca_dds_shm_t *shm);
 
 /** Seqlock read of a mailbox (never waits). @retval MCA_OK @retval MCA_EAGAIN (being written) */
 int mca_dds_mailbox_read(const mca_dds_mailbox_t *b, int kind, mca_ros2_target_t *out);
+
+/** Seqlock read of the streamed bodies' box (never waits). @retval MCA_OK @retval MCA_EAGAIN */
+int mca_dds_trackbox_read(const mca_dds_trackbox_t *b, mca_ros2_tracks_t *out);
 
 #endif

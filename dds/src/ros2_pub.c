@@ -15,6 +15,7 @@
 
 #include "mca/dds_qos.h"
 #include "mca/err.h"
+#include "mca_msgs.h"  /* idlc output of dds/mca_msgs.idl: mca_msgs/TrackedBodies */
 #include "ros2_msgs.h" /* idlc output of dds/ros2_msgs.idl */
 
 /* visualization_msgs/Marker types and actions, diagnostic_msgs/DiagnosticStatus levels */
@@ -22,7 +23,7 @@ enum { MARKER_CYLINDER = 3, MARKER_SPHERE_LIST = 7, MARKER_LINE_LIST = 5, MARKER
 enum { DIAG_OK = 0, DIAG_WARN = 1, DIAG_ERROR = 2 };
 
 #define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2)
-#define N_KV 30
+#define N_KV 32
 #define URDF_MAX (4 * 1024 * 1024)
 
 typedef sensor_msgs_msg_dds__JointState_ JointState;
@@ -41,6 +42,8 @@ struct mca_ros2_pub {
     mca_ros2_config_t cfg;
     mca_dds_mailbox_t *box; /* MCA_MAX_ARMS, the bridge's (shared with the loop, outlives a publisher) */
     stream_in_t in[MCA_MAX_ARMS];
+    mca_dds_trackbox_t *tracks; /* the bridge's (shared with the loop) */
+    dds_entity_t tracks_reader;
     /* rejections: counted and described by the listener, read by the publisher thread (both non-rt) */
     pthread_mutex_t reject_lock;
     uint64_t rejected;
@@ -102,6 +105,12 @@ int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen
     }
     if (cfg->n_arms < 1 || cfg->n_arms > MCA_MAX_ARMS) {
         snprintf(err, errlen, "ros2: %u arms (1..%d)", cfg->n_arms, MCA_MAX_ARMS);
+        return MCA_EINVAL;
+    }
+    if (cfg->tracks &&
+        (!mca_ros2_name_ok(cfg->tracks_topic) || cfg->max_tracks < 1 || cfg->max_tracks > MCA_MAX_TRACKS)) {
+        snprintf(err, errlen, "streamed_bodies: topic '%s' or max_bodies %u (1..%d)", cfg->tracks_topic,
+                 cfg->max_tracks, MCA_MAX_TRACKS);
         return MCA_EINVAL;
     }
     for (uint32_t a = 0; a < cfg->n_arms; a++) {
@@ -286,7 +295,8 @@ static void reject(mca_ros2_pub_t *r, int arm, const char *fmt, ...) {
     pthread_mutex_lock(&r->reject_lock);
     r->rejected++;
     char name[MCA_ROS2_NAME_MAX + 1];
-    memcpy(name, r->cfg.arm[arm].name, sizeof name); /* not formatted from r into r (-Wrestrict) */
+    /* not formatted from r into r (-Wrestrict); arm -1: the streamed bodies */
+    memcpy(name, arm >= 0 ? r->cfg.arm[arm].name : r->cfg.tracks_topic, sizeof name);
     const int n = snprintf(r->last_reject, sizeof r->last_reject, "%s: ", name);
     va_list ap;
     va_start(ap, fmt);
@@ -426,8 +436,188 @@ static int create_stream_reader(mca_ros2_pub_t *r, dds_entity_t pp, int a, char 
     return MCA_OK;
 }
 
+int mca_ros2_tracks_check(const mca_ros2_config_t *c, const char *frame_id, const mca_ros2_tracks_t *t,
+                          int finite, char *why, size_t len) {
+    char dummy[8];
+    if (why == NULL || len == 0) {
+        why = dummy;
+        len = sizeof dummy;
+    }
+    if (c == NULL || t == NULL || !c->tracks) {
+        snprintf(why, len, "no streamed bodies");
+        return MCA_EINVAL;
+    }
+    if (!finite) {
+        snprintf(why, len, "not a number (NaN or infinity) in the bodies");
+        return MCA_ERANGE;
+    }
+    if (frame_id == NULL || strcmp(frame_id, c->world_frame) != 0) {
+        snprintf(why, len, "frame_id '%.40s' is not the cell's '%s'", frame_id ? frame_id : "",
+                 c->world_frame);
+        return MCA_ERANGE;
+    }
+    if (t->n > c->max_tracks) {
+        snprintf(why, len, "%u bodies, more than the %u taken", t->n, c->max_tracks);
+        return MCA_ERANGE;
+    }
+    for (uint32_t k = 0; k < t->n; k++) {
+        const mca_track_t *b = &t->body[k];
+        const double v = sqrt(b->v[0] * b->v[0] + b->v[1] * b->v[1] + b->v[2] * b->v[2]);
+        int far = 0;
+        for (int i = 0; i < 3; i++) {
+            far |= !(fabs(b->a[i]) <= 100.0) || !(fabs(b->b[i]) <= 100.0);
+        }
+        if (b->kind != MCA_BODY_SPHERE && b->kind != MCA_BODY_CAPSULE) {
+            snprintf(why, len, "body %u: shape %d (1 sphere, 2 capsule)", b->id, b->kind);
+            return MCA_ERANGE;
+        }
+        if (!(b->radius >= 0.0 && b->radius <= 2.0) || !(v <= 10.0) || far ||
+            !(b->stamp >= 0.0 && b->stamp <= 10.0)) {
+            snprintf(why, len, "body %u: radius %.3g m, speed %.3g m/s, %s, seen %.3g s before sending",
+                     b->id, b->radius, v, far ? "beyond 100 m" : "within 100 m", b->stamp);
+            return MCA_ERANGE;
+        }
+    }
+    return MCA_OK;
+}
+
+static void accept_tracks(mca_ros2_pub_t *r, const mca_ros2_tracks_t *t) {
+    mca_dds_trackbox_t *b = r->tracks;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    const uint32_t s0 = atomic_load_explicit(&b->seq, memory_order_relaxed);
+    atomic_store_explicit(&b->seq, s0 + 1u, memory_order_relaxed);
+    atomic_thread_fence(memory_order_release); /* odd seq visible before the fields change */
+    atomic_store_explicit(&b->n, t->n, memory_order_relaxed);
+    for (uint32_t k = 0; k < t->n; k++) {
+        const mca_track_t *tr = &t->body[k];
+        const double x[MCA_DDS_TRACK_NUMS] = {tr->a[0],   tr->a[1], tr->a[2], tr->b[0], tr->b[1], tr->b[2],
+                                              tr->radius, tr->v[0], tr->v[1], tr->v[2], tr->stamp};
+        atomic_store_explicit(&b->id[k], tr->id, memory_order_relaxed);
+        atomic_store_explicit(&b->kind[k], tr->kind, memory_order_relaxed);
+        for (int i = 0; i < MCA_DDS_TRACK_NUMS; i++) {
+            atomic_store_explicit(&b->x[k][i], x[i], memory_order_relaxed);
+        }
+    }
+    atomic_store_explicit(&b->recv_ns, (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec, memory_order_relaxed);
+    atomic_store_explicit(&b->accepted, atomic_load_explicit(&b->accepted, memory_order_relaxed) + 1u,
+                          memory_order_relaxed);
+    atomic_store_explicit(&b->seq, s0 + 2u, memory_order_release);
+}
+
+int mca_dds_trackbox_read(const mca_dds_trackbox_t *b, mca_ros2_tracks_t *out) {
+    for (int tries = 0; tries < 4; tries++) {
+        const uint32_t s0 = atomic_load_explicit(&b->seq, memory_order_acquire);
+        if (s0 & 1u) {
+            continue;
+        }
+        const uint32_t n = atomic_load_explicit(&b->n, memory_order_relaxed);
+        out->n = n <= MCA_MAX_TRACKS ? n : MCA_MAX_TRACKS;
+        for (uint32_t k = 0; k < out->n; k++) {
+            mca_track_t *tr = &out->body[k];
+            double x[MCA_DDS_TRACK_NUMS];
+            for (int i = 0; i < MCA_DDS_TRACK_NUMS; i++) {
+                x[i] = atomic_load_explicit(&b->x[k][i], memory_order_relaxed);
+            }
+            tr->id = atomic_load_explicit(&b->id[k], memory_order_relaxed);
+            tr->kind = atomic_load_explicit(&b->kind[k], memory_order_relaxed);
+            for (int i = 0; i < 3; i++) {
+                tr->a[i] = x[i];
+                tr->b[i] = x[3 + i];
+                tr->v[i] = x[7 + i];
+            }
+            tr->radius = x[6];
+            tr->stamp = x[10];
+        }
+        out->recv_ns = atomic_load_explicit(&b->recv_ns, memory_order_relaxed);
+        out->accepted = atomic_load_explicit(&b->accepted, memory_order_relaxed);
+        atomic_thread_fence(memory_order_acquire); /* the fields read before seq is read again */
+        if (atomic_load_explicit(&b->seq, memory_order_relaxed) == s0) {
+            return MCA_OK;
+        }
+    }
+    return MCA_EAGAIN;
+}
+
+static double ros_time_s(const builtin_interfaces_msg_dds__Time_ *t) {
+    return (double)t->sec + 1e-9 * (double)t->nanosec;
+}
+
+/* Cyclone listener (its receive thread, non-rt): every new message of streamed bodies. */
+static void on_tracks(dds_entity_t reader, void *arg) {
+    mca_ros2_pub_t *r = arg;
+    void *buf[1] = {NULL};
+    dds_sample_info_t info[1];
+    while (dds_take(reader, buf, info, 1, 1) > 0) {
+        if (info[0].valid_data) {
+            const mca_msgs_msg_dds__TrackedBodies_ *m = buf[0];
+            mca_ros2_tracks_t t = {.n = m->bodies._length};
+            int finite = 1;
+            const double sent = ros_time_s(&m->header.stamp);
+            for (uint32_t k = 0; k < t.n && k < MCA_MAX_TRACKS; k++) {
+                const mca_msgs_msg_dds__TrackedBody_ *s = &m->bodies._buffer[k];
+                mca_track_t *b = &t.body[k];
+                b->id = s->id;
+                b->kind = s->shape == 1 ? MCA_BODY_SPHERE : s->shape == 2 ? MCA_BODY_CAPSULE : -1;
+                const double x[] = {s->a.x, s->a.y, s->a.z, s->b.x, s->b.y, s->b.z};
+                const double v[] = {s->velocity.x, s->velocity.y, s->velocity.z};
+                for (int i = 0; i < 3; i++) {
+                    b->a[i] = x[i];
+                    b->b[i] = s->shape == 2 ? x[3 + i] : x[i];
+                    b->v[i] = v[i];
+                    finite &= isfinite(x[i]) && isfinite(x[3 + i]) && isfinite(v[i]);
+                }
+                b->radius = s->radius;
+                b->stamp = sent - ros_time_s(&s->stamp);
+                finite &= isfinite(b->radius);
+            }
+            char why[160];
+            if (mca_ros2_tracks_check(&r->cfg, m->header.frame_id, &t, finite, why, sizeof why) == MCA_OK) {
+                accept_tracks(r, &t);
+            } else {
+                reject(r, -1, "%s", why);
+            }
+        }
+        dds_return_loan(reader, buf, 1);
+        buf[0] = NULL;
+    }
+}
+
+static int create_tracks_reader(mca_ros2_pub_t *r, dds_entity_t pp, char *err, size_t errlen) {
+    if (!r->cfg.tracks) {
+        return MCA_OK;
+    }
+    char name[160];
+    snprintf(name, sizeof name, "rt/%s/%s", r->cfg.cell, r->cfg.tracks_topic);
+    dds_qos_t *q = dds_create_qos();
+    dds_listener_t *l = dds_create_listener(r);
+    if (q == NULL || l == NULL) {
+        dds_delete_qos(q);
+        dds_delete_listener(l);
+        return MCA_ENOMEM;
+    }
+    /* as the targets: best effort, keep-last 1, only the latest picture counts */
+    dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    dds_lset_data_available(l, on_tracks);
+    const dds_entity_t t = dds_create_topic(pp, &mca_msgs_msg_dds__TrackedBodies__desc, name, q, NULL);
+    r->tracks_reader = t > 0 ? dds_create_reader(pp, t, q, l) : t;
+    dds_delete_qos(q);
+    dds_delete_listener(l);
+    if (r->tracks_reader < 0) {
+        snprintf(err, errlen, "ros2: cannot create topic/reader '%s': %s", name,
+                 dds_strretcode(r->tracks_reader));
+        return MCA_EIO;
+    }
+    return MCA_OK;
+}
+
 /* Readers first: their listeners use r, which is freed after. */
 static void delete_readers(mca_ros2_pub_t *r) {
+    if (r->tracks_reader > 0) {
+        dds_delete(r->tracks_reader);
+        r->tracks_reader = 0;
+    }
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         if (r->in[a].reader > 0) {
             dds_delete(r->in[a].reader);
@@ -457,13 +647,13 @@ int mca_dds_mailbox_read(const mca_dds_mailbox_t *b, int kind, mca_ros2_target_t
 }
 
 int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg,
-                        mca_dds_mailbox_t *box, char *err, size_t errlen) {
+                        mca_dds_mailbox_t *box, mca_dds_trackbox_t *tracks, char *err, size_t errlen) {
     char dummy[8];
     if (err == NULL) {
         err = dummy;
         errlen = sizeof dummy;
     }
-    if (out == NULL || box == NULL) {
+    if (out == NULL || box == NULL || tracks == NULL) {
         return MCA_EINVAL;
     }
     int rc = mca_ros2_config_check(cfg, err, errlen);
@@ -477,6 +667,7 @@ int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_co
     pthread_mutex_init(&r->reject_lock, NULL);
     r->cfg = *cfg;
     r->box = box; /* not cleared: a restarted publisher keeps the last target and its age */
+    r->tracks = tracks;
     const mca_ros2_config_t *c = &r->cfg;
     r->realtime_offset_ns = clock_ns(CLOCK_REALTIME) - clock_ns(CLOCK_MONOTONIC);
     for (uint32_t a = 0; a < c->n_arms; a++) {
@@ -518,6 +709,9 @@ int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_co
     }
     for (uint32_t a = 0; a < c->n_arms && rc == MCA_OK; a++) {
         rc = create_stream_reader(r, pp, (int)a, err, errlen);
+    }
+    if (rc == MCA_OK) {
+        rc = create_tracks_reader(r, pp, err, errlen);
     }
     dds_delete_qos(stream);
     dds_delete_qos(latched);
@@ -723,7 +917,11 @@ int mca_ros2_pub_status(mca_ros2_pub_t *r, const mca_dds_ControllerStatus *st,
         streams += r->cfg.stream[a] != MCA_ROS2_STREAM_NONE;
         accepted += atomic_load_explicit(&r->box[a].accepted, memory_order_relaxed);
     }
-    if (streams) {
+    if (r->cfg.tracks) {
+        KV("tracks_accepted", "%llu",
+           (unsigned long long)atomic_load_explicit(&r->tracks->accepted, memory_order_relaxed));
+    }
+    if (streams || r->cfg.tracks) {
         pthread_mutex_lock(&r->reject_lock);
         KV("stream_accepted", "%llu", (unsigned long long)accepted);
         KV("stream_rejected", "%llu", (unsigned long long)r->rejected);

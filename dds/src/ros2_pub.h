@@ -13,12 +13,13 @@
 
 typedef struct mca_ros2_pub mca_ros2_pub_t;
 
-/** Writers on participant pp (default partition, as ROS 2 uses); robot_description and /tf_static are
- *  written here, once. Accepted stream targets go to box[arm] (the bridge's, MCA_MAX_ARMS of them; not
- *  cleared here: a restarted publisher continues them). @retval MCA_OK, MCA_EINVAL (bad config: err says
- * which field), MCA_ENOENT (URDF unreadable), MCA_EIO (Cyclone refused), MCA_ENOMEM */
+/** Writers on participant pp (accepted streamed bodies go to tracks, also not cleared) (default partition, as
+ * ROS 2 uses); robot_description and /tf_static are written here, once. Accepted stream targets go to
+ * box[arm] (the bridge's, MCA_MAX_ARMS of them; not cleared here: a restarted publisher continues them).
+ * @retval MCA_OK, MCA_EINVAL (bad config: err says which field), MCA_ENOENT (URDF unreadable), MCA_EIO
+ * (Cyclone refused), MCA_ENOMEM */
 int mca_ros2_pub_create(mca_ros2_pub_t **out, dds_entity_t pp, const mca_ros2_config_t *cfg,
-                        mca_dds_mailbox_t *box, char *err, size_t errlen);
+                        mca_dds_mailbox_t *box, mca_dds_trackbox_t *tracks, char *err, size_t errlen);
 
 /** Joint states and markers of one snapshot. Returns the samples written; *errors counts failures. */
 int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64_t *errors);

@@ -273,7 +273,27 @@ int main(int argc, char **argv) {
     report("streamed task: holding, ROS 2 topics every tick, stop, braking", d, k, before);
     mca_daemon_close(d);
 
-    /* 5. the arms' faults */
+    /* 5. streamed bodies (DDS, the bridge's box read every tick): none comes, so after lost_after the named
+     *    fault, braking with the tracks still read, FAULT */
+    snprintf(path, sizeof path, "%s/config/cells/tracks_secure_sim.yaml", src);
+    d = open_cell(path, 1, csv);
+    t = 0.0;
+    before = allocs;
+    k = run(d, &t, 20000, MCA_DAEMON_FAULT);
+    k += run(d, &t, 50, -1);
+    report("streamed bodies: silent, lost, braking, FAULT", d, k, before);
+    {
+        mca_daemon_summary_t s;
+        mca_daemon_summary(d, &s);
+        if (s.fault != MCA_DAEMON_FAULT_TRACKS_LOST) {
+            printf("FAIL: the silent stream of bodies did not end in its fault (fault %d '%s')\n", s.fault,
+                   s.fault_text);
+            failures++;
+        }
+    }
+    mca_daemon_close(d);
+
+    /* 6. the arms' faults */
     injected("lost feedback (right arm's firmware silent)", inline_cell, 500, 1, MCA_SIM_INJ_SILENT);
     injected("an arm's own FAULT (left actuator)", inline_cell, 500, 0, MCA_SIM_INJ_ACTUATOR);
     injected("an arm that does not servo (commands lost from the start)", inline_cell, 0, 1,

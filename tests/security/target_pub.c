@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* mca-target-pub: streams one ROS 2 target (geometry_msgs/TwistStamped or PoseStamped) on a DDS topic with
+/* mca-target-pub: streams one ROS 2 target (geometry_msgs/TwistStamped or PoseStamped), or one tracked
+ * sphere (mca_msgs/TrackedBodies: --sphere X,Y,Z,R, stamped as it is sent), on a DDS topic with
  * Debian's libddsc, the same Cyclone as mcad, so that the DDS Security test (tests/security) can command
  * mcad as any identity: the Cyclone XML given (with MCA_SECURITY_DIR / MCA_DDS_IDENTITY) decides who it is.
  *
@@ -20,6 +21,7 @@
 
 #include "mca/dds_qos.h" /* mca_dds_open_participant */
 #include "mca/err.h"     /* MCA_OK */
+#include "mca_msgs.h"    /* mca_msgs_msg_dds__TrackedBodies_ */
 #include "ros2_msgs.h"   /* geometry_msgs_msg_dds__TwistStamped_, ..PoseStamped_ */
 
 static double now_s(void) {
@@ -34,22 +36,23 @@ static void sleep_s(double s) {
 }
 
 static int usage(void) {
-    fprintf(
-        stderr,
-        "usage: mca-target-pub --topic NAME (--twist VX,VY,VZ | --pose X,Y,Z) [--domain N] [--config XML]\n"
-        "                      [--frame ID] [--hz F] [--duration S] [--match-timeout S]\n"
-        "  --topic          DDS topic, e.g. rt/stream_sim/left/target_twist\n"
-        "  --twist / --pose linear velocity (m/s) / position (m) to send, in --frame (default world)\n"
-        "  --duration       seconds of sending (default 1.5), after a reader matched or the timeout\n"
-        "  --match-timeout  seconds to wait for a matching reader before sending (default 5)\n");
+    fprintf(stderr,
+            "usage: mca-target-pub --topic NAME (--twist VX,VY,VZ | --pose X,Y,Z | --sphere X,Y,Z,R) "
+            "[--domain N]\n"
+            "                      [--config XML]\n"
+            "                      [--frame ID] [--hz F] [--duration S] [--match-timeout S]\n"
+            "  --topic          DDS topic, e.g. rt/stream_sim/left/target_twist\n"
+            "  --twist / --pose linear velocity (m/s) / position (m) to send, in --frame (default world)\n"
+            "  --duration       seconds of sending (default 1.5), after a reader matched or the timeout\n"
+            "  --match-timeout  seconds to wait for a matching reader before sending (default 5)\n");
     return 2;
 }
 
-static int parse3(const char *s, double v[3]) {
+static int parse_n(const char *s, double *v, int n) {
     char *end;
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < n; i++) {
         v[i] = strtod(s, &end);
-        if (end == s || (i < 2 && *end != ',') || (i == 2 && *end != '\0')) {
+        if (end == s || (i < n - 1 && *end != ',') || (i == n - 1 && *end != '\0')) {
             return -1;
         }
         s = end + 1;
@@ -60,7 +63,8 @@ static int parse3(const char *s, double v[3]) {
 int main(int argc, char **argv) {
     const char *topic = NULL, *config = NULL, *frame = "world";
     unsigned domain = 0;
-    double v[3] = {0, 0, 0}, hz = 50.0, duration = 1.5, match_timeout = 5.0;
+    double v[4] = {0, 0, 0, 0}, hz = 50.0, duration = 1.5, match_timeout = 5.0;
+    int sphere = 0;
     int twist = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
@@ -84,7 +88,13 @@ int main(int argc, char **argv) {
             match_timeout = strtod(val, NULL);
         } else if (!strcmp(a, "--twist") || !strcmp(a, "--pose")) {
             twist = !strcmp(a, "--twist");
-            if (parse3(val, v) != 0) {
+            if (parse_n(val, v, 3) != 0) {
+                return usage();
+            }
+        } else if (!strcmp(a, "--sphere")) {
+            sphere = 1;
+            twist = 0;
+            if (parse_n(val, v, 4) != 0) {
                 return usage();
             }
         } else {
@@ -104,8 +114,9 @@ int main(int argc, char **argv) {
         return 3;
     }
     printf("target_pub: participant ok\n");
-    const dds_topic_descriptor_t *desc =
-        twist ? &geometry_msgs_msg_dds__TwistStamped__desc : &geometry_msgs_msg_dds__PoseStamped__desc;
+    const dds_topic_descriptor_t *desc = sphere  ? &mca_msgs_msg_dds__TrackedBodies__desc
+                                         : twist ? &geometry_msgs_msg_dds__TwistStamped__desc
+                                                 : &geometry_msgs_msg_dds__PoseStamped__desc;
     dds_qos_t *q = dds_create_qos();
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_MSECS(10)); /* rclpy's default profile */
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 10);
@@ -151,6 +162,19 @@ int main(int argc, char **argv) {
     po.pose.position.y = v[1];
     po.pose.position.z = v[2];
     po.pose.orientation.w = 1.0;
+    mca_msgs_msg_dds__TrackedBody_ body;
+    memset(&body, 0, sizeof body);
+    body.id = 1;
+    body.shape = 1;
+    body.a.x = body.b.x = v[0];
+    body.a.y = body.b.y = v[1];
+    body.a.z = body.b.z = v[2];
+    body.radius = v[3];
+    mca_msgs_msg_dds__TrackedBodies_ tb;
+    memset(&tb, 0, sizeof tb);
+    tb.header.frame_id = (char *)frame;
+    tb.bodies._buffer = &body;
+    tb.bodies._length = tb.bodies._maximum = 1;
     const double t1 = now_s();
     unsigned sent = 0, errors = 0;
     for (double next = t1; now_s() - t1 < duration; next += 1.0 / hz) {
@@ -158,7 +182,10 @@ int main(int argc, char **argv) {
         clock_gettime(CLOCK_REALTIME, &rt);
         tw.header.stamp.sec = po.header.stamp.sec = (int32_t)rt.tv_sec;
         tw.header.stamp.nanosec = po.header.stamp.nanosec = (uint32_t)rt.tv_nsec;
-        const dds_return_t rc = dds_write(w, twist ? (const void *)&tw : (const void *)&po);
+        tb.header.stamp = body.stamp = tw.header.stamp; /* the body seen as it is sent */
+        const dds_return_t rc = dds_write(w, sphere  ? (const void *)&tb
+                                             : twist ? (const void *)&tw
+                                                     : (const void *)&po);
         sent++;
         errors += rc != DDS_RETCODE_OK;
         const double wait = next + 1.0 / hz - now_s();

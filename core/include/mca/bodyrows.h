@@ -36,6 +36,8 @@ typedef struct mca_fixed_body {
     mca_body_t body;              /**< kind and geometry, world frame (mca/body.h) */
     double clearance;             /**< [m] what every link it does not allow keeps from it (its d1) */
     unsigned allow[MCA_MAX_ARMS]; /**< bit l of allow[a]: link l of arm a may touch it (no rows, no fault) */
+    double v[3];                  /**< a streamed body's velocity [m/s] (mca/track.h); 0 for a fixed body */
+    double grow;                  /**< a stale streamed body's surface growth [m/s]; 0 for a fixed body */
 } mca_fixed_body_t;
 
 /** One witness pair of a link against a body (a row's data). */
@@ -61,8 +63,9 @@ typedef struct mca_body_nearest {
 const char *mca_body_kind_name(int kind);
 
 /**
- * A body's geometry and clearance are usable (start-up): finite, clearance >= 0, radii and half extents >= 0,
- * normal and axis not zero, a box's rotation orthonormal (one probe distance answers).
+ * A body's geometry and clearance are usable (start-up): finite, clearance >= 0, its motion finite (grow >=
+ * 0), radii and half extents >= 0, normal and axis not zero, a box's rotation orthonormal (one probe distance
+ * answers).
  * @retval MCA_OK, MCA_EINVAL
  */
 int mca_body_check(const mca_fixed_body_t *b);

@@ -47,6 +47,7 @@
 #include "mca/pdnn.h"
 #include "mca/qp.h"
 #include "mca/scheme.h"
+#include "mca/track.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -181,6 +182,9 @@ typedef struct mca_controller_config {
                                 min(pdnn.max_steps, this); stopping here before the cap is a budget event
                                 (MCA_BUDGET_STEPS), deterministic. mcad and mca-sim alike. Not under the
                                 scheme mca, whose step limit stays its cap (the paper's figures) */
+    int max_tracks; /**< streamed bodies (mca/track.h) the controller keeps slots for, after the fixed bodies
+                         (0: none); they arrive through mca_controller_set_tracks */
+    mca_ssm_params_t ssm; /**< their speed and separation monitoring (mca_ssm_default) */
 } mca_controller_config_t;
 
 /** Wall time of one PDNN step [ns] on the largest QPs the shipped tasks build, measured on the development VM
@@ -364,6 +368,19 @@ int mca_controller_stream_target(mca_controller_t *ctrl, int arm, mca_stream_kin
  *  tick on: mcad gives its loop half the period once it runs in real time. RT safe.
  *  @retval MCA_OK, MCA_EINVAL (NULL, negative) */
 int mca_controller_set_pdnn_budget(mca_controller_t *ctrl, int64_t budget_ns);
+
+/** S_p's arm terms under cfg (mca/track.h): v_r the fastest point of any arm, T_s the longest stop at the
+ *  arms' ts.dec_limit (0 without one). Any context. */
+void mca_controller_ssm_arms(const mca_controller_config_t *cfg, double *arm_speed, double *t_stop);
+
+/**
+ * The streamed bodies at time t (the tick's clock): each track becomes a body of the rows with the
+ * protective separation S_p as its clearance, grown while stale (mca_track_body). Call every tick before
+ * mca_controller_tick (or _brake): a stale track grows with t. n = 0 removes them. RT safe (copies).
+ * @retval MCA_OK
+ * @retval MCA_EINVAL  NULL, n above cfg.max_tracks, a track not usable: the bodies stay as they were
+ */
+int mca_controller_set_tracks(mca_controller_t *ctrl, const mca_track_t *tracks, int n, double t);
 
 /** Clear a latched fault (keeps the task clock and anchors). RT safe. */
 void mca_controller_clear_fault(mca_controller_t *ctrl);

@@ -58,6 +58,16 @@ typedef struct mca_cell_stream {
                                       stops at its walls */
 } mca_cell_stream_t;
 
+/** Streamed bodies (streamed_bodies, docs/scheme.md "Streamed bodies"): a person or a foreign machine
+ *  tracked elsewhere, spheres or capsules on the DDS topic rt/<ns>/<topic> (mca::msg::TrackedBodies),
+ *  taken only in a DDS Security cell (a plain cell that declares them is refused). */
+typedef struct mca_cell_tracks {
+    int enabled;
+    char topic[32];       /**< ROS 2 name under /<ns>/ ("tracked_bodies") */
+    int max_bodies;       /**< bodies taken from one sample, 1..MCA_MAX_TRACKS (MCA_MAX_TRACKS) */
+    mca_ssm_params_t ssm; /**< growth, loss and S_p's terms (mca_ssm_default) */
+} mca_cell_tracks_t;
+
 /** Hardware side of one arm (the model and path live in the cell's scenario). */
 typedef struct mca_cell_arm {
     mca_cell_backend_t backend;
@@ -137,7 +147,8 @@ typedef struct mca_cell {
         back_off_time; /**< mca-ts: the yielding arm runs its path backwards this long [s] (<= 0: default) */
     mca_cell_dds_t dds;
     mca_cell_rt_t rt;
-    double stop_after; /**< [s] of running after which the daemon stops by itself; 0 = never */
+    double stop_after;        /**< [s] of running after which the daemon stops by itself; 0 = never */
+    mca_cell_tracks_t tracks; /**< streamed_bodies: a tracked person or machine (DDS Security cells only) */
     /* The test build's cell keys (mca/daemon_test.h). Every binary has these fields, so mca_cell_t has one
      * layout whichever library built it; the production build refuses the keys (MCA_ENOTSUP), so they stay
      * 0 there, and only the test build's code reads them. */

@@ -61,6 +61,8 @@ typedef enum mca_daemon_fault {
     MCA_DAEMON_FAULT_BUS = 5,           /**< bus error on an arm's link */
     MCA_DAEMON_FAULT_FEEDBACK = 6, /**< implausible feedback from an arm (mca_feedback_fault_t says how) */
     MCA_DAEMON_FAULT_STREAM_STALE = 7, /**< task.stream: an arm's target stream silent for brake_after */
+    MCA_DAEMON_FAULT_TRACKS_LOST =
+        8, /**< streamed_bodies: no message for lost_after ("streamed bodies lost") */
 } mca_daemon_fault_t;
 
 /**

@@ -308,6 +308,14 @@ int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *d
  */
 int mca_dds_bridge_stream_target(mca_dds_bridge_t *bridge, int arm, mca_ros2_target_t *out);
 
+/**
+ * The latest accepted message of streamed bodies (mca/ros2.h, mca_msgs/TrackedBodies): a seqlock read,
+ * never waits, no system call. Context: rt.
+ * @retval MCA_OK @retval MCA_EINVAL (no bridge, no ROS 2 topics or no streamed bodies)
+ * @retval MCA_EAGAIN (being written just now: keep the last one this tick)
+ */
+int mca_dds_bridge_tracks(mca_dds_bridge_t *bridge, mca_ros2_tracks_t *out);
+
 /** Topic names (also in docs/dds.md). */
 #define MCA_DDS_TOPIC_JOINT_STATE "mca/joint_state"
 #define MCA_DDS_TOPIC_JOINT_COMMAND "mca/joint_command"

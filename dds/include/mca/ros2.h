@@ -14,11 +14,14 @@
  * In (a cell's `stream` task, per arm one of):
  *   /<cell>/<arm>/target_twist        geometry_msgs/msg/TwistStamped     tool-tip velocity (linear part)
  *   /<cell>/<arm>/target_pose         geometry_msgs/msg/PoseStamped      tool-tip position target
- * read best-effort, keep-last 1 (matches reliable and best-effort publishers). Each message is checked
- * where it arrives (a Cyclone thread, non-rt): NaN or infinity, a frame_id other than the world frame, a
- * linear speed above stream_max_speed, a position outside the workspace box are rejected and counted (the
- * count and the last reason go out on /diagnostics); an accepted one replaces the arm's target in a
- * seqlock mailbox that the loop reads without waiting (mca_dds_bridge_stream_target).
+ *   /<cell>/<topic>                   mca_msgs/msg/TrackedBodies         streamed bodies (a person, a foreign
+ *                                                                        machine: streamed_bodies, DDS
+ * Security cells only; docs/dds.md) read best-effort, keep-last 1 (matches reliable and best-effort
+ * publishers). Each message is checked where it arrives (a Cyclone thread, non-rt): NaN or infinity, a
+ * frame_id other than the world frame, a linear speed above stream_max_speed, a position outside the
+ * workspace box are rejected and counted (the count and the last reason go out on /diagnostics); an accepted
+ * one replaces the arm's target in a seqlock mailbox that the loop reads without waiting
+ * (mca_dds_bridge_stream_target).
  *
  * Stamps are ROS time (CLOCK_REALTIME): the snapshot's CLOCK_MONOTONIC stamp plus the offset between the
  * two clocks taken once when the bridge starts, so that samples of one tick carry one stamp.
@@ -31,6 +34,7 @@
 
 #include "mca/chain.h" /* mca_pose_t */
 #include "mca/limits.h"
+#include "mca/track.h" /* mca_track_t, MCA_MAX_TRACKS */
 
 #ifdef __cplusplus
 extern "C" {
@@ -53,6 +57,15 @@ typedef struct mca_ros2_target {
     int64_t recv_ns;   /**< CLOCK_MONOTONIC when it was accepted */
     uint64_t accepted; /**< targets accepted so far (0: none yet, x is zero) */
 } mca_ros2_target_t;
+
+/** The latest accepted message of streamed bodies. */
+typedef struct mca_ros2_tracks {
+    uint32_t n;                       /**< bodies in it */
+    mca_track_t body[MCA_MAX_TRACKS]; /**< stamp: how old each was when the message was sent [s] (its header
+                                           stamp minus the body's own, >= 0) */
+    int64_t recv_ns;                  /**< CLOCK_MONOTONIC when it was accepted */
+    uint64_t accepted;                /**< messages accepted so far (0: none yet) */
+} mca_ros2_tracks_t;
 
 /** One arm as ROS 2 sees it. */
 typedef struct mca_ros2_arm {
@@ -77,6 +90,9 @@ typedef struct mca_ros2_config {
     double box_lo[3], box_hi[3]; /**< workspace box (world): pose targets outside are rejected */
     uint32_t n_arms;
     mca_ros2_arm_t arm[MCA_MAX_ARMS];
+    int tracks;                               /**< 1: read streamed bodies (mca_msgs/TrackedBodies) */
+    char tracks_topic[MCA_ROS2_NAME_MAX + 1]; /**< on /<cell>/<tracks_topic> */
+    uint32_t max_tracks; /**< a message with more bodies is rejected (<= MCA_MAX_TRACKS) */
 } mca_ros2_config_t;
 
 /** 1 when s is a ROS 2 name token: a letter, then letters, digits and single '_', not ending in '_'.
@@ -101,6 +117,16 @@ int mca_ros2_config_check(const mca_ros2_config_t *cfg, char *err, size_t errlen
  * @retval MCA_OK accept @retval MCA_ERANGE reject @retval MCA_EINVAL NULL cfg or x, arm without a stream
  */
 int mca_ros2_target_check(const mca_ros2_config_t *cfg, int arm, const char *frame_id, const double x[3],
+                          int finite, char *why, size_t len);
+
+/**
+ * The check every received message of streamed bodies goes through before it can reach the loop: finite
+ * numbers (finite = 0: the caller saw NaN or infinity anywhere), the world frame, at most max_tracks bodies,
+ * each a sphere or capsule with a radius in 0..2 m, a speed up to 10 m/s, within 100 m of the world's origin
+ * and seen 0..10 s before the message was sent (body[k].stamp). Context: any (no allocation).
+ * @retval MCA_OK accept @retval MCA_ERANGE reject (why says why) @retval MCA_EINVAL NULL, no tracks
+ */
+int mca_ros2_tracks_check(const mca_ros2_config_t *cfg, const char *frame_id, const mca_ros2_tracks_t *t,
                           int finite, char *why, size_t len);
 
 #ifdef __cplusplus
