@@ -68,6 +68,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->eq_tol = 1e-4;
     cfg->fault_distance = 1;
     cfg->body_rows = 1;
+    cfg->self_rows = 1;
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e3;
     cfg->ts.w_path = 1e4;
@@ -117,7 +118,9 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     ctrl->cfg = *cfg;
     ctrl->cfg.sp.collision = uses_rows(cfg->scheme);
     /* the fixed bodies' rows keep slots after each arm's own (none without bodies: the layout of before) */
-    ctrl->cfg.sp.body_pairs = cfg->n_bodies > 0 && cfg->body_rows ? MCA_BODY_PAIRS : 0;
+    ctrl->cfg.sp.body_pairs =
+        (cfg->n_bodies > 0 && cfg->body_rows) || (mca_ctrl__has_self(cfg) && cfg->self_rows) ? MCA_BODY_PAIRS
+                                                                                             : 0;
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;
@@ -288,6 +291,11 @@ const char *mca_ctrl_fault_format(const mca_ctrl_fault_why_t *w, char *buf, size
         break;
     case MCA_WHY_INJECTED:
         snprintf(buf, len, "injected fault %s at t = %.3f s", mca_ctrl_fault_name(i[0]), x[0]);
+        break;
+    case MCA_WHY_SELF_BELOW_D1:
+    case MCA_WHY_SELF_BELOW_D1_NEXT:
+        snprintf(buf, len, "distance %.4f m %s d1 %.4f m between links %d and %d of arm %d", x[0],
+                 w->why == MCA_WHY_SELF_BELOW_D1 ? "<" : "predicted to fall below", x[1], i[1], i[2], i[0]);
         break;
     case MCA_WHY_BELOW_CLEARANCE:
     case MCA_WHY_BELOW_CLEARANCE_NEXT:

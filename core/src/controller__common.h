@@ -32,6 +32,33 @@ static inline mca_ctrl_fault_why_t why_clearance(int why, const mca_tick_info_t 
                                   .x = {info->body_distance, info->body_distance - info->body_margin}};
 }
 
+/* A self pair's distance fault: the pair and how near. */
+static inline mca_ctrl_fault_why_t why_self(int why, const mca_tick_info_t *info, double d1) {
+    return (mca_ctrl_fault_why_t){
+        .why = why, .i = {info->self_arm, info->self_link, info->self_other}, .x = {info->self_distance, d1}};
+}
+
+/* Some arm has self pairs. */
+static inline int mca_ctrl__has_self(const mca_controller_config_t *cfg) {
+    for (int a = 0; a < cfg->n_arms && a < MCA_MAX_ARMS; a++) {
+        for (int l = 1; l < MCA_MAX_LINKS; l++) {
+            if (cfg->self[a][l] & ((1u << l) - 1u)) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* What the rows keep (mca_body_rows): the bodies unless measured only, the self pairs unless measured only.
+ */
+static inline int mca_ctrl__row_bodies(const mca_controller_config_t *cfg) {
+    return cfg->body_rows ? cfg->n_bodies : 0;
+}
+static inline const mca_self_pairs_t *mca_ctrl__row_self(const mca_controller_config_t *cfg) {
+    return cfg->self_rows && mca_ctrl__has_self(cfg) ? cfg->self : NULL;
+}
+
 /* Latch a fault (the first wins) as a code and numbers: no formatting here, on the 1 kHz path. */
 
 static inline void raise_fault(mca_controller_t *ctrl, int code, mca_ctrl_fault_why_t why) {

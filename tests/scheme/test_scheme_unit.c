@@ -1371,7 +1371,7 @@ static void test_body_rows(void **state) {
     assert_int_equal(si.body_off[0], MCA_NEAR_PAIRS * (ch.dof + 1));
     assert_int_equal(si.active_rows, 0);
     static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, dec, lists), MCA_OK);
     const mca_body_witness_t *w = &lists[0][L][0];
     assert_true(w->valid && w->body == 0);
     assert_true(fabs(w->d - d_want) < 1e-12);
@@ -1410,9 +1410,9 @@ static void test_body_rows(void **state) {
                                           (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
                                           &p, dec, NULL),
                      MCA_OK);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, NULL, &p, dec, lists), MCA_OK);
     assert_int_equal(si2.active_rows, 0);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, NULL, &p, dec, lists), MCA_OK);
     assert_int_equal(si2.active_rows, 0);
     (void)before;
     /* the paper's layout: slots after each arm's own rows, with collision rows only */
@@ -1430,7 +1430,7 @@ static void test_body_rows(void **state) {
     assert_int_equal(qp.n_ineq, (1 + MCA_BODY_PAIRS) * (ch.dof + 1));
     assert_int_equal(si.body_off[0], ch.dof + 1);
     table.allow[0] = ~(1u << L);
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, &p, NULL, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, NULL, lists), MCA_OK);
     /* no stop bound: 2 S_b v_normal */
     assert_true(fabs(qp.beta[si.body_off[0] + MCA_BODY_PAIRS * L] -
                      2.0 * mca_brake_s(d_want, d1m, pb.d2) * p.v_normal) < 1e-15);
