@@ -55,6 +55,17 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out) {
     return MCA_EINVAL;
 }
 
+int mca_controller_has_self(const mca_controller_config_t *cfg) {
+    for (int a = 0; cfg && a < cfg->n_arms && a < MCA_MAX_ARMS; a++) {
+        for (int l = 1; l < MCA_MAX_LINKS; l++) {
+            if (cfg->self[a][l] & ((1u << l) - 1u)) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
 void mca_controller_default_config(mca_controller_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->scheme = MCA_SCHEME_MCA;
@@ -119,8 +130,9 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     ctrl->cfg.sp.collision = uses_rows(cfg->scheme);
     /* the fixed bodies' rows keep slots after each arm's own (none without bodies: the layout of before) */
     ctrl->cfg.sp.body_pairs =
-        (cfg->n_bodies > 0 && cfg->body_rows) || (mca_ctrl__has_self(cfg) && cfg->self_rows) ? MCA_BODY_PAIRS
-                                                                                             : 0;
+        (cfg->n_bodies > 0 && cfg->body_rows) || (mca_controller_has_self(cfg) && cfg->self_rows)
+            ? MCA_BODY_PAIRS
+            : 0;
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
         /* the stoppability bound bounds the normal approach speed, and must hold before the band */
         ctrl->cfg.sp.form = MCA_FORM_NORMAL;

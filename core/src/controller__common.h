@@ -38,25 +38,13 @@ static inline mca_ctrl_fault_why_t why_self(int why, const mca_tick_info_t *info
         .why = why, .i = {info->self_arm, info->self_link, info->self_other}, .x = {info->self_distance, d1}};
 }
 
-/* Some arm has self pairs. */
-static inline int mca_ctrl__has_self(const mca_controller_config_t *cfg) {
-    for (int a = 0; a < cfg->n_arms && a < MCA_MAX_ARMS; a++) {
-        for (int l = 1; l < MCA_MAX_LINKS; l++) {
-            if (cfg->self[a][l] & ((1u << l) - 1u)) {
-                return 1;
-            }
-        }
-    }
-    return 0;
-}
-
 /* What the rows keep (mca_body_rows): the bodies unless measured only, the self pairs unless measured only.
  */
 static inline int mca_ctrl__row_bodies(const mca_controller_config_t *cfg) {
     return cfg->body_rows ? cfg->n_bodies : 0;
 }
 static inline const mca_self_pairs_t *mca_ctrl__row_self(const mca_controller_config_t *cfg) {
-    return cfg->self_rows && mca_ctrl__has_self(cfg) ? cfg->self : NULL;
+    return cfg->self_rows && mca_controller_has_self(cfg) ? cfg->self : NULL;
 }
 
 /* Latch a fault (the first wins) as a code and numbers: no formatting here, on the 1 kHz path. */

@@ -240,7 +240,7 @@ static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     }
     mca_self_nearest_t sn;
     const int rs = mca_self_nearest(ctrl->cfg.n_arms, chains, ctrl->kin,
-                                    mca_ctrl__has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL, &sn);
+                                    mca_controller_has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL, &sn);
     info->self_distance = sn.d;
     info->self_arm = sn.arm;
     info->self_link = sn.link;

@@ -51,8 +51,11 @@ int mcad_csv_open(mca_daemon_t *d, char *err, size_t errlen) {
             return MCA_EIO;
         }
         /* mca-sim's columns, plus the daemon state and the commands, numbers exact */
-        d->csv_layout = (mca_tick_csv_layout_t){
-            .n_arms = d->n_arms, .exact = 1, .daemon_cols = 1, .body_cols = d->ctrl.cfg.n_bodies > 0};
+        d->csv_layout = (mca_tick_csv_layout_t){.n_arms = d->n_arms,
+                                                .exact = 1,
+                                                .daemon_cols = 1,
+                                                .body_cols = d->ctrl.cfg.n_bodies > 0,
+                                                .self_cols = mca_controller_has_self(&d->ctrl.cfg)};
         for (int a = 0; a < d->n_arms; a++) {
             d->csv_layout.dof[a] = d->dof[a];
         }

@@ -75,18 +75,6 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     }
 }
 
-/* Some arm has self pairs. */
-static int has_self(const mca_controller_config_t *cfg) {
-    for (int a = 0; a < cfg->n_arms; a++) {
-        for (int l = 1; l < MCA_MAX_LINKS; l++) {
-            if (cfg->self[a][l]) {
-                return 1;
-            }
-        }
-    }
-    return 0;
-}
-
 int mca_simrun_fault_from_name(const char *name) {
     for (int f = 1; f <= MCA_CTRL_FAULT_LAST; f++) {
         if (strcmp(name, mca_ctrl_fault_name(f)) == 0) {
@@ -173,7 +161,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         }
         csv_layout.n_arms = na;
         csv_layout.body_cols = cfg->n_bodies > 0;
-        csv_layout.self_cols = has_self(cfg);
+        csv_layout.self_cols = mca_controller_has_self(cfg);
         for (int a = 0; a < na; a++) {
             csv_layout.dof[a] = cfg->chain[a].dof;
         }
@@ -184,7 +172,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     r->n_bodies = cfg->n_bodies;
     r->body_min_margin = r->body_min_distance = INFINITY;
     r->body_min_arm = r->body_min_link = r->body_min_body = r->body_min_kind = -1;
-    r->has_self = has_self(cfg);
+    r->has_self = mca_controller_has_self(cfg);
     r->self_min_distance = INFINITY;
     r->self_min_arm = r->self_min_link = r->self_min_other = -1;
     r->brake_t = -1.0;

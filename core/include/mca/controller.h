@@ -205,6 +205,9 @@ int mca_controller_step_budget(const mca_controller_config_t *cfg);
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
 void mca_controller_default_config(mca_controller_config_t *cfg);
 
+/** Some arm of cfg has self pairs (cfg->self, mca/bodyrows.h). Context: any. */
+int mca_controller_has_self(const mca_controller_config_t *cfg);
+
 /** Report of one tick. */
 typedef struct mca_tick_info {
     double t;      /**< the tick's t */
