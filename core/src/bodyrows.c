@@ -33,6 +33,14 @@ void mca_body_band(const mca_scheme_params_t *p, double clearance, mca_scheme_pa
     pb->d2 = clearance + (p->d2 - p->d1);
 }
 
+/* The sphere around a capsule (centre c, radius returned). */
+static double capsule_sphere(const mca_capsule_t *cap, double c[3]) {
+    for (int i = 0; i < 3; i++) {
+        c[i] = 0.5 * (cap->a[i] + cap->b[i]);
+    }
+    return 0.5 * mca_v3_dist(cap->a, cap->b) + cap->radius;
+}
+
 /* A sphere around a finite body (centre c, radius returned); -1 for the half-space. */
 static double body_sphere(const mca_body_t *b, double c[3]) {
     switch (b->kind) {
@@ -40,10 +48,7 @@ static double body_sphere(const mca_body_t *b, double c[3]) {
         mca_v3_set(c, b->u.sphere.centre);
         return b->u.sphere.radius;
     case MCA_BODY_CAPSULE:
-        for (int i = 0; i < 3; i++) {
-            c[i] = 0.5 * (b->u.capsule.a[i] + b->u.capsule.b[i]);
-        }
-        return 0.5 * mca_v3_dist(b->u.capsule.a, b->u.capsule.b) + b->u.capsule.radius;
+        return capsule_sphere(&b->u.capsule, c);
     case MCA_BODY_BOX:
         mca_v3_set(c, b->u.box.centre);
         return mca_v3_norm(b->u.box.half);
@@ -272,11 +277,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             const double v = speed[l] + speed[q];
             const mca_capsule_t cq = link_capsule(ch, kn, q);
             double c[3];
-            for (int i = 0; i < 3; i++) {
-                c[i] = 0.5 * (cq.a[i] + cq.b[i]);
-            }
-            if (!(lower_bound(&cap, c, 0.5 * mca_v3_dist(cq.a, cq.b) + cq.radius) <=
-                  cut_distance(ps, t_stop, v))) {
+            if (!(lower_bound(&cap, c, capsule_sphere(&cq, c)) <= cut_distance(ps, t_stop, v))) {
                 continue;
             }
             const mca_body_t other = {.kind = MCA_BODY_CAPSULE, .u.capsule = cq};
@@ -306,6 +307,10 @@ int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
                 }
                 const mca_body_t other = {.kind = MCA_BODY_CAPSULE,
                                           .u.capsule = link_capsule(chain[a], &kin[a], q)};
+                double c[3];
+                if (lower_bound(&cap, c, capsule_sphere(&other.u.capsule, c)) >= out->d) {
+                    continue; /* cannot be the least (NaN: measured, and the distance rejects it) */
+                }
                 mca_body_dist_t r;
                 if (mca_capsule_body_distance(&cap, &other, &r) != MCA_OK) {
                     return MCA_EINVAL;
