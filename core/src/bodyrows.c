@@ -34,6 +34,14 @@ void mca_body_band(const mca_scheme_params_t *p, double clearance, mca_scheme_pa
     pb->d2 = clearance + (p->d2 - p->d1);
 }
 
+/* The sphere around a capsule (centre c, radius returned). */
+static double capsule_sphere(const mca_capsule_t *cap, double c[3]) {
+    for (int i = 0; i < 3; i++) {
+        c[i] = 0.5 * (cap->a[i] + cap->b[i]);
+    }
+    return 0.5 * mca_v3_dist(cap->a, cap->b) + cap->radius;
+}
+
 /* A sphere around a finite body (centre c, radius returned); -1 for the half-space. */
 static double body_sphere(const mca_body_t *b, double c[3]) {
     switch (b->kind) {
@@ -41,10 +49,7 @@ static double body_sphere(const mca_body_t *b, double c[3]) {
         mca_v3_set(c, b->u.sphere.centre);
         return b->u.sphere.radius;
     case MCA_BODY_CAPSULE:
-        for (int i = 0; i < 3; i++) {
-            c[i] = 0.5 * (b->u.capsule.a[i] + b->u.capsule.b[i]);
-        }
-        return 0.5 * mca_v3_dist(b->u.capsule.a, b->u.capsule.b) + b->u.capsule.radius;
+        return capsule_sphere(&b->u.capsule, c);
     case MCA_BODY_BOX:
         mca_v3_set(c, b->u.box.centre);
         return mca_v3_norm(b->u.box.half);
@@ -119,15 +124,15 @@ int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
 }
 
 /* Insert a witness into a link's list (sorted by margin, at most MCA_BODY_PAIRS); a pair found twice (the
- * closest points at an end) is listed once. */
-static void witness_insert(mca_body_witness_t list[MCA_BODY_PAIRS], int body, double clearance,
+ * closest points at an end) is listed once. body -1: a self pair against the arm's link `link`. */
+static void witness_insert(mca_body_witness_t list[MCA_BODY_PAIRS], int body, int link, double clearance,
                            const mca_body_dist_t *r) {
     const double m = r->d - clearance;
     if (list[MCA_BODY_PAIRS - 1].valid && !(m < list[MCA_BODY_PAIRS - 1].margin)) {
         return;
     }
     for (int i = 0; i < MCA_BODY_PAIRS && list[i].valid; i++) {
-        if (list[i].body == body && mca_v3_dist(list[i].p, r->p_axis) < 1e-9 &&
+        if (list[i].body == body && list[i].link == link && mca_v3_dist(list[i].p, r->p_axis) < 1e-9 &&
             mca_v3_dist(list[i].q, r->q) < 1e-9) {
             return;
         }
@@ -143,6 +148,7 @@ static void witness_insert(mca_body_witness_t list[MCA_BODY_PAIRS], int body, do
     mca_body_witness_t *w = &list[k];
     w->valid = 1;
     w->body = body;
+    w->link = link;
     w->d = r->d;
     w->margin = m;
     mca_v3_set(w->p, r->p_axis);
@@ -155,8 +161,8 @@ static inline double max_or_nan(double x, double y) {
     return x < y ? y : (isnan(y) ? y : x);
 }
 
-/* The row bound of a witness at distance d (the band pb, stop time t_stop), the share of a fixed body (2:
- * the whole budget) applied; p->big when no bound applies. */
+/* The row bound of a witness at distance d (the band pb, stop time t_stop), the share of a fixed body or a
+ * self pair (2: the whole budget) applied; p->big when no bound applies. */
 static double body_bound(const mca_scheme_params_t *pb, double d, double t_stop) {
     const double b = mca_scheme_row_bound(pb, d, t_stop);
     return b < pb->big ? 2.0 * b : pb->big;
@@ -167,14 +173,77 @@ static double body_speed(const mca_fixed_body_t *fb) {
     return mca_v3_norm(fb->v) + fb->grow;
 }
 
+/* Link l's capsule. */
+static mca_capsule_t link_capsule(const mca_chain_t *ch, const mca_kin_t *kn, int l) {
+    return (mca_capsule_t){{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
+                           {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
+                           ch->link_radius[l]};
+}
+
+/* One pair's witnesses into a link's list, those whose row can bind at the pair's approach speed `speed`
+ * (band bp): the closest points, the link's two ends and, for a capsule body (a self pair's other link), the
+ * body's own two ends against the link (two capsules' five witness functions). The pair is body `body`, or
+ * the arm's link `link` (body -1). */
+static int pair_witnesses(const mca_capsule_t *cap, const mca_body_t *body, int k, int link,
+                          const mca_scheme_params_t *bp, double clearance, double t_stop, double speed,
+                          mca_body_witness_t list[MCA_BODY_PAIRS]) {
+    mca_body_dist_t r;
+    if (mca_capsule_body_distance(cap, body, &r) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    /* the ends are never nearer than the closest points: a pair whose closest points cannot bind has no end
+     * that can (the bound grows with d) */
+    if (body_bound(bp, r.d, t_stop) > speed) {
+        return MCA_OK;
+    }
+    witness_insert(list, k, link, clearance, &r);
+    const double *ends[2] = {cap->a, cap->b};
+    for (int e = 0; e < 2; e++) {
+        const mca_capsule_t pt = {
+            {ends[e][0], ends[e][1], ends[e][2]}, {ends[e][0], ends[e][1], ends[e][2]}, cap->radius};
+        if (mca_capsule_body_distance(&pt, body, &r) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+        if (!(body_bound(bp, r.d, t_stop) > speed)) {
+            witness_insert(list, k, link, clearance, &r);
+        }
+    }
+    if (body->kind == MCA_BODY_CAPSULE) {
+        const mca_capsule_t *bc = &body->u.capsule;
+        const double *bends[2] = {bc->a, bc->b};
+        for (int e = 0; e < 2; e++) {
+            const mca_body_sphere_t sp = {{bends[e][0], bends[e][1], bends[e][2]}, bc->radius};
+            if (mca_capsule_sphere_distance(cap, &sp, &r) != MCA_OK) {
+                return MCA_EINVAL;
+            }
+            if (!(body_bound(bp, r.d, t_stop) > speed)) {
+                witness_insert(list, k, link, clearance, &r);
+            }
+        }
+    }
+    return MCA_OK;
+}
+
+/* Beyond this distance no row of a pair in band bp can bind: its S part ends at d2_b, its stop part
+ * 2 (d - c') / (2 T) reaches the approach speed at c' + T speed (1 nm wider: rounding never drops a row that
+ * binds). */
+static double cut_distance(const mca_scheme_params_t *bp, double t_stop, double speed) {
+    if (!isfinite(speed)) {
+        return INFINITY;
+    }
+    return t_stop > 0.0 ? fmax(bp->d2, mca_scheme_rows_d1(bp) + t_stop * speed + 1e-9) : bp->d2;
+}
+
 /* Arm a's witness lists: per link, the pairs whose row can bind with the joint speeds inside the QP's box
- * (the link's fastest point moves at most `speed`: sum_j max|qdot_j| |p - o_j|, largest at an end). */
+ * (the link's fastest point moves at most `speed`: sum_j max|qdot_j| |p - o_j|, largest at an end; a self
+ * pair approaches at most at the sum of its two links'). self: the arm's self pairs (NULL: none), in band ps.
+ */
 static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mca_kin_t *kn, int a,
-                     const mca_fixed_body_t *bodies, int n_bodies, const mca_scheme_params_t *pb,
-                     const double (*sc)[3], const double *sr, double t_stop,
-                     mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
+                     const mca_fixed_body_t *bodies, int n_bodies, const unsigned *self,
+                     const mca_scheme_params_t *pb, const mca_scheme_params_t *ps, const double (*sc)[3],
+                     const double *sr, double t_stop, mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
     const int dof = ch->dof;
-    double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF];
+    double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF], speed[MCA_MAX_LINKS];
     for (int j = 0; j < dof; j++) {
         qmax[j] = max_or_nan(fabs(qp->lb[vo + j]), fabs(qp->ub[vo + j]));
         for (int m = j + 1; m <= dof + 1; m++) {
@@ -182,70 +251,85 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
         }
     }
     for (int l = 0; l <= dof; l++) {
+        speed[l] = 0.0; /* NaN anywhere: NaN, so every pair may bind */
+        for (int j = 0; j < l; j++) {
+            speed[l] += qmax[j] * max_or_nan(lever[l][j], lever[l + 1][j]);
+        }
+    }
+    for (int l = 0; l <= dof; l++) {
         mca_body_witness_t *list = lists[l];
         for (int k = 0; k < MCA_BODY_PAIRS; k++) {
             list[k].valid = 0;
         }
-        double speed = 0.0; /* NaN anywhere: NaN, so every pair may bind */
-        for (int j = 0; j < l; j++) {
-            speed += qmax[j] * max_or_nan(lever[l][j], lever[l + 1][j]);
-        }
-        const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
-                                   {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
-                                   ch->link_radius[l]};
+        const mca_capsule_t cap = link_capsule(ch, kn, l);
         for (int k = 0; k < n_bodies; k++) {
             const mca_fixed_body_t *fb = &bodies[k];
             if (fb->allow[a] & (1u << l)) {
                 continue;
             }
-            const mca_scheme_params_t *bp = &pb[k];
             /* a streamed body's own approach lowers its rows' bounds by at most this (mca/track.h) */
-            const double vs = speed + body_speed(fb);
-            /* beyond d_cut no row of this pair can bind: its S part ends at d2_b, its stop part
-             * 2 (d - c') / (2 T) reaches the link's speed at c' + T speed (1 nm wider: rounding never drops a
-             * row that binds) */
-            double d_cut = bp->d2;
-            if (!isfinite(speed)) {
-                d_cut = INFINITY;
-            } else if (t_stop > 0.0) {
-                d_cut = fmax(d_cut, mca_scheme_rows_d1(bp) + t_stop * vs + 1e-9);
-            }
-            if (!(lower_bound(&cap, sc[k], sr[k]) <= d_cut)) {
+            const double vs = speed[l] + body_speed(fb);
+            if (!(lower_bound(&cap, sc[k], sr[k]) <= cut_distance(&pb[k], t_stop, vs))) {
                 continue;
             }
-            mca_body_dist_t r;
-            if (mca_capsule_body_distance(&cap, &fb->body, &r) != MCA_OK) {
-                return MCA_EINVAL;
+            const int rc = pair_witnesses(&cap, &fb->body, k, -1, &pb[k], fb->clearance, t_stop, vs, list);
+            if (rc != MCA_OK) {
+                return rc;
             }
-            /* the ends are never nearer than the closest points: a pair whose closest points cannot bind has
-             * no end that can (the bound grows with d) */
-            if (body_bound(bp, r.d, t_stop) > vs) {
+        }
+        for (int q = 0; self && q < l; q++) {
+            if (!(self[l] & (1u << q))) {
                 continue;
             }
-            witness_insert(list, k, fb->clearance, &r);
-            const double *ends[2] = {cap.a, cap.b};
-            for (int e = 0; e < 2; e++) {
-                const mca_capsule_t pt = {
-                    {ends[e][0], ends[e][1], ends[e][2]}, {ends[e][0], ends[e][1], ends[e][2]}, cap.radius};
-                if (mca_capsule_body_distance(&pt, &fb->body, &r) != MCA_OK) {
+            const double v = speed[l] + speed[q];
+            const mca_capsule_t cq = link_capsule(ch, kn, q);
+            double c[3];
+            if (!(lower_bound(&cap, c, capsule_sphere(&cq, c)) <= cut_distance(ps, t_stop, v))) {
+                continue;
+            }
+            const mca_body_t other = {.kind = MCA_BODY_CAPSULE, .u.capsule = cq};
+            const int rc = pair_witnesses(&cap, &other, -1, q, ps, ps->d1, t_stop, v, list);
+            if (rc != MCA_OK) {
+                return rc;
+            }
+        }
+    }
+    return MCA_OK;
+}
+
+int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
+                     const mca_self_pairs_t *self, mca_self_nearest_t *out) {
+    if (!out || (self && (!chain || !kin)) || n_arms < 0 || n_arms > MCA_MAX_ARMS) {
+        return MCA_EINVAL;
+    }
+    out->valid = 0;
+    out->d = INFINITY;
+    out->arm = out->link = out->other = -1;
+    for (int a = 0; self && a < n_arms; a++) {
+        for (int l = 0; l <= chain[a]->dof; l++) {
+            const mca_capsule_t cap = link_capsule(chain[a], &kin[a], l);
+            for (int q = 0; q < l; q++) {
+                if (!(self[a][l] & (1u << q))) {
+                    continue;
+                }
+                const mca_body_t other = {.kind = MCA_BODY_CAPSULE,
+                                          .u.capsule = link_capsule(chain[a], &kin[a], q)};
+                double c[3];
+                if (lower_bound(&cap, c, capsule_sphere(&other.u.capsule, c)) >= out->d) {
+                    continue; /* cannot be the least (NaN: measured, and the distance rejects it) */
+                }
+                mca_body_dist_t r;
+                if (mca_capsule_body_distance(&cap, &other, &r) != MCA_OK) {
                     return MCA_EINVAL;
                 }
-                if (!(body_bound(bp, r.d, t_stop) > vs)) {
-                    witness_insert(list, k, fb->clearance, &r);
-                }
-            }
-            if (fb->body.kind == MCA_BODY_CAPSULE) {
-                /* and the body's own ends against the link (two capsules' five witness functions) */
-                const mca_capsule_t *bc = &fb->body.u.capsule;
-                const double *bends[2] = {bc->a, bc->b};
-                for (int e = 0; e < 2; e++) {
-                    const mca_body_sphere_t sp = {{bends[e][0], bends[e][1], bends[e][2]}, bc->radius};
-                    if (mca_capsule_sphere_distance(&cap, &sp, &r) != MCA_OK) {
-                        return MCA_EINVAL;
-                    }
-                    if (!(body_bound(bp, r.d, t_stop) > vs)) {
-                        witness_insert(list, k, fb->clearance, &r);
-                    }
+                if (r.d < out->d) {
+                    out->valid = 1;
+                    out->d = r.d;
+                    out->arm = a;
+                    out->link = l;
+                    out->other = q;
+                    mca_v3_set(out->p, r.p_axis);
+                    mca_v3_set(out->q, r.q);
                 }
             }
         }
@@ -255,19 +339,20 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
 
 int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                   const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
-                  const mca_scheme_params_t *p, const double *dec,
+                  const mca_self_pairs_t *self, const mca_scheme_params_t *p, const double *dec,
                   mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]) {
     if (!qp || !si || !p || n_arms < 1 || n_arms > MCA_MAX_ARMS || n_bodies < 0 ||
         n_bodies > MCA_MAX_BODIES) {
         return MCA_EINVAL;
     }
-    if (n_bodies == 0 || p->body_pairs <= 0) {
+    if ((n_bodies == 0 && !self) || p->body_pairs <= 0) {
         return MCA_OK;
     }
-    if (!chain || !kin || !bodies || p->body_pairs > MCA_BODY_PAIRS) {
+    if (!chain || !kin || (n_bodies > 0 && !bodies) || p->body_pairs > MCA_BODY_PAIRS) {
         return MCA_EINVAL;
     }
-    mca_scheme_params_t pb[MCA_MAX_BODIES];
+    mca_scheme_params_t pb[MCA_MAX_BODIES], ps; /* each body's band; the self pairs' (clearance d1) */
+    mca_body_band(p, p->d1, &ps);
     double sc[MCA_MAX_BODIES][3], sr[MCA_MAX_BODIES]; /* each body's bounding sphere */
     for (int k = 0; k < n_bodies; k++) {
         mca_body_band(p, bodies[k].clearance, &pb[k]);
@@ -283,8 +368,8 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
         const double t_stop = mca_scheme_stop_time(ch, dec ? dec[a] : 0.0);
         mca_body_witness_t own[MCA_MAX_LINKS][MCA_BODY_PAIRS];
         mca_body_witness_t(*ls)[MCA_BODY_PAIRS] = lists ? lists[a] : own;
-        int rc =
-            arm_lists(qp, vo, ch, &kin[a], a, bodies, n_bodies, pb, (const double(*)[3])sc, sr, t_stop, ls);
+        int rc = arm_lists(qp, vo, ch, &kin[a], a, bodies, n_bodies, self ? self[a] : NULL, pb, &ps,
+                           (const double(*)[3])sc, sr, t_stop, ls);
         if (rc != MCA_OK) {
             return rc;
         }
@@ -293,7 +378,7 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
         for (int l = 0; l <= dof; l++) {
             for (int k = 0; k < p->body_pairs && ls[l][k].valid; k++) {
                 const mca_body_witness_t *w = &ls[l][k];
-                const mca_scheme_params_t *bp = &pb[w->body];
+                const mca_scheme_params_t *bp = w->body >= 0 ? &pb[w->body] : &ps;
                 const int r = b0 + p->body_pairs * l + k;
                 if (w->d < bp->d2) {
                     si->brake = fmin(si->brake, mca_brake_s(w->d, mca_scheme_rows_d1(bp), bp->d2));
@@ -302,12 +387,23 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
                 if (!(bound < p->big)) {
                     continue;
                 }
-                /* a streamed body's approach along n (its velocity, or a stale track's growth) is taken off
-                 * the link's share: the row keeps the relative approach within the bound */
-                const mca_fixed_body_t *fb = &bodies[w->body];
-                bound -= mca_v3_dot(w->n, fb->v) + fb->grow;
-                double Jp[3][MCA_MAX_DOF];
+                if (w->link < 0) {
+                    /* a streamed body's approach along n (its velocity, or a stale track's growth) is taken
+                     * off the link's share: the row keeps the relative approach within the bound */
+                    const mca_fixed_body_t *fb = &bodies[w->body];
+                    bound -= mca_v3_dot(w->n, fb->v) + fb->grow;
+                }
+                double Jp[3][MCA_MAX_DOF], Jq[3][MCA_MAX_DOF];
                 rc = mca_jacobian_point(&kin[a], l, w->p, Jp);
+                if (rc == MCA_OK && w->link >= 0) {
+                    /* a self pair: the other witness moves with the arm too, J_P - J_Q */
+                    rc = mca_jacobian_point(&kin[a], w->link, w->q, Jq);
+                    for (int i = 0; i < 3 && rc == MCA_OK; i++) {
+                        for (int j = 0; j < dof; j++) {
+                            Jp[i][j] -= Jq[i][j];
+                        }
+                    }
+                }
                 if (rc != MCA_OK) {
                     return rc;
                 }
@@ -315,7 +411,7 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
                     0.0; /* the fastest approach the joint limits allow: a row above it never binds */
                 memset(qp->U[r], 0, row_bytes);
                 for (int j = 0; j < dof; j++) {
-                    /* the approach speed towards the body: along -n */
+                    /* the approach speed towards the body (the other link): along -n */
                     const double u = -(w->n[0] * Jp[0][j] + w->n[1] * Jp[1][j] + w->n[2] * Jp[2][j]);
                     qp->U[r][vo + j] = u;
                     reach += fabs(u) * ch->joint[j].vel_limit;

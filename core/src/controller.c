@@ -66,6 +66,17 @@ int mca_scheme_from_name(const char *name, mca_scheme_kind_t *out) {
     return MCA_EINVAL;
 }
 
+int mca_controller_has_self(const mca_controller_config_t *cfg) {
+    for (int a = 0; cfg && a < cfg->n_arms && a < MCA_MAX_ARMS; a++) {
+        for (int l = 1; l < MCA_MAX_LINKS; l++) {
+            if (cfg->self[a][l] & ((1u << l) - 1u)) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
 void mca_controller_default_config(mca_controller_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->scheme = MCA_SCHEME_MCA;
@@ -80,6 +91,7 @@ void mca_controller_default_config(mca_controller_config_t *cfg) {
     cfg->fault_distance = 1;
     cfg->body_rows = 1;
     mca_ssm_default(&cfg->ssm);
+    cfg->self_rows = 1;
     cfg->ts.w_sigma = 1e2;
     cfg->ts.w_slack = 1e3;
     cfg->ts.w_path = 1e4;
@@ -189,7 +201,10 @@ int mca_controller_init(mca_controller_t *ctrl, const mca_controller_config_t *c
     ctrl->cfg = *cfg;
     ctrl->cfg.sp.collision = uses_rows(cfg->scheme);
     /* the fixed bodies' rows keep slots after each arm's own (none without bodies: the layout of before) */
-    ctrl->cfg.sp.body_pairs = cfg->n_bodies + cfg->max_tracks > 0 && cfg->body_rows ? MCA_BODY_PAIRS : 0;
+    ctrl->cfg.sp.body_pairs = ((cfg->n_bodies + cfg->max_tracks > 0) && cfg->body_rows) ||
+                                      (mca_controller_has_self(cfg) && cfg->self_rows)
+                                  ? MCA_BODY_PAIRS
+                                  : 0;
     ctrl->n_fixed = cfg->n_bodies;
     mca_controller_ssm_arms(cfg, &ctrl->track_arm_speed, &ctrl->track_stop_time);
     if (cfg->scheme == MCA_SCHEME_MCA_TS) {
@@ -414,6 +429,11 @@ const char *mca_ctrl_fault_format(const mca_ctrl_fault_why_t *w, char *buf, size
         break;
     case MCA_WHY_INJECTED:
         snprintf(buf, len, "injected fault %s at t = %.3f s", mca_ctrl_fault_name(i[0]), x[0]);
+        break;
+    case MCA_WHY_SELF_BELOW_D1:
+    case MCA_WHY_SELF_BELOW_D1_NEXT:
+        snprintf(buf, len, "distance %.4f m %s d1 %.4f m between links %d and %d of arm %d", x[0],
+                 w->why == MCA_WHY_SELF_BELOW_D1 ? "<" : "predicted to fall below", x[1], i[1], i[2], i[0]);
         break;
     case MCA_WHY_BELOW_CLEARANCE:
     case MCA_WHY_BELOW_CLEARANCE_NEXT:

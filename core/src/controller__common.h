@@ -32,6 +32,21 @@ static inline mca_ctrl_fault_why_t why_clearance(int why, const mca_tick_info_t 
                                   .x = {info->body_distance, info->body_distance - info->body_margin}};
 }
 
+/* A self pair's distance fault: the pair and how near. */
+static inline mca_ctrl_fault_why_t why_self(int why, const mca_tick_info_t *info, double d1) {
+    return (mca_ctrl_fault_why_t){
+        .why = why, .i = {info->self_arm, info->self_link, info->self_other}, .x = {info->self_distance, d1}};
+}
+
+/* What the rows keep (mca_body_rows): the bodies unless measured only, the self pairs unless measured only.
+ */
+static inline int mca_ctrl__row_bodies(const mca_controller_config_t *cfg) {
+    return cfg->body_rows ? cfg->n_bodies : 0;
+}
+static inline const mca_self_pairs_t *mca_ctrl__row_self(const mca_controller_config_t *cfg) {
+    return cfg->self_rows && mca_controller_has_self(cfg) ? cfg->self : NULL;
+}
+
 /* Latch a fault (the first wins) as a code and numbers: no formatting here, on the 1 kHz path. */
 
 static inline void raise_fault(mca_controller_t *ctrl, int code, mca_ctrl_fault_why_t why) {

@@ -8,6 +8,7 @@
 #include "mca/segdist.h"
 #include "mca/vec3.h"
 
+#include "controller__common.h"
 #include "controller__dist.h"
 
 /* Insert a witness pair (P on this link, E on link other_link of other_arm, surface distance d) into a
@@ -234,7 +235,17 @@ static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     info->body_kind = bn.kind;
     mca_v3_set(info->body_p, bn.valid ? bn.p : (const double[3]){0.0, 0.0, 0.0});
     mca_v3_set(info->body_q, bn.valid ? bn.q : (const double[3]){0.0, 0.0, 0.0});
-    return rc;
+    if (rc != MCA_OK) {
+        return rc;
+    }
+    mca_self_nearest_t sn;
+    const int rs = mca_self_nearest(ctrl->cfg.n_arms, chains, ctrl->kin,
+                                    mca_controller_has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL, &sn);
+    info->self_distance = sn.d;
+    info->self_arm = sn.arm;
+    info->self_link = sn.link;
+    info->self_other = sn.other;
+    return rs;
 }
 
 int mca_ctrl__distances(mca_controller_t *ctrl, mca_tick_info_t *info) {

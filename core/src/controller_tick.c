@@ -176,6 +176,10 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_clearance(MCA_WHY_BELOW_CLEARANCE, info));
         goto fault;
     }
+    if (cfg->fault_distance && cfg->self_rows && info->self_distance < d1) {
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_self(MCA_WHY_SELF_BELOW_D1, info, d1));
+        goto fault;
+    }
 
     /* 4. scheme */
     if (cfg->scheme == MCA_SCHEME_APF) {
@@ -206,8 +210,8 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         }
         if (sp.collision) {
             /* the paper's scheme: the fixed bodies' rows in their slots, no stop bound */
-            rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, cfg->n_bodies, &sp, NULL,
-                               ctrl->body_near);
+            rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, mca_ctrl__row_bodies(cfg),
+                               mca_ctrl__row_self(cfg), &sp, NULL, ctrl->body_near);
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
                             (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
@@ -261,8 +265,9 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
                                       &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
             if (rc == MCA_OK) {
-                rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, cfg->n_bodies, &cfg->sp,
-                                   cfg->ts.dec_limit, ctrl->body_near);
+                rc =
+                    mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, mca_ctrl__row_bodies(cfg),
+                                  mca_ctrl__row_self(cfg), &cfg->sp, cfg->ts.dec_limit, ctrl->body_near);
             }
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
@@ -369,9 +374,15 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_clearance(MCA_WHY_BELOW_CLEARANCE_NEXT, info));
         goto fault;
     }
+    if (cfg->fault_distance && cfg->self_rows && ctrl->has_prev && isfinite(info->self_distance) &&
+        isfinite(ctrl->self_distance_prev) && 2.0 * info->self_distance - ctrl->self_distance_prev < d1) {
+        raise_fault(ctrl, MCA_CTRL_FAULT_DISTANCE, why_self(MCA_WHY_SELF_BELOW_D1_NEXT, info, d1));
+        goto fault;
+    }
     memcpy(ctrl->phi_prev, ctrl->phi, sizeof ctrl->phi_prev);
     ctrl->min_distance_prev = info->min_distance;
     ctrl->body_margin_prev = info->body_margin;
+    ctrl->self_distance_prev = info->self_distance;
     ctrl->has_prev = 1;
     ctrl->ticks++;
     info->fault = MCA_CTRL_FAULT_NONE;

@@ -159,6 +159,7 @@ static const cyaml_schema_field_t cell_fields[] = {
     CYAML_FIELD_MAPPING_PTR("solver", OPT, struct raw_cell, solver, solver_fields),
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_cell, arms, &arm_entry, 1, MCA_MAX_ARMS),
     MCA_YAML_BODIES_FIELD(struct raw_cell, bodies),
+    MCA_YAML_SELF_FIELD(struct raw_cell, self_pairs),
     CYAML_FIELD_MAPPING_PTR("dds", OPT, struct raw_cell, dds, dds_fields),
     CYAML_FIELD_MAPPING_PTR("rt", OPT, struct raw_cell, rt, rt_fields),
     CYAML_FIELD_MAPPING_PTR("streamed_bodies", OPT, struct raw_cell, tracks, tracks_fields),
@@ -226,7 +227,8 @@ int mca_cell_load(const char *path, mca_cell_t *out, char *err, size_t errlen) {
     }
     /* fixed bodies: the scenario's, and the cell's over them (a body of the same name replaces it), with the
      * scenario's one check against the cell's arms */
-    if ((rc = mca_scenario_bodies_apply(&ctx, raw->bodies, raw->bodies_count, &cell->scn)) != MCA_OK) {
+    if ((rc = mca_scenario_bodies_apply(&ctx, raw->bodies, raw->bodies_count, &cell->scn)) != MCA_OK ||
+        (rc = mca_scenario_self_apply(&ctx, raw->self_pairs, raw->self_pairs_count, &cell->scn)) != MCA_OK) {
         goto out;
     }
     if ((rc = mcad_cell_read_dds(ctx, raw, cell)) != MCA_OK) {

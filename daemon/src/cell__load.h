@@ -95,6 +95,8 @@ struct raw_cell {
     unsigned arms_count;
     mca_body_keys_t *bodies;
     unsigned bodies_count;
+    char **self_pairs;
+    unsigned self_pairs_count;
     struct raw_dds *dds;
     struct raw_rt *rt;
     struct raw_tracks *tracks;

@@ -125,6 +125,8 @@ int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_
     d->min_d_t = 0.0;
     d->body_margin = d->body_d = INFINITY;
     d->body_pair[0] = d->body_pair[1] = d->body_pair[2] = -1;
+    d->self_d = INFINITY;
+    d->self_pair[0] = d->self_pair[1] = d->self_pair[2] = -1;
     int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
     if (rc == MCA_OK && d->drive.controller_config) {
         d->drive.controller_config(&d->ccfg, d->drive.controller_config_arg);

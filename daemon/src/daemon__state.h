@@ -143,7 +143,9 @@ struct mca_daemon {
     int64_t min_d_stamp;
     /* fixed bodies: the arm-body pair of least margin (d - clearance) over the run, every tick */
     double body_margin, body_d, body_t;
-    int body_pair[3];     /* arm, link, body */
+    int body_pair[3]; /* arm, link, body */
+    double self_d, self_t;
+    int self_pair[3];     /* arm, link, other link */
     int64_t pct_cache[6]; /* the summary's percentiles of the last second (the DDS status) */
 
     /* ---- streamed bodies (daemon_stream.c) */

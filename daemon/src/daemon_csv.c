@@ -57,7 +57,8 @@ int mcad_csv_open(mca_daemon_t *d, char *err, size_t errlen) {
                                     .daemon_cols = 1,
                                     .body_cols = mca_controller_get_config(d->ctrl)->n_bodies +
                                                      mca_controller_get_config(d->ctrl)->max_tracks >
-                                                 0};
+                                                 0,
+                                    .self_cols = mca_controller_has_self(mca_controller_get_config(d->ctrl))};
         for (int a = 0; a < d->n_arms; a++) {
             d->csv_layout.dof[a] = d->dof[a];
         }

@@ -52,6 +52,9 @@ void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
     s->body_distance = d->body_d;
     s->body_t = d->body_t;
     memcpy(s->body_pair, d->body_pair, sizeof s->body_pair);
+    s->self_distance = d->self_d;
+    s->self_t = d->self_t;
+    memcpy(s->self_pair, d->self_pair, sizeof s->self_pair);
     {
         const int k = d->body_pair[2];
         const mca_fixed_body_t *fb = k >= 0 && k < cc->n_bodies ? &cc->body[k] : NULL;
@@ -174,6 +177,10 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
                 "link %d against %s '%s'\n",
                 s->body_margin, s->body_distance, s->body_t, s->body_pair[0], s->body_pair[1],
                 mca_body_kind_name(s->body_kind), s->body_name);
+    }
+    if (s->self_pair[0] >= 0) {
+        fprintf(f, "<6>mcad: summary: self pairs: least distance %.4f m at t = %.3f s, arm %d links %d-%d\n",
+                s->self_distance, s->self_t, s->self_pair[0], s->self_pair[1], s->self_pair[2]);
     }
     if (s->brake_t >= 0.0) {
         fprintf(f,

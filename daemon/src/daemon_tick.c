@@ -62,7 +62,8 @@ static void deadlock_watch(mca_daemon_t *d, double t) {
     d->deadlocks = in->deadlocks;
 }
 
-/* The fixed bodies' pair of least margin over the run (running, stopped and braking ticks alike). */
+/* The fixed bodies' pair of least margin and the self pair of least distance over the run (running, stopped
+ * and braking ticks alike). */
 static void body_watch(mca_daemon_t *d, double t) {
     if (d->info.body_margin < d->body_margin) {
         d->body_margin = d->info.body_margin;
@@ -71,6 +72,13 @@ static void body_watch(mca_daemon_t *d, double t) {
         d->body_pair[0] = d->info.body_arm;
         d->body_pair[1] = d->info.body_link;
         d->body_pair[2] = d->info.body_index;
+    }
+    if (d->info.self_distance < d->self_d) {
+        d->self_d = d->info.self_distance;
+        d->self_t = t;
+        d->self_pair[0] = d->info.self_arm;
+        d->self_pair[1] = d->info.self_link;
+        d->self_pair[2] = d->info.self_other;
     }
 }
 

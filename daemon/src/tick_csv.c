@@ -36,6 +36,9 @@ void mca_tick_csv_header(FILE *f, const mca_tick_csv_layout_t *l) {
     if (l->body_cols) {
         fprintf(f, ",body_d,body_margin,body_arm,body_link,body,body_kind");
     }
+    if (l->self_cols) {
+        fprintf(f, ",self_d,self_arm,self_link,self_other");
+    }
     fprintf(f, "\n");
 }
 
@@ -88,6 +91,9 @@ void mca_tick_csv_row(FILE *f, const mca_tick_csv_layout_t *l, const mca_tick_cs
     if (l->body_cols) {
         fprintf(f, ",%.*g,%.*g,%d,%d,%d,%s", x, in->body_distance, x, in->body_margin, in->body_arm,
                 in->body_link, in->body_index, mca_body_kind_name(in->body_kind));
+    }
+    if (l->self_cols) {
+        fprintf(f, ",%.*g,%d,%d,%d", x, in->self_distance, in->self_arm, in->self_link, in->self_other);
     }
     fputc('\n', f);
 }

@@ -39,6 +39,8 @@ struct raw_scn {
     unsigned arms_count;
     mca_body_keys_t *bodies;
     unsigned bodies_count;
+    char **self_pairs;
+    unsigned self_pairs_count;
 };
 
 static const cyaml_strval_t kind_strings[] = {
@@ -89,6 +91,7 @@ static const cyaml_strval_t body_kind_strings[] = {
 };
 
 static const cyaml_schema_value_t allow_entry = {CYAML_VALUE_STRING(CYAML_FLAG_POINTER, char, 1, 47)};
+const cyaml_schema_value_t mca_scenario_self_entry = {CYAML_VALUE_STRING(CYAML_FLAG_POINTER, char, 1, 47)};
 
 #define BODY_XYZ(key, m)                                                                                     \
     CYAML_FIELD_SEQUENCE(key, OPT | CYAML_FLAG_FLOW, mca_body_keys_t, m, &mca_yaml_float_entry, 3, 3)
@@ -137,6 +140,7 @@ static const cyaml_schema_field_t scn_fields[] = {
                          &mca_yaml_float_entry, 1, 16),
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_scn, arms, &arm_entry, 1, MCA_MAX_ARMS),
     MCA_YAML_BODIES_FIELD(struct raw_scn, bodies),
+    MCA_YAML_SELF_FIELD(struct raw_scn, self_pairs),
     CYAML_FIELD_END,
 };
 
@@ -979,7 +983,8 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
         }
     }
     /* the bodies after the arms: their allow lists name links */
-    if ((rc = mca_scenario_bodies_apply(&ctx, raw->bodies, raw->bodies_count, &scn)) != MCA_OK) {
+    if ((rc = mca_scenario_bodies_apply(&ctx, raw->bodies, raw->bodies_count, &scn)) != MCA_OK ||
+        (rc = mca_scenario_self_apply(&ctx, raw->self_pairs, raw->self_pairs_count, &scn)) != MCA_OK) {
         goto out;
     }
     *scn_out = scn;
@@ -1040,6 +1045,13 @@ int mca_controller_config_from_scenario(mca_controller_config_t *cfg, const mca_
         return rc;
     }
     cfg->n_bodies = scn->n_bodies;
+    for (int a = 0; a < scn->n_arms; a++) {
+        const int dof = cfg->chain[a].dof;
+        for (int l = 0; l < MCA_MAX_LINKS; l++) {
+            /* pairs of links the arm has (a cell may have changed its model) */
+            cfg->self[a][l] = l <= dof ? scn->arm[a].self[l] & ((1u << l) - 1u) : 0u;
+        }
+    }
     cfg->dt = scn->params.dt;
     /* The baselines are run to show what happens without the scheme: no distance fault for them. */
     cfg->fault_distance = uses_rows(scheme);

@@ -401,6 +401,24 @@ static void test_cell_bodies(void **state) {
     expect_error(p, MCA_ECONFIG, line_of(p, "centre:"), "bodies[0].centre", "not a key of a capsule", NULL);
 }
 
+/* Self pairs in a cell: the scenario's one check (file, line, field), against the cell's own arms. */
+static void test_cell_self_pairs(void **state) {
+    (void)state;
+    const char *p = write_variant("self", "dds:\n", "self_pairs: [left, -left.8-4, right.2-5]\ndds:\n");
+    char err[1024] = "";
+    assert_int_equal(mca_cell_load(p, &cell, err, sizeof err), MCA_OK);
+    mca_controller_config_t *cfg = calloc(1, sizeof *cfg);
+    assert_non_null(cfg);
+    assert_int_equal(mca_cell_controller_config(&cell, cfg, err, sizeof err), MCA_OK);
+    assert_int_equal(cfg->self[0][4], 1u << 2); /* pa10plus.self.yaml */
+    assert_int_equal(cfg->self[0][8], 0xfu);    /* 8-0..8-3: 8-4 taken out */
+    assert_int_equal(cfg->self[1][5], 1u << 2);
+    assert_int_equal(cfg->self[1][8], 0u);
+    free(cfg);
+    p = write_variant("self_bad", "dds:\n", "self_pairs: [left, rigt.2-5]\ndds:\n");
+    expect_error(p, MCA_ECONFIG, line_of(p, "self_pairs:"), "self_pairs[1]", "no such arm", NULL);
+}
+
 /* A cell over a scenario with bodies: they come with it, and a cell body of the same name replaces one. */
 static void test_cell_bodies_over_scenario(void **state) {
     (void)state;
@@ -978,22 +996,39 @@ int main(void) {
         return 1;
     }
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_good_cell),          cmocka_unit_test(test_missing_file),
-        cmocka_unit_test(test_yaml_syntax),        cmocka_unit_test(test_wrong_type),
-        cmocka_unit_test(test_wrong_type_in_arm),  cmocka_unit_test(test_unknown_key),
-        cmocka_unit_test(test_unknown_top_key),    cmocka_unit_test(test_missing_required),
-        cmocka_unit_test(test_d1_ge_d2),           cmocka_unit_test(test_missing_urdf),
-        cmocka_unit_test(test_unknown_backend),    cmocka_unit_test(test_unknown_backend_id),
-        cmocka_unit_test(test_bus_clash_order),    cmocka_unit_test(test_dof_mismatch),
-        cmocka_unit_test(test_q0_outside_limits),  cmocka_unit_test(test_negative_period),
-        cmocka_unit_test(test_debug_kill_hook),    cmocka_unit_test(test_bad_priority),
-        cmocka_unit_test(test_cell_bodies),        cmocka_unit_test(test_cell_bodies_over_scenario),
-        cmocka_unit_test(test_scenario_missing),   cmocka_unit_test(test_socketcan_needs_interface),
-        cmocka_unit_test(test_dds_config_missing), cmocka_unit_test(test_unknown_scheme),
-        cmocka_unit_test(test_dds_priority),       cmocka_unit_test(test_ros2_keys),
-        cmocka_unit_test(test_search_path),        cmocka_unit_test(test_duplicate_arm),
-        cmocka_unit_test(test_shipped_cells),      cmocka_unit_test(test_mca_ts_keys),
-        cmocka_unit_test(test_cell_error_lines),   cmocka_unit_test(test_arm_error_lines),
+        cmocka_unit_test(test_good_cell),
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_yaml_syntax),
+        cmocka_unit_test(test_wrong_type),
+        cmocka_unit_test(test_wrong_type_in_arm),
+        cmocka_unit_test(test_unknown_key),
+        cmocka_unit_test(test_unknown_top_key),
+        cmocka_unit_test(test_missing_required),
+        cmocka_unit_test(test_d1_ge_d2),
+        cmocka_unit_test(test_missing_urdf),
+        cmocka_unit_test(test_unknown_backend),
+        cmocka_unit_test(test_unknown_backend_id),
+        cmocka_unit_test(test_bus_clash_order),
+        cmocka_unit_test(test_dof_mismatch),
+        cmocka_unit_test(test_q0_outside_limits),
+        cmocka_unit_test(test_negative_period),
+        cmocka_unit_test(test_debug_kill_hook),
+        cmocka_unit_test(test_bad_priority),
+        cmocka_unit_test(test_cell_bodies),
+        cmocka_unit_test(test_cell_self_pairs),
+        cmocka_unit_test(test_cell_bodies_over_scenario),
+        cmocka_unit_test(test_scenario_missing),
+        cmocka_unit_test(test_socketcan_needs_interface),
+        cmocka_unit_test(test_dds_config_missing),
+        cmocka_unit_test(test_unknown_scheme),
+        cmocka_unit_test(test_dds_priority),
+        cmocka_unit_test(test_ros2_keys),
+        cmocka_unit_test(test_search_path),
+        cmocka_unit_test(test_duplicate_arm),
+        cmocka_unit_test(test_shipped_cells),
+        cmocka_unit_test(test_mca_ts_keys),
+        cmocka_unit_test(test_cell_error_lines),
+        cmocka_unit_test(test_arm_error_lines),
         cmocka_unit_test(test_scenario_arm_lines),
     };
     const int failed = cmocka_run_group_tests(tests, NULL, NULL);

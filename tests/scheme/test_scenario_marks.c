@@ -556,10 +556,65 @@ static void test_scenario_bodies_good(void **state) {
     assert_int_equal(cfg.body[1].allow[1], (1u << 8) | (1u << 3));
 }
 
+/* Self pairs (mca_scenario_self_apply, shared with cells): each error with its file, line and field; a good
+ * list turns the robot's default list on (config/robots/pa10plus.self.yaml), adds and takes out pairs. */
+static const struct scase self_cases[] = {
+    {"self_arm", "self_pairs: [circle, nobody] #@\n", "self_pairs[1]"},
+    {"self_link", "self_pairs: [hold.2-9] #@\n", "self_pairs[0]"},
+    {"self_adjacent", "self_pairs: [hold.3-4] #@\n", "self_pairs[0]"},
+    {"self_same", "self_pairs: [hold, hold.tool-8] #@\n", "self_pairs[1]"},
+    {"self_no_pair", "self_pairs: [hold.2] #@\n", "self_pairs[0]"},
+    {"self_block", "self_pairs:\n  - hold\n  - wp.0-x #@\n", "self_pairs[1]"},
+};
+
+static void test_scenario_self_pairs(void **state) {
+    (void)state;
+    static char text[16384];
+    for (size_t c = 0; c < sizeof self_cases / sizeof self_cases[0]; c++) {
+        snprintf(text, sizeof text, "name: t\nduration: 1\narms:\n%s%s%s%s", good_arms[0], good_arms[1],
+                 good_arms[2], self_cases[c].text);
+        expect(self_cases[c].name, text, self_cases[c].field, 0);
+    }
+    snprintf(
+        text, sizeof text,
+        "name: t\nduration: 1\narms:\n%s%s%sself_pairs: [hold, -hold.8-4, circle.2-5, circle.tool-base, wp, "
+        "-wp]\n",
+        good_arms[0], good_arms[1], good_arms[2]);
+    static mca_scenario_t s;
+    char err[512] = "";
+    const char *p = write_tmp("self_good", text);
+    const int rc = mca_scenario_load(p, &s, err, sizeof err);
+    if (rc != MCA_OK) {
+        print_error("%s\n", err);
+    }
+    assert_int_equal(rc, MCA_OK);
+    remove(p);
+    /* hold: the shipped list (4-2, 5-0..5-3, 6-0, 6-1, 6-4, 7-0, 7-1, 7-4, 8-0..8-4) without 8-4 */
+    assert_int_equal(s.arm[1].self[4], 1u << 2);
+    assert_int_equal(s.arm[1].self[5], 0xfu);
+    assert_int_equal(s.arm[1].self[8], 0xfu);
+    assert_int_equal(s.arm[1].self[3], 0u);
+    /* circle: the two pairs given (stored at the outer link) */
+    assert_int_equal(s.arm[0].self[5], 1u << 2);
+    assert_int_equal(s.arm[0].self[8], 1u << 0);
+    assert_int_equal(s.arm[0].self[4], 0u);
+    /* wp: on, then off */
+    for (int l = 0; l < MCA_MAX_LINKS; l++) {
+        assert_int_equal(s.arm[2].self[l], 0u);
+    }
+    static mca_controller_config_t cfg;
+    assert_int_equal(mca_controller_config_from_scenario(&cfg, &s, MCA_SCHEME_MCA_TS, err, sizeof err),
+                     MCA_OK);
+    assert_int_equal(cfg.self[1][5], 0xfu);
+    assert_int_equal(cfg.self[0][8], 1u);
+    assert_true(mca_controller_has_self(&cfg));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scenario_body_errors),
         cmocka_unit_test(test_scenario_bodies_good),
+        cmocka_unit_test(test_scenario_self_pairs),
         cmocka_unit_test(test_marks_doc),
         cmocka_unit_test(test_marks_errors),
         cmocka_unit_test(test_marks_bounds),

@@ -71,9 +71,9 @@ void __wrap__ZdaPv(void *p) {
     __real__ZdaPv(p);
 }
 
-enum { CROSS_CIRCLES, CUP_STACKING, NEGATIVE, CUP_BODIES, N_SCENARIOS };
-static const char *const scenario_file[N_SCENARIOS] = {"cross_circles.yaml", "cup_stacking.yaml",
-                                                       "negative.yaml", "cup_stacking_bodies.yaml"};
+enum { CROSS_CIRCLES, CUP_STACKING, NEGATIVE, CUP_BODIES, SELF_FOLD, N_SCENARIOS };
+static const char *const scenario_file[N_SCENARIOS] = {
+    "cross_circles.yaml", "cup_stacking.yaml", "negative.yaml", "cup_stacking_bodies.yaml", "self_fold.yaml"};
 
 struct variant {
     const char *what;
@@ -238,6 +238,9 @@ int main(int argc, char **argv) {
         {"cup_stacking_bodies mca-ts", CUP_BODIES, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA_TS, -1, -1, 0, 0, -1,
          16000},
         {"cup_stacking_bodies mca", CUP_BODIES, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1, 16000},
+        /* the self rows (a PA10+ folding its elbow), through the fold, both schemes */
+        {"self_fold mca-ts", SELF_FOLD, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA_TS, -1, -1, 0, 0, -1, 5000},
+        {"self_fold mca", SELF_FOLD, MCA_DIST_CLOSED, 1, MCA_SCHEME_MCA, -1, -1, 0, 0, -1, 5000},
     };
     long faulted = 0, binding = 0, failed = 0;
     for (size_t i = 0; i < sizeof vs / sizeof vs[0]; i++) {

@@ -20,6 +20,7 @@
 #include "mca/path_rate.h"
 #include "mca/scenario.h"
 #include "mca/scheme.h"
+#include "mca/segdist.h"
 #include "mca/urdf.h"
 #include "mca/vec3.h"
 
@@ -1458,7 +1459,7 @@ static void test_body_rows(void **state) {
     assert_int_equal(si.body_off[0], MCA_NEAR_PAIRS * (ch.dof + 1));
     assert_int_equal(si.active_rows, 0);
     static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, dec, lists), MCA_OK);
     const mca_body_witness_t *w = &lists[0][L][0];
     assert_true(w->valid && w->body == 0);
     assert_true(fabs(w->d - d_want) < 1e-12);
@@ -1497,9 +1498,9 @@ static void test_body_rows(void **state) {
                                           (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
                                           &p, dec, NULL),
                      MCA_OK);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, NULL, &p, dec, lists), MCA_OK);
     assert_int_equal(si2.active_rows, 0);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, NULL, &p, dec, lists), MCA_OK);
     assert_int_equal(si2.active_rows, 0);
     (void)before;
     /* the paper's layout: slots after each arm's own rows, with collision rows only */
@@ -1517,10 +1518,108 @@ static void test_body_rows(void **state) {
     assert_int_equal(qp.n_ineq, (1 + MCA_BODY_PAIRS) * (ch.dof + 1));
     assert_int_equal(si.body_off[0], ch.dof + 1);
     table.allow[0] = ~(1u << L);
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, &p, NULL, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, NULL, lists), MCA_OK);
     /* no stop bound: 2 S_b v_normal */
     assert_true(fabs(qp.beta[si.body_off[0] + MCA_BODY_PAIRS * L] -
                      2.0 * mca_brake_s(d_want, d1m, pb.d2) * p.v_normal) < 1e-15);
+}
+
+/* Links 4 and 2 of a PA10+ at q: their surface distance from the segment distance of their axes (an
+ * independent computation: mca/segdist.h's closed form, not the bodies' capsule code). */
+static double self_d42(const mca_chain_t *ch, const double *q) {
+    mca_kin_t k;
+    assert_int_equal(mca_fk(ch, q, &k), MCA_OK);
+    mca_segdist_t sd;
+    assert_int_equal(mca_segdist_closed(k.point[4], k.point[5], k.point[2], k.point[3], &sd), MCA_OK);
+    return sd.d - ch->link_radius[4] - ch->link_radius[2];
+}
+
+/* The self rows (mca_body_rows with self pairs): the elbow of a PA10+ closed until links 4 and 2 are inside
+ * the band; the row of their closest points is -n^T (J_P - J_Q) qdot <= 2 min{S v_normal, (d - d1')/(2T)},
+ * and its left side is the approach speed: minus the derivative of the witness distance, checked against
+ * central finite differences of that distance along random joint velocities. No row without the pair. */
+static void test_self_rows(void **state) {
+    (void)state;
+    mca_chain_t ch;
+    char err[256];
+    assert_int_equal(mca_chain_load_urdf(&ch, PA10, "tool_tip", err, sizeof err), MCA_OK);
+    const mca_chain_t *chains[1] = {&ch};
+    mca_kin_t kin[1];
+    double q[MCA_MAX_DOF] = {0.3, 0.7853981633974483, 0.2, -1.5707963267948966,
+                             0.1, 0.7853981633974483, 0.0, 0.5};
+    while (self_d42(&ch, q) > 0.075) {
+        q[3] -= 0.005; /* close the elbow */
+    }
+    const double d_want = self_d42(&ch, q);
+    assert_true(d_want > 0.06 && d_want <= 0.075);
+    assert_int_equal(mca_fk(&ch, q, &kin[0]), MCA_OK);
+    static mca_self_pairs_t self[MCA_MAX_ARMS];
+    memset(self, 0, sizeof self);
+    self[0][4] = 1u << 2;
+    mca_self_nearest_t sn;
+    assert_int_equal(mca_self_nearest(1, chains, kin, self, &sn), MCA_OK);
+    assert_true(sn.valid && sn.arm == 0 && sn.link == 4 && sn.other == 2);
+    assert_true(fabs(sn.d - d_want) < 1e-12);
+
+    mca_scheme_params_t p;
+    mca_scheme_default_params(&p);
+    p.body_pairs = MCA_BODY_PAIRS;
+    p.d1_margin = 0.005;
+    static mca_qp_t qp;
+    assert_int_equal(mca_qp_reset(&qp, ch.dof, 3, 0), MCA_OK);
+    for (int j = 0; j < ch.dof; j++) {
+        qp.lb[j] = -ch.joint[j].vel_limit;
+        qp.ub[j] = ch.joint[j].vel_limit;
+    }
+    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_PAIRS];
+    memset(near, 0, sizeof near);
+    mca_scheme_info_t si = {0};
+    const double dec[1] = {2.0};
+    assert_int_equal(mca_scheme_near_rows(&qp, &si, 1, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                          &p, dec, NULL),
+                     MCA_OK);
+    static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, NULL, 0, self, &p, dec, lists), MCA_OK);
+    const mca_body_witness_t *w = &lists[0][4][0];
+    assert_true(w->valid && w->body == -1 && w->link == 2);
+    assert_true(fabs(w->d - d_want) < 1e-12);
+    const int r = si.body_off[0] + MCA_BODY_PAIRS * 4;
+    const double t_stop = mca_scheme_stop_time(&ch, dec[0]);
+    const double d1m = p.d1 + p.d1_margin;
+    const double want =
+        2.0 * fmin(mca_brake_s(d_want, d1m, p.d2) * p.v_normal, (d_want - d1m) / (2.0 * t_stop));
+    assert_true(fabs(qp.beta[r] - want) < 1e-15);
+    assert_true(si.active_rows >= 1);
+    /* the approach speed U qdot = -d/dt d(q + t qdot), by central differences */
+    srand(31);
+    for (int trial = 0; trial < 20; trial++) {
+        double qd[MCA_MAX_DOF] = {0}, qp_[MCA_MAX_DOF], qm[MCA_MAX_DOF];
+        double u = 0.0;
+        for (int j = 0; j < ch.dof; j++) {
+            qd[j] = 2.0 * rand() / (double)RAND_MAX - 1.0;
+            u += qp.U[r][j] * qd[j];
+        }
+        const double h = 1e-6;
+        for (int j = 0; j < MCA_MAX_DOF; j++) {
+            qp_[j] = q[j] + h * qd[j];
+            qm[j] = q[j] - h * qd[j];
+        }
+        const double fd = -(self_d42(&ch, qp_) - self_d42(&ch, qm)) / (2.0 * h);
+        assert_true(fabs(u - fd) < 1e-6 * fmax(1.0, fabs(fd)));
+    }
+    /* without the pair: no witnesses, no rows */
+    self[0][4] = 0;
+    mca_scheme_info_t si2 = {0};
+    assert_int_equal(mca_scheme_near_rows(&qp, &si2, 1, chains, kin,
+                                          (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                          &p, dec, NULL),
+                     MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, NULL, 0, self, &p, dec, lists), MCA_OK);
+    assert_false(lists[0][4][0].valid);
+    assert_int_equal(si2.active_rows, 0);
+    assert_int_equal(mca_self_nearest(1, chains, kin, self, &sn), MCA_OK);
+    assert_false(sn.valid);
 }
 
 /* Braking: every tick within dec dt of the last, at rest in the time the fastest joint needs; the fallback
@@ -1680,6 +1779,7 @@ int main(void) {
         cmocka_unit_test(test_near_rows_parallel),
         cmocka_unit_test(test_controller_brake),
         cmocka_unit_test(test_body_rows),
+        cmocka_unit_test(test_self_rows),
         cmocka_unit_test(test_tube_bounds),
         cmocka_unit_test(test_path_distance_tolerance),
         cmocka_unit_test(test_path_rate_limit),

@@ -26,7 +26,7 @@ static void usage(FILE *f) {
         "               [--duration S] [--summary FILE.json] [--v-normal V] [--v-floor V]\n"
         "               [--pdnn-max-steps N] [--dist closed|lsdm] [--stop-at T] [--fault-at T:KIND]\n"
         "               [--dec-limit X] [--pdnn-budget-us U] [--w-path W] [--w-tube W] [--dump-capped]\n"
-        "               [--no-coordinate] [--no-body-rows]\n"
+        "               [--no-coordinate] [--no-body-rows] [--no-self-rows]\n"
         "  --csv OUT      per-tick CSV (with several schemes: OUT-<scheme>.csv, OUT's .csv suffix dropped)\n"
         "  --dump-qp DIR  write every tick's QP (mca_qp_dump_json with the PDNN's phi) for tools/qp-check;\n"
         "                 --dump-every N keeps every Nth tick (and every N/5th with binding rows);\n"
@@ -38,6 +38,9 @@ static void usage(FILE *f) {
         "  --no-body-rows the scenario's fixed bodies measured only: no rows, no clearance fault (what the "
         "run\n"
         "                 does without them; docs/scheme.md, Fixed bodies)\n"
+        "  --no-self-rows the scenario's self pairs measured only: no rows, no d1 fault (docs/scheme.md, "
+        "Self "
+        "pairs)\n"
         "  --stop-at T    stop request at task time T s, as SIGTERM to mcad (brakes through the controller)\n"
         "  --fault-at T:KIND  latch controller fault KIND at T s (pdnn-not-converged, fake-attractor, "
         "distance,\n"
@@ -116,6 +119,9 @@ int main(int argc, char **argv) {
             continue;
         } else if (!strcmp(a, "--no-body-rows")) {
             o.no_body_rows = 1;
+            continue;
+        } else if (!strcmp(a, "--no-self-rows")) {
+            o.no_self_rows = 1;
             continue;
         } else if (!strcmp(a, "--dump-capped")) {
             o.dump_capped = 1;
@@ -355,6 +361,11 @@ int main(int argc, char **argv) {
                 r->body_min_link, mca_body_kind_name(r->body_min_kind), k >= 0 ? scn.body[k].fb.name : "",
                 r->body_ticks_below);
         }
+        if (r->has_self) {
+            printf("%s: self pairs: least distance %.5f m at %.3f s, arm %d links %d-%d; %d ticks below d1\n",
+                   r->scheme, r->self_min_distance, r->self_min_t, r->self_min_arm, r->self_min_link,
+                   r->self_min_other, r->self_ticks_below);
+        }
         if (r->budget_hits_steps + r->budget_hits_time) {
             printf("%s: %d ticks out of the PDNN's budget (%d at its %d steps, %d by the clock): repaired "
                    "answers, "
@@ -439,6 +450,13 @@ int main(int argc, char **argv) {
                     r->n_bodies, r->body_min_margin, r->body_min_distance, r->body_min_t, r->body_min_arm,
                     r->body_min_link, k, k >= 0 ? scn.body[k].fb.name : "",
                     mca_body_kind_name(r->body_min_kind), r->body_ticks_below);
+            }
+            if (r->has_self) {
+                fprintf(f,
+                        ",\"self_min_distance\":%.9g,\"self_min_t\":%.6g,\"self_min_pair\":[%d,%d,%d],"
+                        "\"self_ticks_below\":%d",
+                        r->self_min_distance, r->self_min_t, r->self_min_arm, r->self_min_link,
+                        r->self_min_other, r->self_ticks_below);
             }
             fprintf(f,
                     ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"

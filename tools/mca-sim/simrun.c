@@ -67,6 +67,9 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     if (o->no_body_rows) {
         cfg->body_rows = 0;
     }
+    if (o->no_self_rows) {
+        cfg->self_rows = 0;
+    }
     if (o->pdnn_budget_us >= 0) {
         cfg->pdnn_budget_steps = mca_pdnn_budget_steps((int64_t)o->pdnn_budget_us * 1000);
     }
@@ -158,6 +161,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         }
         csv_layout.n_arms = na;
         csv_layout.body_cols = cfg->n_bodies > 0;
+        csv_layout.self_cols = mca_controller_has_self(cfg);
         for (int a = 0; a < na; a++) {
             csv_layout.dof[a] = cfg->chain[a].dof;
         }
@@ -168,6 +172,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     r->n_bodies = cfg->n_bodies;
     r->body_min_margin = r->body_min_distance = INFINITY;
     r->body_min_arm = r->body_min_link = r->body_min_body = r->body_min_kind = -1;
+    r->has_self = mca_controller_has_self(cfg);
+    r->self_min_distance = INFINITY;
+    r->self_min_arm = r->self_min_link = r->self_min_other = -1;
     r->brake_t = -1.0;
     r->stop_duration_s = -1.0;
     r->n_samples = scn->n_sample_times;
@@ -238,6 +245,14 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             r->body_min_kind = ip->body_kind;
         }
         r->body_ticks_below += ip->body_margin < 0.0;
+        if (ip->self_distance < r->self_min_distance) {
+            r->self_min_distance = ip->self_distance;
+            r->self_min_t = ip->task_t;
+            r->self_min_arm = ip->self_arm;
+            r->self_min_link = ip->self_link;
+            r->self_min_other = ip->self_other;
+        }
+        r->self_ticks_below += ip->self_distance < cfg->sp.d1;
         for (int i = 0; i < r->n_samples; i++) {
             if (fabs(t - r->sample_t[i]) < 0.5 * dt) {
                 r->sample_d[i] = ip->min_distance;

@@ -32,6 +32,7 @@ typedef struct mca_simrun_opts {
     double w_path;     /**< > 0: mca-ts's exact slack weight (mca_timescale_params_t.w_path) */
     int no_coordinate; /**< 1: mca-ts without the start-up plan of who passes first (mca/coord.h) */
     int no_body_rows;  /**< 1: the fixed bodies measured only, no rows and no fault (the run without them) */
+    int no_self_rows;  /**< 1: the self pairs measured only, no rows and no fault (the run without them) */
     int dump_capped;   /**< 1: also the picked ticks whose PDNN ended unconverged, as NAME.json.capped (their
                             phi is the solver's last iterate, not an answer: for a look at the QP itself) */
     double duration;   /**< <= 0: the scenario's */
@@ -118,6 +119,12 @@ typedef struct mca_simrun_result {
     double body_min_t;        /**< task time [s] */
     int body_min_arm, body_min_link, body_min_body, body_min_kind;
     int body_ticks_below; /**< ticks with the margin below 0 */
+    /* self pairs, every tick: the pair of least distance */
+    int has_self;
+    double self_min_distance; /**< [m] (+INF: no self pairs) */
+    double self_min_t;        /**< task time [s] */
+    int self_min_arm, self_min_link, self_min_other;
+    int self_ticks_below; /**< ticks with it below d1 */
 } mca_simrun_result_t;
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);

@@ -15,6 +15,16 @@
  * least can jump (a link level above a table). Only pairs whose row can bind inside the QP's box are listed
  * (as the arm pairs': docs/scheme.md section 10), and a cheap bounding-sphere test skips the rest.
  *
+ *
+ * Self pairs (docs/scheme.md, "Self pairs") are one more kind of pair: link l against link q < l of the same
+ * arm as if q were a capsule body of clearance d1, the row's Jacobian the difference of the two witnesses',
+ *
+ *     -n^T (J_P - J_Q) qdot_a <= 2 min{ S(d) v_normal (d < d2 only), (d - d1') / (2 T_a) },
+ *
+ * in the same lists and slots as the bodies' (the MCA_BODY_PAIRS of least margin per link, over both kinds).
+ * The factor is again 2: both witnesses are on the one arm, which brakes them together, so it owns the
+ * whole margin.
+ *
  * Context: rt (no allocation, no locks, no formatting, bounded time), except mca_body_check (start-up).
  */
 #ifndef MCA_BODYROWS_H
@@ -40,16 +50,30 @@ typedef struct mca_fixed_body {
     double grow;                  /**< a stale streamed body's surface growth [m/s]; 0 for a fixed body */
 } mca_fixed_body_t;
 
-/** One witness pair of a link against a body (a row's data). */
+/** An arm's self pairs: bit q of s[l] (q < l): link l is kept from the same arm's link q (mca/bodyrows.h, the
+ *  self rows; bits with q >= l are ignored). */
+typedef unsigned mca_self_pairs_t[MCA_MAX_LINKS];
+
+/** One witness pair of a link against a body, or against another link of its own arm (a row's data). */
 typedef struct mca_body_witness {
     int valid;
-    int body;      /**< index into the bodies */
+    int body;      /**< index into the bodies; -1 for a self pair */
+    int link;      /**< a self pair's other link (its "body", the same arm's), -1 for a body */
     double d;      /**< signed surface distance [m] */
     double margin; /**< d - clearance [m]: the list's order */
     double p[3];   /**< on the link's axis (the Jacobian's point) */
-    double q[3];   /**< on the body */
+    double q[3];   /**< on the body (on the other link's surface) */
     double n[3];   /**< unit normal from the body toward the link */
 } mca_body_witness_t;
+
+/** The self pair of least distance (two links of one arm). */
+typedef struct mca_self_nearest {
+    int valid;     /**< 0: no self pairs */
+    int arm, link; /**< the arm, its outer link of the pair */
+    int other;     /**< its inner link (other < link) */
+    double d;      /**< surface distance [m] (+INF: no pair) */
+    double p[3], q[3];
+} mca_self_nearest_t;
 
 /** The arm-body pair of least margin. */
 typedef struct mca_body_nearest {
@@ -81,18 +105,26 @@ int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
                      const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t *out);
 
 /**
+ * The self pair of least surface distance over every arm's self pairs (self[a], NULL: none).
+ * @retval MCA_OK, MCA_EINVAL (NULL, a distance failed: non-finite geometry)
+ */
+int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
+                     const mca_self_pairs_t *self, mca_self_nearest_t *out);
+
+/**
  * Fill the fixed bodies' rows of a QP whose layout keeps them (p->body_pairs rows per link from
  * si->body_off[a]: mca_scheme_assemble with collision rows, or mca_scheme_near_rows; call after it, with the
  * QP's box final, since only witness pairs whose row can bind inside it are listed). Rows are written at the
  * QP's full width (after mca_scheme_add_timescale their extra columns are 0). Rows that cannot bind, or that
  * are parallel to one kept before (1e-3) stay inactive (beta = big). Adds to si->active_rows, lowers
- * si->brake. dec NULL or dec[a] <= 0: no stop bound for arm a (the paper's scheme).
+ * si->brake. dec NULL or dec[a] <= 0: no stop bound for arm a (the paper's scheme). self: each arm's self
+ * pairs (NULL: none), in the same lists and slots.
  * @param[out] lists  lists[a][l]: the witness pairs of each link (rows in this order), may be NULL
  * @retval MCA_OK (also with no bodies or body_pairs 0: nothing done), MCA_EINVAL
  */
 int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                   const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
-                  const mca_scheme_params_t *p, const double *dec,
+                  const mca_self_pairs_t *self, const mca_scheme_params_t *p, const double *dec,
                   mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]);
 
 #ifdef __cplusplus

@@ -143,6 +143,9 @@ typedef enum mca_ctrl_why {
     MCA_WHY_BELOW_CLEARANCE, /**< a link inside a fixed body's clearance: x[0] distance, x[1] clearance;
                                 i[0..2] arm, link, body */
     MCA_WHY_BELOW_CLEARANCE_NEXT, /**< as MCA_WHY_BELOW_CLEARANCE, predicted for the next tick */
+    MCA_WHY_SELF_BELOW_D1,        /**< two links of one arm below d1: x[0] distance, x[1] d1; i[0..2] arm,
+                                     link, other link */
+    MCA_WHY_SELF_BELOW_D1_NEXT,   /**< as MCA_WHY_SELF_BELOW_D1, predicted for the next tick */
 } mca_ctrl_why_t;
 
 /** A fault's cause as a code and numbers: the tick fills it without formatting anything (no text on the
@@ -178,6 +181,10 @@ typedef struct mca_controller_config {
     mca_fixed_body_t body[MCA_MAX_BODIES];
     int body_rows; /**< 1 (default): the bodies' rows and their distance fault; 0: bodies measured only (the
                         comparison run of what happens without them: mca-sim --no-body-rows) */
+    mca_self_pairs_t self[MCA_MAX_ARMS]; /**< each arm's self pairs (mca/bodyrows.h): link pairs of one arm
+                                              kept d1 apart by rows in the bodies' slots; all 0: none */
+    int self_rows; /**< 1 (default): the self pairs' rows and their distance fault; 0: measured only (the
+                        comparison run: mca-sim --no-self-rows) */
     int pdnn_budget_steps; /**< the same budget in steps (0: none; mca_pdnn_budget_steps): a solve stops at
                                 min(pdnn.max_steps, this); stopping here before the cap is a budget event
                                 (MCA_BUDGET_STEPS), deterministic. mcad and mca-sim alike. Not under the
@@ -205,6 +212,9 @@ int mca_controller_step_budget(const mca_controller_config_t *cfg);
 /** Defaults for everything but chains and paths (MCA scheme, normal form, closed-form distances). */
 void mca_controller_default_config(mca_controller_config_t *cfg);
 
+/** Some arm of cfg has self pairs (cfg->self, mca/bodyrows.h). Context: any. */
+int mca_controller_has_self(const mca_controller_config_t *cfg);
+
 /** Report of one tick. */
 typedef struct mca_tick_info {
     double t;      /**< the tick's t */
@@ -223,9 +233,13 @@ typedef struct mca_tick_info {
     int body_index;          /**< the body (cfg.body[]) */
     int body_kind;           /**< its mca_body_kind_t (mca_body_kind_name) */
     double body_p[3], body_q[3]; /**< witness on the link's axis, on the body */
-    double brake;                /**< smallest S(d) over the links (1: free) */
-    int active_rows;             /**< collision rows with a finite bound */
-    int binding_rows;            /**< collision rows at their bound (U phi >= beta - 1e-9) */
+    /* self pairs: the pair of least distance (self_arm -1: none) */
+    double self_distance;    /**< its surface distance [m] (+INF: no pair); below d1 is a distance fault */
+    int self_arm, self_link; /**< the arm and the pair's outer link */
+    int self_other;          /**< the pair's inner link */
+    double brake;            /**< smallest S(d) over the links (1: free) */
+    int active_rows;         /**< collision rows with a finite bound */
+    int binding_rows;        /**< collision rows at their bound (U phi >= beta - 1e-9) */
     /* solver */
     int pdnn_steps;
     int pdnn_exact_solves; /**< the polish's exact active-set solves (docs/pdnn.md) */

@@ -25,8 +25,9 @@
 #define MCA_NEAR_PAIRS 6
 /** Fixed bodies of a cell (tables, fixtures, cups: mca/bodyrows.h). */
 #define MCA_MAX_BODIES 16
-/** Collision rows per link against the fixed bodies: one per each of the link's nearest witness pairs
- *  against the bodies not allowed to it (mca_body_rows). */
+/** Collision rows per link against the fixed bodies and its arm's own links (self pairs): one per each of
+ *  the link's nearest witness pairs against the bodies not allowed to it and its self pairs, both kinds in
+ *  one list (mca_body_rows). */
 #define MCA_BODY_PAIRS 6
 /** QP sizes: phi = all joint velocities (and the mca-ts variables), one 3-row equality per arm, and per
  *  link of every arm up to MCA_NEAR_PAIRS rows against the other arms (mca-ts; the paper's componentwise

@@ -179,6 +179,9 @@ typedef struct mca_daemon_summary {
     double body_margin, body_distance, body_t;
     int body_pair[3];   /**< arm, link, body (the cell's bodies, in order) */
     char body_name[32]; /**< that body's name */
+    /* self pairs: the pair of least distance (self_pair[0] -1: no self pairs) */
+    double self_distance, self_t;
+    int self_pair[3];   /**< arm, link, the other link */
     int body_kind;      /**< and kind (mca_body_kind_t: mca_body_kind_name) */
     int fault;          /**< mca_daemon_fault_t */
     int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */

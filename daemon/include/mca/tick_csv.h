@@ -33,6 +33,8 @@ typedef struct mca_tick_csv_layout {
                           smallest of them; mca-sim) */
     int body_cols;   /**< 1: the arm-body pair of least margin last: body_d, body_margin, body_arm,
                           body_link, body, body_kind (a cell with fixed bodies) */
+    int self_cols;   /**< 1: the self pair of least distance after them: self_d, self_arm, self_link,
+                          self_other (a cell with self pairs) */
 } mca_tick_csv_layout_t;
 
 /** One tick's data. Fields a layout does not select are not read (NULL allowed). */

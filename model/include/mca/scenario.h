@@ -36,6 +36,7 @@ typedef struct mca_scenario_arm {
     /** The URDF's chain to tip_link as mca_scenario_arm_model() loaded and checked it (base not applied;
      *  dof 0: not loaded, or urdf/tip_link changed since): loaded once per file, then copied. */
     mca_chain_t chain;
+    mca_self_pairs_t self; /**< the arm's self pairs (mca/bodyrows.h; `self_pairs:`), none by default */
 } mca_scenario_arm_t;
 
 /** Scheme and fault parameters a scenario may set (defaults in mca_scenario_defaults()). */
@@ -287,6 +288,17 @@ typedef struct mca_body_keys {
  */
 int mca_scenario_bodies_apply(const mca_check_ctx_t *c, const mca_body_keys_t *k, unsigned count,
                               mca_scenario_t *scn);
+
+/**
+ * Apply the self pairs a file gives (k[0..count), at node "self_pairs", after the arms: their models loaded),
+ * in order: "ARM" adds the arm's default list (the file beside its URDF, ROBOT.self.yaml, made by
+ * tools/selfpairs), "ARM.L-M" adds the pair of links L and M (numbers, base, tool; not adjacent), a leading
+ * '-' takes them out ("-ARM" every pair of the arm). A cell's entries apply after its scenario's. The one
+ * check of self pairs for scenario and cell files.
+ * @retval MCA_OK, MCA_ECONFIG (c->err: "FILE:LINE: self_pairs[I]: reason", or the list file's own
+ *         "FILE:LINE: pairs[I]: reason")
+ */
+int mca_scenario_self_apply(const mca_check_ctx_t *c, char *const *k, unsigned count, mca_scenario_t *scn);
 
 /**
  * The controller's bodies from a scenario's: clearance (d1 where not given) and each allow entry resolved to

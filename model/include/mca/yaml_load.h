@@ -60,6 +60,15 @@ extern const cyaml_schema_value_t mca_scenario_body_entry;
 #define MCA_YAML_BODIES_FIELD(T, M)                                                                          \
     CYAML_FIELD_SEQUENCE("bodies", MCA_YAML_OPT, T, M, &mca_scenario_body_entry, 0, MCA_MAX_BODIES)
 
+/** The self pairs' entries ("ARM", "ARM.L-M", "-ARM", "-ARM.L-M"; mca_scenario_self_apply). */
+extern const cyaml_schema_value_t mca_scenario_self_entry;
+
+/** libcyaml field of the self pairs (char **M with unsigned M##_count in struct T), optional at the top level
+ * of both kinds of file. */
+#define MCA_YAML_SELF_FIELD(T, M)                                                                            \
+    CYAML_FIELD_SEQUENCE("self_pairs", MCA_YAML_OPT | CYAML_FLAG_FLOW, T, M, &mca_scenario_self_entry, 0,    \
+                         4 * MCA_MAX_LINKS * MCA_MAX_LINKS)
+
 /**
  * libcyaml fields of an arm's model (mca_arm_keys_t M, a member of struct T): name, urdf, tip_link,
  * base_xyz, base_rpy, q0, path. NEED: the flags of urdf, base_xyz, q0 and path, which a scenario must give
