@@ -152,7 +152,7 @@ static void test_good_cell(void **state) {
     assert_int_equal(cell.scn.arm[0].n_q0, 8);
     assert_true(cell.scn.arm[0].q0[3] == 0.8);
     assert_int_equal(cell.scn.arm[0].path.kind, MCA_PATH_HOLD);
-    assert_int_equal(cell.arm[1].backend, MCA_CELL_BACKEND_SOCKETCAN);
+    assert_int_equal(cell.arm[1].backend, mca_cell_backend_id("socketcan"));
     assert_string_equal(cell.arm[1].interface, "vcan1");
     assert_int_equal(cell.arm[1].id_base, 0x140);
     assert_true(cell.arm[1].dec_limit[0] == 10.0); /* default */
@@ -955,7 +955,7 @@ static void test_shipped_cells(void **state) {
                     assert_string_equal(cell.scn.name, want[k]);
                     for (int a = 0; a < cell.scn.n_arms; a++) {
                         assert_int_equal(cell.arm[a].backend,
-                                         b ? MCA_CELL_BACKEND_SOCKETCAN : MCA_CELL_BACKEND_SIM);
+                                         b ? mca_cell_backend_id("socketcan") : MCA_CELL_BACKEND_SIM);
                     }
                     seen[k][b]++;
                 }

@@ -131,7 +131,7 @@ static void test_schedule(void **state) {
 static void test_ideal_needs_sim(void **state) {
     (void)state;
     mca_cell_t *cell = scenario_cell();
-    cell->arm[1].backend = MCA_CELL_BACKEND_SOCKETCAN;
+    cell->arm[1].backend = mca_cell_backend_id("socketcan");
     const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .ideal_arms = 2u};
     mca_daemon_t *d = NULL;
     char err[512] = "";
