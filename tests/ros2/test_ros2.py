@@ -51,6 +51,9 @@ import tempfile
 import threading
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "dds"))
+import idl_enums  # noqa: E402  the states' names by their IDL numbering
+
 MODE = sys.argv[1]
 if MODE == "listen":  # as a user's node: the environment as given (test_hosts.py gives no ROS_* variables)
     SRC, CELL_FILE, WORK, ROLE, EXPECT = sys.argv[2:7]
@@ -364,7 +367,7 @@ def mode_topics(tmp):
           f"MarkerArrays: {len(set(mk_ticks))} of the {n_exp} ticks published from the first received (>= 99 %)")
 
     # Diagnostics
-    states = ["init", "ready", "running", "braking", "stopped", "fault"]
+    states = idl_enums.controller_state_names()
     dg_fail, n_dg, seen = [], 0, set()
     for da in main.diag:
         for s in da.status:
@@ -657,13 +660,14 @@ def mode_stream(tmp):
     rows = read_csv(out_csv)
     d = [float(r["min_d"]) for r in rows]
     states = [int(r["state"]) for r in rows]
+    st = dict(idl_enums.controller_states())
     check(min(d) >= D1, f"every one of {len(rows)} ticks at or above d1 = {D1} m (min {min(d):.4f} m)")
     # phases in the CSV: mcad's t is task time from its first tick; map by the ticks the diagnostics stamped
-    running = [i for i, s_ in enumerate(states) if s_ == 2]
+    running = [i for i, s_ in enumerate(states) if s_ == st["STATE_RUNNING"]]
     check(min(d[i] for i in running) < D2, f"the tips came within d2 = {D2} m while driven at each other "
           f"(min {min(d[i] for i in running):.4f} m): the yield was needed")
-    brake_from = next((i for i, s_ in enumerate(states) if s_ in (3, 5)), None)
-    check(brake_from is not None and states[-1] == 5, "mcad braked and ended in FAULT")
+    brake_from = next((i for i, s_ in enumerate(states) if s_ in (st["STATE_BRAKING"], st["STATE_FAULT"])), None)
+    check(brake_from is not None and states[-1] == st["STATE_FAULT"], "mcad braked and ended in FAULT")
     # B: the distance grew past d2 again before the stale fault
     if brake_from:
         i_min = min(running, key=lambda i: d[i])
