@@ -417,7 +417,7 @@ static void test_cell_bodies_over_scenario(void **state) {
 static void test_socketcan_needs_interface(void **state) {
     (void)state;
     const char *p = write_variant("noif", "    interface: vcan1\n", "");
-    /* a missing field names its enclosing mapping's line: the arm's entry (issue 12) */
+    /* a missing field names its enclosing mapping's line: the arm's entry */
     expect_error(p, MCA_EPARSE, line_of(p, "- name: right"), "arms[1].interface", "required", NULL);
 }
 
@@ -433,7 +433,7 @@ static void test_unknown_scheme(void **state) {
     expect_error(p, MCA_ECONFIG, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
 }
 
-/* ROS 2 (issue 14): dds.ros2 and task.stream keys; bad values name file, line and field. */
+/* ROS 2: dds.ros2 and task.stream keys; bad values name file, line and field. */
 static void test_ros2_keys(void **state) {
     (void)state;
     const char *p = write_variant("r2ns", "  publish_divisor: 4\n",
@@ -493,7 +493,7 @@ static void test_search_path(void **state) {
     assert_int_equal(cell.scn.n_arms, 2);
 }
 
-/* mca-ts (issue 11): the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
+/* mca-ts: the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
  * solver.back_off_time reach the controller config; bad values name file, line and field. */
 static void test_mca_ts_keys(void **state) {
     (void)state;
@@ -534,7 +534,7 @@ static void test_duplicate_arm(void **state) {
     expect_error(p, MCA_ECONFIG, line_of(p, "backend: socketcan") - 1, "arms[1].name", "used twice", NULL);
 }
 
-/* ---- issue 12: every error kind names its exact line and field ---- */
+/* ---- every error kind names its exact line and field (an operator goes straight to it) ---- */
 
 /* Write `text` as tmpdir/NAME.yaml; returns the file name (static). */
 static const char *write_text(const char *name, const char *text) {
@@ -944,7 +944,7 @@ static void test_shipped_cells(void **state) {
         const int rc = mca_cell_load(g.gl_pathv[i], &cell, err, sizeof err);
         print_message("  %s: %s\n", g.gl_pathv[i], rc == MCA_OK ? "ok" : err);
         assert_int_equal(rc, MCA_OK);
-        /* two arms, but the three-arm cell of issue 11 (three_arms_sim: JACO2, MICO2, JACO2) */
+        /* two arms, but the three-arm cell (three_arms_sim: JACO2, MICO2, JACO2) */
         assert_true(cell.scn.n_arms == (strcmp(cell.name, "three_arms_sim") == 0 ? 3 : 2));
         for (int k = 0; k < 4; k++) {
             for (int b = 0; b < 2; b++) {

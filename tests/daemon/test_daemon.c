@@ -532,7 +532,7 @@ static void test_bus_error_keeps_feedback(void **state) {
     free(cell);
 }
 
-/* ---- issue 16: implausible feedback. A proxy between the daemon and a sim arm (the test hook
+/* ---- implausible feedback (nothing moves on it). A proxy between the daemon and a sim arm (the test hook
  * mca_daemon_swap_arm) corrupts one sample in a chosen way, or drops it (EAGAIN) ---- */
 typedef struct fbproxy {
     mca_arm_t *inner;
@@ -940,7 +940,7 @@ static int cmp_i64(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-/* The PDNN's budget (issue 29): a tick that runs out of it is no fault, and the summary counts it, by the
+/* The PDNN's budget: a tick that runs out of it is no fault, and the summary counts it, by the
  * clock and by steps apart. The budget is set through the config hook mca-sim uses (no seam): a 1 ns clock
  * with a tolerance no solve meets (every tick runs out at its first clock check), then a step budget of 2
  * under mca-ts (the cell's arms far apart: no row binds, the repair keeps the answer inside the box). */

@@ -261,7 +261,7 @@ int main(int argc, char **argv) {
     }
     mca_daemon_close(d);
 
-    /* 4. a streamed task (ROS 2 targets, issue 14), DDS with its ROS 2 topics every tick: the loop reads the
+    /* 4. a streamed task (ROS 2 targets), DDS with its ROS 2 topics every tick: the loop reads the
      *    stream mailboxes each tick (no target comes: the arms hold), then a stop and braking */
     snprintf(path, sizeof path, "%s/config/cells/stream_sim.yaml", src);
     d = open_cell(path, 1, csv);

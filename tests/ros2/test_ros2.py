@@ -29,7 +29,7 @@ graph: mcad runs 3 s and links no ROS library (ldd); a second rclpy node sees th
   sensor-data (best-effort) subscriber receives JointState too.
 With a fifth argument (topics), the MarkerArray received at the tick of the smallest distance is written there
 as JSON: tools/plots/ros2_markers.py draws it (the README's picture).
-restart (issue 16): mcad's DDS bridge process is killed with SIGSEGV after its first /diagnostics (12 s run): it says
+restart: mcad's DDS bridge process is killed with SIGSEGV after its first /diagnostics (12 s run): it says
   dds_bridge_restarts 0 before and 1 from the restarted bridge, JointState flows again, mcad exits 0.
 listen (for test_hosts.py, which runs it in network namespaces and then mcad): a node with the environment it
   is given subscribes to a cell's JointStates, markers and diagnostics, writes WORK/ROLE.status as it goes
@@ -481,7 +481,7 @@ def mode_restart(tmp):
     check(any(r == "1" and s == "running" for _, s, r in restarts),
           "/diagnostics from the restarted bridge: dds_bridge_restarts 1, running")
     # the death is said on /diagnostics too: a WARN (the controller is fine; its monitoring was down), the
-    # count, the cause and the back-off (issue 32)
+    # count, the cause and the back-off
     h = health[0] if health else None
     lvl = None if h is None else (h[0][0] if isinstance(h[0], (bytes, bytearray)) else int(h[0]))
     check(lvl == 1, f"/diagnostics from the restarted bridge: level WARN (1) while its death is recent: {h}")
