@@ -333,7 +333,7 @@ def main():
                      f"p50 {fmt(ts_a['ctrl_p50_us'])} / p99 {fmt(ts_a['ctrl_p99_us'])} us",
                      f"{ratio(ts_b['ctrl_p50_us'], ts_a['ctrl_p50_us'])} / "
                      f"{ratio(ts_b['ctrl_p99_us'], ts_a['ctrl_p99_us'])}",
-                     f"issue 11 asks p99 <= 1.3x; the median of {len(pairs)} pairs run at the same time, one per "
+                     f"the target is p99 <= 1.3x; the median of {len(pairs)} pairs run at the same time, one per "
                      f"CPU, CPUs swapped every other pair (p99 ratios {each}); mca_controller_tick alone, from "
                      "mcad's summary"))
 

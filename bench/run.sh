@@ -80,7 +80,7 @@ if have "$TICK"; then
     fi
 fi
 
-# 2c. PDNN (polish on) against DAQP on every tick of the hardest sweep tasks (issue 29 item 4; bench/daqp/run.sh:
+# 2c. PDNN (polish on) against DAQP on every tick of the hardest sweep tasks (bench/daqp/run.sh:
 #     DAQP built from its PyPI sdist outside the repository; "skipped: daqp not available" without it)
 if have "$B/bench/pdnn/bench_pdnn" && have "$B/tools/mca-sim/mca-sim"; then
     step "daqp: PDNN vs DAQP on consecutive ticks of 3 sweep tasks, then OSQP on every 50th"
@@ -124,7 +124,7 @@ if have "$MCAD" && command -v cyclictest >/dev/null; then
     wait $cyc
 fi
 
-# 4c. mca-ts against mca in mcad's real 1 kHz loop, same task (issue 11: tick p99 within 1.3x). The two run
+# 4c. mca-ts against mca in mcad's real 1 kHz loop, same task (the target: tick p99 within 1.3x). The two run
 #     at the same time, one per CPU (rt.cpu), so the host's disturbances hit both; five pairs, the CPUs
 #     swapped in every other one. One pair at a time, one after the other, gave p99 ratios from 1.2 to 1.6
 #     on the same build (the host's load moves between runs); the report gives each pair's and the median.
@@ -267,8 +267,8 @@ JOB
     vcan_from_log "$RAW/vcan/console.log" "measured $(date -u +%Y-%m-%dT%H:%MZ) by bench/run.sh in the guest"
 fi
 
-# 7. optional (MCA_BENCH_SWEEP=1, or `make sweep` alone): the seeded random-task sweep of issue 11,
-#    1000 two-arm tasks (500 two PA10+, 500 JACO2 + MICO2) and 200 three-arm tasks, and issue 29's 400
+# 7. optional (MCA_BENCH_SWEEP=1, or `make sweep` alone): the seeded random-task sweep,
+#    1000 two-arm tasks (500 two PA10+, 500 JACO2 + MICO2) and 200 three-arm tasks, and the 400
 #    pick-and-place tasks (200 pnp-jaco-mico, 200 pnp-pa10), every scheme mca-sim has of mvn,mca,mca-ts, each
 #    task again with a stop request; ~15 min on 2 cores, plus the pick-and-place part (not yet timed in full)
 if [ "${MCA_BENCH_SWEEP:-0}" = 1 ] && have "$B/tools/mca-sim/mca-sim"; then

@@ -1,6 +1,6 @@
 #!/bin/bash
 # SPDX-License-Identifier: MIT
-# PDNN (polish on) against DAQP on consecutive ticks of the hardest sweep tasks (issue 29 item 4).
+# PDNN (polish on) against DAQP on consecutive ticks of the hardest sweep tasks.
 # usage: bench/daqp/run.sh BUILD_DIR OUT_DIR   (env PY: the venv's python)
 # Regenerates three seeded sweep tasks (jaco-mico 1 and 7 of --n 16 --seed 501, pnp-jaco-mico 1 of --n 4
 # --seed 501: the most binding ticks under mca-ts), dumps every tick's QP with mca-sim (capped ones too),

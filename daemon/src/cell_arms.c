@@ -77,7 +77,7 @@ int mcad_cell_read_arms(const mca_check_ctx_t ctx, const struct raw_cell *raw, m
             FAIL(MCA_ECONFIG, LINE("arms[%d].backend", ai),
                  "arms[%d].backend: unknown backend '%s' (known: %s)", ai, ra->backend, known);
         }
-        ca->backend = be->id;
+        ca->backend = mca_backend_id(be);
         /* a backend's own section belongs to it alone */
         const void *own = NULL;
         const mca_backend_def_t *owner;

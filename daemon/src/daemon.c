@@ -15,6 +15,7 @@
 #include "mca/errbuf.h" /* mca_errbuf_printf */
 #include "mca/scenario.h"
 
+#include "daemon__log.h" /* mcad_log: the caller's sink */
 #include "daemon__arms.h"
 #include "daemon__backends.h" /* mca_backend_check_ids */
 #include "daemon__csv.h"
@@ -52,26 +53,25 @@ static int plan(mca_daemon_t *d, char *err, size_t errlen) {
         const mca_path_rate_t *r = mca_controller_path_rate(d->ctrl, a);
         const double sigma_max = mca_controller_get_config(d->ctrl)->ts.sigma_max;
         if (r->n > 0 && r->least < sigma_max) {
-            fprintf(d->opts.log,
-                    "<6>mcad: path rate: arm %d at most %.3f where its path bends most (to stop on it; "
-                    "sigma_max %.2f)\n",
-                    a, r->least, sigma_max);
+            mcad_log(d, 6,
+                     "path rate: arm %d at most %.3f where its path bends most (to stop on it; "
+                     "sigma_max %.2f)",
+                     a, r->least, sigma_max);
         }
     }
     const mca_coord_t *c = mca_controller_coord(d->ctrl);
     for (int k = 0; k < c->n_pairs; k++) {
         const mca_coord_pair_t *p = &c->pair[k];
-        fprintf(d->opts.log,
-                "<6>mcad: coordination: arms %d and %d kept %.3f m apart: %d of %d cells blocked, %d + %d "
-                "gates\n",
-                p->a, p->b, p->d_block, p->blocked, p->n_a * p->n_b, p->gates_a, p->gates_b);
+        mcad_log(d, 6,
+                 "coordination: arms %d and %d kept %.3f m apart: %d of %d cells blocked, %d + %d "
+                 "gates",
+                 p->a, p->b, p->d_block, p->blocked, p->n_a * p->n_b, p->gates_a, p->gates_b);
     }
     if (c->unplanned > 0) {
-        fprintf(d->opts.log, "<5>mcad: coordination: %d pair(s) without a schedule: left to the back-off\n",
-                c->unplanned);
+        mcad_log(d, 5, "coordination: %d pair(s) without a schedule: left to the back-off", c->unplanned);
     }
     if (c->n_pairs + c->unplanned > 0) {
-        fprintf(d->opts.log, "<6>mcad: coordination planned in %.0f ms\n", (double)(now_ns() - t0) * 1e-6);
+        mcad_log(d, 6, "coordination planned in %.0f ms", (double)(now_ns() - t0) * 1e-6);
     }
     return MCA_OK;
 }
@@ -102,9 +102,6 @@ int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_
     memset(d, 0, sizeof *d);
     d->cell = *cell;
     d->opts = *opts;
-    if (!d->opts.log) {
-        d->opts.log = stderr;
-    }
     if (drive) {
         d->drive = *drive;
     }
@@ -113,7 +110,7 @@ int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_
     d->drive.fired = 0;
     d->dma_fd = -1;
     atomic_store(&d->state, MCA_DAEMON_INIT);
-    mca_rtlog_init(&d->log, "mcad");
+    mca_rtlog_init(&d->log);
     mca_rtlog_set_formatter(&d->log, mcad_log_format, d);
     mca_ring_init(&d->sum_ring, d->sum_storage, sizeof d->sum_storage, sizeof(mca_daemon_summary_t), 4);
     mca_hist_reset(&d->jitter);
@@ -203,12 +200,12 @@ int mca_daemon_service(mca_daemon_t *d) {
     /* the fault's text to the DDS publisher as soon as this thread sees the latch, and no later than the
      * drain of the log record that names the fault (latched before that record was pushed) */
     mcad_fault_text_to_dds(d);
-    int n = mca_rtlog_drain(&d->log, d->opts.log);
+    int n = mca_rtlog_drain(&d->log, d->opts.log, d->opts.log_arg);
     mcad_fault_text_to_dds(d);
     if (d->dds) {
         /* the DDS publisher process: its death noticed, logged, a restart after the back-off (never blocks)
          */
-        n += mca_dds_bridge_supervise(d->dds, mcad_dds_log_line, d->opts.log);
+        n += mca_dds_bridge_supervise(d->dds, mcad_dds_log_line, d);
     }
     if (d->csv_storage) {
         n += mcad_csv_drain(d);

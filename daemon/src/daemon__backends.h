@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: MIT */
-/* The arm backends mcad knows, in one const table: each names itself as cell files do
+/* The arm backends mcad knows, one folder each (daemon/backends/NAME/) and one line in the registry
+ * (backends.c, MCA_BACKENDS), which gives each its id: its place on that line. Each names itself as cell
+ * files do
  * ("backend: NAME"), reads and checks its keys of a cell arm, opens the arm and says what the daemon must
  * know of it; its own section of a cell arm comes with its schema. The cell reader builds the arm schema from
  * the table and looks a backend up by name, the daemon by id; neither switches on names nor knows sections.
@@ -14,7 +16,9 @@
 #include "mca/arm.h"
 #include "mca/cell.h"
 #include "mca/chain.h"
-#include "mca/scenario.h" /* mca_check_ctx_t */
+#include "mca/errbuf.h"     /* mca_errbuf_at */
+#include "mca/scenario.h"   /* mca_check_ctx_t */
+#include "mca/yaml_marks.h" /* mca_yaml_marks_line_of */
 
 /* Most backends the table may hold (the cell's arm schema has room for each one's section). */
 #define MCA_BACKEND_MAX 8
@@ -45,7 +49,6 @@ typedef enum mca_backend_bus {
 
 typedef struct mca_backend_def {
     const char *name;      /* as in cell files */
-    mca_cell_backend_t id; /* as in mca_cell_arm_t.backend */
     mca_backend_bus_t bus; /* its arm's bus: which other arms may share it */
     const char *section;   /* its own mapping in a cell arm ("sim", "canopen"; NULL: none): only with it */
     const cyaml_schema_field_t *section_fields; /* the section's schema: the cell's arm schema takes it */
@@ -66,6 +69,34 @@ const mca_backend_def_t *mca_backend_find(const char *name);
 
 /* The backend of id `id`, or NULL when no backend has it. */
 const mca_backend_def_t *mca_backend_get(mca_cell_backend_t id);
+
+/* A backend's id (as in mca_cell_arm_t.backend): its place in the registry. */
+mca_cell_backend_t mca_backend_id(const mca_backend_def_t *be);
+
+/* The bus keys every CAN backend shares, for a backend's read: the interface copied (when given) and the id
+ * block checked and copied (when given): MCA_OK or MCA_ECONFIG "FILE:LINE: arms[N].id_base: ...". */
+int mca_backend_bus_keys(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const mca_backend_keys_t *k);
+
+/* Arm a's bus against every earlier arm's (arms 0..a-1 are read), by what the two backends say of their bus
+ * (mca_backend_bus_t), never by which of them comes first: MCA_OK or MCA_ECONFIG naming arm a's field. */
+int mca_backend_bus_check(const mca_check_ctx_t *c, const mca_cell_t *cell, int a);
+
+/* A backend's read fails with "FILE:LINE: message" (c: its mca_check_ctx_t *); MCA_BE_LINE(...) is the line
+ * of a printf-formatted field path ("arms[1].canopen.sync_us"), or of its nearest enclosing node;
+ * MCA_BE_CHECK is the one range check (mca_check_range). */
+#define MCA_BE_LINE(...) mca_yaml_marks_line_of(c->marks, __VA_ARGS__)
+#define MCA_BE_FAIL(code, line, ...)                                                                         \
+    do {                                                                                                     \
+        mca_errbuf_at(c->err, c->errlen, c->file, (line), __VA_ARGS__);                                      \
+        return (code);                                                                                       \
+    } while (0)
+#define MCA_BE_CHECK(range, v, ...)                                                                          \
+    do {                                                                                                     \
+        int rc_ = mca_check_range(c, (range), (v), __VA_ARGS__);                                             \
+        if (rc_ != MCA_OK) {                                                                                 \
+            return rc_;                                                                                      \
+        }                                                                                                    \
+    } while (0)
 
 /* Every arm's backend id is one of the table's (a cell changed in code after its file was read may hold any
  * value): MCA_OK, or MCA_ECONFIG with "FILE:LINE: arms[N].backend: unknown backend id ID (known: ...)" in

@@ -24,8 +24,7 @@ static inline int mcad_dds_ab_publishes(const mca_daemon_t *d, uint64_t n) {
 int mcad_publish_open(mca_daemon_t *d, char *err, size_t errlen);
 /* RT (and shut-down): d->snap from this tick's feedback, commands, distances and status. */
 void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state);
-/* Service thread: the DDS library's lines (mca_dds_log_fn; arg is the FILE, mcad's log) as mcad's:
- * "<LEVEL>mcad: TEXT". */
+/* Service thread: the DDS library's lines (mca_dds_log_fn; arg is the daemon) to the daemon's sink. */
 void mcad_dds_log_line(void *arg, int level, const char *text);
 /* Shut-down (d->dds set, the loop ended): push the final status, destroy the bridge, log its figures. */
 void mcad_publish_close(mca_daemon_t *d);

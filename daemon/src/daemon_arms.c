@@ -10,6 +10,7 @@
 #include "mca/err.h"
 #include "mca/errbuf.h" /* mca_errbuf_printf */
 
+#include "daemon__log.h"      /* mcad_log: the caller's sink */
 #include "daemon__backends.h" /* mca_backend_get */
 #include "daemon__fault.h"    /* mcad_latch_fault */
 #include "daemon__plausibility.h"
@@ -72,10 +73,10 @@ int mcad_handshake(mca_daemon_t *d, int a, char *err, size_t errlen) {
                 return MCA_EFAULT;
             }
             if (fb.state == MCA_ARM_FAULT && cleared < 3) {
-                fprintf(d->opts.log,
-                        "<5>mcad: arm '%s' reports FAULT (%s) at start: clearing it (--clear-faults: the "
-                        "operator asked)\n",
-                        d->cell.scn.arm[a].name, mca_arm_fault_name(fb.fault_code));
+                mcad_log(d, 5,
+                         "arm '%s' reports FAULT (%s) at start: clearing it (--clear-faults: the "
+                         "operator asked)",
+                         d->cell.scn.arm[a].name, mca_arm_fault_name(fb.fault_code));
                 for (int j = 0; j < c.n; j++) {
                     c.flags[j] = MCA_ACT_CLEAR_FAULT;
                 }

@@ -18,6 +18,7 @@
 
 #include "mca/err.h"
 
+#include "daemon__log.h"     /* mcad_log: the caller's sink */
 #include "daemon__fault.h"   /* mcad_latch_fault */
 #include "daemon__publish.h" /* mcad_dds_ab_publishes */
 #include "daemon__tick.h"    /* mcad_step */
@@ -31,14 +32,13 @@ void mcad_pin_non_rt(mca_daemon_t *d) {
     }
     CPU_CLR(d->cell.rt.cpu, &set);
     if (CPU_COUNT(&set) == 0) {
-        fprintf(d->opts.log,
-                "<4>mcad: rt.cpu %d is the only CPU this process may use: the other threads share it\n",
-                d->cell.rt.cpu);
+        mcad_log(d, 4, "rt.cpu %d is the only CPU this process may use: the other threads share it",
+                 d->cell.rt.cpu);
         return;
     }
     if (sched_setaffinity(0, sizeof set, &set) != 0) {
-        fprintf(d->opts.log, "<4>mcad: cannot move the non-real-time threads off CPU %d: %s\n",
-                d->cell.rt.cpu, strerror(errno));
+        mcad_log(d, 4, "cannot move the non-real-time threads off CPU %d: %s", d->cell.rt.cpu,
+                 strerror(errno));
         return;
     }
     char list[128];
@@ -48,8 +48,8 @@ void mcad_pin_non_rt(mca_daemon_t *d) {
             k += (size_t)snprintf(list + k, sizeof list - k, "%s%d", k ? "," : "", c);
         }
     }
-    fprintf(d->opts.log, "<6>mcad: loop on CPU %d; supervisor, log/CSV drainer and DDS threads on CPUs %s\n",
-            d->cell.rt.cpu, list);
+    mcad_log(d, 6, "loop on CPU %d; supervisor, log/CSV drainer and DDS threads on CPUs %s", d->cell.rt.cpu,
+             list);
     d->non_rt_pinned = 1;
 }
 
@@ -212,7 +212,6 @@ int mca_daemon_start(mca_daemon_t *d) {
         return MCA_EINVAL; /* its driver steps it (mca/daemon_drive.h): one thread ticks a daemon, never two
                             */
     }
-    FILE *log = d->opts.log;
     /* The loop's own clock: the PDNN's share of the period (rt.pdnn_budget_us, default half). Running out is
      * a named fault, not an overrun. A caller that steps the daemon itself (mca-sim in virtual time, the
      * tests) has no period to keep, and its runs stay deterministic. */
@@ -230,19 +229,18 @@ int mca_daemon_start(mca_daemon_t *d) {
                 free(p);
             }
         } else {
-            fprintf(log,
-                    "<4>mcad: mlockall failed (%s): page faults may delay the loop (raise LimitMEMLOCK)\n",
-                    strerror(errno));
+            mcad_log(d, 4, "mlockall failed (%s): page faults may delay the loop (raise LimitMEMLOCK)",
+                     strerror(errno));
         }
     }
     if (!d->opts.no_rt && d->cell.rt.dma_latency) {
         d->dma_fd = open("/dev/cpu_dma_latency", O_WRONLY);
         const int32_t zero = 0;
         if (d->dma_fd < 0 || write(d->dma_fd, &zero, sizeof zero) != (ssize_t)sizeof zero) {
-            fprintf(log,
-                    "<4>mcad: cannot hold /dev/cpu_dma_latency at 0 (%s): deep C-states may add wake-up "
-                    "latency\n",
-                    strerror(errno));
+            mcad_log(d, 4,
+                     "cannot hold /dev/cpu_dma_latency at 0 (%s): deep C-states may add wake-up "
+                     "latency",
+                     strerror(errno));
             if (d->dma_fd >= 0) {
                 close(d->dma_fd);
             }
@@ -262,10 +260,10 @@ int mca_daemon_start(mca_daemon_t *d) {
         if (rc == 0) {
             d->sched_fifo = 1;
         } else {
-            fprintf(log,
-                    "<4>mcad: SCHED_FIFO priority %d not permitted (%s): running SCHED_OTHER, expect "
-                    "jitter (run as root or with CPUSchedulingPolicy=fifo / LimitRTPRIO)\n",
-                    d->cell.rt.priority, strerror(rc));
+            mcad_log(d, 4,
+                     "SCHED_FIFO priority %d not permitted (%s): running SCHED_OTHER, expect "
+                     "jitter (run as root or with CPUSchedulingPolicy=fifo / LimitRTPRIO)",
+                     d->cell.rt.priority, strerror(rc));
         }
     }
     if (rc != 0) {
@@ -274,7 +272,7 @@ int mca_daemon_start(mca_daemon_t *d) {
     }
     pthread_attr_destroy(&attr);
     if (rc != 0) {
-        fprintf(log, "<3>mcad: cannot start the loop thread: %s\n", strerror(rc));
+        mcad_log(d, 3, "cannot start the loop thread: %s", strerror(rc));
         return MCA_ENOMEM;
     }
     d->thread_started = 1;

@@ -14,6 +14,8 @@
 #include "mca/errbuf.h" /* mca_errbuf_printf */
 #include "mca/prefix.h" /* mca_exe_prefix */
 
+#include "daemon__log.h" /* mcad_log: the caller's sink */
+
 /* What ROS 2 sees of the cell: names from the scenario and the URDFs, bases, capsule radii. */
 static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err, size_t errlen) {
     const mca_cell_t *cell = &d->cell;
@@ -88,12 +90,9 @@ static int find_bridge_exe(const mca_daemon_opts_t *opts, char *out, size_t len)
     return access(out, X_OK) == 0 ? MCA_OK : MCA_ENOENT;
 }
 
-/* Cyclone's own messages (mca_dds_log_drain) as mcad printed them: "<LEVEL>mcad: dds: TEXT". */
+/* Cyclone's own messages (mca_dds_log_drain) as the daemon's lines: "dds: TEXT" (arg is the daemon). */
 static void cyclone_line(void *arg, int level, const char *text) {
-    FILE *f = arg;
-    if (f) {
-        fprintf(f, "<%d>mcad: dds: %s\n", level, text);
-    }
+    mcad_log((const mca_daemon_t *)arg, level, "dds: %s", text);
 }
 
 /* DDS at start-up: the bridge process (mca-dds-bridge) with the cell's ROS 2 topics. */
@@ -131,7 +130,7 @@ int mcad_publish_open(mca_daemon_t *d, char *err, size_t errlen) {
     rc = rc == MCA_OK ? mca_dds_bridge_create(&d->dds, &dc, why, sizeof why) : rc;
     if (rc != MCA_OK) {
         /* Cyclone's reason (a security file missing, a certificate refused, ...) was captured: say it */
-        mca_dds_log_drain(3, cyclone_line, d->opts.log);
+        mca_dds_log_drain(3, cyclone_line, d);
         mca_dds_log_capture(0);
     }
     if (rc != MCA_OK && !(err && err[0])) {
@@ -142,16 +141,15 @@ int mcad_publish_open(mca_daemon_t *d, char *err, size_t errlen) {
         mca_dds_stats_t ds;
         mca_dds_bridge_stats(d->dds, &ds);
         if (ds.sched_refused) {
-            fprintf(d->opts.log,
-                    "<4>mcad: dds.priority %d (SCHED_FIFO) not permitted: the publisher runs SCHED_OTHER "
-                    "and a busy CPU delays its samples\n",
-                    dc.sched_priority);
+            mcad_log(d, 4,
+                     "dds.priority %d (SCHED_FIFO) not permitted: the publisher runs SCHED_OTHER "
+                     "and a busy CPU delays its samples",
+                     dc.sched_priority);
         }
         if (dc.sched_priority > 0 && !ds.sched_refused) {
-            fprintf(d->opts.log, "<6>mcad: dds bridge: pid %d (%s), SCHED_FIFO %d\n", (int)ds.pid, exe,
-                    dc.sched_priority);
+            mcad_log(d, 6, "dds bridge: pid %d (%s), SCHED_FIFO %d", (int)ds.pid, exe, dc.sched_priority);
         } else {
-            fprintf(d->opts.log, "<6>mcad: dds bridge: pid %d (%s)\n", (int)ds.pid, exe);
+            mcad_log(d, 6, "dds bridge: pid %d (%s)", (int)ds.pid, exe);
         }
     }
     return rc;
@@ -213,10 +211,7 @@ void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
 
 /* Shut-down: the final status with the run's figures, then the bridge's own summary lines. */
 void mcad_dds_log_line(void *arg, int level, const char *text) {
-    FILE *f = arg;
-    if (f) {
-        fprintf(f, "<%d>mcad: %s\n", level, text);
-    }
+    mcad_log((const mca_daemon_t *)arg, level, "%s", text);
 }
 
 void mcad_publish_close(mca_daemon_t *d) {
@@ -242,26 +237,23 @@ void mcad_publish_close(mca_daemon_t *d) {
     mca_dds_stats_t ds;
     mca_dds_bridge_destroy(d->dds, &ds);
     d->dds = NULL;
-    if (d->opts.log) {
-        fprintf(d->opts.log,
-                "<%d>mcad: summary: dds: %llu snapshots published, %llu lost to ring overrun (most "
-                "waiting %llu), "
-                "%llu samples, %llu write errors, longest publish %.1f us; publisher on the grid %llu "
-                "times, woken by the loop %llu\n",
-                ds.dropped || ds.write_errors ? 4 : 6, (unsigned long long)ds.published,
-                (unsigned long long)ds.dropped, (unsigned long long)ds.max_pending,
-                (unsigned long long)ds.samples, (unsigned long long)ds.write_errors,
-                (double)ds.max_publish_ns / 1e3, (unsigned long long)ds.grid_sleeps,
-                (unsigned long long)ds.wakes);
-        fprintf(d->opts.log,
-                "<%d>mcad: summary: dds bridge: died %llu times, restarted %llu times, %llu stale "
-                "snapshots skipped at restarts, %llu killed as hung; at the end %s",
-                ds.deaths ? 4 : 6, (unsigned long long)ds.deaths, (unsigned long long)ds.restarts,
-                (unsigned long long)ds.stale, (unsigned long long)ds.hung, ds.down ? "down" : "up");
-        if (ds.deaths_in_a_row > 0) {
-            fprintf(d->opts.log, " (%s%u deaths in a row, back-off %.1f s)",
-                    ds.down ? "backing off: " : "restarted after ", ds.deaths_in_a_row, ds.backoff_s);
-        }
-        fputc('\n', d->opts.log);
+    mcad_log(d, ds.dropped || ds.write_errors ? 4 : 6,
+             "summary: dds: %llu snapshots published, %llu lost to ring overrun (most waiting %llu), %llu "
+             "samples, "
+             "%llu write errors, longest publish %.1f us; publisher on the grid %llu times, woken by the "
+             "loop %llu",
+             (unsigned long long)ds.published, (unsigned long long)ds.dropped,
+             (unsigned long long)ds.max_pending, (unsigned long long)ds.samples,
+             (unsigned long long)ds.write_errors, (double)ds.max_publish_ns / 1e3,
+             (unsigned long long)ds.grid_sleeps, (unsigned long long)ds.wakes);
+    char row[96] = "";
+    if (ds.deaths_in_a_row > 0) {
+        snprintf(row, sizeof row, " (%s%u deaths in a row, back-off %.1f s)",
+                 ds.down ? "backing off: " : "restarted after ", ds.deaths_in_a_row, ds.backoff_s);
     }
+    mcad_log(d, ds.deaths ? 4 : 6,
+             "summary: dds bridge: died %llu times, restarted %llu times, %llu stale snapshots skipped at "
+             "restarts, %llu killed as hung; at the end %s%s",
+             (unsigned long long)ds.deaths, (unsigned long long)ds.restarts, (unsigned long long)ds.stale,
+             (unsigned long long)ds.hung, ds.down ? "down" : "up", row);
 }

@@ -8,6 +8,7 @@
 
 #include "mca/err.h"
 
+#include "daemon__log.h"   /* mcad_log: the caller's sink */
 #include "daemon__fault.h" /* mcad_fault_describe, mcad_link_ignored_text */
 
 /* Figures from the loop's own data: call from the loop, or once it has ended (rt safe: no formatting). */
@@ -113,42 +114,43 @@ void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s) {
     }
 }
 
-void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
-    fprintf(f,
-            "<6>mcad: summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "
-            "memory locked %s\n",
-            mca_daemon_state_name(s->state), (unsigned long long)s->ticks, (unsigned long long)s->overruns,
-            (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no",
-            s->mem_locked ? "yes" : "no");
-    fprintf(f,
-            "<6>mcad: summary: loop stalls (> %d periods between two ticks' commands) %llu, the longest %.1f "
-            "ms\n",
-            MCA_DAEMON_STALL_PERIODS, (unsigned long long)s->stalls, (double)s->stall_max_ns / 1e6);
-    fprintf(f, "<6>mcad: summary: wake-up jitter p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
-            (double)s->jitter_p50_ns / 1e3, (double)s->jitter_p99_ns / 1e3, (double)s->jitter_p999_ns / 1e3,
-            (double)s->jitter_max_ns / 1e3);
-    fprintf(f,
-            "<6>mcad: summary: compute time (whole tick) p50 %.1f us, p99 %.1f us, max %.1f us; controller "
-            "tick p50 %.1f us, p99 %.1f us, max %.1f us\n",
-            (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3, (double)s->compute_max_ns / 1e3,
-            (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3, (double)s->ctrl_max_ns / 1e3);
+void mca_daemon_log_summary(const mca_daemon_summary_t *s, mca_log_fn fn, void *arg) {
+    mcad_logf(fn, arg, 6,
+              "summary: state %s, ticks %llu, overruns %llu (skipped periods %llu), SCHED_FIFO %s, "
+              "memory locked %s",
+              mca_daemon_state_name(s->state), (unsigned long long)s->ticks, (unsigned long long)s->overruns,
+              (unsigned long long)s->skipped_periods, s->sched_fifo ? "yes" : "no",
+              s->mem_locked ? "yes" : "no");
+    mcad_logf(fn, arg, 6,
+              "summary: loop stalls (> %d periods between two ticks' commands) %llu, the longest %.1f "
+              "ms",
+              MCA_DAEMON_STALL_PERIODS, (unsigned long long)s->stalls, (double)s->stall_max_ns / 1e6);
+    mcad_logf(fn, arg, 6, "summary: wake-up jitter p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us",
+              (double)s->jitter_p50_ns / 1e3, (double)s->jitter_p99_ns / 1e3, (double)s->jitter_p999_ns / 1e3,
+              (double)s->jitter_max_ns / 1e3);
+    mcad_logf(fn, arg, 6,
+              "summary: compute time (whole tick) p50 %.1f us, p99 %.1f us, max %.1f us; controller "
+              "tick p50 %.1f us, p99 %.1f us, max %.1f us",
+              (double)s->compute_p50_ns / 1e3, (double)s->compute_p99_ns / 1e3,
+              (double)s->compute_max_ns / 1e3, (double)s->ctrl_p50_ns / 1e3, (double)s->ctrl_p99_ns / 1e3,
+              (double)s->ctrl_max_ns / 1e3);
     char steps[64];
     if (s->pdnn_step_budget > 0) {
         snprintf(steps, sizeof steps, "%d steps (cap %d)", s->pdnn_step_budget, s->pdnn_max_steps);
     } else {
         snprintf(steps, sizeof steps, "the cap %d steps", s->pdnn_max_steps);
     }
-    fprintf(f,
-            "<%d>mcad: summary: PDNN out of its budget (%.3g us, %s): %llu ticks by the clock, %llu by steps "
-            "(no faults: short answers repaired)\n",
-            s->pdnn_budget_time + s->pdnn_budget_steps ? 5 : 6, s->pdnn_budget_us, steps,
-            (unsigned long long)s->pdnn_budget_time, (unsigned long long)s->pdnn_budget_steps);
+    mcad_logf(fn, arg, s->pdnn_budget_time + s->pdnn_budget_steps ? 5 : 6,
+              "summary: PDNN out of its budget (%.3g us, %s): %llu ticks by the clock, %llu by steps "
+              "(no faults: short answers repaired)",
+              s->pdnn_budget_us, steps, (unsigned long long)s->pdnn_budget_time,
+              (unsigned long long)s->pdnn_budget_steps);
     if (s->dds_ab_block && s->dds_ab_n[0] && s->dds_ab_n[1] && s->dds_ab_p50_ns[0] && s->dds_ab_p99_ns[0]) {
-        fprintf(
-            f,
-            "<6>mcad: summary: dds on/off (blocks of %u ticks): whole tick publishing off p50 %.1f us, "
+        mcad_logf(
+            fn, arg, 6,
+            "summary: dds on/off (blocks of %u ticks): whole tick publishing off p50 %.1f us, "
             "p99 %.1f us, mean %.2f us (%llu ticks); on p50 %.1f us, p99 %.1f us, mean %.2f us (%llu ticks); "
-            "ratio on/off p50 %.3f, p99 %.3f, mean %.3f\n",
+            "ratio on/off p50 %.3f, p99 %.3f, mean %.3f",
             s->dds_ab_block, (double)s->dds_ab_p50_ns[0] / 1e3, (double)s->dds_ab_p99_ns[0] / 1e3,
             s->dds_ab_mean_ns[0] / 1e3, (unsigned long long)s->dds_ab_n[0], (double)s->dds_ab_p50_ns[1] / 1e3,
             (double)s->dds_ab_p99_ns[1] / 1e3, s->dds_ab_mean_ns[1] / 1e3, (unsigned long long)s->dds_ab_n[1],
@@ -156,52 +158,51 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
             (double)s->dds_ab_p99_ns[1] / (double)s->dds_ab_p99_ns[0],
             s->dds_ab_mean_ns[1] / s->dds_ab_mean_ns[0]);
         if (s->dds_ab_short_n[0] && s->dds_ab_short_n[1] && s->dds_ab_short_mean_ns[0] > 0.0) {
-            fprintf(f,
-                    "<6>mcad: summary: dds on/off, ticks shorter than half a period: off mean %.2f us (%llu "
-                    "ticks), "
-                    "on mean %.2f us (%llu ticks); ratio on/off mean %.3f\n",
-                    s->dds_ab_short_mean_ns[0] / 1e3, (unsigned long long)s->dds_ab_short_n[0],
-                    s->dds_ab_short_mean_ns[1] / 1e3, (unsigned long long)s->dds_ab_short_n[1],
-                    s->dds_ab_short_mean_ns[1] / s->dds_ab_short_mean_ns[0]);
+            mcad_logf(fn, arg, 6,
+                      "summary: dds on/off, ticks shorter than half a period: off mean %.2f us (%llu "
+                      "ticks), "
+                      "on mean %.2f us (%llu ticks); ratio on/off mean %.3f",
+                      s->dds_ab_short_mean_ns[0] / 1e3, (unsigned long long)s->dds_ab_short_n[0],
+                      s->dds_ab_short_mean_ns[1] / 1e3, (unsigned long long)s->dds_ab_short_n[1],
+                      s->dds_ab_short_mean_ns[1] / s->dds_ab_short_mean_ns[0]);
         }
     }
     if (isfinite(s->min_distance)) {
-        fprintf(f, "<6>mcad: summary: minimum distance %.4f m at t = %.3f s\n", s->min_distance,
-                s->min_distance_t);
+        mcad_logf(fn, arg, 6, "summary: minimum distance %.4f m at t = %.3f s", s->min_distance,
+                  s->min_distance_t);
     } else {
-        fprintf(f, "<6>mcad: summary: minimum distance n/a\n");
+        mcad_logf(fn, arg, 6, "summary: minimum distance n/a");
     }
     if (s->body_pair[0] >= 0) {
-        fprintf(f,
-                "<6>mcad: summary: fixed bodies: least margin %.4f m (distance %.4f m) at t = %.3f s, arm %d "
-                "link %d against %s '%s'\n",
-                s->body_margin, s->body_distance, s->body_t, s->body_pair[0], s->body_pair[1],
-                mca_body_kind_name(s->body_kind), s->body_name);
+        mcad_logf(fn, arg, 6,
+                  "summary: fixed bodies: least margin %.4f m (distance %.4f m) at t = %.3f s, arm %d "
+                  "link %d against %s '%s'",
+                  s->body_margin, s->body_distance, s->body_t, s->body_pair[0], s->body_pair[1],
+                  mca_body_kind_name(s->body_kind), s->body_name);
     }
     if (s->self_pair[0] >= 0) {
-        fprintf(f, "<6>mcad: summary: self pairs: least distance %.4f m at t = %.3f s, arm %d links %d-%d\n",
-                s->self_distance, s->self_t, s->self_pair[0], s->self_pair[1], s->self_pair[2]);
+        mcad_logf(fn, arg, 6, "summary: self pairs: least distance %.4f m at t = %.3f s, arm %d links %d-%d",
+                  s->self_distance, s->self_t, s->self_pair[0], s->self_pair[1], s->self_pair[2]);
     }
     if (s->brake_t >= 0.0) {
-        fprintf(f,
-                "<%d>mcad: summary: braking from t = %.3f s, %s %.3f s, keep-direction fallback ticks %llu "
-                "(past the deadline %llu), max |dv|/(dec dt) %.4f\n",
-                s->brake_fallback_ticks ? 4 : 6, s->brake_t,
-                s->stop_duration_s >= 0.0 ? "at rest after" : "not at rest after",
-                s->stop_duration_s >= 0.0 ? s->stop_duration_s : 0.0,
-                (unsigned long long)s->brake_fallback_ticks, (unsigned long long)s->brake_forced_ticks,
-                s->max_dv_over_dt_dec);
+        mcad_logf(fn, arg, s->brake_fallback_ticks ? 4 : 6,
+                  "summary: braking from t = %.3f s, %s %.3f s, keep-direction fallback ticks %llu "
+                  "(past the deadline %llu), max |dv|/(dec dt) %.4f",
+                  s->brake_t, s->stop_duration_s >= 0.0 ? "at rest after" : "not at rest after",
+                  s->stop_duration_s >= 0.0 ? s->stop_duration_s : 0.0,
+                  (unsigned long long)s->brake_fallback_ticks, (unsigned long long)s->brake_forced_ticks,
+                  s->max_dv_over_dt_dec);
     }
     if (s->deadlocks || s->deadlock) {
-        fprintf(f, "<6>mcad: summary: deadlocks %d (state now %s)\n", s->deadlocks,
-                s->deadlock == MCA_DEADLOCK_BACK_OFF ? "back-off"
-                : s->deadlock == MCA_DEADLOCK_WAIT   ? "wait"
-                                                     : "none");
+        mcad_logf(fn, arg, 6, "summary: deadlocks %d (state now %s)", s->deadlocks,
+                  s->deadlock == MCA_DEADLOCK_BACK_OFF ? "back-off"
+                  : s->deadlock == MCA_DEADLOCK_WAIT   ? "wait"
+                                                       : "none");
     }
     if (s->fault) {
-        fprintf(f, "<3>mcad: summary: faults: 1 (at t = %.3f s: %s)\n", s->fault_t, s->fault_text);
+        mcad_logf(fn, arg, 3, "summary: faults: 1 (at t = %.3f s: %s)", s->fault_t, s->fault_text);
     } else {
-        fprintf(f, "<6>mcad: summary: faults: none\n");
+        mcad_logf(fn, arg, 6, "summary: faults: none");
     }
     for (int a = 0; a < s->n_arms && a < MCA_MAX_ARMS; a++) {
         /* what each link took and why it ignored the rest: a field diagnosis starts here */
@@ -210,16 +211,16 @@ void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f) {
             st->rx_bad_length || st->rx_bad_counter || st->rx_implausible || st->bus_errors || st->rx_dropped;
         char ign[160];
         mcad_link_ignored_text(st, ign, sizeof ign);
-        fprintf(f, "<%d>mcad: summary: arm %.32s link: commands sent %llu, feedback taken %llu; %s\n",
-                unusual ? 4 : 6, s->arm_name[a], (unsigned long long)st->commands_sent,
-                (unsigned long long)st->feedback_received, ign);
+        mcad_logf(fn, arg, unusual ? 4 : 6,
+                  "summary: arm %.32s link: commands sent %llu, feedback taken %llu; %s", s->arm_name[a],
+                  (unsigned long long)st->commands_sent, (unsigned long long)st->feedback_received, ign);
     }
     if (s->implausible_samples) {
-        fprintf(f, "<4>mcad: summary: implausible feedback samples dropped %llu\n",
-                (unsigned long long)s->implausible_samples);
+        mcad_logf(fn, arg, 4, "summary: implausible feedback samples dropped %llu",
+                  (unsigned long long)s->implausible_samples);
     }
     if (s->log_dropped || s->csv_dropped) {
-        fprintf(f, "<4>mcad: summary: dropped log records %llu, CSV rows %llu\n",
-                (unsigned long long)s->log_dropped, (unsigned long long)s->csv_dropped);
+        mcad_logf(fn, arg, 4, "summary: dropped log records %llu, CSV rows %llu",
+                  (unsigned long long)s->log_dropped, (unsigned long long)s->csv_dropped);
     }
 }

@@ -59,6 +59,11 @@ static void usage(FILE *f) {
     );
 }
 
+/* The daemon library's lines (mca/log.h) as mcad logs: the journald/syslog priority prefix, its name. */
+static void log_line(void *arg, int level, const char *text) {
+    fprintf((FILE *)arg, "<%d>mcad: %s\n", level, text);
+}
+
 static double mono_s(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -166,7 +171,7 @@ int main(int argc, char **argv) {
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
-    mca_daemon_opts_t opts = {.log = stderr};
+    mca_daemon_opts_t opts = {.log = log_line, .log_arg = stderr};
     int check = 0;
     const char *hist_path = NULL;
     for (;;) {
@@ -388,7 +393,7 @@ int main(int argc, char **argv) {
     mca_daemon_join(d);
     mca_daemon_summary_t s;
     mca_daemon_summary(d, &s);
-    mca_daemon_print_summary(&s, stderr);
+    mca_daemon_log_summary(&s, log_line, stderr);
     if (hist) {
         /* the span lets a reader take another tool's samples of exactly these milliseconds (bench/rt) */
         int64_t first, last;

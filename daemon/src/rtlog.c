@@ -2,16 +2,16 @@
 /* Real-time logging through an SPSC ring (see mca/rtlog.h). */
 #include "mca/rtlog.h"
 
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
 #include "mca/err.h"
 
-int mca_rtlog_init(mca_rtlog_t *log, const char *tag) {
+int mca_rtlog_init(mca_rtlog_t *log) {
     if (!log) {
         return MCA_EINVAL;
     }
-    log->tag = tag ? tag : "mca";
     log->formatter = NULL;
     log->formatter_arg = NULL;
     return mca_ring_init(&log->ring, log->storage, sizeof log->storage, sizeof(mca_rtlog_rec_t),
@@ -58,52 +58,50 @@ void mca_rtlog_code(mca_rtlog_t *log, int level, int code, int nargs, double a0,
 }
 
 char *mca_rtlog_format(const mca_rtlog_t *log, const mca_rtlog_rec_t *r, char *buf, size_t len) {
-    char msg[384];
+    char *msg = buf;
+    const size_t msglen = len;
     const double *a = r->arg;
     const char *t = r->text;
     if (r->fmt == NULL) {
         /* a code record: the owner's formatter (non-rt) */
         msg[0] = 0;
         if (log->formatter) {
-            log->formatter(log->formatter_arg, r, msg, sizeof msg);
+            log->formatter(log->formatter_arg, r, msg, msglen);
         } else {
-            snprintf(msg, sizeof msg, "code %d: %g %g %g %g %s", r->code, a[0], a[1], a[2], a[3], t);
+            snprintf(msg, msglen, "code %d: %g %g %g %g %s", r->code, a[0], a[1], a[2], a[3], t);
         }
-        snprintf(buf, len, "<%d>%s: %s", r->level, log->tag, msg);
         return buf;
     }
     /* the text goes right after the numbers (see the format rules) */
     switch (r->nargs) {
     case 0:
-        snprintf(msg, sizeof msg, r->fmt, t);
+        snprintf(msg, msglen, r->fmt, t);
         break;
     case 1:
-        snprintf(msg, sizeof msg, r->fmt, a[0], t);
+        snprintf(msg, msglen, r->fmt, a[0], t);
         break;
     case 2:
-        snprintf(msg, sizeof msg, r->fmt, a[0], a[1], t);
+        snprintf(msg, msglen, r->fmt, a[0], a[1], t);
         break;
     case 3:
-        snprintf(msg, sizeof msg, r->fmt, a[0], a[1], a[2], t);
+        snprintf(msg, msglen, r->fmt, a[0], a[1], a[2], t);
         break;
     default:
-        snprintf(msg, sizeof msg, r->fmt, a[0], a[1], a[2], a[3], t);
+        snprintf(msg, msglen, r->fmt, a[0], a[1], a[2], a[3], t);
         break;
     }
-    snprintf(buf, len, "<%d>%s: %s", r->level, log->tag, msg);
     return buf;
 }
 
-int mca_rtlog_drain(mca_rtlog_t *log, FILE *f) {
+int mca_rtlog_drain(mca_rtlog_t *log, mca_log_fn fn, void *arg) {
     mca_rtlog_rec_t r;
     int n = 0;
-    char line[512];
+    char line[384];
     while (mca_ring_pop(&log->ring, &r) == MCA_OK) {
-        fprintf(f, "%s\n", mca_rtlog_format(log, &r, line, sizeof line));
+        if (fn) {
+            fn(arg, r.level, mca_rtlog_format(log, &r, line, sizeof line));
+        }
         n++;
-    }
-    if (n) {
-        fflush(f);
     }
     return n;
 }

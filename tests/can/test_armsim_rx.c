@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* cmocka: the firmware emulator's receive rules (mca/armsim_rx.h) with crafted command frames, through the
- * simulated firmware as mca-armsim runs it (issue 16: a forged frame id, a flood). No sockets. */
+ * simulated firmware as mca-armsim runs it (what a hostile peer sends: a forged frame id, a flood). No
+ * sockets. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

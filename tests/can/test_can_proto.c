@@ -394,8 +394,8 @@ static void test_link(void **state) {
     assert_int_equal(mca_can_link_take(&l, &fb), MCA_OK); /* error already reported */
     assert_true(fabs(fb.position[0] - 0.26) < 1e-12);
     assert_int_equal(l.st.bus_errors, 3);
-    /* a restarted controller (CAN_ERR_RESTARTED) does not end bus-off (issue 16): only feedback does; a
-     * second bus-off is a second event */
+    /* a restarted controller (CAN_ERR_RESTARTED) does not end bus-off (a restart proves no frame got
+     * through): only feedback does; a second bus-off is a second event */
     ef.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
     assert_int_equal(mca_can_link_rx(&l, &ef), MCA_OK);
     ef.can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED;

@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# mcad end to end on CANopen (issue 15, "what it must show" 1 and the SIGTERM part of 3): task 3 (cup
+# mcad end to end on CANopen: task 3 (cup
 # stacking) with each arm six CiA 402 drives on its own bus (JACO2 nodes 1..6 on vcan0, MICO2 on vcan1),
 # answered by mca-drivesim, through the `canopen` backend; the shipped cell config/cells/cup_stacking_canopen.yaml
 # with only the emulated-CPU tolerances widened (overrun limit, PDNN budget, CPU pin, and the CANopen

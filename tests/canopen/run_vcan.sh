@@ -1,5 +1,5 @@
 #!/bin/sh
-# ctest entry of the CANopen vcan suite (issue 15): natively when this kernel has vcan and we may create
+# ctest entry of the CANopen vcan suite: natively when this kernel has vcan and we may create
 # interfaces, otherwise in one QEMU guest boot (tools/vcan-guest). Never a silent pass: if neither works,
 # exit 77 (ctest: skipped) and say why.
 # Usage: run_vcan.sh BUILD_DIR SOURCE_DIR PYTHON

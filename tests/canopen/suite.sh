@@ -1,5 +1,5 @@
 #!/bin/sh
-# The CANopen vcan suite (issue 15), in two phases like tests/can/suite.sh:
+# The CANopen vcan suite, in two phases like tests/can/suite.sh:
 #   suite.sh run   BUILD_DIR SOURCE_DIR OUT_DIR   scenarios on vcan (root, kernel with vcan): outputs,
 #                                                 logs, candump captures and exit codes into OUT_DIR
 #   suite.sh check SOURCE_DIR PYTHON OUT_DIR      verdicts (tests/canopen/check_suite.py); prints

@@ -18,6 +18,8 @@
 #include "mca/cell.h"
 #include "mca/err.h"
 
+#include "canopen_cell.h" /* the canopen backend's settings in a cell arm */
+
 static const char *g_src;  /* config/cells/cup_stacking_canopen.yaml */
 static const char *g_src2; /* config/cells/cup_stacking_canopen_can.yaml */
 static mca_cell_t cell;
@@ -65,20 +67,21 @@ static void test_shipped(void **state) {
     assert_int_equal(mca_cell_load(g_src, &cell, err, sizeof err), MCA_OK);
     assert_int_equal(cell.scn.n_arms, 2);
     for (int a = 0; a < 2; a++) {
-        assert_int_equal(cell.arm[a].backend, MCA_CELL_BACKEND_CANOPEN);
-        assert_int_equal(cell.arm[a].co_first_node, 1);
-        assert_int_equal(cell.arm[a].co_sync_us, 1000);
-        assert_int_equal(cell.arm[a].co_mode, 9);
-        assert_true(cell.arm[a].co_pos_scale == 1e6 && cell.arm[a].co_vel_scale == 1e6);
-        assert_int_equal(cell.arm[a].co_hb_timeout_ms, 350);
-        assert_int_equal(cell.arm[a].co_pdo_timeout, 5);
+        assert_int_equal(cell.arm[a].backend, mca_cell_backend_id("canopen"));
+        assert_int_equal(mca_canopen_cell_c(&cell.arm[a])->first_node, 1);
+        assert_int_equal(mca_canopen_cell_c(&cell.arm[a])->sync_us, 1000);
+        assert_int_equal(mca_canopen_cell_c(&cell.arm[a])->mode, 9);
+        assert_true(mca_canopen_cell_c(&cell.arm[a])->pos_scale == 1e6 &&
+                    mca_canopen_cell_c(&cell.arm[a])->vel_scale == 1e6);
+        assert_int_equal(mca_canopen_cell_c(&cell.arm[a])->hb_timeout_ms, 350);
+        assert_int_equal(mca_canopen_cell_c(&cell.arm[a])->pdo_timeout, 5);
     }
     assert_string_equal(cell.arm[0].interface, "vcan0");
     assert_string_equal(cell.arm[1].interface, "vcan1");
     assert_string_equal(mca_cell_backend_name(cell.arm[0].backend), "canopen");
     assert_int_equal(mca_cell_load(g_src2, &cell, err, sizeof err), MCA_OK);
     assert_string_equal(cell.arm[0].interface, "can0");
-    assert_int_equal(cell.arm[1].co_sync_us, 4000);
+    assert_int_equal(mca_canopen_cell_c(&cell.arm[1])->sync_us, 4000);
 }
 
 static void expect_bad(const char *tag, const char *from, const char *to, const char *piece) {
@@ -113,9 +116,9 @@ static void test_defaults_and_csp(void **state) {
     const int rc = mca_cell_load(p, &cell, err, sizeof err);
     unlink(p);
     assert_int_equal(rc, MCA_OK);
-    assert_int_equal(cell.arm[0].co_mode, 8);
-    assert_int_equal(cell.arm[0].co_pdo_timeout, 40);
-    assert_int_equal(cell.arm[1].co_mode, 9);
+    assert_int_equal(mca_canopen_cell_c(&cell.arm[0])->mode, 8);
+    assert_int_equal(mca_canopen_cell_c(&cell.arm[0])->pdo_timeout, 40);
+    assert_int_equal(mca_canopen_cell_c(&cell.arm[1])->mode, 9);
 }
 
 int main(int argc, char **argv) {

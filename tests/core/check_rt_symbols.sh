@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# core.rt_symbols (issue 12): the real-time library calls no allocator, opens no file, takes no mutex and
+# core.rt_symbols: the real-time library calls no allocator, opens no file, takes no mutex and
 # knows nothing of YAML or URDF. nm -u lists what each object of libmca_core.a needs from outside; any
 # forbidden name fails the test, printed with its object file. The same check on libmca_model.a must find
 # the YAML and URDF readers there (the check is not vacuous: it can fail).

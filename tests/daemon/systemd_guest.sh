@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# systemd for real (issue 12): this machine's PID 1 is not systemd, so one QEMU guest (tools/vcan-guest,
+# systemd for real: this machine's PID 1 is not systemd, so one QEMU guest (tools/vcan-guest,
 # MCA_GUEST_SYSTEMD) boots the host's own /lib/systemd/systemd as PID 1 on an overlay root: the host tree,
 # shared read-only over 9p, under a tmpfs upper layer (nothing the guest writes reaches the host). Before
 # systemd starts, the job below lays a tree made here over that root (one cp): this build installed

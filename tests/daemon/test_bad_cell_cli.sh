@@ -100,7 +100,7 @@ expect() {
 NL=$'\n'
 URDF="$SRC/config/robots/pa10plus.urdf"
 run_both missing_file "$tmp/no-such-cell.yaml" 0 "" "cannot open cell file"
-# issue 16: an empty or comment-only cell, or a cell whose scenario file is so, was a NULL dereference
+# an empty or comment-only cell, or a cell whose scenario file is so: named, not a NULL dereference
 : > "$tmp/empty.yaml"
 run_both empty_cell "$tmp/empty.yaml" 0 "(document)" "empty document"
 printf '# nothing but comments\n\n   # and blank lines\n' > "$tmp/comments.yaml"
@@ -132,18 +132,18 @@ expect zero_period "period_us: 2000" "period_us: 0" "period_us" "rt.period_us" "
 expect bad_priority "priority: 70" "priority: 150" "priority: 150" "rt.priority" "must be in 0..99"
 expect scenario_missing "  duration: 3.5$NL" "  scenario: gone/cross.yaml$NL" "scenario: gone" "task.scenario" \
     "gone/cross.yaml' not found"
-# a missing field names its enclosing mapping's line: the arm's entry (issue 12)
+# a missing field names its enclosing mapping's line: the arm's entry
 expect socketcan_no_interface "    interface: vcan1$NL" "" "- name: right" "arms[1].interface" \
     "required with backend socketcan"
 expect dds_config_missing "  domain: 7$NL" "  domain: 7$NL  config: nowhere/cyclone.xml$NL" "config: nowhere" \
     "dds.config" "nowhere/cyclone.xml' not found"
 expect unknown_scheme "scheme: mvn" "scheme: magic" "scheme: magic" "scheme" "unknown scheme 'magic' (known: mca-ts, mca, mvn, apf)"
-# issue 16: a URDF nested 50 000 deep overflowed the stack in TinyXML's recursive parser
+# a URDF nested 50 000 deep would overflow the stack in TinyXML's recursive parser
 { printf '<?xml version="1.0"?>\n<robot name="deep">\n'; for ((i = 0; i < 50000; i++)); do printf '<a>'; done; } \
     > "$tmp/deep.urdf"
 expect deep_urdf "$URDF${NL}    base_xyz: [0.0, -0.6" "$tmp/deep.urdf${NL}    base_xyz: [0.0, -0.6" "deep.urdf" \
     "arms[0].urdf" "deep.urdf: line 3: elements nested deeper than 256 levels"
-# issue 16: lines over 1023 characters (fgets split them) shifted the reported line numbers
+# lines over 1023 characters (a reader that fgets would split them) must not shift the reported line numbers
 long="# $(printf 'x%.0s' {1..3000})"
 expect long_line_before_range_error "rt:$NL  period_us: 2000" "$long${NL}rt:$NL  period_us: -1000" "period_us: -1000" \
     "rt.period_us" "(got -1000)"
@@ -153,7 +153,7 @@ expect long_line_before_unknown_key "stop_after: 1.5" "$long${NL}$long${NL}stop_
     "stop_afterwards" "Unexpected key"
 expect duplicate_arm "  - name: right" "  - name: left" "backend: socketcan" "arms[1].name" "'left' used twice" -1
 
-# issue 16: every number has a range a real cell can need (docs/daemon.md); out of it, the field, the line
+# every number has a range a real cell can need (docs/daemon.md); out of it, the field, the line
 # and the range are named and nothing starts
 expect lost_feedback_huge "lost_feedback_cycles: 6" "lost_feedback_cycles: 2147483647" "lost_feedback_cycles" \
     "rt.lost_feedback_cycles" "must be in 1..1000 cycles (got 2147483647)"
@@ -223,7 +223,7 @@ sed -e 's/^duration: .*/duration: 1e7/' -e "s|\.\./robots/|$SRC/config/robots/|"
 dline=$(grep -n '^duration:' "$tmp/long_scn.yaml" | cut -d: -f1)
 expect scenario_duration_huge "  duration: 3.5$NL" "  scenario: long_scn.yaml$NL" "scenario: long_scn" "task.scenario" \
     "long_scn.yaml:$dline: duration: must be in (0, 3600] s (got 10000000)"
-# issue 16: production holds no test hooks. Each debug_* key, whatever its value, is refused by mcad at its
+# production holds no test hooks. Each debug_* key, whatever its value, is refused by mcad at its
 # line; the test build (mcad-test) checks the same file without complaint.
 for hook in "debug_kill_after_ticks: 1500" "debug_kill_after_ticks: 0" "debug_stall_after_ticks: 400" \
     "debug_start_in_fault: true"; do

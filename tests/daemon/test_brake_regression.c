@@ -23,6 +23,8 @@
 #include "mca/scenario.h"
 #include "mca/sim_backend.h"
 
+#include "log_sink.h" /* test_log_line */
+
 typedef struct {
     int ok;            /* 0: the task faulted or stopped before T */
     double d_new;      /* minimum distance while braking, daemon (new) */
@@ -35,7 +37,7 @@ typedef struct {
 } outcome_t;
 
 static mca_daemon_t *open_at(const mca_cell_t *cell, int k_stop, double dt, int *ok) {
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr}};
     mca_daemon_t *d = NULL;
     char err[512] = "";
     if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {

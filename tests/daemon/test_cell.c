@@ -152,7 +152,7 @@ static void test_good_cell(void **state) {
     assert_int_equal(cell.scn.arm[0].n_q0, 8);
     assert_true(cell.scn.arm[0].q0[3] == 0.8);
     assert_int_equal(cell.scn.arm[0].path.kind, MCA_PATH_HOLD);
-    assert_int_equal(cell.arm[1].backend, MCA_CELL_BACKEND_SOCKETCAN);
+    assert_int_equal(cell.arm[1].backend, mca_cell_backend_id("socketcan"));
     assert_string_equal(cell.arm[1].interface, "vcan1");
     assert_int_equal(cell.arm[1].id_base, 0x140);
     assert_true(cell.arm[1].dec_limit[0] == 10.0); /* default */
@@ -435,7 +435,7 @@ static void test_cell_bodies_over_scenario(void **state) {
 static void test_socketcan_needs_interface(void **state) {
     (void)state;
     const char *p = write_variant("noif", "    interface: vcan1\n", "");
-    /* a missing field names its enclosing mapping's line: the arm's entry (issue 12) */
+    /* a missing field names its enclosing mapping's line: the arm's entry */
     expect_error(p, MCA_EPARSE, line_of(p, "- name: right"), "arms[1].interface", "required", NULL);
 }
 
@@ -451,7 +451,7 @@ static void test_unknown_scheme(void **state) {
     expect_error(p, MCA_ECONFIG, line_of(p, "scheme: magic"), "scheme", "unknown scheme 'magic'", NULL);
 }
 
-/* ROS 2 (issue 14): dds.ros2 and task.stream keys; bad values name file, line and field. */
+/* ROS 2: dds.ros2 and task.stream keys; bad values name file, line and field. */
 static void test_ros2_keys(void **state) {
     (void)state;
     const char *p = write_variant("r2ns", "  publish_divisor: 4\n",
@@ -511,7 +511,7 @@ static void test_search_path(void **state) {
     assert_int_equal(cell.scn.n_arms, 2);
 }
 
-/* mca-ts (issue 11): the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
+/* mca-ts: the default without a scheme key; its keys: arms[i].priority, solver.deadlock_time and
  * solver.back_off_time reach the controller config; bad values name file, line and field. */
 static void test_mca_ts_keys(void **state) {
     (void)state;
@@ -552,7 +552,7 @@ static void test_duplicate_arm(void **state) {
     expect_error(p, MCA_ECONFIG, line_of(p, "backend: socketcan") - 1, "arms[1].name", "used twice", NULL);
 }
 
-/* ---- issue 12: every error kind names its exact line and field ---- */
+/* ---- every error kind names its exact line and field (an operator goes straight to it) ---- */
 
 /* Write `text` as tmpdir/NAME.yaml; returns the file name (static). */
 static const char *write_text(const char *name, const char *text) {
@@ -962,7 +962,7 @@ static void test_shipped_cells(void **state) {
         const int rc = mca_cell_load(g.gl_pathv[i], &cell, err, sizeof err);
         print_message("  %s: %s\n", g.gl_pathv[i], rc == MCA_OK ? "ok" : err);
         assert_int_equal(rc, MCA_OK);
-        /* two arms, but the three-arm cell of issue 11 (three_arms_sim: JACO2, MICO2, JACO2) */
+        /* two arms, but the three-arm cell (three_arms_sim: JACO2, MICO2, JACO2) */
         assert_true(cell.scn.n_arms == (strcmp(cell.name, "three_arms_sim") == 0 ? 3 : 2));
         for (int k = 0; k < 4; k++) {
             for (int b = 0; b < 2; b++) {
@@ -973,7 +973,7 @@ static void test_shipped_cells(void **state) {
                     assert_string_equal(cell.scn.name, want[k]);
                     for (int a = 0; a < cell.scn.n_arms; a++) {
                         assert_int_equal(cell.arm[a].backend,
-                                         b ? MCA_CELL_BACKEND_SOCKETCAN : MCA_CELL_BACKEND_SIM);
+                                         b ? mca_cell_backend_id("socketcan") : MCA_CELL_BACKEND_SIM);
                     }
                     seen[k][b]++;
                 }

@@ -1,5 +1,5 @@
 #!/bin/sh
-# mcad --clear-faults (issue 11): an arm that reports FAULT at start-up (the cell's test hook
+# mcad --clear-faults: an arm that reports FAULT at start-up (the cell's test hook
 # debug_start_in_fault: the sim firmware latches a fault in its first cycle, as one left from an earlier
 # run) stops the start (exit 1, the arm and the fault named) unless --clear-faults is given; then the
 # clearing is logged and the task runs (here 0.3 s, exit 0).

@@ -26,6 +26,8 @@
 #include "mca/rtstats.h"
 #include "mca/sim_backend.h"
 
+#include "log_sink.h" /* test_log_line */
+
 #ifndef MCA_SOURCE_DIR
 #error MCA_SOURCE_DIR must be defined
 #endif
@@ -67,7 +69,8 @@ static mca_daemon_t *open_daemon(mca_cell_t *cell) {
     if (rc != MCA_OK) {
         fail_msg("%s", err);
     }
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .wall_clock = 1};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr},
+                                .wall_clock = 1};
     mca_daemon_t *d = NULL;
     rc = mca_drive_open(&d, cell, &o, err, sizeof err);
     if (rc != MCA_OK) {
@@ -223,7 +226,7 @@ static void test_lost_feedback_faults_and_brakes(void **state) {
     size_t sum_len = 0;
     FILE *mf = open_memstream(&sum_text, &sum_len);
     assert_non_null(mf);
-    mca_daemon_print_summary(&s, mf);
+    mca_daemon_log_summary(&s, test_log_line, mf);
     fclose(mf);
     char want[256];
     snprintf(want, sizeof want,
@@ -289,7 +292,7 @@ static void test_start_in_fault(void **state) {
     mca_cell_t *cell = calloc(1, sizeof *cell);
     char err[1024] = "";
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
-    mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .wall_clock = 1};
+    mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
     const int rc = mca_drive_open(&d, cell, &o, err, sizeof err);
     print_message("  without --clear-faults: %s (%s)\n", err, mca_strerror(rc));
@@ -446,7 +449,8 @@ static void test_bus_error_keeps_feedback(void **state) {
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
     FILE *log = tmpfile();
     assert_non_null(log);
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = log}, .wall_clock = 1};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = log},
+                                .wall_clock = 1};
     mca_daemon_t *d = NULL;
     if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("%s", err);
@@ -532,7 +536,7 @@ static void test_bus_error_keeps_feedback(void **state) {
     free(cell);
 }
 
-/* ---- issue 16: implausible feedback. A proxy between the daemon and a sim arm (the test hook
+/* ---- implausible feedback (nothing moves on it). A proxy between the daemon and a sim arm (the test hook
  * mca_daemon_swap_arm) corrupts one sample in a chosen way, or drops it (EAGAIN) ---- */
 typedef struct fbproxy {
     mca_arm_t *inner;
@@ -610,7 +614,8 @@ static const mca_arm_ops_t fbproxy_ops = {.name = "fbproxy",
 
 static mca_daemon_t *open_with_fbproxy(const mca_cell_t *cell, int a, fbproxy_t *p, FILE *log) {
     char err[1024] = "";
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = log}, .wall_clock = 1};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = log},
+                                .wall_clock = 1};
     mca_daemon_t *d = NULL;
     if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("%s", err);
@@ -869,7 +874,8 @@ static void test_distances_while_braking(void **state) {
     char err[1024] = "", csv[512];
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
     snprintf(csv, sizeof csv, "/tmp/mca-test-daemon-%d.csv", (int)getpid());
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr, .csv_path = csv}, .wall_clock = 1};
+    const mca_drive_opts_t o = {
+        .daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr, .csv_path = csv}, .wall_clock = 1};
     mca_daemon_t *d = NULL;
     if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
         fail_msg("%s", err);
@@ -942,7 +948,7 @@ static int cmp_i64(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-/* The PDNN's budget (issue 29): a tick that runs out of it is no fault, and the summary counts it, by the
+/* The PDNN's budget: a tick that runs out of it is no fault, and the summary counts it, by the
  * clock and by steps apart. The budget is set through the config hook mca-sim uses (no seam): a 1 ns clock
  * with a tolerance no solve meets (every tick runs out at its first clock check), then a step budget of 2
  * under mca-ts (the cell's arms far apart: no row binds, the repair keeps the answer inside the box). */
@@ -967,7 +973,7 @@ static void budget_run(const char *scheme, int steps, uint64_t *by_time, uint64_
     mca_cell_t *cell = calloc(1, sizeof *cell);
     char err[1024] = "";
     assert_int_equal(mca_cell_load(cell_path, cell, err, sizeof err), MCA_OK);
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr},
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr},
                                 .wall_clock = 1,
                                 .controller_config = budget_hook,
                                 .controller_config_arg = &steps};
@@ -992,7 +998,7 @@ static void budget_run(const char *scheme, int steps, uint64_t *by_time, uint64_
     size_t n = 0;
     FILE *mf = open_memstream(&buf, &n);
     assert_non_null(mf);
-    mca_daemon_print_summary(&s, mf);
+    mca_daemon_log_summary(&s, test_log_line, mf);
     fclose(mf);
     const char *l = strstr(buf, "mcad: summary: PDNN out of its budget");
     assert_non_null(l);
@@ -1113,12 +1119,12 @@ static void test_histogram_vs_sorted(void **state) {
 static void test_rtlog(void **state) {
     (void)state;
     static mca_rtlog_t log;
-    assert_int_equal(mca_rtlog_init(&log, "mcad"), MCA_OK);
+    assert_int_equal(mca_rtlog_init(&log), MCA_OK);
     mca_rtlog(&log, MCA_LOG_ERR, "fault at t = %.3f s: %s", 1, 1.23456, 0, 0, 0, "distance below d1");
     mca_rtlog(&log, MCA_LOG_INFO, "running: %g arms, period %g us", 2, 2, 1000, 0, 0, NULL);
     FILE *f = tmpfile();
     assert_non_null(f);
-    assert_int_equal(mca_rtlog_drain(&log, f), 2);
+    assert_int_equal(mca_rtlog_drain(&log, test_log_line, f), 2);
     rewind(f);
     char l1[256], l2[256];
     assert_non_null(fgets(l1, sizeof l1, f));
@@ -1131,7 +1137,7 @@ static void test_rtlog(void **state) {
         mca_rtlog(&log, MCA_LOG_DEBUG, "n %g", 1, i, 0, 0, 0, NULL);
     }
     f = tmpfile();
-    assert_int_equal(mca_rtlog_drain(&log, f), MCA_RTLOG_CAPACITY);
+    assert_int_equal(mca_rtlog_drain(&log, test_log_line, f), MCA_RTLOG_CAPACITY);
     assert_true(mca_rtlog_dropped(&log) == 40);
     rewind(f);
     assert_non_null(fgets(l1, sizeof l1, f));

@@ -25,6 +25,8 @@
 #include "mca/err.h"
 #include "mca/sim_backend.h"
 
+#include "log_sink.h" /* test_log_line */
+
 extern void *__libc_malloc(size_t n);
 extern void *__libc_calloc(size_t a, size_t b);
 extern void *__libc_realloc(void *p, size_t n);
@@ -102,8 +104,11 @@ static mca_daemon_t *open_cell(const char *path, int dds, char *csv) {
     cell.dds.domain = domain;
     snprintf(cell.dds.config, sizeof cell.dds.config, "%s/config/dds/loopback.xml", src); /* traffic on lo */
     cell.dds.publish_divisor = 1;
-    const mca_drive_opts_t o = {
-        .daemon = {.no_dds = !dds, .log = stderr, .csv_path = csv, .dds_bridge_exe = bridge_exe}};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = !dds,
+                                           .log = test_log_line,
+                                           .log_arg = stderr,
+                                           .csv_path = csv,
+                                           .dds_bridge_exe = bridge_exe}};
     mca_daemon_t *d = NULL;
     if (mca_drive_open(&d, &cell, &o, err, sizeof err) != MCA_OK) {
         fprintf(stderr, "open: %s\n", err);
@@ -261,7 +266,7 @@ int main(int argc, char **argv) {
     }
     mca_daemon_close(d);
 
-    /* 4. a streamed task (ROS 2 targets, issue 14), DDS with its ROS 2 topics every tick: the loop reads the
+    /* 4. a streamed task (ROS 2 targets), DDS with its ROS 2 topics every tick: the loop reads the
      *    stream mailboxes each tick (no target comes: the arms hold), then a stop and braking */
     snprintf(path, sizeof path, "%s/config/cells/stream_sim.yaml", src);
     d = open_cell(path, 1, csv);

@@ -4,7 +4,8 @@
  *   - ideal arms: each tick's positions are the last ones plus the last command times dt, exactly; the same
  *     cell on plain sim arms is not (the control);
  *   - a stop and a fault scheduled at a task time act before the first tick at or after it, not before;
- *   - a driven daemon refuses mca_daemon_start; an ideal arm off the sim backend is refused at open. */
+ *   - a driven daemon refuses mca_daemon_start; an ideal arm off the sim backend is refused at open;
+ *   - the library prints nothing: its lines go to the caller's sink only. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -15,12 +16,15 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h> /* dup, dup2 */
 
 #include "mca/cell.h"
 #include "mca/daemon.h"
 #include "mca/daemon_drive.h"
 #include "mca/err.h"
 #include "mca/scenario.h"
+
+#include "log_sink.h" /* test_log_line */
 
 #ifndef MCA_SOURCE_DIR
 #error MCA_SOURCE_DIR must be defined
@@ -41,7 +45,8 @@ static mca_cell_t *scenario_cell(void) {
 }
 
 static mca_daemon_t *open_driven(const mca_cell_t *cell, uint32_t ideal) {
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .ideal_arms = ideal};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr},
+                                .ideal_arms = ideal};
     mca_daemon_t *d = NULL;
     char err[512] = "";
     if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
@@ -128,11 +133,73 @@ static void test_schedule(void **state) {
     free(cell);
 }
 
+/* A fault at 0.05 s, its lines drained, the summary logged, the daemon closed: every line to `sink`. */
+static void run_and_log(const mca_cell_t *cell, mca_log_fn sink, void *arg) {
+    const double dt = (double)cell->rt.period_ns * 1e-9;
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = sink, .log_arg = arg}};
+    mca_daemon_t *d = NULL;
+    char err[512] = "";
+    if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {
+        fail_msg("%s", err);
+    }
+    mca_drive_fault_at(d, MCA_CTRL_FAULT_NAN, 0.05);
+    for (int k = 0; k <= 60; k++) {
+        const double t = k * dt;
+        mca_drive_step(d, t, (int64_t)llround(t * 1e9));
+        mca_daemon_service(d);
+    }
+    mca_daemon_summary_t s;
+    mca_daemon_summary(d, &s);
+    mca_daemon_log_summary(&s, sink, arg);
+    mca_daemon_close(d);
+}
+
+/* The library prints nothing: without a sink a run that faults leaves stdout and stderr empty; with one,
+ * its lines (the fault, the summary) reach the sink. */
+static void test_lines_only_to_the_sink(void **state) {
+    (void)state;
+    mca_cell_t *cell = scenario_cell();
+    FILE *out = tmpfile(), *errf = tmpfile();
+    assert_true(out && errf);
+    fflush(stdout);
+    fflush(stderr);
+    const int saved_out = dup(1), saved_err = dup(2);
+    assert_true(saved_out >= 0 && saved_err >= 0);
+    assert_int_equal(dup2(fileno(out), 1), 1);
+    assert_int_equal(dup2(fileno(errf), 2), 2);
+    run_and_log(cell, NULL, NULL);
+    fflush(stdout);
+    fflush(stderr);
+    dup2(saved_out, 1);
+    dup2(saved_err, 2);
+    close(saved_out);
+    close(saved_err);
+    fseek(out, 0, SEEK_END);
+    fseek(errf, 0, SEEK_END);
+    print_message("  without a sink: %ld bytes on stdout, %ld on stderr\n", ftell(out), ftell(errf));
+    assert_int_equal(ftell(out), 0);
+    assert_int_equal(ftell(errf), 0);
+    fclose(out);
+    fclose(errf);
+    char *text = NULL;
+    size_t len = 0;
+    FILE *mf = open_memstream(&text, &len);
+    assert_non_null(mf);
+    run_and_log(cell, test_log_line, mf);
+    fclose(mf);
+    print_message("  with a sink: %zu bytes\n", len);
+    assert_non_null(strstr(text, "<3>mcad: summary: faults: 1 (at t = 0.050 s: injected fault nan"));
+    assert_non_null(strstr(text, "<6>mcad: summary: state "));
+    free(text);
+    free(cell);
+}
+
 static void test_ideal_needs_sim(void **state) {
     (void)state;
     mca_cell_t *cell = scenario_cell();
-    cell->arm[1].backend = MCA_CELL_BACKEND_SOCKETCAN;
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}, .ideal_arms = 2u};
+    cell->arm[1].backend = mca_cell_backend_id("socketcan");
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr},
+                                .ideal_arms = 2u};
     mca_daemon_t *d = NULL;
     char err[512] = "";
     assert_int_equal(mca_drive_open(&d, cell, &o, err, sizeof err), MCA_EINVAL);
@@ -147,6 +214,7 @@ int main(void) {
         cmocka_unit_test(test_ideal_arms),
         cmocka_unit_test(test_schedule),
         cmocka_unit_test(test_ideal_needs_sim),
+        cmocka_unit_test(test_lines_only_to_the_sink),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

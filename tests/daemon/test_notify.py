@@ -11,7 +11,7 @@ keep-alives. Four runs of a short sim cell (two PA10+, hold task, DDS on the loo
   3. same with SIGUSR1 as the stall trigger.
   4. as 1 with SIGINT (Ctrl-C) instead of SIGTERM: STOPPING=1, braking, stopped, exit 0.
 Runs 1 and 4 use the production mcad; 2 and 3 need the test hooks, so they run the test build mcad-test
-(issue 16: production holds no test hooks; daemon_sigusr1 shows that SIGUSR1 does not stall mcad).
+(production holds no test hooks; daemon_sigusr1 shows that SIGUSR1 does not stall mcad).
 usage: test_notify.py MCAD MCAD_TEST SOURCE_DIR [--no-rt]
 """
 import os

@@ -20,6 +20,8 @@
 #include "mca/err.h"
 #include "mca/tick_rec.h"
 
+#include "log_sink.h" /* test_log_line */
+
 #ifndef MCA_SOURCE_DIR
 #error MCA_SOURCE_DIR must be defined
 #endif
@@ -57,7 +59,8 @@ static mca_daemon_t *open_cell(const char *path, const char *record) {
         fprintf(stderr, "%s\n", err);
     }
     assert_int_equal(rc, MCA_OK);
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr, .record_path = record}};
+    const mca_drive_opts_t o = {
+        .daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr, .record_path = record}};
     mca_daemon_t *d = NULL;
     rc = mca_drive_open(&d, cell, &o, err, sizeof err);
     if (rc != MCA_OK) {

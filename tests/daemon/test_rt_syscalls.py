@@ -236,7 +236,7 @@ def main():
     if ftrace:
         ftrace.start(loop)
     affinity = threads(p.pid)
-    # issue 16: the DDS bridge is a child process of mcad's main thread; its threads must be off the loop's CPU too
+    # the DDS bridge is a child process of mcad's main thread; its threads must be off the loop's CPU too
     try:
         children = open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()
     except OSError:
@@ -325,7 +325,7 @@ def main():
             if "CLOCK_MONOTONIC, TIMER_ABSTIME" not in line:
                 bad.append(f"clock_nanosleep not absolute on CLOCK_MONOTONIC: {line}")
         elif name == "futex":
-            # shared (not _PRIVATE) since issue 16: the word is in the memfd mcad shares with mca-dds-bridge
+            # shared (not _PRIVATE): the word is in the memfd mcad shares with mca-dds-bridge
             if "FUTEX_WAKE, 1)" not in line:
                 bad.append(f"futex other than one FUTEX_WAKE: {line}")
         elif name == "restart_syscall":

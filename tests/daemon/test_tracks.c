@@ -21,6 +21,7 @@
 #include "mca/cell.h"
 #include "mca/daemon.h"
 #include "mca/daemon_drive.h"
+#include "log_sink.h" /* test_log_line */
 #include "mca/daemon_test.h"
 #include "mca/err.h"
 #include "mca/scenario.h"
@@ -77,7 +78,7 @@ typedef struct run {
 static void drive(double silent_at, run_t *r) {
     mca_cell_t *cell = tracks_cell();
     const double dt = (double)cell->rt.period_ns * 1e-9;
-    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = stderr}};
+    const mca_drive_opts_t o = {.daemon = {.no_dds = 1, .log = test_log_line, .log_arg = stderr}};
     mca_daemon_t *d = NULL;
     char err[512] = "";
     if (mca_drive_open(&d, cell, &o, err, sizeof err) != MCA_OK) {

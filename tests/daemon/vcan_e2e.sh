@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# End to end over CAN FD (issue 6, "what it must show" 1): mcad drives task 3 (cup stacking, JACO2 on vcan0,
+# End to end over CAN FD: mcad drives task 3 (cup stacking, JACO2 on vcan0,
 # MICO2 on vcan1) through the SocketCAN backend, each arm answered by its own firmware emulator mca-armsim
 # (lockstep: one firmware cycle per command, so the emulated guest CPU changes no trajectory), with DDS on
 # and mca-monitor subscribed. Natively when this kernel has vcan and we are root, else in one QEMU guest
@@ -41,7 +41,7 @@ B=$(cd "$1" && pwd) S=$(cd "$2" && pwd)
 OUT=$B/tests/daemon/vcan-e2e
 ARMSIM=$B/sim_backend/armsim_can/mca-armsim
 MCAD=$B/daemon/mcad
-# phase D's self-kill is a test hook (debug_kill_after_ticks): only the test build takes it (issue 16)
+# phase D's self-kill is a test hook (debug_kill_after_ticks): only the test build takes it (production holds no test hooks)
 MCAD_TEST=$B/daemon/mcad-test
 MON=$B/tools/mca-monitor/mca-monitor
 SRC_CELL=$S/config/cells/cup_stacking_vcan.yaml

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The peer of issue 16 "No peer can take the controller down": a subscriber of mca/distances whose type
+"""A peer that must not take the controller down: a subscriber of mca/distances whose type
 a new user wrote from dds/mca_dds.idl in the obvious way, plain uint8 keys and no must-understand
 annotation. Its XTypes type identifiers differ from idlc's (tests/dds/mca_types.py has the matching
 definition), so libddsc 0.10.2 asks this (PyPI cyclonedds 11.x) side for the type object and, on the

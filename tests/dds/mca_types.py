@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
-"""mca DDS types written in Python (independent of dds/mca_dds.idl and its C code): same fully
-qualified names, same keys, same field order, all @final. Also the deterministic synthetic pattern of
+"""mca DDS types written in Python (the structs independent of dds/mca_dds.idl and its C code, so that
+test_types_match.py compares two writings): same fully qualified names, same keys, same field order, all
+@final; the state numbering (an int32 on the wire, no part of the types) is the IDL's, read from it. Also the deterministic synthetic pattern of
 dds/include/mca/dds_synth.h, reimplemented here so a subscriber can check every field it receives.
 Topic names and QoS as in docs/dds.md."""
 import enum
@@ -10,6 +11,8 @@ from dataclasses import dataclass
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.annotations import final, key, must_understand
 import cyclonedds.idl.types as t
+
+import idl_enums
 
 MAX_DOF = 8
 MAX_LINKS = 9
@@ -68,14 +71,8 @@ class Distances(IdlStruct, typename="mca::dds::Distances"):
     link_distance_b: t.sequence[t.float64, MAX_LINKS]
 
 
-class ControllerState(enum.IntEnum):
-    """Values of ControllerStatus.state (sent as int32, see dds/mca_dds.idl)."""
-    STATE_INIT = 0
-    STATE_READY = 1
-    STATE_RUNNING = 2
-    STATE_BRAKING = 3
-    STATE_STOPPED = 4
-    STATE_FAULT = 5
+# Values of ControllerStatus.state (sent as int32): the IDL's own numbering, read from dds/mca_dds.idl.
+ControllerState = enum.IntEnum("ControllerState", idl_enums.controller_states())
 
 
 @final

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """The peer that crashes libddsc 0.10.2 (docs/dds.md, "A peer that crashes Cyclone 0.10.2"), present for a while
-against a running mcad (issues 16 and 32).
+against a running mcad: it must not take the loop down.
 
 mcad runs the shipped cross-circles sim cell (DDS at 100 Hz, --csv, SCHED_FIFO as the cell says) long enough for
 the peer to be there PEER_S seconds (--peer-seconds, default 12; the issue's 60 s by hand) and for the run to go
@@ -9,7 +9,7 @@ on after it left. ~3 s after mcad runs, the peer joins: a Python subscriber of m
 written from dds/mca_dds.idl with plain uint8 keys and no must-understand (tests/dds/crash_peer.py, PyPI
 cyclonedds 11.0.1). libddsc 0.10.2 (Debian 12) asks it for its type object and crashes on the reply in its
 type-lookup thread (a NULL member type in xt_validate_impl, ddsi_typewrap.c: the reply's uint8 members are
-TK_UINT8, a type kind 0.10.2 does not know). Since issue 16 that thread is in mca-dds-bridge, not in mcad.
+TK_UINT8, a type kind 0.10.2 does not know). That thread is in mca-dds-bridge, not in mcad, so the crash cannot take the loop with it.
 
 Plain cell (config/dds/loopback.xml; default), asserted:
   - the bridge dies of SIGSEGV within 10 s of the peer joining ("the crash REPRODUCED"; if not, a Cyclone without

@@ -31,8 +31,9 @@
 static const char *g_config;
 static uint32_t g_domain;
 static const char *g_bridge_exe; /* mca-dds-bridge (process mode), argv[3] */
-/* The crash of issue 16 is a SIGSEGV; under AddressSanitizer the bridge's own SEGV handler would turn a
- * SIGSEGV into an exit with a report, so the sanitizer build kills it with SIGKILL instead. */
+/* The crash a bad peer causes (tests/dds/crash_peer.py) is a SIGSEGV; under AddressSanitizer the bridge's own
+ * SEGV handler would turn a SIGSEGV into an exit with a report, so the sanitizer build kills it with SIGKILL
+ * instead. */
 #if defined(__SANITIZE_ADDRESS__)
 #define CRASH_SIGNAL SIGKILL
 #define CRASH_TEXT "died: signal 9 (SIGKILL); restart 1 in 0.1 s"
@@ -661,9 +662,10 @@ static void test_log_line(void *arg, int level, const char *text) {
     fprintf((FILE *)arg, "<%d>test: %s\n", level, text);
 }
 
-/* Process mode (issue 16): the publisher is the program mca-dds-bridge. Killed with SIGSEGV, it is reaped,
- * logged and restarted by mca_dds_bridge_supervise(); the restarted one publishes the newest snapshot of the
- * backlog at once (the others count as stale) and then every new one; destroy ends it after the final status.
+/* Process mode (a crash of Cyclone's must not take mcad with it): the publisher is the program
+ * mca-dds-bridge. Killed with SIGSEGV, it is reaped, logged and restarted by mca_dds_bridge_supervise(); the
+ * restarted one publishes the newest snapshot of the backlog at once (the others count as stale) and then
+ * every new one; destroy ends it after the final status.
  */
 static void test_process_mode_restart(void **state) {
     (void)state;

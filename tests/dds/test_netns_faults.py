@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Network faults between a controller host and a monitoring host (issue 16), with real UDP and multicast
+"""Network faults between a controller host and a monitoring host (no peer may take the controller down), with real UDP and multicast
 discovery: two network namespaces joined by a veth pair, each end named eth1 with the addresses that
 config/dds/network-example.xml names (192.168.10.2 controller, .3 operator), so the shipped example works
 as it is. mcad runs the cross circles task (sim backend, publishing every tick) in the controller namespace;

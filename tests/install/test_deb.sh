@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# The Debian package (issue 12): build it from the tree (tools/deb/build_deb.sh: its own configure with the
+# The Debian package: build it from the tree (tools/deb/build_deb.sh: its own configure with the
 # prefix /usr, in BUILD_DIR/deb-build), check its control data and contents, unpack it into a scratch root
 # (dpkg -x), run the unpacked mcad --check on every unpacked cell, have systemd-analyze verify the unit's
 # instance mcad@cross_circles_sim, and run one whole sim cell from the unpacked tree the way the packaged unit

@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# cmake --install into a fresh prefix, then what a user and an outside project do with it (issue 12):
+# cmake --install into a fresh prefix, then what a user and an outside project do with it:
 # the files where FHS puts them, the unit with the prefix's paths, the installed mcad checking an installed
 # cell that reaches the shared scenarios and robots through the search path, and an outside CMake project
 # that finds the package (find_package(mca)), builds against the installed headers and static libraries
@@ -29,7 +29,7 @@ check "include/mca/controller.h, dds_bridge.h, ros2.h" test -f "$P/include/mca/c
 check "no test-only header (daemon_test.h)" test ! -e "$P/include/mca/daemon_test.h"
 check "lib*/libmca_core.a, libmca_model.a and the CMake package" sh -c "ls $P/lib*/libmca_core.a $P/lib*/libmca_model.a $P/lib*/cmake/mca/mcaConfig.cmake"
 check "include/mca/path.h (core), scenario.h, urdf.h, qp_dump.h (model)" test -f "$P/include/mca/path.h" -a -f "$P/include/mca/scenario.h" -a -f "$P/include/mca/urdf.h" -a -f "$P/include/mca/qp_dump.h"
-# the exported real-time core carries none of the loaders' dependencies (issue 12); mca::model brings them
+# the exported real-time core carries none of the loaders' dependencies (an RT user links no YAML or URDF parser); mca::model brings them
 core_links() {
     b=$(sed -n '/^set_target_properties(mca::core /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)
     m=$(sed -n '/^set_target_properties(mca::model /,/^)/p' "$P"/lib*/cmake/mca/mcaTargets.cmake)

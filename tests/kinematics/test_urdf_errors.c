@@ -90,7 +90,7 @@ static void test_zero_velocity_limit(void **state) {
     assert_error(&l, MCA_EPARSE, "joint 'j1'", "velocity");
 }
 
-/* issue 16: velocity="1e300" switched the velocity bounds off; limits are in (0, MCA_JOINT_VEL_MAX] */
+/* velocity="1e300" would switch the velocity bounds off; limits are in (0, MCA_JOINT_VEL_MAX] */
 static void test_huge_velocity_limit(void **state) {
     (void)state;
     load_t l;

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""mca-record of the demo, read back by an independent reader (issue 32).
+"""mca-record of the demo, read back by an independent reader.
 
 The shipped cell config/cells/cross_circles_sim.yaml (the demo's: loopback.xml, domain 0, DDS at 100 Hz),
 run for STOP_S seconds instead of 11 (and with a high overrun limit: a stalled VM must not end the run), by

@@ -284,7 +284,7 @@ static void run_stress(size_t capacity, uint64_t n) {
 
 /* A ring and its storage in one block moved elsewhere (as two processes map one memfd at different
  * addresses): the copy works; a producer with its own geometry (mca_ring_producer_t) never writes outside the
- * storage even when the ring's fields are scribbled over (issue 16: the consumer may be another process). */
+ * storage even when the ring's fields are scribbled over (the consumer may be another process). */
 /* push_parts writes only the given words of a record (a range past the end cut there, on a record whose size
  * is not a multiple of 8); the slot's other words keep the earlier record's. */
 static void test_push_parts(void **state) {

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Shipped cells as they are, seen by ROS 2 nodes as a user runs them (issue 32, docs/ros2.md "Network"): two
+"""Shipped cells as they are, seen by ROS 2 nodes as a user runs them (docs/ros2.md "Network"): two
 network namespaces joined by a veth pair stand for two machines, each with lo as a real host has it (no
 multicast flag) and a network interface eth1 (controller 192.168.10.2, monitoring host .3, a default route).
 For each cell given: mcad runs the shipped file unchanged (its dds.config, domain 0) in the controller

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Every shipped plain cell with DDS on publishes the way ros2.hosts proves (issue 32, docs/ros2.md "Network").
+"""Every shipped plain cell with DDS on publishes the way ros2.hosts proves (docs/ros2.md "Network").
 
 ros2.hosts runs the shipped plain sim cells with default ROS 2 nodes on the controller's host and on a second
 one. The vcan and CANopen cells need SocketCAN, which this kernel lacks (their runs are QEMU guest tests under
@@ -30,7 +30,7 @@ import sys
 import tempfile
 
 MCAD, SRC, HOSTS = sys.argv[1], sys.argv[2], [os.path.realpath(x) for x in sys.argv[3:]]
-NEEDED = ("joint_states", "distance_markers", "diagnostics")  # what issue 32's must-show 1 counts
+NEEDED = ("joint_states", "distance_markers", "diagnostics")  # what a user's ROS 2 tools need to see the cell
 failures = []
 
 

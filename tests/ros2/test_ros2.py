@@ -29,7 +29,7 @@ graph: mcad runs 3 s and links no ROS library (ldd); a second rclpy node sees th
   sensor-data (best-effort) subscriber receives JointState too.
 With a fifth argument (topics), the MarkerArray received at the tick of the smallest distance is written there
 as JSON: tools/plots/ros2_markers.py draws it (the README's picture).
-restart (issue 16): mcad's DDS bridge process is killed with SIGSEGV after its first /diagnostics (12 s run): it says
+restart: mcad's DDS bridge process is killed with SIGSEGV after its first /diagnostics (12 s run): it says
   dds_bridge_restarts 0 before and 1 from the restarted bridge, JointState flows again, mcad exits 0.
 listen (for test_hosts.py, which runs it in network namespaces and then mcad): a node with the environment it
   is given subscribes to a cell's JointStates, markers and diagnostics, writes WORK/ROLE.status as it goes
@@ -50,6 +50,9 @@ import sys
 import tempfile
 import threading
 import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "dds"))
+import idl_enums  # noqa: E402  the states' names by their IDL numbering
 
 MODE = sys.argv[1]
 if MODE == "listen":  # as a user's node: the environment as given (test_hosts.py gives no ROS_* variables)
@@ -364,7 +367,7 @@ def mode_topics(tmp):
           f"MarkerArrays: {len(set(mk_ticks))} of the {n_exp} ticks published from the first received (>= 99 %)")
 
     # Diagnostics
-    states = ["init", "ready", "running", "braking", "stopped", "fault"]
+    states = idl_enums.controller_state_names()
     dg_fail, n_dg, seen = [], 0, set()
     for da in main.diag:
         for s in da.status:
@@ -478,7 +481,7 @@ def mode_restart(tmp):
     check(any(r == "1" and s == "running" for _, s, r in restarts),
           "/diagnostics from the restarted bridge: dds_bridge_restarts 1, running")
     # the death is said on /diagnostics too: a WARN (the controller is fine; its monitoring was down), the
-    # count, the cause and the back-off (issue 32)
+    # count, the cause and the back-off
     h = health[0] if health else None
     lvl = None if h is None else (h[0][0] if isinstance(h[0], (bytes, bytearray)) else int(h[0]))
     check(lvl == 1, f"/diagnostics from the restarted bridge: level WARN (1) while its death is recent: {h}")
@@ -657,13 +660,14 @@ def mode_stream(tmp):
     rows = read_csv(out_csv)
     d = [float(r["min_d"]) for r in rows]
     states = [int(r["state"]) for r in rows]
+    st = dict(idl_enums.controller_states())
     check(min(d) >= D1, f"every one of {len(rows)} ticks at or above d1 = {D1} m (min {min(d):.4f} m)")
     # phases in the CSV: mcad's t is task time from its first tick; map by the ticks the diagnostics stamped
-    running = [i for i, s_ in enumerate(states) if s_ == 2]
+    running = [i for i, s_ in enumerate(states) if s_ == st["STATE_RUNNING"]]
     check(min(d[i] for i in running) < D2, f"the tips came within d2 = {D2} m while driven at each other "
           f"(min {min(d[i] for i in running):.4f} m): the yield was needed")
-    brake_from = next((i for i, s_ in enumerate(states) if s_ in (3, 5)), None)
-    check(brake_from is not None and states[-1] == 5, "mcad braked and ended in FAULT")
+    brake_from = next((i for i, s_ in enumerate(states) if s_ in (st["STATE_BRAKING"], st["STATE_FAULT"])), None)
+    check(brake_from is not None and states[-1] == st["STATE_FAULT"], "mcad braked and ended in FAULT")
     # B: the distance grew past d2 again before the stale fault
     if brake_from:
         i_min = min(running, key=lambda i: d[i])

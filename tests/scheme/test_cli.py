@@ -62,7 +62,7 @@ def main():
         expect([sim, "--scenario", bad], 1, [bad, "d1/d2"])
         btext = text.replace("kind: hold", "kind: hold\n      radius: [1]")
         open(bad, "w").write(btext)
-        # file:line:column of the value, then the field (the cell loader's form, issue 12)
+        # file:line:column of the value, then the field (the cell loader's form)
         blines = btext.split("\n")
         bl = next(i for i, ln in enumerate(blines) if "radius: [1]" in ln)
         barm = sum(1 for ln in blines[:bl] if ln.lstrip().startswith("- name:")) - 1
@@ -74,15 +74,15 @@ def main():
         expect([sim, "--scenario", bad], 1, ["q0", "7 values"])
         open(bad, "w").write("name: x\nduration: [\n")
         expect([sim, "--scenario", bad], 1, [bad])
-        # issue 16: an empty or comment-only file was a NULL dereference (SIGSEGV)
+        # an empty or comment-only file: named, not a NULL dereference (SIGSEGV)
         open(bad, "w").write("")
         expect([sim, "--scenario", bad], 1, [bad + ":0: (document): empty document"])
         open(bad, "w").write("# a scenario\n\n  # to be written\n")
         expect([sim, "--scenario", bad], 1, [bad + ":0: (document): empty document"])
-        # issue 16: a line over 1023 characters (fgets split it) shifted the line numbers of range errors
-        # (d1 >= d2 names the line of d1, issue 12)
+        # a line over 1023 characters (a reader that fgets would split it) must not shift the line numbers of range errors
+        # (d1 >= d2 names the line of d1)
         expect_at(bad, "# " + "x" * 3000 + "\n" + text.replace("d2: 0.12", "d2: 0.01"), "d1: 0.05", ["d1/d2"])
-        # issue 16: every number has a range (docs/scheme.md section 3), named with file, line and field
+        # every number has a range (docs/scheme.md section 3), named with file, line and field
         for old_, new_, field, why in (
                 ("duration: 8.0", "duration: 1e7", "duration", "must be in (0, 3600] s (got 10000000)"),
                 ("dt: 0.001", "dt: 1e-12", "dt", "must be in [0.0001, 0.1] s (got 1e-12)"),

@@ -521,7 +521,7 @@ static void test_scenario_files(void **state) {
     const char *base = "name: t\nduration: 1\narms:\n  - name: a\n    urdf: " MCA_SOURCE_DIR
                        "/config/robots/pa10plus.urdf\n    base_xyz: [0, 0, 0]\n"
                        "    q0: [0]\n    path:\n      kind: hold\n";
-    /* a URDF that is not there: named at load, with its line (the cell's check, shared: issue 12) */
+    /* a URDF that is not there: named at load, with its line (the cell's check, shared) */
     {
         char nourdf[512];
         snprintf(nourdf, sizeof nourdf,
@@ -541,7 +541,7 @@ static void test_scenario_files(void **state) {
     const char *p = write_tmp("unknown", buf);
     assert_int_equal(mca_scenario_load(p, &s, err, sizeof err), MCA_EPARSE);
     {
-        /* the key's own line and its path, as the cell loader names it (issue 12) */
+        /* the key's own line and its path, as the cell loader names it */
         char want_key[300];
         snprintf(want_key, sizeof want_key, "%s:10: arms[0].bogus: Unexpected key: bogus", p);
         if (strncmp(err, want_key, strlen(want_key)) != 0) {
@@ -817,7 +817,7 @@ static void test_controller_n_arms(void **state) {
     free(c);
 }
 
-/* ------------------------------------------------------------------ mca-ts (issue 11) */
+/* ------------------------------------------------------------------ mca-ts */
 
 /* Run a scenario under mca-ts with the arms integrated exactly (q += qdot dt); calls back every tick. */
 typedef void (*ts_tick_fn)(const mca_controller_t *c, const mca_tick_info_t *info, void *user);
@@ -1111,7 +1111,7 @@ static void assert_rows_hold(const mca_controller_t *c, double *const qds[MCA_MA
     print_message("  %d collision rows hold at the command\n", rows);
 }
 
-/* The PDNN's budget (issue 29): a tick whose solve runs out of its time is no fault. A budget of 1 ns runs
+/* The PDNN's budget: a tick whose solve runs out of its time is no fault. A budget of 1 ns runs
  * out at each block's first clock check (after 16 steps): the first tick of the negative task whose solve
  * needs over 100 steps (mca: its fault at the cap) is repeated with it. mca-ts commands repair_capped's
  * answer, mca the iterate scaled into the rows and the box; both keep every collision row, and the task goes
@@ -1258,7 +1258,7 @@ static int run_negative(mca_controller_config_t *cfg, const mca_scenario_t *s, i
     return k;
 }
 
-/* The step budget (issue 29): deterministic, below the cap a non-fault event under mca-ts (the same tick
+/* The step budget: deterministic, below the cap a non-fault event under mca-ts (the same tick
  * twice: the same commands); under the paper's scheme mca the cap stays its limit, so the negative task
  * faults as published (pdnn-not-converged after 2000 steps, at the tick it did without a budget). */
 static void test_pdnn_step_budget(void **state) {

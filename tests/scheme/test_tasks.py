@@ -7,7 +7,7 @@ usage: test_tasks.py MCA_SIM SCENARIO_DIR WORK_DIR
     binding, no fault, the whole task;
     tasks 1-3: MCA's end-effector error <= 1e-4 m while no collision row binds, and overall;
  4. negative example: MCA ends in a braked stop with a named fault, no distance below d1 (MVN collides).
- 5. path first (issue 29): tasks 1-3 as shipped under mca-ts (path first, tolerance 0, the default): every
+ 5. path first: tasks 1-3 as shipped under mca-ts (path first, tolerance 0, the default): every
     pair >= d1, the task completed, the tool tips' distance to their paths' curves <= 2e-5 m; with
     `tracking: elastic` on every path the same tasks leave the path by more (the exact penalty holds it).
 Prints the figures (min distance, tracking errors, PDNN steps, tick compute time).

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* Real-time discipline: the distance functions must not allocate. Counts malloc/calloc/realloc calls by
  * interposing them (glibc __libc_* underneath), and documents which libccd entry points do allocate.
- * Under AddressSanitizer (it owns malloc) it exits 77, which ctest shows as skipped (issue 12: a test must
+ * Under AddressSanitizer (it owns malloc) it exits 77, which ctest shows as skipped (a test must
  * not pass without having run); the normal build's run is the one that counts. */
 #include <math.h>
 #include <stdio.h>

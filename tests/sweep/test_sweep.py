@@ -6,7 +6,7 @@ usage: test_sweep.py pa10|pa10-simarm MCA_SIM MCA_SWEEP_PY WORK_DIR
          (>= 70 % reachable, MVN below d1 on >= 5 of them) and mca-ts completes, on its paths (path first),
          >= 90 % of the reachable tasks and >= 95 % of those whose paths clear the other arm at rest. pa10: arms that realise each command exactly (mca-sim --euler): no mca-ts run below d1 (task,
          and with a stop request). pa10-simarm: the sim backend's rate-limited firmware model: the stop runs
-         have none below d1, the task runs at most KNOWN_SIMARM_UNSAFE (1) (a known gap of issue 11, see
+         have none below d1, the task runs at most KNOWN_SIMARM_UNSAFE (1) (a known gap, see
          docs/scheme.md "What is not yet shown"; the bound makes a regression fail);
        test_sweep.py regress MCA_SIM MCA_SWEEP_PY WORK_DIR [MCA_STOPCHECK]
          tasks of the full sweep (seed 1) that once went below d1 under mca-ts: MVN goes below d1 on each,
@@ -16,10 +16,10 @@ usage: test_sweep.py pa10|pa10-simarm MCA_SIM MCA_SWEEP_PY WORK_DIR
          the three-arm task: MVN goes below d1; mca-ts keeps every pair (CSV d_<a>_<b>) >= d1 at every tick,
          braking included, and completes;
        test_sweep.py pnp MCA_SIM MCA_SWEEP_PY WORK_DIR
-         issue 29's pick and place, 4 pnp-jaco-mico + 4 pnp-pa10 tasks (seed 3): every task reachable (MVN
+         pick and place, 4 pnp-jaco-mico + 4 pnp-pa10 tasks (seed 3): every task reachable (MVN
          tracks it alone), each arm's picks in its own pick area on its side of the zone, every place point in
          the shared zone and >= sep from the other arm's, the exact indices exactly the grasp/release dwell
-         pairs, timetables 25-45 s, the issue-29 keys written iff this mca-sim takes them; MVN below d1 on some
+         pairs, timetables 25-45 s, the pick-and-place keys written iff this mca-sim takes them; MVN below d1 on some
          task of each kind (the arms meet), mca-ts never; one task drawn again alone is the same scenario.
 Exit 77 (ctest SKIP) when this mca-sim has no scheme mca-ts.
 """
@@ -74,7 +74,7 @@ def sweep(sim, tool, work, ideal):
         allowed = 0 if ideal else KNOWN_SIMARM_UNSAFE
         check(ts["unsafe"] <= allowed, "mca-ts: %d runs below d1 (want <= %d) %s" % (ts["unsafe"], allowed,
                                                                                      " ".join(bad)))
-        # completed = on the path (path first, tolerance 0: the default since issue 29; the elastic tracking
+        # completed = on the path (path first, tolerance 0: the default; the elastic tracking
         # "completed" 49 of 50 here by leaving its paths by up to 10 cm). A task whose path runs into the other
         # arm standing at its start (= end) cannot be completed by any path rate: the bar of 95 % is on the
         # others (mca_sweep.py's a-priori rest probe), 90 % on all.

@@ -32,6 +32,12 @@ void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     o->pdnn_budget_us = -1;
 }
 
+/* The daemon library's lines (mca/log.h) as mcad prints them, "<LEVEL>mcad: TEXT": mca-sim runs the same
+ * daemon, and its output reads the same. */
+static void daemon_line(void *arg, int level, const char *text) {
+    fprintf((FILE *)arg, "<%d>mcad: %s\n", level, text);
+}
+
 static int cmp_i64(const void *a, const void *b) {
     const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
     return (x > y) - (x < y);
@@ -115,7 +121,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             }
         }
     }
-    const mca_drive_opts_t dopts = {.daemon = {.no_dds = 1, .log = stderr},
+    const mca_drive_opts_t dopts = {.daemon = {.no_dds = 1, .log = daemon_line, .log_arg = stderr},
                                     .ideal_arms = o->use_backend ? 0u : (1u << scn->n_arms) - 1u,
                                     .controller_config = apply_overrides,
                                     .controller_config_arg = (void *)o};

@@ -544,8 +544,8 @@ class Sim:
         self.stop_at = "--stop-at" in h
         self.fault_at = "--fault-at" in h
         self.dec_limit = "--dec-limit" in h
-        self.fields = set()  # the issue-11/29 summary fields this mca-sim writes
-        # issue-29 scenario keys, each accepted or not by a 2-tick run of a tiny scenario: per path
+        self.fields = set()  # the newer summary fields (mca-ts, pick and place) this mca-sim writes
+        # the pick-and-place scenario keys, each accepted or not by a 2-tick run of a tiny scenario: per path
         # `tolerance: X` and `exact: [i, ...]`, top level `exact_tolerance: X`
         self.keys = self.probe_keys()
 
@@ -603,7 +603,7 @@ def min_distance_all(r):
 
 
 def classify(r, d1, duration, lost_thr, stop_t=None):
-    """(class, reason, details) of one run's summary. With the issue-29 fields a run completes only when every
+    """(class, reason, details) of one run's summary. With the pick-and-place fields a run completes only when every
     exact point was met too (exact_missed 0); one that ran to its end without fault or stop but missed an exact
     point is `exact-missed`."""
     dmin = min_distance_all(r)
@@ -824,7 +824,7 @@ def pnp_target(tasks, schemes, lines):
                       done_and_path_error_ok=both if have_pe else None, target_met=met if have_pe and have_ex else None,
                       max_err_ok=me_ok)
         lines.append("pick and place, %s: %d of %d done (completed or late%s) = %.1f %%; path_error_max <= %.2f m: %s; "
-                     "both: %s -> issue 29 target (>= 95 %%): %s" % (
+                     "both: %s -> target (>= 95 %%): %s" % (
                          s, len(done), n, ", every exact point met" if have_ex else "; exact points: n/a",
                          100.0 * len(done) / n, PNP_PATH_ERROR,
                          ("%d of %d (every task: %s)" % (pe_ok, n, "yes" if pe_ok == n else "no")) if have_pe else "n/a",

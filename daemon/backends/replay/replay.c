@@ -42,7 +42,7 @@ static const cyaml_schema_field_t replay_fields[] = {
 typedef struct replay_own {
     char file[512 - 8];
 } replay_own_t;
-_Static_assert(sizeof(replay_own_t) <= MCA_CELL_BACKEND_OWN_SIZE, "raise MCA_CELL_BACKEND_OWN_SIZE");
+MCA_CELL_BACKEND_OWN(replay_own_t, replay_own)
 
 static int replay_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const mca_backend_keys_t *k) {
     const replay_keys_t *rk = k->section;
@@ -51,7 +51,7 @@ static int replay_read(const mca_check_ctx_t *c, mca_cell_t *cell, int a, const 
                       "arms[%d].replay.file: required with backend replay (the recording, mcad --record)", a);
         return MCA_EPARSE;
     }
-    replay_own_t *own = (replay_own_t *)cell->arm[a].backend_own.bytes;
+    replay_own_t *own = replay_own(&cell->arm[a]);
     char field[48];
     snprintf(field, sizeof field, "arms[%d].replay.file", a);
     return mca_config_find(c, field, rk->file, own->file, sizeof own->file);
@@ -129,7 +129,7 @@ static const mca_arm_ops_t replay_ops = {
 };
 
 static int replay_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *err, size_t errlen) {
-    const replay_own_t *own = (const replay_own_t *)o->cell->arm[o->arm].backend_own.bytes;
+    const replay_own_t *own = replay_own_c(&o->cell->arm[o->arm]);
     replay_arm_t *r = calloc(1, sizeof *r);
     if (!r) {
         return MCA_ENOMEM;
@@ -159,12 +159,11 @@ static int replay_open(mca_arm_t **arm, const mca_backend_open_args_t *o, char *
 
 static void replay_describe(const mca_cell_arm_t *ca, int n_joints, char *buf, size_t len) {
     (void)n_joints;
-    snprintf(buf, len, " %s", ((const replay_own_t *)ca->backend_own.bytes)->file);
+    snprintf(buf, len, " %s", replay_own_c(ca)->file);
 }
 
 const mca_backend_def_t mca_backend_replay = {
     .name = "replay",
-    .id = (mca_cell_backend_t)(MCA_CELL_BACKEND_FOLDER + 0),
     .section = "replay",
     .section_fields = replay_fields,
     .section_size = sizeof(replay_keys_t),

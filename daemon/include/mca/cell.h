@@ -26,17 +26,29 @@
 extern "C" {
 #endif
 
+/** An arm's backend: its place in the backend registry (daemon/src/backends.c, one line per backend), which
+ *  assigns the ids, so two backends never share one; mca_cell_backend_id() finds one by its name. The sim is
+ *  the first (the default of mca_cell_from_scenario and the virtual-time driver's ideal arms). */
 typedef enum mca_cell_backend {
-    MCA_CELL_BACKEND_SIM = 0,       /**< in-process simulated arm (mca/sim_backend.h) */
-    MCA_CELL_BACKEND_SOCKETCAN = 1, /**< SocketCAN CAN FD (mca/arm_can.h) */
-    MCA_CELL_BACKEND_CANOPEN = 2, /**< CiA 402 drives, one node per joint, one bus per arm (mca/canopen.h) */
-    /** The backends in a folder of their own (daemon/backends/NAME/, docs/daemon.md "Backends") take the ids
-     *  from here up, each its own (replay: MCA_CELL_BACKEND_FOLDER + 0). */
-    MCA_CELL_BACKEND_FOLDER = 16,
+    MCA_CELL_BACKEND_NONE = -1, /**< no backend has this name */
+    MCA_CELL_BACKEND_SIM = 0,   /**< in-process simulated arm (mca/sim_backend.h) */
 } mca_cell_backend_t;
 
 /** Room for a backend's own settings in each cell arm (mca_cell_arm_t.backend_own). */
 #define MCA_CELL_BACKEND_OWN_SIZE 512
+
+/** A backend's own settings in a cell arm: declares `static type *fn(mca_cell_arm_t *)` and
+ *  `fn##_c(const mca_cell_arm_t *)`, checked at compile time to fit (and be aligned in) backend_own. */
+#define MCA_CELL_BACKEND_OWN(type, fn)                                                                       \
+    _Static_assert(sizeof(type) <= MCA_CELL_BACKEND_OWN_SIZE, "raise MCA_CELL_BACKEND_OWN_SIZE");            \
+    _Static_assert(_Alignof(type) <= _Alignof(double) && _Alignof(type) <= _Alignof(int64_t),                \
+                   "backend_own is aligned for double and int64_t");                                         \
+    static inline type *fn(mca_cell_arm_t *ca) {                                                             \
+        return (type *)(void *)ca->backend_own.bytes;                                                        \
+    }                                                                                                        \
+    static inline const type *fn##_c(const mca_cell_arm_t *ca) {                                             \
+        return (const type *)(const void *)ca->backend_own.bytes;                                            \
+    }
 
 /** What a streamed arm follows (task.stream): the bridge's kinds, so a cell arm's kind is handed to the
  *  bridge (mca_ros2_config_t.stream) as it is. */
@@ -71,25 +83,14 @@ typedef struct mca_cell_tracks {
 /** Hardware side of one arm (the model and path live in the cell's scenario). */
 typedef struct mca_cell_arm {
     mca_cell_backend_t backend;
-    char interface[32]; /**< socketcan: "vcan0", "can0" */
-    uint32_t id_base;   /**< socketcan: the arm's CAN id block */
-    /* canopen (docs/canopen.md): joint j = node first_node + j */
-    int co_first_node;             /**< 1..127 (default 1) */
-    uint32_t co_sync_us;           /**< SYNC period, a multiple of the loop period (default 4000) */
-    int co_mode;                   /**< 9 CSV (default), 8 CSP */
-    double co_pos_scale;           /**< counts per rad (default 1e6) */
-    double co_vel_scale;           /**< counts per rad/s (default 1e6) */
-    int co_hb_timeout_ms;          /**< heartbeat consumer time (default 350) */
-    int co_pdo_timeout;            /**< SYNCs without a fresh TPDO before PDO_TIMEOUT (default 5) */
+    /* the bus keys every CAN backend shares: the registry's bus-clash check compares them across backends */
+    char interface[32];            /**< "vcan0", "can0" */
+    uint32_t id_base;              /**< the arm's CAN id block (socketcan) */
     double dec_limit[MCA_MAX_DOF]; /**< braking deceleration per joint [rad/s^2] */
     double priority;               /**< mca-ts: higher keeps its path, lower yields first (0: default 1) */
     int stream;                    /**< mca_cell_stream_kind_t (task.stream: twist unless the arm says) */
-    /* sim backend model */
-    double sim_lag_tau;     /**< first-order velocity lag [s] */
-    int sim_latency_cycles; /**< command transport delay [cycles] */
-    double sim_noise_pos;   /**< measurement noise sigma [rad] */
-    /** A backend's own settings: its read in the registry keeps them here and its open reads them, as a
-     *  struct of its own (a backend in a folder of its own adds no field to this struct). */
+    /** A backend's own settings: its read keeps them here and its open reads them, as a struct of its own
+     *  (MCA_CELL_BACKEND_OWN): a backend adds no field to this struct. */
     union {
         unsigned char bytes[MCA_CELL_BACKEND_OWN_SIZE];
         double align_d;
@@ -191,6 +192,9 @@ int mca_cell_from_scenario(mca_cell_t *cell, const mca_scenario_t *scn, mca_sche
 /** The backend's name as in cell files: "sim", "socketcan", "canopen" (the backend registry's); "?" for an
  *  id no backend has. */
 const char *mca_cell_backend_name(mca_cell_backend_t b);
+
+/** The id of the backend named `name` ("socketcan"), or MCA_CELL_BACKEND_NONE. */
+mca_cell_backend_t mca_cell_backend_id(const char *name);
 
 /** Where an arm's backend reaches it, for a summary line (" vcan0 id_base 0x140"; "" for the sim backend);
  *  n_joints: the arm's joint count. */

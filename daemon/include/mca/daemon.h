@@ -34,6 +34,7 @@
 #include "mca/cell.h"
 #include "mca/controller.h"
 #include "mca/dds_bridge.h" /* mca_dds_state_t: the states' one numbering */
+#include "mca/log.h"
 #include "mca/ring.h"
 #include "mca/rtlog.h"
 #include "mca/rtstats.h"
@@ -110,8 +111,12 @@ typedef struct mca_daemon_opts {
                             *   in every other block of this many ticks and time the whole tick of both kinds
                             *   of block (summary dds_ab_*); a measurement of the real loop, so not part of
                             *   the virtual-time driver (which ignores it) */
-    FILE *log;             /**< where log lines go (stderr) */
-    int clear_faults;      /**< 1: clear an arm FAULT latched at start-up (logged); 0: refuse to start */
+    /** Where the daemon's lines go (mca/log.h: it prints nothing itself; mcad writes "<LEVEL>mcad: TEXT" on
+     *  stderr), called from the thread of the call that logs (start-up, mca_daemon_service, shut-down);
+     *  NULL: the lines are dropped. */
+    mca_log_fn log;
+    void *log_arg;
+    int clear_faults; /**< 1: clear an arm FAULT latched at start-up (logged); 0: refuse to start */
     /** The DDS publisher program (mca-dds-bridge, run as a process of its own). NULL: the one next
      *  to the running executable, else in its prefix's libexec/mca (PREFIX/sbin/mcad ->
      *  PREFIX/libexec/mca, mca/prefix.h), else MCA_LIBEXECDIR's (the configured install's libexec/mca). */
@@ -250,8 +255,9 @@ int mca_daemon_join(mca_daemon_t *d);
 /** Figures so far: while the loop runs, the ones it published last (once a second; state and ticks are
  *  current); once it has ended (or without a loop thread), exact. Call from ONE non-rt thread. */
 void mca_daemon_summary(mca_daemon_t *d, mca_daemon_summary_t *s);
-/** Print the summary block on f ("<6>mcad: ..." lines). */
-void mca_daemon_print_summary(const mca_daemon_summary_t *s, FILE *f);
+/** The summary block as lines to fn (mca/log.h: "summary: ..." with their levels, 6 unless one says a
+ *  problem). */
+void mca_daemon_log_summary(const mca_daemon_summary_t *s, mca_log_fn fn, void *arg);
 /** The loop's wake-up latency histogram (mcad --histogram writes it), and when the first and the last of
  *  those wake-ups were due [ns of CLOCK_MONOTONIC; 0 without any]. Once the loop has ended. */
 const mca_hist_t *mca_daemon_wake_histogram(const mca_daemon_t *d, int64_t *first_due_ns,

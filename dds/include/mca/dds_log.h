@@ -7,13 +7,15 @@
 #ifndef MCA_DDS_LOG_H
 #define MCA_DDS_LOG_H
 
+#include "mca/log.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/** Where a library's line goes: @p level is syslog's (3 error, 4 warning, 5 notice), @p text one line
- *  without a level, a program's name or the newline; the caller prints it as it logs. */
-typedef void (*mca_dds_log_fn)(void *arg, int level, const char *text);
+/** Where a library's line goes: the one sink type of mca/log.h (@p level syslog's, @p text one line without
+ *  a level, a program's name or the newline); the caller prints it as it logs. */
+typedef mca_log_fn mca_dds_log_fn;
 
 #ifdef __cplusplus
 }
