@@ -90,3 +90,34 @@ int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const 
     out->iterations = iters;
     return MCA_OK;
 }
+
+static void mid(double out[3], const double a[3], const double b[3]) {
+    for (int i = 0; i < 3; i++) {
+        out[i] = 0.5 * (a[i] + b[i]);
+    }
+}
+
+double mca_arm_least_distance(const mca_chain_t *A, const double pa[][3], const mca_chain_t *B,
+                              const double pb[][3], double cap) {
+    double best = cap;
+    for (int i = 0; i <= A->dof; i++) {
+        const double ra = A->link_radius[i];
+        double ca[3];
+        mid(ca, pa[i], pa[i + 1]);
+        const double ba = 0.5 * mca_v3_dist(pa[i], pa[i + 1]) + ra;
+        for (int j = i == 0; j <= B->dof; j++) {
+            const double rb = B->link_radius[j];
+            double cb[3];
+            mid(cb, pb[j], pb[j + 1]);
+            const double bb = 0.5 * mca_v3_dist(pb[j], pb[j + 1]) + rb;
+            if (mca_v3_dist(ca, cb) - ba - bb >= best) {
+                continue; /* the links' bounding spheres are farther than the best pair */
+            }
+            mca_segdist_t s;
+            if (mca_segdist_closed(pa[i], pa[i + 1], pb[j], pb[j + 1], &s) == MCA_OK) {
+                best = fmin(best, s.d - ra - rb);
+            }
+        }
+    }
+    return best;
+}

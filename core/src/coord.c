@@ -8,6 +8,7 @@
 
 #include "mca/apf.h" /* mca_apf_pinv_apply */
 #include "mca/err.h"
+#include "mca/armdist.h"
 #include "mca/segdist.h"
 #include "mca/vec3.h"
 
@@ -85,39 +86,6 @@ static int predict(const mca_coord_arm_t *arm, double h, int n, double q[][MCA_M
         memcpy(pts[k], kin.point, sizeof pts[k]);
     }
     return MCA_OK;
-}
-
-static void mid(double out[3], const double a[3], const double b[3]) {
-    for (int i = 0; i < 3; i++) {
-        out[i] = 0.5 * (a[i] + b[i]);
-    }
-}
-
-/* Least surface distance between the two predicted arms, or `cap` when it is at least that. Pairs of two
- * fixed links (link 0 of both) are left out: they never move, and the rows do not act on them. */
-static double arms_distance(const mca_coord_arm_t *A, const double pa[][3], const mca_coord_arm_t *B,
-                            const double pb[][3], double cap) {
-    double best = cap;
-    for (int i = 0; i <= A->chain->dof; i++) {
-        const double ra = A->chain->link_radius[i];
-        double ca[3];
-        mid(ca, pa[i], pa[i + 1]);
-        const double ba = 0.5 * mca_v3_dist(pa[i], pa[i + 1]) + ra;
-        for (int j = i == 0; j <= B->chain->dof; j++) {
-            const double rb = B->chain->link_radius[j];
-            double cb[3];
-            mid(cb, pb[j], pb[j + 1]);
-            const double bb = 0.5 * mca_v3_dist(pb[j], pb[j + 1]) + rb;
-            if (mca_v3_dist(ca, cb) - ba - bb >= best) {
-                continue; /* the links' bounding spheres are farther than the best pair */
-            }
-            mca_segdist_t s;
-            if (mca_segdist_closed(pa[i], pa[i + 1], pb[j], pb[j + 1], &s) == MCA_OK) {
-                best = fmin(best, s.d - ra - rb);
-            }
-        }
-    }
-    return best;
 }
 
 /* The quickest monotone schedule from (0, 0) to (n_a - 1, n_b - 1) through free cells: each step advances
@@ -201,13 +169,26 @@ static void gates(unsigned char cell[][MCA_COORD_MAX_CELLS], mca_coord_pair_t *p
     }
 }
 
-/* Block the cells closer than d (and their neighbours: the arms move between the samples). */
+/* The part of the arm's path tube per cell the plan may count on to separate the arms (the rows push the tips
+ * apart inside it); its largest value. */
+static double tube_share(const mca_coord_arm_t *arm, double h, int n, double tube[]) {
+    double m = 0.0;
+    for (int x = 0; x < n; x++) {
+        tube[x] = MCA_COORD_TUBE_SHARE * mca_path_tolerance(arm->path, x * h);
+        m = fmax(m, tube[x]);
+    }
+    return m;
+}
+
+/* Block the cells closer than d less the tubes' share there (tube_a, tube_b; NULL: none) and their
+ * neighbours: the arms move between the samples. */
 static int block(unsigned char cell[][MCA_COORD_MAX_CELLS], const float dist[][MCA_COORD_MAX_CELLS], int n_a,
-                 int n_b, double d) {
+                 int n_b, double d, const double *tube_a, const double *tube_b) {
     int n = 0;
     for (int x = 0; x < n_a; x++) {
         for (int y = 0; y < n_b; y++) {
-            cell[x][y] = dist[x][y] < d ? CELL_SEEN : 0;
+            const double t = tube_a ? tube_a[x] + tube_b[y] : 0.0;
+            cell[x][y] = dist[x][y] < d - t ? CELL_SEEN : 0;
         }
     }
     for (int x = 0; x < n_a; x++) {
@@ -266,17 +247,28 @@ int mca_coord_plan(const mca_coord_arm_t *arms, int n_arms, double d_block, doub
             p->h_b = h[b];
             for (int x = 0; x < n[a]; x++) {
                 for (int y = 0; y < n[b]; y++) {
-                    work->dist[x][y] =
-                        (float)arms_distance(&arms[a], (const double(*)[3])work->pts[a][x], &arms[b],
-                                             (const double(*)[3])work->pts[b][y], d_block);
+                    work->dist[x][y] = (float)mca_arm_least_distance(
+                        arms[a].chain, (const double(*)[3])work->pts[a][x], arms[b].chain,
+                        (const double(*)[3])work->pts[b][y], d_block);
                 }
             }
             const double tries[3] = {d_block, 0.5 * (d_block + d_floor), d_floor};
             int found = 0;
             for (int k = 0; k < 3 && !found; k++) {
-                p->blocked =
-                    block(work->cell, (const float(*)[MCA_COORD_MAX_CELLS])work->dist, n[a], n[b], tries[k]);
+                p->blocked = block(work->cell, (const float(*)[MCA_COORD_MAX_CELLS])work->dist, n[a], n[b],
+                                   tries[k], NULL, NULL);
                 p->d_block = tries[k];
+                found = schedule(work->cell, n[a], n[b]);
+            }
+            if (!found && tube_share(&arms[a], h[a], n[a], work->tube[0]) +
+                                  tube_share(&arms[b], h[b], n[b], work->tube[1]) >
+                              0.0) {
+                /* paths with a tube: the rows may push the tips apart inside it where the predicted arms meet
+                 */
+                p->blocked = block(work->cell, (const float(*)[MCA_COORD_MAX_CELLS])work->dist, n[a], n[b],
+                                   d_floor, work->tube[0], work->tube[1]);
+                p->d_block = d_floor;
+                p->in_tubes = 1;
                 found = schedule(work->cell, n[a], n[b]);
             }
             if (!found) {

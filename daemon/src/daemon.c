@@ -63,9 +63,10 @@ static int plan(mca_daemon_t *d, char *err, size_t errlen) {
     for (int k = 0; k < c->n_pairs; k++) {
         const mca_coord_pair_t *p = &c->pair[k];
         mcad_log(d, 6,
-                 "coordination: arms %d and %d kept %.3f m apart: %d of %d cells blocked, %d + %d "
+                 "coordination: arms %d and %d kept %.3f m apart%s: %d of %d cells blocked, %d + %d "
                  "gates",
-                 p->a, p->b, p->d_block, p->blocked, p->n_a * p->n_b, p->gates_a, p->gates_b);
+                 p->a, p->b, p->d_block, p->in_tubes ? " less their tubes' shares" : "", p->blocked,
+                 p->n_a * p->n_b, p->gates_a, p->gates_b);
     }
     if (c->unplanned > 0) {
         mcad_log(d, 5, "coordination: %d pair(s) without a schedule: left to the back-off", c->unplanned);

@@ -3,6 +3,7 @@
  * kinematics, capsule-body distances). */
 #include <errno.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,15 @@ static void usage(FILE *f) {
           "        min LINK_A LINK_B d d_axis px py pz ex ey ez   (global minimum, P on A, E on B)\n"
           "        a_to_b I J ... (per link of A)  /  b_to_a J I ... (per link of B)  /  iterations N\n"
           "      Bad URDF, bad base or wrong number of q: exit code 2.\n"
+          "\n"
+          "  armgrid --robot-a A.urdf [--base-a ...] --robot-b B.urdf [--base-b ...] --out FILE\n"
+          "          [--every N] [--cap C]\n"
+          "      A coordination diagram's distances: stdin holds two recorded trajectories, one tick a line\n"
+          "      (arm A's joint angles, then arm B's). Every N-th tick (default 10) is a sample; FILE gets\n"
+          "      (native endian) int32 n, float64 travel_a[n], travel_b[n], float32 d[n][n]: d[i][j] the\n"
+          "      arm-to-arm distance with A at sample i and B at sample j (at least C, default 0.5 m, is a\n"
+          "      lower bound: the bounding spheres' gap), travel_x[i] an upper bound of how far any point\n"
+          "      of arm X moves from sample i to i+1.\n"
           "\n"
           "  body\n"
           "      Link capsule against a fixed body (mca/body.h). Reads stdin, one pair per line:\n"
@@ -264,24 +274,39 @@ typedef struct arm_arg {
     const char *robot, *base, *q;
 } arm_arg_t;
 
-static int load_arm(const char *label, const arm_arg_t *arg, mca_chain_t *chain, mca_kin_t *kin) {
+/* The chain of --robot-X placed at --base-X. */
+static int load_chain(const char *cmd, const char *label, const arm_arg_t *arg, mca_chain_t *chain) {
     char err[512] = "";
-    double base[6] = {0, 0, 0, 0, 0, 0}, q[MCA_MAX_DOF];
-    int rc, n;
-    if (arg->robot == NULL || arg->q == NULL) {
-        fprintf(stderr, "mca-geom armdist: --robot-%s and --q%s are required\n", label, label);
+    double base[6] = {0, 0, 0, 0, 0, 0};
+    int rc;
+    if (arg->robot == NULL) {
+        fprintf(stderr, "mca-geom %s: --robot-%s is required\n", cmd, label);
         return EXIT_BAD_INPUT;
     }
     rc = mca_chain_load_urdf(chain, arg->robot, NULL, err, sizeof err);
     if (rc != MCA_OK) {
-        fprintf(stderr, "mca-geom armdist: arm %s: %s: %s\n", label, mca_strerror(rc),
+        fprintf(stderr, "mca-geom %s: arm %s: %s: %s\n", cmd, label, mca_strerror(rc),
                 err[0] ? err : arg->robot);
         return EXIT_BAD_INPUT;
     }
     if (arg->base != NULL && parse_list(arg->base, base, 6) != 6) {
-        fprintf(stderr, "mca-geom armdist: --base-%s '%s': expected 6 numbers x,y,z,roll,pitch,yaw\n", label,
+        fprintf(stderr, "mca-geom %s: --base-%s '%s': expected 6 numbers x,y,z,roll,pitch,yaw\n", cmd, label,
                 arg->base);
         return EXIT_BAD_INPUT;
+    }
+    mca_chain_set_base(chain, &base[0], &base[3]);
+    return 0;
+}
+
+static int load_arm(const char *label, const arm_arg_t *arg, mca_chain_t *chain, mca_kin_t *kin) {
+    double q[MCA_MAX_DOF];
+    int rc, n;
+    if (arg->q == NULL) {
+        fprintf(stderr, "mca-geom armdist: --q%s is required\n", label);
+        return EXIT_BAD_INPUT;
+    }
+    if ((rc = load_chain("armdist", label, arg, chain)) != 0) {
+        return rc;
     }
     n = parse_list(arg->q, q, MCA_MAX_DOF);
     if (n != chain->dof) {
@@ -289,7 +314,6 @@ static int load_arm(const char *label, const arm_arg_t *arg, mca_chain_t *chain,
                 arg->q, arg->robot, chain->dof);
         return EXIT_BAD_INPUT;
     }
-    mca_chain_set_base(chain, &base[0], &base[3]);
     if (mca_fk(chain, q, kin) != MCA_OK) {
         fprintf(stderr, "mca-geom armdist: arm %s: forward kinematics failed\n", label);
         return EXIT_BAD_INPUT;
@@ -354,6 +378,207 @@ static int cmd_armdist(int argc, char **argv) {
     }
     printf("iterations %d\n", out.iterations);
     return 0;
+}
+
+/* The two arms' sampled states read by cmd_armgrid: kinematics per sample, each sample's bounding sphere and
+ * how far any point of the arm travels until the next sample. */
+typedef struct grid_arm {
+    mca_chain_t chain;
+    mca_kin_t *kin; /* [n] */
+    double *centre, *radius, *travel;
+} grid_arm_t;
+
+/* Largest displacement of any capsule axis point between two states: the motion from one tick to the next is
+ * a rigid transform per link, whose displacement is affine along the link, so the axis ends bound it. */
+static double max_point_move(const mca_kin_t *a, const mca_kin_t *b) {
+    double m = 0.0;
+    for (int k = 0; k < a->n_points; k++) {
+        double dx = b->point[k][0] - a->point[k][0], dy = b->point[k][1] - a->point[k][1],
+               dz = b->point[k][2] - a->point[k][2];
+        m = fmax(m, sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    return m;
+}
+
+static void bounding_sphere(const mca_chain_t *chain, const mca_kin_t *kin, double c[3], double *r) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, rmax = 0.0,
+           m = 0.0;
+    for (int k = 0; k < kin->n_points; k++) {
+        for (int i = 0; i < 3; i++) {
+            lo[i] = fmin(lo[i], kin->point[k][i]);
+            hi[i] = fmax(hi[i], kin->point[k][i]);
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        c[i] = 0.5 * (lo[i] + hi[i]);
+    }
+    for (int k = 0; k < kin->n_points; k++) {
+        double dx = kin->point[k][0] - c[0], dy = kin->point[k][1] - c[1], dz = kin->point[k][2] - c[2];
+        m = fmax(m, sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    for (int k = 0; k <= chain->dof; k++) {
+        rmax = fmax(rmax, chain->link_radius[k]);
+    }
+    *r = m + rmax;
+}
+
+/* Arm-to-arm distance over every pair of sampled states of two recorded trajectories (a coordination diagram:
+ * tools/mca-sweep/coord_diagram.py). */
+static int cmd_armgrid(int argc, char **argv) {
+    arm_arg_t arg[2] = {{NULL, NULL, NULL}, {NULL, NULL, NULL}};
+    static grid_arm_t arm[2];
+    const char *out_path = NULL;
+    long every = 10, ticks = 0, n = 0, cap_ticks = 0;
+    double cap = 0.5, *q = NULL;
+    char *line = NULL;
+    size_t lcap = 0;
+    int rc = EXIT_BAD_INPUT;
+    FILE *out = NULL;
+    float *row = NULL;
+
+    for (int i = 0; i < argc; i++) {
+        const char *o = argv[i];
+        if (i + 1 >= argc) {
+            fprintf(stderr, "mca-geom armgrid: option '%s' needs a value (see --help)\n", o);
+            return EXIT_BAD_INPUT;
+        }
+        const char *v = argv[++i];
+        double x;
+        if (strcmp(o, "--robot-a") == 0 || strcmp(o, "--robot-b") == 0) {
+            arg[o[8] - 'a'].robot = v;
+        } else if (strcmp(o, "--base-a") == 0 || strcmp(o, "--base-b") == 0) {
+            arg[o[7] - 'a'].base = v;
+        } else if (strcmp(o, "--every") == 0 && parse_finite(v, &x) == 0 && x >= 1 && x == floor(x)) {
+            every = (long)x;
+        } else if (strcmp(o, "--cap") == 0 && parse_finite(v, &x) == 0 && x > 0) {
+            cap = x;
+        } else if (strcmp(o, "--out") == 0) {
+            out_path = v;
+        } else {
+            fprintf(stderr, "mca-geom armgrid: unknown option or value '%s %s' (see --help)\n", o, v);
+            return EXIT_BAD_INPUT;
+        }
+    }
+    if (out_path == NULL) {
+        fprintf(stderr, "mca-geom armgrid: --out FILE is required\n");
+        return EXIT_BAD_INPUT;
+    }
+    for (int a = 0; a < 2; a++) {
+        if ((rc = load_chain("armgrid", a ? "b" : "a", &arg[a], &arm[a].chain)) != 0) {
+            return rc;
+        }
+    }
+    rc = EXIT_BAD_INPUT;
+    const int dof[2] = {arm[0].chain.dof, arm[1].chain.dof};
+    q = malloc(sizeof(double) * (size_t)(dof[0] + dof[1]));
+    for (int a = 0; a < 2; a++) {
+        cap_ticks = 1024;
+        arm[a].kin = malloc(sizeof(mca_kin_t) * (size_t)cap_ticks);
+        arm[a].travel = calloc((size_t)cap_ticks, sizeof(double));
+    }
+    mca_kin_t prev[2], cur[2];
+    while (getline(&line, &lcap, stdin) != -1) {
+        char *p = line, *end;
+        int k = 0;
+        for (; k < dof[0] + dof[1]; k++) {
+            q[k] = strtod(p, &end);
+            if (end == p || !isfinite(q[k])) {
+                break;
+            }
+            p = end;
+        }
+        while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r') {
+            p++;
+        }
+        if (k != dof[0] + dof[1] || *p != '\0') {
+            fprintf(stderr,
+                    "mca-geom armgrid: stdin:%ld: expected %d joint angles (arm a's %d, then arm b's %d)\n",
+                    ticks + 1, dof[0] + dof[1], dof[0], dof[1]);
+            goto done;
+        }
+        for (int a = 0; a < 2; a++) {
+            if (mca_fk(&arm[a].chain, q + (a ? dof[0] : 0), &cur[a]) != MCA_OK) {
+                fprintf(stderr, "mca-geom armgrid: stdin:%ld: forward kinematics failed\n", ticks + 1);
+                goto done;
+            }
+            if (ticks > 0) {
+                arm[a].travel[n - 1] += max_point_move(&prev[a], &cur[a]);
+            }
+            prev[a] = cur[a];
+        }
+        if (ticks % every == 0) {
+            if (n == cap_ticks) {
+                cap_ticks *= 2;
+                for (int a = 0; a < 2; a++) {
+                    arm[a].kin = realloc(arm[a].kin, sizeof(mca_kin_t) * (size_t)cap_ticks);
+                    arm[a].travel = realloc(arm[a].travel, sizeof(double) * (size_t)cap_ticks);
+                    memset(arm[a].travel + n, 0, sizeof(double) * (size_t)(cap_ticks - n));
+                }
+            }
+            for (int a = 0; a < 2; a++) {
+                arm[a].kin[n] = cur[a];
+            }
+            n++;
+        }
+        ticks++;
+    }
+    if (n == 0) {
+        fprintf(stderr, "mca-geom armgrid: stdin: no states\n");
+        goto done;
+    }
+    for (int a = 0; a < 2; a++) {
+        arm[a].travel[n - 1] = 0.0;
+        arm[a].centre = malloc(sizeof(double) * 3 * (size_t)n);
+        arm[a].radius = malloc(sizeof(double) * (size_t)n);
+        for (long i = 0; i < n; i++) {
+            bounding_sphere(&arm[a].chain, &arm[a].kin[i], &arm[a].centre[3 * i], &arm[a].radius[i]);
+        }
+    }
+    if ((out = fopen(out_path, "wb")) == NULL) {
+        fprintf(stderr, "mca-geom armgrid: %s: %s\n", out_path, strerror(errno));
+        goto done;
+    }
+    int32_t n32 = (int32_t)n;
+    fwrite(&n32, sizeof n32, 1, out);
+    fwrite(arm[0].travel, sizeof(double), (size_t)n, out);
+    fwrite(arm[1].travel, sizeof(double), (size_t)n, out);
+    row = malloc(sizeof(float) * (size_t)n);
+    for (long i = 0; i < n; i++) {
+        for (long j = 0; j < n; j++) {
+            const double *ca = &arm[0].centre[3 * i], *cb = &arm[1].centre[3 * j];
+            double lb = sqrt((ca[0] - cb[0]) * (ca[0] - cb[0]) + (ca[1] - cb[1]) * (ca[1] - cb[1]) +
+                             (ca[2] - cb[2]) * (ca[2] - cb[2])) -
+                        arm[0].radius[i] - arm[1].radius[j];
+            /* at least cap: a lower bound, far enough not to matter */
+            row[j] = (float)(lb >= cap ? lb
+                                       : mca_arm_least_distance(
+                                             &arm[0].chain, (const double(*)[3])arm[0].kin[i].point,
+                                             &arm[1].chain, (const double(*)[3])arm[1].kin[j].point, cap));
+        }
+        fwrite(row, sizeof(float), (size_t)n, out);
+    }
+    if (fclose(out) != 0) {
+        out = NULL;
+        fprintf(stderr, "mca-geom armgrid: %s: %s\n", out_path, strerror(errno));
+        goto done;
+    }
+    out = NULL;
+    printf("armgrid %ld ticks, %ld samples every %ld ticks\n", ticks, n, every);
+    rc = 0;
+done:
+    if (out != NULL) {
+        fclose(out);
+    }
+    for (int a = 0; a < 2; a++) {
+        free(arm[a].kin);
+        free(arm[a].travel);
+        free(arm[a].centre);
+        free(arm[a].radius);
+    }
+    free(row);
+    free(q);
+    free(line);
+    return rc;
 }
 
 /* One capsule-body pair per stdin line (mca/body.h). */
@@ -497,6 +722,9 @@ int main(int argc, char **argv) {
     }
     if (strcmp(argv[1], "armdist") == 0) {
         return cmd_armdist(argc - 2, argv + 2);
+    }
+    if (strcmp(argv[1], "armgrid") == 0) {
+        return cmd_armgrid(argc - 2, argv + 2);
     }
     if (strcmp(argv[1], "body") == 0) {
         return cmd_body(argc - 2, argv + 2);

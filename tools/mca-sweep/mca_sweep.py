@@ -56,6 +56,7 @@ import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cells  # noqa: E402
+import coord_diagram  # noqa: E402
 import tips_pass  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -780,6 +781,8 @@ def run_task(sim, kind, seed, i, a):
             else:
                 res[s]["stop"] = dict(cls="n/a", reason="scheme not run")
     task["runs"] = res
+    if a.witness:
+        task["witness"] = coord_diagram.witness(sim.path, a.witness, task["scenario"], wd)
     if a.stopcheck:
         # stops branched off the task every 20 ms at each dec limit (tools/mca-stopcheck, mca-ts)
         sj = os.path.join(wd, "stopcheck.json")
@@ -926,6 +929,21 @@ def table(tasks, schemes, sim, a):
                              len(passable), nr, s, dp, 100.0 * dp / max(1, len(passable)), nr - len(passable), db))
             summary["tips_pass/%s" % s] = dict(passable=len(passable), done=dp, blocked=nr - len(passable),
                                                blocked_done=db)
+    # a schedule on the paths found in the coordination diagram (--witness): a proof that the task can be done
+    if reach and any(t.get("witness", {}).get("feasible") is not None for t in reach):
+        wit = [t for t in reach if t.get("witness", {}).get("feasible")]
+        nowit = [t for t in reach if not t.get("witness", {}).get("feasible")]
+        for s in schemes:
+            dw, dn = [sum(1 for t in ts if t["runs"].get(s, {}).get("task", {}).get("cls") in ("completed", "late"))
+                      for ts in (wit, nowit)]
+            lines.append("tasks with a schedule on their paths (coord_diagram.py: a proof they can be done): %d of %d "
+                         "reachable; %s done on them %d (%.1f %%), on the %d without one (undecided or infeasible) %d"
+                         % (len(wit), nr, s, dw, 100.0 * dw / max(1, len(wit)), len(nowit), dn))
+            summary["witness/%s" % s] = dict(witnessed=len(wit), done=dw, others=len(nowit), others_done=dn)
+            for t in wit:
+                r = t["runs"].get(s, {}).get("task", {})
+                if r.get("cls") not in ("completed", "late", None):
+                    lines.append("  witnessed, not done: %s %s %s" % (s, t["id"], r.get("reason", "")))
     # random cells (--cells): every link keeps each fixed body's clearance (the table, the obstacles)
     if any(t.get("bodies") for t in reach):
         mb = [t for t in reach if t.get("mvn_body_ticks_below")]
@@ -1062,6 +1080,8 @@ def main():
                     help="mca-sim --no-coordinate: mca-ts without the start-up plan of who passes first")
     ap.add_argument("--cells", action="store_true",
                     help="random cells: a table and 1-3 boxes or posts in every task (cells.py; the same tasks)")
+    ap.add_argument("--witness", default="", help="path of mca-geom: also look for a schedule on the paths in "
+                    "each two-arm task's coordination diagram (coord_diagram.py; ~5-20 s a task)")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
     if not os.access(a.sim, os.X_OK):

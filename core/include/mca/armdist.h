@@ -49,6 +49,15 @@ typedef struct mca_arm_distances {
 int mca_arm_distances(const mca_chain_t *chain_a, const mca_kin_t *kin_a, const mca_chain_t *chain_b,
                       const mca_kin_t *kin_b, mca_dist_method_t method, mca_arm_distances_t *out);
 
+/**
+ * Least surface distance between two arms given their link points (mca_kin_t.point: link k is point[k] ->
+ * point[k+1]), or `cap` when it is at least that; links whose bounding spheres are farther than the best so
+ * far are skipped. The pair of both fixed links (link 0 of each) is left out: it never moves, and the rows do
+ * not act on it. Real-time safe.
+ */
+double mca_arm_least_distance(const mca_chain_t *chain_a, const double pa[][3], const mca_chain_t *chain_b,
+                              const double pb[][3], double cap);
+
 #ifdef __cplusplus
 }
 #endif

@@ -35,6 +35,11 @@ extern "C" {
 #define MCA_COORD_MAX_CELLS 512
 /** Shortest cell of path time [s]. */
 #define MCA_COORD_CELL_S 0.1
+/** The share of a path's tolerance the plan counts on to separate the arms where no schedule keeps the
+ * predicted arms d_floor apart. */
+#ifndef MCA_COORD_TUBE_SHARE
+#define MCA_COORD_TUBE_SHARE 0.75
+#endif
 /** Most pairs (MCA_MAX_ARMS choose 2). */
 #define MCA_COORD_MAX_PAIRS (MCA_MAX_ARMS * (MCA_MAX_ARMS - 1) / 2)
 
@@ -43,6 +48,7 @@ typedef struct mca_coord_pair {
     int n_a, n_b;                      /**< cells */
     double h_a, h_b;                   /**< path time per cell [s] */
     double d_block;                    /**< the distance the plan kept between the predicted arms [m] */
+    int in_tubes;                      /**< 1: only d_block less the tubes' shares (MCA_COORD_TUBE_SHARE) */
     int blocked;                       /**< blocked cells (after dilation) */
     int gates_a, gates_b;              /**< columns of a / rows of b with a gate */
     short need_b[MCA_COORD_MAX_CELLS]; /**< a may enter column x once b's clock is past row need_b[x] */
@@ -61,6 +67,7 @@ typedef struct mca_coord_work {
     float dist[MCA_COORD_MAX_CELLS][MCA_COORD_MAX_CELLS];             /**< least distance per cell [m] */
     unsigned char cell[MCA_COORD_MAX_CELLS][MCA_COORD_MAX_CELLS];     /**< blocked bit, predecessor */
     double q[MCA_COORD_MAX_CELLS][MCA_MAX_DOF]; /**< one arm's predicted configurations */
+    double tube[2][MCA_COORD_MAX_CELLS];        /**< the pair's tube shares per cell [m] */
 } mca_coord_work_t;
 
 /** What mca_coord_plan needs of one arm. */
