@@ -172,7 +172,7 @@ static void *rt_main(void *arg) {
             const int k = mcad_dds_ab_publishes(d, ticks);
             mca_hist_record(&d->compute_ab[k], end - wake);
             /* a tick of half a period or more is a stall of this machine, not a cost of publishing: one in
-             * either kind of block moves its mean more than publishing does (bench/rt/issue13.sh) */
+             * either kind of block moves its mean more than publishing does (bench/rt/jitter_dds.sh) */
             if (end - wake < period / 2) {
                 d->compute_ab_short_sum_ns[k] += (double)(end - wake);
                 d->compute_ab_short_n[k]++;

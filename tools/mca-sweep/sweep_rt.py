@@ -11,7 +11,7 @@ usage: sweep_rt.py --build BUILD [--n 25] [--kind pnp-jaco-mico,pnp-pa10,jaco-mi
    cell, overrun_limit 500, the default PDNN budget), --csv (per tick: compute_ns, the controller's time, and
    wake_ns, the tick's wake-up on CLOCK_MONOTONIC), --histogram; cyclictest -m -p PRIORITY -a CPU -i 1000 -d 0
    --secaligned=250 -v on the same CPU at the same time (a quarter period before mcad's grid, as
-   bench/rt/issue13.sh). mcad is stopped as mca-sim stops: SIGTERM once the task time reached the duration and
+   bench/rt/jitter_dds.sh). mcad is stopped as mca-sim stops: SIGTERM once the task time reached the duration and
    every arm's path clock its path's end (mca-ts: at most 2x the duration; --stop-after caps it).
 3. Per task: the rt class from the CSV (unsafe: min_d below d1 at any tick, braking included; completed: every
    tau_a reached its path's end while running, <= 0.1 s path time lost; late: more; safe-stop: otherwise), PDNN

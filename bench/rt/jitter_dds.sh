@@ -1,6 +1,6 @@
 #!/bin/bash
 # SPDX-License-Identifier: MIT
-# Issue 13's benchmark rows, one run each, with the other CPU quiet and then loaded (a busy loop pinned there):
+# The real-time benchmark rows (docs/benchmarks.md: wake-up jitter, DDS latency, publishing's cost), one run each, with the other CPU quiet and then loaded (a busy loop pinned there):
 #   1. mcad's wake-up jitter (loop pinned to CPU 1, SCHED_FIFO 80, DDS on as shipped, mca-monitor subscribed)
 #      against cyclictest on the same CPU, same priority, same length, at the same time (a quarter period apart);
 #   2. DDS latency tick stamp -> mca-monitor receipt (the run of 1), with ddsperf's ping/pong round trip on the
@@ -11,13 +11,13 @@
 # phase for tens of seconds (late wake-ups every 10 ms, wherever mcad's or cyclictest's wake-up falls), so
 # one 20-s run says which of the two it hit; each round's ratio is printed, and the ratio of the rounds'
 # histograms pooled (mcad --histogram and cyclictest -h, read by one reader).
-# usage: bench/rt/issue13.sh BUILD_DIR [SECONDS (20)] [OUT_DIR (out/bench-issue13)] [MODES ("quiet busy")]
+# usage: bench/rt/jitter_dds.sh BUILD_DIR [SECONDS (20)] [OUT_DIR (out/bench-jitter-dds)] [MODES ("quiet busy")]
 # Needs root (SCHED_FIFO, mlockall) and 2 CPUs; prints one table (markdown) on stdout, raw outputs in OUT_DIR.
 set -u
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-B=$(cd "${1:?usage: issue13.sh BUILD_DIR [SECONDS] [OUT_DIR] [MODES]}" && pwd) || exit 1
+B=$(cd "${1:?usage: jitter_dds.sh BUILD_DIR [SECONDS] [OUT_DIR] [MODES]}" && pwd) || exit 1
 DUR=${2:-20}
-OUT=${3:-$ROOT/out/bench-issue13}
+OUT=${3:-$ROOT/out/bench-jitter-dds}
 MODES=${4:-quiet busy}
 ROUNDS=${MCA_BENCH_ROUNDS:-3}
 # mca-monitor's priority: above the DDS publisher's (10, on the same CPU), so its receive thread takes a
