@@ -14,7 +14,7 @@ DEB_PKGS  := $(shell grep -v '^\#' tools/deps/debian-packages.txt)
 STAMP_DEB := .deps-debian.stamp
 STAMP_PY  := $(VENV)/.deps-python.stamp
 
-.PHONY: all deps build test asan-test fuzz demo bench sweep sweep-rt deb format format-check clean
+.PHONY: all deps build test test-long asan-test fuzz demo bench sweep sweep-rt deb format format-check clean
 
 all: build
 
@@ -41,8 +41,14 @@ $(BUILD)/CMakeCache.txt: $(STAMP_DEB)
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
+# every test but those labelled `long` (the full-length variants of the QEMU guest runs: `make test-long`)
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -LE long $(CTEST_ARGS)
+
+# the tests labelled `long`: the QEMU guest end-to-end runs over the whole 50 s cup stacking task
+# (canopen_mcad_e2e_long ~10 min, daemon_vcan_e2e_long ~4 min; `make test` runs their first 6 and 17 s)
+test-long: build
+	cd $(BUILD) && ctest --output-on-failure -L long $(CTEST_ARGS)
 
 # ASan + UBSan build of everything, all tests except those marked `nosan`
 # (the QEMU guest and wall-clock real-time runs, where the sanitizer runtime changes what is measured).
