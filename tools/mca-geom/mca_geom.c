@@ -471,10 +471,13 @@ static int cmd_armgrid(int argc, char **argv) {
     rc = EXIT_BAD_INPUT;
     const int dof[2] = {arm[0].chain.dof, arm[1].chain.dof};
     q = malloc(sizeof(double) * (size_t)(dof[0] + dof[1]));
+    cap_ticks = 1024;
     for (int a = 0; a < 2; a++) {
-        cap_ticks = 1024;
         arm[a].kin = malloc(sizeof(mca_kin_t) * (size_t)cap_ticks);
         arm[a].travel = calloc((size_t)cap_ticks, sizeof(double));
+        if (!q || !arm[a].kin || !arm[a].travel) {
+            goto nomem;
+        }
     }
     mca_kin_t prev[2], cur[2];
     while (getline(&line, &lcap, stdin) != -1) {
@@ -510,8 +513,17 @@ static int cmd_armgrid(int argc, char **argv) {
             if (n == cap_ticks) {
                 cap_ticks *= 2;
                 for (int a = 0; a < 2; a++) {
-                    arm[a].kin = realloc(arm[a].kin, sizeof(mca_kin_t) * (size_t)cap_ticks);
-                    arm[a].travel = realloc(arm[a].travel, sizeof(double) * (size_t)cap_ticks);
+                    mca_kin_t *kin = realloc(arm[a].kin, sizeof(mca_kin_t) * (size_t)cap_ticks);
+                    if (kin) {
+                        arm[a].kin = kin;
+                    }
+                    double *travel = realloc(arm[a].travel, sizeof(double) * (size_t)cap_ticks);
+                    if (travel) {
+                        arm[a].travel = travel;
+                    }
+                    if (!kin || !travel) {
+                        goto nomem;
+                    }
                     memset(arm[a].travel + n, 0, sizeof(double) * (size_t)(cap_ticks - n));
                 }
             }
@@ -530,6 +542,9 @@ static int cmd_armgrid(int argc, char **argv) {
         arm[a].travel[n - 1] = 0.0;
         arm[a].centre = malloc(sizeof(double) * 3 * (size_t)n);
         arm[a].radius = malloc(sizeof(double) * (size_t)n);
+        if (!arm[a].centre || !arm[a].radius) {
+            goto nomem;
+        }
         for (long i = 0; i < n; i++) {
             bounding_sphere(&arm[a].chain, &arm[a].kin[i], &arm[a].centre[3 * i], &arm[a].radius[i]);
         }
@@ -542,7 +557,9 @@ static int cmd_armgrid(int argc, char **argv) {
     fwrite(&n32, sizeof n32, 1, out);
     fwrite(arm[0].travel, sizeof(double), (size_t)n, out);
     fwrite(arm[1].travel, sizeof(double), (size_t)n, out);
-    row = malloc(sizeof(float) * (size_t)n);
+    if ((row = malloc(sizeof(float) * (size_t)n)) == NULL) {
+        goto nomem;
+    }
     for (long i = 0; i < n; i++) {
         for (long j = 0; j < n; j++) {
             const double *ca = &arm[0].centre[3 * i], *cb = &arm[1].centre[3 * j];
@@ -565,6 +582,10 @@ static int cmd_armgrid(int argc, char **argv) {
     out = NULL;
     printf("armgrid %ld ticks, %ld samples every %ld ticks\n", ticks, n, every);
     rc = 0;
+    goto done;
+nomem:
+    fprintf(stderr, "mca-geom armgrid: out of memory (%ld samples)\n", n);
+    rc = 1;
 done:
     if (out != NULL) {
         fclose(out);
