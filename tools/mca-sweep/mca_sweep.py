@@ -4,7 +4,7 @@
 usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three|pnp-jaco-mico|pnp-pa10[,...]] [--n N] [--seed S]
                     [--only ID[,ID...]] [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT]
                     [--table OUT] [--lost-threshold 0.1] [--no-stop] [--dec-limit X] [--max-err 0.005]
-                    [--tolerance X] [--keep]
+                    [--tolerance X] [--cells] [--self-pairs] [--keep]
 
 For each kind (pa10: two PA10+ as in cross_circles.yaml; jaco-mico: JACO2 + MICO2 as in cup_stacking.yaml;
 three: JACO2, MICO2, JACO2 as in three_arms.yaml; pnp-jaco-mico, pnp-pa10: pick and place at cup_stacking's and
@@ -24,6 +24,8 @@ release dwells' points are the path's exact points (`exact: [...]`, with `exact_
 when this mca-sim takes those keys. A round one arm alone cannot track under MVN (a single-arm run) is redrawn.
 Reachable: plain MVN (each arm's QP is its own: every arm alone) tracks every path with error < --max-err and
 no fault; the others are counted apart as unreachable (with MVN's fault name).
+--cells gives every task a table and 1-3 boxes or posts, and every odd task a streamed sphere crossing between the
+arms (cells.py; mca-sim's simulated_sphere); --self-pairs every arm's self pairs (docs/sweep.md, "Random cells").
 Every reachable task runs under each scheme, and again with a stop request at a random instant
 (mca-sim --stop-at, when this mca-sim has it). Each run is classified:
   unsafe        some tick below d1, during the task or while braking (for mvn the expected collision);
