@@ -149,7 +149,8 @@ static void sphere_feed(mca_daemon_t *d, const mca_sim_sphere_t *s, sphere_feed_
  * would be) is counted below S_p with the arm at rest (its true joint velocities, this tick's and the last,
  * all at most MCA_SIMRUN_REST) or moving. And the least distance to the true sphere. */
 static void sphere_measure(mca_daemon_t *d, const mca_sim_sphere_t *s, const sphere_feed_t *f, int n_fixed,
-                           double t, double task_t, int rest_prev[MCA_MAX_ARMS], mca_simrun_result_t *r) {
+                           double t, double task_t, int running, int rest_prev[MCA_MAX_ARMS],
+                           mca_simrun_result_t *r) {
     const mca_controller_t *ctrl = mca_drive_controller(d);
     const mca_controller_config_t *cfg = mca_controller_get_config(ctrl);
     const int na = cfg->n_arms;
@@ -207,6 +208,7 @@ static void sphere_measure(mca_daemon_t *d, const mca_sim_sphere_t *s, const sph
                     r->track_ticks_rest++;
                 } else {
                     r->track_ticks_moving++;
+                    r->track_ticks_braking += !running;
                 }
             }
         }
@@ -401,7 +403,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             r->min_distance_t = t;
         }
         if (sph) {
-            sphere_measure(d, sph, &feed, n_fixed, t, ip->task_t, rest_prev, r);
+            sphere_measure(d, sph, &feed, n_fixed, t, ip->task_t, state == MCA_DAEMON_RUNNING, rest_prev, r);
         } else if (ip->body_margin < r->body_min_margin) {
             r->body_min_margin = ip->body_margin;
             r->body_min_distance = ip->body_distance;

@@ -138,6 +138,7 @@ typedef struct mca_simrun_result {
     int track_ticks_rest;     /**< (arm, tick) pairs below S_p with that arm at rest on the tick and the one
                                    before (every joint |qdot| <= MCA_SIMRUN_REST): the sphere walked into it */
     int track_ticks_moving;   /**< (arm, tick) pairs below S_p with that arm moving */
+    int track_ticks_braking;  /**< of those, while the daemon brakes (a stop or a fault: the arm stopping) */
     double sphere_true_min_d; /**< least surface distance of any link to the true sphere (where it is, not
                                    where the controller last heard of it) [m] */
 } mca_simrun_result_t;

@@ -662,6 +662,7 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
                                       "bodies", "body_min_margin", "body_min_name", "body_min_pair", "body_ticks_below",
                                       "arm_ticks_below", "self_ticks_below", "sphere_sent", "sphere_lost",
                                       "track_min_margin", "track_sp_max", "track_ticks_rest", "track_ticks_moving",
+                                      "track_ticks_braking",
                                       "sphere_true_min_d")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
@@ -1019,12 +1020,14 @@ def table(tasks, schemes, sim, a):
                     if label == "sphere":
                         within = [r for r in rs if (r.get("track_min_margin") or 1e9) < 0]
                         row.update(track_rest=tot("track_ticks_rest"), track_moving=tot("track_ticks_moving"),
+                                   track_braking=tot("track_ticks_braking"),
                                    within_sp=len(within),
                                    true_min_d=min(r.get("sphere_true_min_d", 1e9) for r in rs),
                                    sp_max=max(r.get("track_sp_max") or 0 for r in rs))
-                        txt += (", arm-sphere at rest %d / moving %d (sphere inside S_p in %d runs, S_p up to %.3f m, "
-                                "least distance to it %.3f m)" % (row["track_rest"], row["track_moving"], len(within),
-                                                                 row["sp_max"], row["true_min_d"]))
+                        txt += (", arm-sphere at rest %d / moving %d (%d braking) (sphere inside S_p in %d runs, S_p up "
+                                "to %.3f m, least distance to it %.3f m)" % (
+                                    row["track_rest"], row["track_moving"], row["track_braking"], len(within),
+                                    row["sp_max"], row["true_min_d"]))
                     txt += "; done %d (%.1f %%), path err p50/max %s" % (
                         done, 100.0 * done / len(rs), "n/a" if not pe else "%.4f/%.4f m" % (pe[len(pe) // 2], pe[-1]))
                     lines.append(txt)
