@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 """A streamed sphere crossing random cells in virtual time (`mca_sweep.py --cells`, mca-sim's `simulated_sphere`).
 
-1. The sweep on 4 + 4 seeded tasks (pa10, jaco-mico; seed 2), random cells with every arm's self pairs, mca-ts,
+1. The sweep on 4 + 4 seeded tasks (pa10, jaco-mico; seed 2), random cells (--cells --sphere) with every arm's
+   self pairs, mca-ts,
    task and stop runs; tasks 1 and 3 of each kind get a sphere crossing between the arms at 0.3-2.0 m/s,
    sampled at 30 Hz, 30 ms latency, 1 % of samples lost, fed through the daemon's track input. Over every run:
    0 ticks with two arms below d1, 0 with a link inside a fixed body's clearance, 0 with a self pair below d1,
@@ -35,7 +36,7 @@ def main():
     os.makedirs(work, exist_ok=True)
     out = os.path.join(work, "sphere.json")
     cmd = [sys.executable, os.path.join(tools, "mca_sweep.py"), "--sim", sim, "--kind", "pa10,jaco-mico", "--n", "4",
-           "--seed", "2", "--schemes", "mca-ts", "--jobs", "2", "--cells", "--self-pairs",
+           "--seed", "2", "--schemes", "mca-ts", "--jobs", "2", "--cells", "--sphere", "--self-pairs",
            "--work", os.path.join(work, "tasks"), "--keep", "--json", out]
     print(" ".join(cmd))
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=900)

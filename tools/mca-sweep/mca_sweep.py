@@ -4,7 +4,7 @@
 usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three|pnp-jaco-mico|pnp-pa10[,...]] [--n N] [--seed S]
                     [--only ID[,ID...]] [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT]
                     [--table OUT] [--lost-threshold 0.1] [--no-stop] [--dec-limit X] [--max-err 0.005]
-                    [--tolerance X] [--cells] [--self-pairs] [--keep]
+                    [--tolerance X] [--cells [--sphere]] [--self-pairs] [--keep]
 
 For each kind (pa10: two PA10+ as in cross_circles.yaml; jaco-mico: JACO2 + MICO2 as in cup_stacking.yaml;
 three: JACO2, MICO2, JACO2 as in three_arms.yaml; pnp-jaco-mico, pnp-pa10: pick and place at cup_stacking's and
@@ -24,8 +24,8 @@ release dwells' points are the path's exact points (`exact: [...]`, with `exact_
 when this mca-sim takes those keys. A round one arm alone cannot track under MVN (a single-arm run) is redrawn.
 Reachable: plain MVN (each arm's QP is its own: every arm alone) tracks every path with error < --max-err and
 no fault; the others are counted apart as unreachable (with MVN's fault name).
---cells gives every task a table and 1-3 boxes or posts, and every odd task a streamed sphere crossing between the
-arms (cells.py; mca-sim's simulated_sphere); --self-pairs every arm's self pairs (docs/sweep.md, "Random cells").
+--cells gives every task a table and 1-3 boxes or posts, with --sphere every odd task a streamed sphere crossing
+between the arms (cells.py; mca-sim's simulated_sphere); --self-pairs every arm's self pairs (docs/sweep.md, "Random cells").
 Every reachable task runs under each scheme, and again with a stop request at a random instant
 (mca-sim --stop-at, when this mca-sim has it). Each run is classified:
   unsafe        some tick below d1, during the task or while braking (for mvn the expected collision);
@@ -164,6 +164,7 @@ def fmt(v):
 
 
 SELF_PAIRS = False  # --self-pairs: every arm's robot list of self pairs in every task (docs/scheme.md section 15)
+SPHERE = False  # --sphere (with --cells): a streamed sphere in every odd task (cells.draw_sphere)
 
 
 def self_pairs(sim, wd, name, kind, arms):
@@ -476,11 +477,11 @@ def task_start(kind, seed, i, work):
 
 def draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths, duration, selfp=None):
     """A random cell for the task (cells.py; its own generator, so the task's own draws do not change): bodies
-    whose clearances the start configurations keep (a 2-tick probe with them), and in every odd task a streamed
-    sphere (its own generator too) that starts outside S_p of the arms (a 50 ms probe: its first samples);
+    whose clearances the start configurations keep (a 2-tick probe with them), and with --sphere in every odd task
+    a streamed sphere (its own generator too) that starts outside S_p of the arms (a 50 ms probe: its first samples);
     (bodies, sphere or None), or (None, None) after 20 draws."""
     rng = random.Random("%d:%s:%d:cell" % (seed, kind, i))
-    srng = random.Random("%d:%s:%d:sphere" % (seed, kind, i)) if i % 2 == 1 else None
+    srng = random.Random("%d:%s:%d:sphere" % (seed, kind, i)) if SPHERE and i % 2 == 1 else None
     full = [dict(a, urdf=os.path.join(ROBOTS, a["urdf"])) for a in arms]
     for _ in range(20):
         bodies = cells.draw_cell(rng, full, tips, paths)
@@ -1151,13 +1152,19 @@ def main():
                     help="mca-sim --no-coordinate: mca-ts without the start-up plan of who passes first")
     ap.add_argument("--cells", action="store_true",
                     help="random cells: a table and 1-3 boxes or posts in every task (cells.py; the same tasks)")
+    ap.add_argument("--sphere", action="store_true",
+                    help="with --cells: a streamed sphere crossing between the arms in every odd task (mca-sim's "
+                    "simulated_sphere, 0.3-2.0 m/s, 30 ms latency, 1 %% of samples lost)")
     ap.add_argument("--self-pairs", action="store_true",
                     help="every arm's self pairs (its robot's list, ROBOT.self.yaml) in every task: self rows, and "
                     "their ticks below d1 counted")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
-    global SELF_PAIRS
+    global SELF_PAIRS, SPHERE
     SELF_PAIRS = a.self_pairs
+    SPHERE = a.sphere
+    if a.sphere and not a.cells:
+        sys.exit("mca-sweep: --sphere needs --cells")
     if not os.access(a.sim, os.X_OK):
         sys.exit("mca-sweep: %s: no mca-sim there (--sim)" % a.sim)
     sim = Sim(a.sim)
