@@ -35,6 +35,15 @@ int mcad_cell_read_task(const mca_check_ctx_t ctx, const struct raw_cell *raw, m
         if (src != MCA_OK) {
             FAIL(src, LINE("task.scenario"), "task.scenario: %s", serr);
         }
+        if (scn->sim_sphere.enabled) {
+            /* a simulated tracker is mca-sim's; mcad's tracks come over DDS Security only (streamed_bodies)
+             */
+            FAIL(
+                MCA_ECONFIG, LINE("task.scenario"),
+                "task.scenario: %s:%d: simulated_sphere: a simulated streamed body is for mca-sim only; mcad "
+                "takes streamed bodies over DDS Security (streamed_bodies:, docs/scheme.md section 14)",
+                sp, scn->sim_sphere.line);
+        }
     } else {
         mca_scenario_defaults(scn);
         snprintf(scn->name, sizeof scn->name, "%s", raw->name);

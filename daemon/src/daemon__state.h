@@ -37,6 +37,10 @@ typedef struct mcad_drive {
     long long stop_k, fault_k;
     int fault_kind;
     unsigned fired; /* mca_drive_event bits */
+    /* the streamed bodies' source in place of the DDS bridge (mca_drive_put_tracks); tracks_on 0: the bridge
+     */
+    int tracks_on;
+    mca_ros2_tracks_t tracks;
 } mcad_drive_t;
 
 struct mca_daemon {
@@ -153,10 +157,6 @@ struct mca_daemon {
     int64_t tracks_since_ns;  /* the first tick's stamp: no message since then counts as lost too */
     uint64_t tracks_bad;      /* messages the controller refused (the bridge had passed them) */
     double tracks_lost_age;   /* LOST: the silence when it latched [s] */
-#ifdef MCA_TEST_HOOKS
-    int test_tracks_on; /* the tests' source instead of the bridge (mca_daemon_put_tracks) */
-    mca_ros2_tracks_t test_tracks;
-#endif
 
     /* ---- publishing (daemon_publish.c) */
     mca_dds_bridge_t *dds;

@@ -89,16 +89,16 @@ mca_arm_t *mca_drive_arm(mca_daemon_t *d, int a) {
     return a >= 0 && a < d->n_arms ? d->arm[a] : NULL;
 }
 
+void mca_drive_put_tracks(mca_daemon_t *d, const mca_ros2_tracks_t *t) {
+    if (d && t) {
+        d->drive.tracks = *t;
+        d->drive.tracks_on = 1;
+    }
+}
+
 #ifdef MCA_TEST_HOOKS
 void mca_daemon_request_stall(mca_daemon_t *d) {
     atomic_store(&d->stall_request, 1);
-}
-
-void mca_daemon_put_tracks(mca_daemon_t *d, const mca_ros2_tracks_t *t) {
-    if (d && t) {
-        d->test_tracks = *t;
-        d->test_tracks_on = 1;
-    }
 }
 
 mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm) {

@@ -47,13 +47,10 @@ void mcad_stream_bodies(mca_daemon_t *d, double t, int64_t now_ns) {
     }
     mca_ros2_tracks_t tk;
     int rc;
-#ifdef MCA_TEST_HOOKS
-    if (d->test_tracks_on) {
-        tk = d->test_tracks;
+    if (d->drive.tracks_on) {
+        tk = d->drive.tracks; /* a driver's (mca_drive_put_tracks): mcad never sets it */
         rc = MCA_OK;
-    } else
-#endif
-    {
+    } else {
         rc = mca_dds_bridge_tracks(d->dds, &tk);
     }
     if (rc == MCA_OK && tk.accepted > 0 && tk.accepted != d->tracks.accepted) {

@@ -28,6 +28,13 @@ struct raw_arm {
     mca_arm_keys_t model;
 };
 
+struct raw_sphere {
+    double radius, speed;
+    double *start, *end; /* 3 each */
+    double *t0, *rate, *latency, *loss;
+    int *seed;
+};
+
 struct raw_scn {
     char *name;
     double duration;
@@ -41,6 +48,7 @@ struct raw_scn {
     unsigned bodies_count;
     char **self_pairs;
     unsigned self_pairs_count;
+    struct raw_sphere *sim_sphere;
 };
 
 static const cyaml_strval_t kind_strings[] = {
@@ -130,6 +138,21 @@ static const cyaml_schema_value_t arm_entry = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct raw_arm, arm_fields),
 };
 
+static const cyaml_schema_field_t sphere_fields[] = {
+    CYAML_FIELD_FLOAT("radius", CYAML_FLAG_DEFAULT, struct raw_sphere, radius),
+    CYAML_FIELD_FLOAT("speed", CYAML_FLAG_DEFAULT, struct raw_sphere, speed),
+    CYAML_FIELD_SEQUENCE_FIXED("start", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_sphere, start,
+                               &mca_yaml_float_entry, 3),
+    CYAML_FIELD_SEQUENCE_FIXED("end", CYAML_FLAG_POINTER | CYAML_FLAG_FLOW, struct raw_sphere, end,
+                               &mca_yaml_float_entry, 3),
+    CYAML_FIELD_FLOAT_PTR("t0", OPT, struct raw_sphere, t0),
+    CYAML_FIELD_FLOAT_PTR("rate", OPT, struct raw_sphere, rate),
+    CYAML_FIELD_FLOAT_PTR("latency", OPT, struct raw_sphere, latency),
+    CYAML_FIELD_FLOAT_PTR("loss", OPT, struct raw_sphere, loss),
+    CYAML_FIELD_INT_PTR("seed", OPT, struct raw_sphere, seed),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t scn_fields[] = {
     CYAML_FIELD_STRING_PTR("name", CYAML_FLAG_POINTER, struct raw_scn, name, 1, 63),
     CYAML_FIELD_FLOAT("duration", CYAML_FLAG_DEFAULT, struct raw_scn, duration),
@@ -141,6 +164,7 @@ static const cyaml_schema_field_t scn_fields[] = {
     CYAML_FIELD_SEQUENCE("arms", CYAML_FLAG_POINTER, struct raw_scn, arms, &arm_entry, 1, MCA_MAX_ARMS),
     MCA_YAML_BODIES_FIELD(struct raw_scn, bodies),
     MCA_YAML_SELF_FIELD(struct raw_scn, self_pairs),
+    CYAML_FIELD_MAPPING_PTR("simulated_sphere", OPT, struct raw_scn, sim_sphere, sphere_fields),
     CYAML_FIELD_END,
 };
 
@@ -187,6 +211,13 @@ static const mca_range_t scn_ranges[] = {
     {"half_extents", 0.0, 10.0, 0, 0, "m"},
     {"half_length", 0.0, 10.0, 0, 0, "m"},
     {"body_radius", 0.0, 10.0, 0, 0, "m"},
+    /* a simulated streamed sphere: what the DDS bridge takes of a track (radius, speed), a camera's rate */
+    {"sphere.radius", 0.0, 2.0, 1, 0, "m"},
+    {"sphere.speed", 0.0, 10.0, 1, 0, "m/s"},
+    {"sphere.rate", 0.0, 1000.0, 1, 0, "1/s"},
+    {"sphere.latency", 0.0, 10.0, 0, 0, "s"},
+    {"sphere.loss", 0.0, 0.5, 0, 0, ""},
+    {"sphere.seed", 0.0, 2147483647.0, 0, 1, ""},
 };
 
 int mca_range_check(const mca_range_t *r, double v, char *why, size_t whylen) {
@@ -931,6 +962,63 @@ void mca_scenario_defaults(mca_scenario_t *scn) {
     scn->params.dt = MCA_CONTROLLER_DT;
 }
 
+/* simulated_sphere: a tracked sphere on a straight line, for mca-sim (mca_sim_sphere_t). */
+static int sim_sphere_apply(const mca_check_ctx_t *c, const struct raw_sphere *k, mca_sim_sphere_t *s) {
+    *s = (mca_sim_sphere_t){.enabled = 1, .t0 = 0.0, .rate = 30.0, .latency = 0.03, .loss = 0.0, .seed = 1};
+    s->line = mca_yaml_marks_line_of(c->marks, "simulated_sphere");
+    int rc;
+    if ((rc =
+             mca_check_range(c, mca_scenario_range("sphere.radius"), k->radius, "simulated_sphere.radius")) ||
+        (rc = mca_check_range(c, mca_scenario_range("sphere.speed"), k->speed, "simulated_sphere.speed"))) {
+        return rc;
+    }
+    s->radius = k->radius;
+    s->speed = k->speed;
+    for (int j = 0; j < 3; j++) {
+        if ((rc = mca_check_range(c, mca_scenario_range("position"), k->start[j],
+                                  "simulated_sphere.start[%d]", j)) ||
+            (rc = mca_check_range(c, mca_scenario_range("position"), k->end[j], "simulated_sphere.end[%d]",
+                                  j))) {
+            return rc;
+        }
+        s->start[j] = k->start[j];
+        s->end[j] = k->end[j];
+    }
+    double d[3];
+    mca_v3_sub(d, s->end, s->start);
+    if (!(mca_v3_norm(d) > 1e-6)) {
+        return mca_check_fail(c, MCA_ECONFIG, "simulated_sphere.end",
+                              "simulated_sphere.end: the same point as start (a line needs two)");
+    }
+    const struct {
+        const char *key, *range;
+        const double *v;
+        double *dst;
+    } opt[] = {
+        {"t0", "t0", k->t0, &s->t0},
+        {"rate", "sphere.rate", k->rate, &s->rate},
+        {"latency", "sphere.latency", k->latency, &s->latency},
+        {"loss", "sphere.loss", k->loss, &s->loss},
+    };
+    for (size_t i = 0; i < sizeof opt / sizeof opt[0]; i++) {
+        if (opt[i].v) {
+            if ((rc = mca_check_range(c, mca_scenario_range(opt[i].range), *opt[i].v, "simulated_sphere.%s",
+                                      opt[i].key))) {
+                return rc;
+            }
+            *opt[i].dst = *opt[i].v;
+        }
+    }
+    if (k->seed) {
+        if ((rc = mca_check_range(c, mca_scenario_range("sphere.seed"), (double)*k->seed,
+                                  "simulated_sphere.seed"))) {
+            return rc;
+        }
+        s->seed = (unsigned)*k->seed;
+    }
+    return MCA_OK;
+}
+
 int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size_t errlen) {
     if (!path || !scn_out) {
         mca_errbuf_printf(err, errlen, "scenario: NULL argument");
@@ -985,6 +1073,9 @@ int mca_scenario_load(const char *path, mca_scenario_t *scn_out, char *err, size
     /* the bodies after the arms: their allow lists name links */
     if ((rc = mca_scenario_bodies_apply(&ctx, raw->bodies, raw->bodies_count, &scn)) != MCA_OK ||
         (rc = mca_scenario_self_apply(&ctx, raw->self_pairs, raw->self_pairs_count, &scn)) != MCA_OK) {
+        goto out;
+    }
+    if (raw->sim_sphere && (rc = sim_sphere_apply(&ctx, raw->sim_sphere, &scn.sim_sphere)) != MCA_OK) {
         goto out;
     }
     *scn_out = scn;

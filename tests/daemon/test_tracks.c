@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* Streamed bodies in the daemon, in virtual time (mca/daemon_drive.h; the tracks from the test build's
- * mca_daemon_put_tracks in place of the DDS bridge):
+/* Streamed bodies in the daemon, in virtual time (mca/daemon_drive.h; the tracks from
+ * the driver's mca_drive_put_tracks in place of the DDS bridge):
  *   - a sphere streamed fresh, then silent: it grows once older than max_age (the controller's body is
  *     radius + growth of its age, measured from the last message), and after lost_after the arms brake to
  *     rest on their paths as the named fault "streamed bodies lost", never below d1 of each other nor inside
@@ -58,7 +58,7 @@ static void put_person(mca_daemon_t *d, uint64_t n, int64_t recv_ns) {
                               .radius = 0.3,
                               .v = {-0.1, 0.0, 0.0},
                               .stamp = 0.02}; /* seen 20 ms before it was sent */
-    mca_daemon_put_tracks(d, &t);
+    mca_drive_put_tracks(d, &t);
 }
 
 typedef struct run {

@@ -366,6 +366,15 @@ int main(int argc, char **argv) {
                    r->scheme, r->self_min_distance, r->self_min_t, r->self_min_arm, r->self_min_link,
                    r->self_min_other, r->self_ticks_below);
         }
+        if (r->has_sphere) {
+            printf(
+                "%s: streamed sphere: %d samples delivered, %d lost; least margin d - S_p %.5f m at %.3f s "
+                "(arm %d, S_p up to %.3f m); below S_p: %d arm-ticks at rest (the sphere walked in), %d "
+                "moving (%d of them braking); least distance to the true sphere %.5f m\n",
+                r->scheme, r->sphere_sent, r->sphere_lost, r->track_min_margin, r->track_min_t,
+                r->track_min_arm, r->track_sp_max, r->track_ticks_rest, r->track_ticks_moving,
+                r->track_ticks_braking, r->sphere_true_min_d);
+        }
         if (r->budget_hits_steps + r->budget_hits_time) {
             printf("%s: %d ticks out of the PDNN's budget (%d at its %d steps, %d by the clock): repaired "
                    "answers, "
@@ -439,7 +448,8 @@ int main(int argc, char **argv) {
             for (int a = 0; a < scn.n_arms; a++) {
                 fprintf(f, "%s%d", a ? "," : "", r->end_done[a]);
             }
-            fprintf(f, "],\"coord_pairs\":%d,\"coord_unplanned\":%d", r->coord_pairs, r->coord_unplanned);
+            fprintf(f, "],\"coord_pairs\":%d,\"coord_unplanned\":%d,\"arm_ticks_below\":%d", r->coord_pairs,
+                    r->coord_unplanned, r->arm_ticks_below);
             if (r->n_bodies > 0) {
                 const int k = r->body_min_body;
                 fprintf(
@@ -457,6 +467,17 @@ int main(int argc, char **argv) {
                         "\"self_ticks_below\":%d",
                         r->self_min_distance, r->self_min_t, r->self_min_arm, r->self_min_link,
                         r->self_min_other, r->self_ticks_below);
+            }
+            if (r->has_sphere) {
+                fprintf(
+                    f,
+                    ",\"sphere_sent\":%d,\"sphere_lost\":%d,\"track_min_margin\":%.9g,\"track_min_t\":%.6g,"
+                    "\"track_min_arm\":%d,\"track_sp_max\":%.9g,\"track_ticks_rest\":%d,"
+                    "\"track_ticks_moving\":%d,\"track_ticks_braking\":%d,\"sphere_true_min_d\":%.9g",
+                    r->sphere_sent, r->sphere_lost, isfinite(r->track_min_margin) ? r->track_min_margin : 1e9,
+                    r->track_min_t, r->track_min_arm, r->track_sp_max, r->track_ticks_rest,
+                    r->track_ticks_moving, r->track_ticks_braking,
+                    isfinite(r->sphere_true_min_d) ? r->sphere_true_min_d : 1e9);
             }
             fprintf(f,
                     ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"

@@ -17,6 +17,8 @@
 #include "mca/scenario.h"
 #include "mca/sim_backend.h"
 #include "mca/tick_csv.h"
+#include "mca/track.h"
+#include "mca/vec3.h"
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o) {
     memset(o, 0, sizeof *o);
@@ -81,6 +83,142 @@ static void apply_overrides(mca_controller_config_t *cfg, void *arg) {
     }
 }
 
+/* The simulated sphere where it truly is at task time t, and its velocity: at start until t0, then along the
+ * line at speed until end, then at end. */
+static void sphere_at(const mca_sim_sphere_t *s, double t, double pos[3], double vel[3]) {
+    double dir[3];
+    mca_v3_sub(dir, s->end, s->start);
+    const double len = mca_v3_norm(dir);
+    const double run = fmax(0.0, t - s->t0) * s->speed;
+    const double u = fmin(run, len);
+    for (int j = 0; j < 3; j++) {
+        dir[j] /= len;
+        pos[j] = s->start[j] + u * dir[j];
+        vel[j] = t >= s->t0 && run < len ? s->speed * dir[j] : 0.0;
+    }
+}
+
+/* The losses' generator (splitmix64): one draw per sample, seeded, the same on every machine. */
+static double sphere_draw(uint64_t *state) {
+    uint64_t z = (*state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * 0x1.0p-53;
+}
+
+/* The simulated tracker (the scenario's simulated_sphere): every sample taken at or before t - latency and
+ * not yet delivered reaches the daemon now, as the DDS bridge would hand it over (mca_drive_put_tracks):
+ * received at its stamp + latency, sent at once (its age when sent 0: the tracker cannot know the transport's
+ * latency, which S_p budgets in T_r). A lost sample is skipped. */
+typedef struct sphere_feed {
+    long long next; /* the next sample's index */
+    uint64_t rng;
+    uint64_t accepted;
+    mca_track_t last; /* the last sample delivered, stamped on the ticks' clock (as the daemon stamps it) */
+} sphere_feed_t;
+
+static void sphere_feed(mca_daemon_t *d, const mca_sim_sphere_t *s, sphere_feed_t *f, double t,
+                        mca_simrun_result_t *r) {
+    for (;;) {
+        const double ts = (double)f->next / s->rate;
+        if (ts + s->latency > t + 1e-12) {
+            return;
+        }
+        f->next++;
+        if (sphere_draw(&f->rng) < s->loss) {
+            r->sphere_lost++;
+            continue;
+        }
+        mca_ros2_tracks_t m = {
+            .n = 1, .recv_ns = llround((ts + s->latency) * 1e9), .accepted = ++f->accepted};
+        m.body[0] = (mca_track_t){.id = 1, .kind = MCA_BODY_SPHERE, .radius = s->radius, .stamp = 0.0};
+        sphere_at(s, ts, m.body[0].a, m.body[0].v);
+        memcpy(m.body[0].b, m.body[0].a, sizeof m.body[0].b);
+        mca_drive_put_tracks(d, &m);
+        f->last = m.body[0];
+        f->last.stamp = ts + s->latency;
+        r->sphere_sent++;
+    }
+}
+
+/* With a streamed sphere the tick's least body pair may be the track's: the fixed bodies' pair of least
+ * margin (body_*) is measured here over the fixed bodies alone. Each arm's least margin d - S_p to the track
+ * as the last delivered sample makes it at t (mca_track_body under the controller's settings: the body the
+ * controller holds while the arms may move, and, once they rest and the daemon no longer updates it, where it
+ * would be) is counted below S_p with the arm at rest (its true joint velocities, this tick's and the last,
+ * all at most MCA_SIMRUN_REST) or moving. And the least distance to the true sphere. */
+static void sphere_measure(mca_daemon_t *d, const mca_sim_sphere_t *s, const sphere_feed_t *f, int n_fixed,
+                           double t, double task_t, int running, int rest_prev[MCA_MAX_ARMS],
+                           mca_simrun_result_t *r) {
+    const mca_controller_t *ctrl = mca_drive_controller(d);
+    const mca_controller_config_t *cfg = mca_controller_get_config(ctrl);
+    const int na = cfg->n_arms;
+    const mca_chain_t *chain[MCA_MAX_ARMS];
+    mca_kin_t kin[MCA_MAX_ARMS];
+    for (int a = 0; a < na; a++) {
+        chain[a] = &cfg->chain[a];
+        /* where the arm is (its last positions), also once the controller no longer ticks */
+        if (mca_fk(chain[a], mca_drive_positions(d, a), &kin[a]) != MCA_OK) {
+            kin[a] = *mca_controller_kin(ctrl, a);
+        }
+    }
+    mca_body_nearest_t bn;
+    if (n_fixed > 0 && mca_body_nearest(na, chain, kin, cfg->body, n_fixed, &bn) == MCA_OK && bn.valid) {
+        if (bn.margin < r->body_min_margin) {
+            r->body_min_margin = bn.margin;
+            r->body_min_distance = bn.d;
+            r->body_min_t = task_t;
+            r->body_min_arm = bn.arm;
+            r->body_min_link = bn.link;
+            r->body_min_body = bn.body;
+            r->body_min_kind = bn.kind;
+        }
+        r->body_ticks_below += bn.margin < 0.0;
+    }
+    mca_fixed_body_t track;
+    int has_track = 0;
+    if (f->accepted > 0) {
+        double arm_speed, t_stop;
+        mca_controller_ssm_arms(cfg, &arm_speed, &t_stop);
+        has_track = mca_track_body(&cfg->ssm, &f->last, t, arm_speed, t_stop, &track, NULL) == MCA_OK;
+        r->track_sp_max = has_track ? fmax(r->track_sp_max, track.clearance) : r->track_sp_max;
+    }
+    mca_fixed_body_t truth = {.clearance = 0.0};
+    truth.body.kind = MCA_BODY_SPHERE;
+    truth.body.u.sphere.radius = s->radius;
+    double v[3];
+    sphere_at(s, t, truth.body.u.sphere.centre, v);
+    for (int a = 0; a < na; a++) {
+        const mca_sim_arm_t *fw = mca_sim_backend_firmware(mca_drive_arm(d, a));
+        const mca_arm_command_t *cmd = mca_drive_last_command(d, a);
+        double vmax = 0.0;
+        for (int j = 0; j < cfg->chain[a].dof; j++) {
+            vmax = fmax(vmax, fabs(fw ? fw->v[j] : cmd->velocity[j]));
+        }
+        const int rest = vmax <= MCA_SIMRUN_REST;
+        if (has_track && mca_body_nearest(1, &chain[a], &kin[a], &track, 1, &bn) == MCA_OK && bn.valid) {
+            if (bn.margin < r->track_min_margin) {
+                r->track_min_margin = bn.margin;
+                r->track_min_t = task_t;
+                r->track_min_arm = a;
+            }
+            if (bn.margin < 0.0) {
+                if (rest && rest_prev[a]) {
+                    r->track_ticks_rest++;
+                } else {
+                    r->track_ticks_moving++;
+                    r->track_ticks_braking += !running;
+                }
+            }
+        }
+        if (mca_body_nearest(1, &chain[a], &kin[a], &truth, 1, &bn) == MCA_OK && bn.valid) {
+            r->sphere_true_min_d = fmin(r->sphere_true_min_d, bn.d);
+        }
+        rest_prev[a] = rest;
+    }
+}
+
 int mca_simrun_fault_from_name(const char *name) {
     for (int f = 1; f <= MCA_CTRL_FAULT_LAST; f++) {
         if (strcmp(name, mca_ctrl_fault_name(f)) == 0) {
@@ -113,6 +251,16 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     if (rc != MCA_OK) {
         snprintf(err, errlen, "%s: dt %g s is not a whole number of ns", scn->source, scn->params.dt);
         goto out;
+    }
+    const mca_sim_sphere_t *sph = scn->sim_sphere.enabled ? &scn->sim_sphere : NULL;
+    if (sph) {
+        /* mca-sim's tracker is the driver's (mca_drive_put_tracks), not DDS: a cell built here from a
+         * scenario, never a cell file, so the DDS Security rule of streamed_bodies does not arise */
+        cell->tracks.enabled = 1;
+        cell->tracks.max_bodies = 1;
+        snprintf(cell->tracks.topic, sizeof cell->tracks.topic, "tracked_bodies");
+        mca_ssm_default(&cell->tracks.ssm);
+        cell->tracks.ssm.latency = sph->latency;
     }
     for (int a = 0; a < scn->n_arms; a++) {
         if (o->dec_limit > 0.0) {
@@ -183,6 +331,15 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     r->self_min_arm = r->self_min_link = r->self_min_other = -1;
     r->brake_t = -1.0;
     r->stop_duration_s = -1.0;
+    const int n_fixed = cfg->n_bodies; /* before the first tick: the tracks come after them */
+    r->has_sphere = sph != NULL;
+    r->track_min_margin = r->sphere_true_min_d = INFINITY;
+    r->track_min_arm = -1;
+    sphere_feed_t feed = {.rng = sph ? sph->seed : 0};
+    int rest_prev[MCA_MAX_ARMS]; /* the arms start at rest */
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        rest_prev[a] = 1;
+    }
     r->n_samples = scn->n_sample_times;
     for (int i = 0; i < scn->n_sample_times; i++) {
         r->sample_t[i] = scn->sample_times[i];
@@ -195,6 +352,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         const double t = k * dt;
         if (!ended && k >= n_ticks && (o->scheme != MCA_SCHEME_MCA_TS || ip->paths_done || k >= n_ticks_ts)) {
             break;
+        }
+        if (sph) {
+            sphere_feed(d, sph, &feed, t, r);
         }
         struct timespec c0, c1;
         clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
@@ -237,11 +397,14 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         }
         r->deadlocks = ip->deadlocks;
         r->max_slack = fmax(r->max_slack, ip->slack);
+        r->arm_ticks_below += ip->min_distance < cfg->sp.d1;
         if (ip->min_distance < r->min_distance) {
             r->min_distance = ip->min_distance;
             r->min_distance_t = t;
         }
-        if (ip->body_margin < r->body_min_margin) {
+        if (sph) {
+            sphere_measure(d, sph, &feed, n_fixed, t, ip->task_t, state == MCA_DAEMON_RUNNING, rest_prev, r);
+        } else if (ip->body_margin < r->body_min_margin) {
             r->body_min_margin = ip->body_margin;
             r->body_min_distance = ip->body_distance;
             r->body_min_t = ip->task_t;
@@ -250,7 +413,7 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
             r->body_min_body = ip->body_index;
             r->body_min_kind = ip->body_kind;
         }
-        r->body_ticks_below += ip->body_margin < 0.0;
+        r->body_ticks_below += !sph && ip->body_margin < 0.0;
         if (ip->self_distance < r->self_min_distance) {
             r->self_min_distance = ip->self_distance;
             r->self_min_t = ip->task_t;
@@ -371,7 +534,8 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
                 r->stop_t = t + dt;
                 r->stop_duration_s = r->stop_t - r->brake_t;
             }
-            if (r->stopped && ++stopped_ticks > (int)llround(o->settle / dt)) {
+            /* with a sphere, at rest until the task's duration: the sphere may walk into an arm at rest */
+            if (r->stopped && ++stopped_ticks > (int)llround(o->settle / dt) && (!sph || k + 1 >= n_ticks)) {
                 k++;
                 break;
             }

@@ -56,6 +56,7 @@ typedef struct mca_simrun_result {
     char scheme[8];
     int ticks;
     double min_distance, min_distance_t;
+    int arm_ticks_below;    /**< ticks (running and braking) with two arms below d1 */
     double max_err;         /**< max |r_d - r| over arms and ticks before any fault [m] */
     double max_err_free;    /**< same, over ticks where no collision row binds */
     double max_err_nobrake; /**< same, over ticks with S(d) = 1 (no link inside d2) */
@@ -125,7 +126,25 @@ typedef struct mca_simrun_result {
     double self_min_t;        /**< task time [s] */
     int self_min_arm, self_min_link, self_min_other;
     int self_ticks_below; /**< ticks with it below d1 */
+    /* the simulated streamed sphere (scenario simulated_sphere), every tick (running and braking); the arm
+     * pairs' and the fixed bodies' figures above leave it out */
+    int has_sphere;
+    int sphere_sent, sphere_lost; /**< samples delivered to the daemon, samples lost */
+    double track_min_margin;      /**< least d - S_p of any arm's link against the track as the controller
+                                       holds it (position, grown radius, clearance S_p) [m] (+INF: none) */
+    double track_min_t;           /**< its task time [s] */
+    int track_min_arm;
+    double track_sp_max;      /**< the largest S_p the track had [m] */
+    int track_ticks_rest;     /**< (arm, tick) pairs below S_p with that arm at rest on the tick and the one
+                                   before (every joint |qdot| <= MCA_SIMRUN_REST): the sphere walked into it */
+    int track_ticks_moving;   /**< (arm, tick) pairs below S_p with that arm moving */
+    int track_ticks_braking;  /**< of those, while the daemon brakes (a stop or a fault: the arm stopping) */
+    double sphere_true_min_d; /**< least surface distance of any link to the true sphere (where it is, not
+                                   where the controller last heard of it) [m] */
 } mca_simrun_result_t;
+
+/** An arm is at rest when every joint's velocity is at most this [rad/s] (the sim arm's true velocity). */
+#define MCA_SIMRUN_REST 1e-6
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);
 

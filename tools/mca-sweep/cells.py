@@ -9,7 +9,9 @@ seeded "S:K:i:cell", so a task with and without its cell is the same task) and g
     clearance OBSTACLE_CLEARANCE, nothing allowed, placed near the arms: inside the box around both bases and
     every tool-tip path, grown by NEAR. Drawn again while it comes closer than its clearance + PATH_ROOM to
     any tool-tip path (the paths stay reachable: only the arms' other links have to give way) or than BASE_ROOM
-    to a base; the caller drops a cell whose bodies are inside a clearance at the start configurations.
+    to a base; the caller drops a cell whose bodies are inside a clearance at the start configurations;
+  - in half of the tasks (the caller picks them) a streamed sphere crossing the workspace between the arms
+    (draw_sphere: mca-sim's `simulated_sphere`, fed through the daemon's track input as a tracker's samples).
 """
 import math
 
@@ -82,6 +84,45 @@ def draw_cell(rng, arms, tips, paths):
         else:
             return None
     return bodies
+
+
+SPHERE_SPEED = (0.3, 2.0)  # [m/s]
+SPHERE_RADIUS = (0.10, 0.25)  # [m] a head to a torso
+SPHERE_RUN = 3.0  # [m] from its start to the crossing point (beyond S_p of the arms at its speed)
+SPHERE_RATE = 30.0  # [1/s] a camera
+SPHERE_LATENCY = 0.03  # [s]
+SPHERE_LOSS = 0.01
+
+
+def draw_sphere(rng, arms, tips, duration):
+    """A sphere crossing the workspace between the first two arms: through a point near the middle of their
+    bases (+-0.15 m, at the tool tips' mean height +-0.15 m), horizontally, across the line of the bases
+    (+-30 deg), SPHERE_RUN m before and after it, at 0.3-2.0 m/s, reaching that point at 20-80 % of the task
+    (or later when it cannot start that close)."""
+    b0, b1 = (np.asarray(a["base"], float) for a in arms[:2])
+    mid = 0.5 * (b0 + b1)
+    zt = float(np.mean([t[2] for t in tips]))
+    c = [mid[0] + rng.uniform(-0.15, 0.15), mid[1] + rng.uniform(-0.15, 0.15), 0.0]
+    r = rng.uniform(*SPHERE_RADIUS)
+    c[2] = max(r + 0.05, zt + rng.uniform(-0.15, 0.15))
+    ang = math.atan2(b1[1] - b0[1], b1[0] - b0[0]) + math.pi / 2 + math.radians(rng.uniform(-30.0, 30.0))
+    u = [math.cos(ang), math.sin(ang), 0.0]
+    v = rng.uniform(*SPHERE_SPEED)
+    t0 = max(0.0, rng.uniform(0.2, 0.8) * duration - SPHERE_RUN / v)
+    return dict(radius=round(r, 4), speed=round(v, 4), t0=round(t0, 3),
+                start=[round(c[j] - SPHERE_RUN * u[j], 4) for j in range(3)],
+                end=[round(c[j] + SPHERE_RUN * u[j], 4) for j in range(3)],
+                rate=SPHERE_RATE, latency=SPHERE_LATENCY, loss=SPHERE_LOSS, seed=rng.randrange(1, 2 ** 31 - 1))
+
+
+def sphere_yaml(s):
+    """The scenario's `simulated_sphere:` lines."""
+    def f(v):
+        return "[%s]" % ", ".join("%g" % x for x in v)
+
+    return ["simulated_sphere:", "  radius: %g" % s["radius"], "  start: %s" % f(s["start"]), "  end: %s" % f(s["end"]),
+            "  speed: %g" % s["speed"], "  t0: %g" % s["t0"], "  rate: %g" % s["rate"], "  latency: %g" % s["latency"],
+            "  loss: %g" % s["loss"], "  seed: %d" % s["seed"]]
 
 
 def bodies_yaml(bodies):

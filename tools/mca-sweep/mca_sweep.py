@@ -4,7 +4,7 @@
 usage: mca_sweep.py --sim MCA_SIM [--kind pa10|jaco-mico|three|pnp-jaco-mico|pnp-pa10[,...]] [--n N] [--seed S]
                     [--only ID[,ID...]] [--schemes mvn,mca,mca-ts] [--jobs 2] [--work DIR] [--json OUT]
                     [--table OUT] [--lost-threshold 0.1] [--no-stop] [--dec-limit X] [--max-err 0.005]
-                    [--tolerance X] [--keep]
+                    [--tolerance X] [--cells [--sphere]] [--self-pairs] [--keep]
 
 For each kind (pa10: two PA10+ as in cross_circles.yaml; jaco-mico: JACO2 + MICO2 as in cup_stacking.yaml;
 three: JACO2, MICO2, JACO2 as in three_arms.yaml; pnp-jaco-mico, pnp-pa10: pick and place at cup_stacking's and
@@ -24,6 +24,8 @@ release dwells' points are the path's exact points (`exact: [...]`, with `exact_
 when this mca-sim takes those keys. A round one arm alone cannot track under MVN (a single-arm run) is redrawn.
 Reachable: plain MVN (each arm's QP is its own: every arm alone) tracks every path with error < --max-err and
 no fault; the others are counted apart as unreachable (with MVN's fault name).
+--cells gives every task a table and 1-3 boxes or posts, with --sphere every odd task a streamed sphere crossing
+between the arms (cells.py; mca-sim's simulated_sphere); --self-pairs every arm's self pairs (docs/sweep.md, "Random cells").
 Every reachable task runs under each scheme, and again with a stop request at a random instant
 (mca-sim --stop-at, when this mca-sim has it). Each run is classified:
   unsafe        some tick below d1, during the task or while braking (for mvn the expected collision);
@@ -162,7 +164,31 @@ def fmt(v):
     return "[" + ", ".join("%.6g" % x for x in v) + "]"
 
 
-def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None, bodies=None):
+SELF_PAIRS = False  # --self-pairs: every arm's robot list of self pairs in every task (docs/scheme.md section 15)
+SPHERE = False  # --sphere (with --cells): a streamed sphere in every odd task (cells.draw_sphere)
+
+
+def self_pairs(sim, wd, name, kind, arms):
+    """--self-pairs: the `self_pairs:` entries of a task, each arm's robot list less the pairs below d1 + 5 mm at
+    the start configuration (as cup_stacking_self.yaml takes mico2's 5-2 and 6-2 out at the Kinova home), found
+    by 2-tick probes; None without --self-pairs."""
+    if not SELF_PAIRS:
+        return None
+    out = [a["name"] for a in arms]
+    for _ in range(12):
+        scn = os.path.join(wd, "self_probe.yaml")
+        with open(scn, "w") as f:
+            f.write(scenario_yaml(name + "_self_probe", kind, arms, 0.002, selfp=out))
+        r = sim.run(scn, os.path.join(wd, "self_probe.json"), ["mvn"])[0].get("mvn")
+        if r is None or r.get("self_min_distance", 1.0) >= KINDS[kind]["d1"] + 0.005:
+            break
+        a, link, other = r["self_min_pair"]
+        out.append("-%s.%d-%d" % (arms[a]["name"], link, other))
+    return out
+
+
+def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None, bodies=None, sphere=None,
+                  selfp=None):
     """The scenario text. A path dict: kind, its keys, and optionally t0, relative (waypoints; default true),
     tolerance and exact (written only when present: the caller leaves them out for an mca-sim without them)."""
     d = KINDS[kind]
@@ -172,6 +198,10 @@ def scenario_yaml(name, kind, arms, duration, paths=None, exact_tolerance=None, 
         s.append("exact_tolerance: %g" % exact_tolerance)
     if bodies:
         s += cells.bodies_yaml(bodies)
+    if sphere:
+        s += cells.sphere_yaml(sphere)
+    if selfp:
+        s.append("self_pairs: [%s]" % ", ".join(selfp))
     s.append("arms:")
     for i, a in enumerate(arms):
         s += ["  - name: %s" % a["name"], "    urdf: %s" % os.path.join(ROBOTS, a["urdf"]), "    tip_link: tool_tip",
@@ -446,22 +476,28 @@ def task_start(kind, seed, i, work):
     return random.Random("%d:%s:%d" % (seed, kind, i)), "%s:%d" % (kind, i), name, wd
 
 
-def draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths):
+def draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths, duration, selfp=None):
     """A random cell for the task (cells.py; its own generator, so the task's own draws do not change): bodies
-    whose clearances the start configurations keep (a 2-tick probe with them), or None after 20 draws."""
+    whose clearances the start configurations keep (a 2-tick probe with them), and with --sphere in every odd task
+    a streamed sphere (its own generator too) that starts outside S_p of the arms (a 50 ms probe: its first samples);
+    (bodies, sphere or None), or (None, None) after 20 draws."""
     rng = random.Random("%d:%s:%d:cell" % (seed, kind, i))
+    srng = random.Random("%d:%s:%d:sphere" % (seed, kind, i)) if SPHERE and i % 2 == 1 else None
     full = [dict(a, urdf=os.path.join(ROBOTS, a["urdf"])) for a in arms]
     for _ in range(20):
         bodies = cells.draw_cell(rng, full, tips, paths)
         if bodies is None:
             continue
+        sphere = cells.draw_sphere(srng, arms, tips, duration) if srng else None
         scn = os.path.join(wd, "cell_probe.yaml")
         with open(scn, "w") as f:
-            f.write(scenario_yaml(name + "_cell_probe", kind, arms, 0.002, bodies=bodies))
+            f.write(scenario_yaml(name + "_cell_probe", kind, arms, 0.05 if sphere else 0.002, bodies=bodies,
+                                  sphere=sphere, selfp=selfp))
         r = sim.run(scn, os.path.join(wd, "cell_probe.json"), ["mvn"])[0].get("mvn")
-        if r is not None and r.get("body_min_margin", -1.0) >= 0.005:
-            return bodies
-    return None
+        if r is not None and r.get("body_min_margin", -1.0) >= 0.005 and (
+                not sphere or r.get("track_min_margin", -1.0) >= 0.005):
+            return bodies, sphere
+    return None, None
 
 
 def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None, with_cell=False):
@@ -510,7 +546,9 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None, with_cell=False):
                          picks=[r["pick"] for r in rounds], places=[r["place"] for r in rounds],
                          points=path["points"], exact=path["exact"]))
     duration = round(max(p["total"] for p in paths) + 0.5, 2)
-    bodies = draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths) if with_cell else None
+    selfp = self_pairs(sim, wd, name, kind, arms)
+    bodies, sphere = draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths, duration,
+                               selfp) if with_cell else (None, None)
     if with_cell and bodies is None:
         return dict(id=tid, error="no random cell clear of the paths and the start in 20 draws")
     out = []
@@ -524,7 +562,8 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None, with_cell=False):
     scn = os.path.join(wd, "scenario.yaml")
     with open(scn, "w") as f:
         f.write(scenario_yaml(name, kind, arms, duration, out,
-                              exact_tolerance=PNP_EXACT_TOL if sim.keys["exact_tolerance"] else None, bodies=bodies))
+                              exact_tolerance=PNP_EXACT_TOL if sim.keys["exact_tolerance"] else None, bodies=bodies,
+                              sphere=sphere, selfp=selfp))
     stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
     g = PNP[kind]
     return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
@@ -532,7 +571,7 @@ def make_pnp_task(sim, kind, seed, i, work, max_err, tol=None, with_cell=False):
                 pnp=dict(frame=[[round(x, 6) for x in v] for v in frame], zone=g["zone"], sep=g["sep"],
                          slots=[[round(x, 4) for x in c] for c in slots],
                          pick_areas=list(g["pick"]), arms=info),
-                tips_blocked=tips_pass.scenario_blocked(scn, tips), bodies=bodies)
+                tips_blocked=tips_pass.scenario_blocked(scn, tips), bodies=bodies, sphere=sphere, self_pairs=selfp)
 
 
 class Sim:
@@ -622,11 +661,19 @@ def classify(r, d1, duration, lost_thr, stop_t=None):
     det.update({k: r.get(k) for k in ("path_error_max", "path_error_p99", "path_error_brake_max", "exact_points", "exact_missed",
                                       "exact_error_max", "end_pair", "end_distance", "end_ee", "end_tau", "end_done", "coord_pairs", "coord_unplanned",
                                       "solves", "solves_unconverged", "solve_steps", "exact_solves",
-                                      "bodies", "body_min_margin", "body_min_name", "body_min_pair", "body_ticks_below")})
+                                      "bodies", "body_min_margin", "body_min_name", "body_min_pair", "body_ticks_below",
+                                      "arm_ticks_below", "self_ticks_below", "sphere_sent", "sphere_lost",
+                                      "track_min_margin", "track_sp_max", "track_ticks_rest", "track_ticks_moving",
+                                      "track_ticks_braking",
+                                      "sphere_true_min_d")})
     if dmin < d1:
         return "unsafe", fault if fault != "none" else "below-d1", det
     if r.get("body_ticks_below"):
         return "unsafe", "below-clearance", det
+    if r.get("self_ticks_below"):
+        return "unsafe", "self-below-d1", det
+    if r.get("track_ticks_moving"):
+        return "unsafe", "below-S_p-moving", det
     if completed and not missed:
         if lost is not None and lost > lost_thr:
             return "late", "lost %.2f s" % lost, det
@@ -716,18 +763,20 @@ def make_task(sim, kind, seed, i, work, tol=None, elastic=False, with_cell=False
             p["tracking"] = "elastic"  # the L2 slack of docs/scheme.md section 10 (no tube)
         elif tol is not None:
             p["tolerance"] = tol
-    bodies = draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths) if with_cell else None
+    selfp = self_pairs(sim, wd, name, kind, arms)
+    bodies, sphere = draw_cell(sim, kind, seed, i, wd, name, arms, tips, paths, duration,
+                               selfp) if with_cell else (None, None)
     if with_cell and bodies is None:
         return dict(id=tid, error="no random cell clear of the paths and the start in 20 draws")
     scn = os.path.join(wd, "scenario.yaml")
     with open(scn, "w") as f:
-        f.write(scenario_yaml(name, kind, arms, duration, paths, bodies=bodies))
+        f.write(scenario_yaml(name, kind, arms, duration, paths, bodies=bodies, sphere=sphere, selfp=selfp))
     stop_t = round(rng.uniform(0.15, 0.85) * duration, 3)
     return dict(id=tid, kind=kind, index=i, scenario=scn, duration=duration, start_distance=round(d0, 5),
                 draws=tries, stop_at=stop_t, d1=KINDS[kind]["d1"], d2=d2,
                 paths=[p["kind"] for p in paths], towards=fars,
                 rest_conflicts=rest_conflicts(sim, wd, name, kind, arms, paths, duration),
-                tips_blocked=tips_pass.scenario_blocked(scn, tips), bodies=bodies)
+                tips_blocked=tips_pass.scenario_blocked(scn, tips), bodies=bodies, sphere=sphere, self_pairs=selfp)
 
 
 def run_task(sim, kind, seed, i, a):
@@ -961,6 +1010,47 @@ def table(tasks, schemes, sim, a):
                                  s, "task" if mode == "task" else "with stop", len(rs), len(below),
                                  sum(r["body_ticks_below"] for r in below), mm[len(mm) // 2], mm[0]))
                 summary["cells/%s/%s" % (s, mode)] = dict(runs=len(rs), below=len(below), min_margin=mm[0])
+    # the streamed sphere (--cells, odd tasks): ticks below clearance per pair kind; arm-sphere apart by whether
+    # that arm was at rest (the sphere walked into it) or moving (must be 0)
+    sph = [t for t in reach if t.get("sphere")]
+    if sph:
+        lines.append("sphere: %d reachable tasks with a streamed sphere crossing between the arms (%.1f-%.1f m/s, "
+                     "%g ms latency, %g %% of samples lost), %d without" % (
+                         len(sph), min(t["sphere"]["speed"] for t in sph), max(t["sphere"]["speed"] for t in sph),
+                         1e3 * cells.SPHERE_LATENCY, 100 * cells.SPHERE_LOSS, nr - len(sph)))
+        for s in schemes:
+            for mode in ("task", "stop"):
+                for label, ts in (("sphere", sph), ("no sphere", [t for t in reach if not t.get("sphere")])):
+                    rs = [t["runs"][s][mode] for t in ts if t["runs"].get(s, {}).get(mode, {}).get("cls", "n/a") != "n/a"]
+                    if not rs:
+                        continue
+
+                    def tot(k):
+                        return sum(r.get(k) or 0 for r in rs)
+                    done = sum(1 for r in rs if r["cls"] in ("completed", "late"))
+                    pe = sorted(r["path_error_max"] for r in rs if r.get("path_error_max") is not None)
+                    row = dict(runs=len(rs), arm_arm=tot("arm_ticks_below"), arm_body=tot("body_ticks_below"),
+                               self=tot("self_ticks_below"), done=done,
+                               path_error_max_p50=pe[len(pe) // 2] if pe else None,
+                               path_error_max_max=pe[-1] if pe else None)
+                    txt = ("sphere %-6s %-9s %-9s %3d runs: ticks below clearance arm-arm %d, arm-body %d, self %d" % (
+                        s, "task" if mode == "task" else "with stop", label, len(rs), row["arm_arm"], row["arm_body"],
+                        row["self"]))
+                    if label == "sphere":
+                        within = [r for r in rs if (r.get("track_min_margin") or 1e9) < 0]
+                        row.update(track_rest=tot("track_ticks_rest"), track_moving=tot("track_ticks_moving"),
+                                   track_braking=tot("track_ticks_braking"),
+                                   within_sp=len(within),
+                                   true_min_d=min(r.get("sphere_true_min_d", 1e9) for r in rs),
+                                   sp_max=max(r.get("track_sp_max") or 0 for r in rs))
+                        txt += (", arm-sphere at rest %d / moving %d (%d braking) (sphere inside S_p in %d runs, S_p up "
+                                "to %.3f m, least distance to it %.3f m)" % (
+                                    row["track_rest"], row["track_moving"], row["track_braking"], len(within),
+                                    row["sp_max"], row["true_min_d"]))
+                    txt += "; done %d (%.1f %%), path err p50/max %s" % (
+                        done, 100.0 * done / len(rs), "n/a" if not pe else "%.4f/%.4f m" % (pe[len(pe) // 2], pe[-1]))
+                    lines.append(txt)
+                    summary["sphere/%s/%s/%s" % (s, mode, label.replace(" ", "_"))] = row
     for s in schemes:
         for mode in ("task", "stop"):
             v = summary.get("%s/%s" % (s, mode))
@@ -1082,8 +1172,19 @@ def main():
                     help="random cells: a table and 1-3 boxes or posts in every task (cells.py; the same tasks)")
     ap.add_argument("--witness", default="", help="path of mca-geom: also look for a schedule on the paths in "
                     "each two-arm task's coordination diagram (coord_diagram.py; ~5-20 s a task)")
+    ap.add_argument("--sphere", action="store_true",
+                    help="with --cells: a streamed sphere crossing between the arms in every odd task (mca-sim's "
+                    "simulated_sphere, 0.3-2.0 m/s, 30 ms latency, 1 %% of samples lost)")
+    ap.add_argument("--self-pairs", action="store_true",
+                    help="every arm's self pairs (its robot's list, ROBOT.self.yaml) in every task: self rows, and "
+                    "their ticks below d1 counted")
     ap.add_argument("--keep", action="store_true", help="keep the work dir (default: removed unless --work is given)")
     a = ap.parse_args()
+    global SELF_PAIRS, SPHERE
+    SELF_PAIRS = a.self_pairs
+    SPHERE = a.sphere
+    if a.sphere and not a.cells:
+        sys.exit("mca-sweep: --sphere needs --cells")
     if not os.access(a.sim, os.X_OK):
         sys.exit("mca-sweep: %s: no mca-sim there (--sim)" % a.sim)
     sim = Sim(a.sim)

@@ -36,6 +36,7 @@
 #include "mca/cell.h"
 #include "mca/controller.h"
 #include "mca/daemon.h"
+#include "mca/ros2.h" /* mca_ros2_tracks_t */
 
 #ifdef __cplusplus
 extern "C" {
@@ -81,6 +82,14 @@ int mca_drive_open(mca_daemon_t **d, const mca_cell_t *cell, const mca_drive_opt
  * @return the state after the tick (mca_daemon_state_t)
  */
 int mca_drive_step(mca_daemon_t *d, double t, int64_t stamp_ns);
+
+/** From now on the daemon's streamed bodies (the cell's streamed_bodies) come from here instead of the DDS
+ *  bridge: the message *t as if the bridge had just accepted it (t->recv_ns on the ticks' stamp clock,
+ *  t->accepted counting messages: a message with the same count is the same message, only older; each
+ *  body's stamp how old it was when sent). The controller checks it as it checks the bridge's. A driven
+ *  daemon may have streamed bodies with DDS off (mca-sim's simulated sphere, the tests); mcad, never driven,
+ *  takes them over DDS Security only. Between steps. */
+void mca_drive_put_tracks(mca_daemon_t *d, const mca_ros2_tracks_t *t);
 
 /** Schedule a stop request (as mcad's SIGTERM) before the first tick at or after task time t [s]; a
  *  later call replaces it. */

@@ -36,11 +36,6 @@ void mca_daemon_request_stall(mca_daemon_t *d);
  *  caller owns the old handle. @return the old handle, NULL (and nothing changed) if a or arm is bad. */
 mca_arm_t *mca_daemon_swap_arm(mca_daemon_t *d, int a, mca_arm_t *arm);
 
-/** From now on the daemon's streamed bodies (streamed_bodies) come from here instead of the DDS bridge: the
- *  message *t as if the bridge had just accepted it (t->recv_ns on the ticks' stamp clock, t->accepted
- *  counting messages: a message with the same count is the same message). Between steps only. */
-void mca_daemon_put_tracks(mca_daemon_t *d, const mca_ros2_tracks_t *t);
-
 #ifdef __cplusplus
 }
 #endif

@@ -62,6 +62,23 @@ typedef struct mca_scenario_body {
     char allow[MCA_SCENARIO_MAX_ALLOW][48]; /**< "ARM" (every link), "ARM.base", "ARM.tool", "ARM.N" */
 } mca_scenario_body_t;
 
+/** A simulated streamed body (`simulated_sphere:`, docs/scheme.md section 14): a sphere a virtual tracker
+ * sees moving on a straight line, sampled at `rate`, each sample reaching the controller `latency` after it
+ * was taken, a fraction `loss` of them lost (seeded). mca-sim feeds it through the daemon's track input
+ *  (mca_drive_put_tracks); mcad refuses a task that declares one (its tracks come over DDS Security only). */
+typedef struct mca_sim_sphere {
+    int enabled;
+    int line;                /**< the key's line in the file (for mcad's refusal) */
+    double radius;           /**< [m] */
+    double start[3], end[3]; /**< the line, world frame [m] */
+    double speed;            /**< along it [m/s] */
+    double t0;               /**< it leaves start at this task time; before it stands at start [s] (0) */
+    double rate;             /**< samples per second (30, a camera) */
+    double latency;          /**< a sample's age when it reaches the controller [s] (0.03) */
+    double loss;             /**< fraction of samples lost (0) */
+    unsigned seed;           /**< of the losses (1) */
+} mca_sim_sphere_t;
+
 typedef struct mca_scenario {
     char name[64];
     char source[512]; /**< file it was loaded from */
@@ -74,6 +91,7 @@ typedef struct mca_scenario {
     double sample_times[16];
     int n_bodies; /**< fixed bodies (tables, fixtures, cups) */
     mca_scenario_body_t body[MCA_MAX_BODIES];
+    mca_sim_sphere_t sim_sphere; /**< a simulated streamed sphere (mca-sim only) */
 } mca_scenario_t;
 
 /**
