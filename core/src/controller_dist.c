@@ -301,3 +301,30 @@ int mca_ctrl__distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     }
     return body_distances(ctrl, info);
 }
+
+int mca_controller_pair_nearest(const mca_controller_t *ctrl, mca_pair_nearest_t *out) {
+    if (!ctrl || !out) {
+        return MCA_EINVAL;
+    }
+    const mca_chain_t *chains[MCA_MAX_ARMS];
+    for (int a = 0; a < ctrl->cfg.n_arms; a++) {
+        chains[a] = &ctrl->cfg.chain[a];
+    }
+    out->n_bodies = ctrl->cfg.n_bodies;
+    out->n_fixed = ctrl->n_fixed;
+    int rc = mca_body_nearest_each(ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body, ctrl->cfg.n_bodies,
+                                   out->body);
+    const int has_self = mca_controller_has_self(&ctrl->cfg);
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        mca_self_nearest_t *sn = &out->self[a];
+        /* one arm at a time: the arm's own least self pair */
+        const int rs = a < ctrl->cfg.n_arms ? mca_self_nearest(1, &chains[a], &ctrl->kin[a],
+                                                               has_self ? &ctrl->cfg.self[a] : NULL, sn)
+                                            : mca_self_nearest(0, NULL, NULL, NULL, sn);
+        if (sn->valid) {
+            sn->arm = a;
+        }
+        rc = rc != MCA_OK ? rc : rs;
+    }
+    return rc;
+}

@@ -187,6 +187,8 @@ void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
         }
     }
     s->n_pairs = (uint32_t)np;
+    /* every pair of every kind, named (the bodies' closest links as this tick's body_watch found them) */
+    mca_dds_named_fill(s, mca_controller_get_config(d->ctrl), dist, &d->pn);
     mca_dds_status_snapshot_t *st = &s->status;
     st->state = (mca_dds_state_t)state;
     st->fault_code = d->fault ? d->fault_code : 0;
