@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "mca/controller.h"
+#include "mca/dds_bridge.h" /* MCA_DDS_PAIR_KINDS, mca_dds_pair_kind_name */
 #include "mca/qp_dump.h"
 #include "mca/scenario.h"
 
@@ -125,6 +126,11 @@ typedef struct mca_simrun_result {
     double self_min_t;        /**< task time [s] */
     int self_min_arm, self_min_link, self_min_other;
     int self_ticks_below; /**< ticks with it below d1 */
+    /* every kind of pair and each fixed body over the run, as mcad's summary counts them (mca_daemon_summary) */
+    double kind_min[MCA_DDS_PAIR_KINDS], kind_min_t[MCA_DDS_PAIR_KINDS]; /**< [m] (+INF: none), [s] */
+    int n_fixed_bodies;
+    double fixed_min[MCA_MAX_BODIES], fixed_min_t[MCA_MAX_BODIES]; /**< [m] (+INF: none), [s] */
+    int fixed_min_link[MCA_MAX_BODIES][2];                         /**< arm, link (-1: every link allowed) */
 } mca_simrun_result_t;
 
 void mca_simrun_default_opts(mca_simrun_opts_t *o);
