@@ -15,7 +15,8 @@ checks:
   - the summary on stderr carries the least distance per kind and per body with its time: never above the least
     published, and within 1 cm of what was published within 5 ticks of that time (a subscriber that matched
     after that time, on a loaded machine, says so and checks the first part only).
-usage: test_dds_pairs.py MCAD MCA_GEOM SOURCE_DIR [mcad flags]"""
+  - mca-monitor, watching the same run, shows the least distance per kind and each body with its closest link.
+usage: test_dds_pairs.py MCAD MCA_GEOM MCA_MONITOR SOURCE_DIR [mcad flags]"""
 import math
 import os
 import re
@@ -27,8 +28,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-MCAD, GEOM, SRC = sys.argv[1], sys.argv[2], sys.argv[3]
-EXTRA = sys.argv[4:]
+MCAD, GEOM, MONITOR, SRC = sys.argv[1:5]
+EXTRA = sys.argv[5:]
 sys.path.insert(0, os.path.join(SRC, "tests", "dds"))
 import mca_types as m  # noqa: E402
 
@@ -211,6 +212,9 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-pairs-") as tmp:
     cell = os.path.join(tmp, "cell.yaml")
     with open(cell, "w") as f:
         f.write(CELL)
+    mon = subprocess.Popen([MONITOR, "--domain", str(DOMAIN), "--config",
+                            os.path.join(SRC, "config", "dds", "loopback.xml"), "--duration", "3.5", "--no-color"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     proc = subprocess.Popen([MCAD] + EXTRA + [cell], stderr=subprocess.PIPE, text=True)
     pairs, js = [], []
     t_exit = None
@@ -223,6 +227,7 @@ with tempfile.TemporaryDirectory(prefix="mca-dds-pairs-") as tmp:
             break
         time.sleep(0.005)
     err = proc.stderr.read()
+    mon_out, mon_err = mon.communicate(timeout=60)
 check(proc.returncode == 0, f"mcad exit status {proc.returncode}")
 check(len(pairs) >= 200, f"{len(pairs)} PairDistances samples for ~3 s at 200 Hz (first tick "
       f"{min((p.tick for p in pairs), default=None)})")
@@ -231,7 +236,7 @@ for s in js:
     state.setdefault(s.tick, {})[s.arm_id] = list(s.position)
 both = [p for p in pairs if len(state.get(p.tick, {})) == 2]
 check(len(both) >= 0.9 * len(pairs), f"{len(both)} of {len(pairs)} samples with both arms' joint states")
-# every 8th matched tick against the truth (FK is a subprocess per arm: keep the test quick)
+# every 16th matched tick against the truth (FK is a subprocess per arm: keep the test quick)
 worst = {"table": 0.0, "crate": 0.0, "ball": 0.0, "self": 0.0}
 least = {k: math.inf for k in ("arm-arm", "arm-body", "self", "table", "crate", "ball")}
 at = {k: [] for k in least}  # (tick, least of that kind or body at that tick)
@@ -252,7 +257,7 @@ for i, p in enumerate(both):
     for k, d in here.items():
         least[k] = min(least[k], d)
         at[k].append((p.tick, d))
-    if i % 8:
+    if i % 16:
         continue
     pts = [chain_points(state[p.tick][a], BASES[a]) for a in (0, 1)]
     truth = truth_bodies(pts)
@@ -301,7 +306,16 @@ for name in ("table", "crate", "ball"):
     check(mb is not None and near(float(mb.group(1)), float(mb.group(2)), name),
           f"summary body '{name}': {mb and mb.group(1)} m at t = {mb and mb.group(2)} s: least published "
           f"{least[name]:.5f} m")
+# the monitor's last view: the kinds' least, then a line per body with its closest link
+view = mon_out[mon_out.rfind("least per kind:"):]
+check(re.search(r"least per kind:  arm-arm [\d.]+ mm \(arm 0 link \d - arm 1 link \d\)  arm-body [\d.]+ mm \('\w+'\)"
+                r"  self [\d.]+ mm \(arm 0 link \d - arm 0 link \d\)  arm-track -", view) is not None,
+      "mca-monitor shows the least distance per kind: " + (view.splitlines() or [""])[0])
+for name in ("table", "crate", "ball"):
+    check(re.search(r"body %s +arm-body +d= +[\d.]+ mm +d-clearance= +[\d.]+ mm +closest: arm \d link \d" % name, view)
+          is not None, f"mca-monitor shows body '{name}' with its closest link")
 if failures:
+    print(mon_out[-2000:], mon_err)
     print(err)
     print(f"{len(failures)} check(s) failed")
     sys.exit(1)
