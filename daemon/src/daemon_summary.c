@@ -199,21 +199,24 @@ void mca_daemon_log_summary(const mca_daemon_summary_t *s, mca_log_fn fn, void *
         char kinds[256];
         int len = 0;
         for (int k = 0; k < MCA_DDS_PAIR_KINDS && len < (int)sizeof kinds; k++) {
-            len += isfinite(s->kind_min[k])
-                       ? snprintf(kinds + len, sizeof kinds - (size_t)len, "%s%s %.4f m at t = %.3f s",
-                                  len ? ", " : "", mca_dds_pair_kind_name(k), s->kind_min[k], s->kind_min_t[k])
-                       : snprintf(kinds + len, sizeof kinds - (size_t)len, "%s%s n/a", len ? ", " : "",
-                                  mca_dds_pair_kind_name(k));
+            len +=
+                isfinite(s->kind_min[k])
+                    ? snprintf(kinds + len, sizeof kinds - (size_t)len, "%s%s %.4f m at t = %.3f s",
+                               len ? ", " : "", mca_dds_pair_kind_name(k), s->kind_min[k], s->kind_min_t[k])
+                    : snprintf(kinds + len, sizeof kinds - (size_t)len, "%s%s n/a", len ? ", " : "",
+                               mca_dds_pair_kind_name(k));
         }
         mcad_logf(fn, arg, 6, "summary: least distance per kind: %s", kinds);
     }
     for (int k = 0; k < s->n_fixed_bodies && k < MCA_MAX_BODIES; k++) {
         if (s->fixed_min_link[k][0] >= 0) {
-            mcad_logf(fn, arg, 6, "summary: body '%.32s': least distance %.4f m at t = %.3f s, arm %d link %d",
+            mcad_logf(fn, arg, 6,
+                      "summary: body '%.32s': least distance %.4f m at t = %.3f s, arm %d link %d",
                       s->fixed_name[k], s->fixed_min[k], s->fixed_min_t[k], s->fixed_min_link[k][0],
                       s->fixed_min_link[k][1]);
         } else {
-            mcad_logf(fn, arg, 6, "summary: body '%.32s': every link allowed, none measured", s->fixed_name[k]);
+            mcad_logf(fn, arg, 6, "summary: body '%.32s': every link allowed, none measured",
+                      s->fixed_name[k]);
         }
     }
     if (s->brake_t >= 0.0) {

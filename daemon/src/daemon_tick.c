@@ -88,7 +88,8 @@ static void body_watch(mca_daemon_t *d, double t) {
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         d->pn.self[a].valid = 0;
     }
-    if ((cc->n_bodies > 0 || mca_controller_has_self(cc)) && mca_controller_pair_nearest(d->ctrl, &d->pn) == MCA_OK) {
+    if ((cc->n_bodies > 0 || mca_controller_has_self(cc)) &&
+        mca_controller_pair_nearest(d->ctrl, &d->pn) == MCA_OK) {
         for (int k = 0; k < d->pn.n_bodies; k++) {
             const mca_body_nearest_t *bn = &d->pn.body[k];
             if (!bn->valid) {

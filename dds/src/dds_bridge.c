@@ -508,10 +508,9 @@ static int publisher_open(publisher_t *b, char *err, size_t errlen) {
         return prc;
     }
     b->participant = p;
-    const dds_topic_descriptor_t *const descs[W_COUNT] = {&mca_dds_JointState_desc,
-                                                          &mca_dds_JointCommand_desc, &mca_dds_Distances_desc,
-                                                          &mca_dds_ControllerStatus_desc,
-                                                          &mca_dds_PairDistances_desc};
+    const dds_topic_descriptor_t *const descs[W_COUNT] = {
+        &mca_dds_JointState_desc, &mca_dds_JointCommand_desc, &mca_dds_Distances_desc,
+        &mca_dds_ControllerStatus_desc, &mca_dds_PairDistances_desc};
     dds_qos_t *qs = mca_dds_qos_stream();
     dds_qos_t *qst = mca_dds_qos_status();
     int rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
@@ -905,7 +904,8 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
     /* only the arms and pairs in use (2 arms, 1 pair: 1.6 of 4 kB): the publisher reads no more */
     const size_t n_arms = snap->n_arms < MCA_MAX_ARMS ? snap->n_arms : MCA_MAX_ARMS;
     const size_t n_pairs = snap->n_pairs < MCA_MAX_PAIRS ? snap->n_pairs : MCA_MAX_PAIRS;
-    const size_t n_named = snap->n_named < MCA_DDS_MAX_PAIR_ENTRIES ? snap->n_named : MCA_DDS_MAX_PAIR_ENTRIES;
+    const size_t n_named =
+        snap->n_named < MCA_DDS_MAX_PAIR_ENTRIES ? snap->n_named : MCA_DDS_MAX_PAIR_ENTRIES;
     const mca_ring_part_t parts[4] = {
         {0, offsetof(mca_dds_snapshot_t, arm) + n_arms * sizeof snap->arm[0]},
         {offsetof(mca_dds_snapshot_t, pair), n_pairs * sizeof snap->pair[0]},

@@ -69,8 +69,8 @@ int mca_dds_named_fill(mca_dds_snapshot_t *s, const mca_controller_config_t *cfg
             continue;
         }
         mca_dds_named_pair_t *e =
-            entry(s, k < pn->n_fixed ? MCA_DDS_PAIR_ARM_BODY : MCA_DDS_PAIR_ARM_TRACK, bn->arm, bn->link, -1, -1,
-                  bn->d, cfg->body[k].clearance, bn->p, bn->q);
+            entry(s, k < pn->n_fixed ? MCA_DDS_PAIR_ARM_BODY : MCA_DDS_PAIR_ARM_TRACK, bn->arm, bn->link, -1,
+                  -1, bn->d, cfg->body[k].clearance, bn->p, bn->q);
         e->body = (int16_t)k;
         _Static_assert(sizeof cfg->body[k].name <= sizeof e->name, "a body's name fits");
         memcpy(e->name, cfg->body[k].name, sizeof cfg->body[k].name);

@@ -218,8 +218,9 @@ static void draw(monitor_t *m) {
             }
             const double d = pf->e[best].distance;
             if (kind == MCA_DDS_PAIR_ARM_ARM || kind == MCA_DDS_PAIR_SELF) {
-                printf("  %s %.1f mm (arm %d link %d - arm %d link %d)", mca_dds_pair_kind_name(kind), d * 1e3,
-                       pf->e[best].arm, pf->e[best].link, pf->e[best].other_arm, pf->e[best].other_link);
+                printf("  %s %.1f mm (arm %d link %d - arm %d link %d)", mca_dds_pair_kind_name(kind),
+                       d * 1e3, pf->e[best].arm, pf->e[best].link, pf->e[best].other_arm,
+                       pf->e[best].other_link);
             } else {
                 printf("  %s %.1f mm ('%s')", mca_dds_pair_kind_name(kind), d * 1e3, pf->e[best].name);
             }
@@ -395,7 +396,9 @@ static int child_main(int fd, void *arg) {
     int rc = 0;
     if (rd < 0 || rs < 0 || rp < 0) {
         fprintf(stderr, "mca-monitor: cannot create readers: %s\n",
-                dds_strretcode(rd < 0 ? rd : rs < 0 ? rs : rp));
+                dds_strretcode(rd < 0   ? rd
+                               : rs < 0 ? rs
+                                        : rp));
         rc = 1;
     } else {
         pthread_mutex_lock(&ch->lock);

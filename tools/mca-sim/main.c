@@ -412,9 +412,9 @@ int main(int argc, char **argv) {
                     "\"compute_max_ns\":%lld,\"cpu_p50_ns\":%lld,\"cpu_p99_ns\":%lld,\"cpu_max_ns\":%lld,"
                     "\"dumped\":%d,\"dumped_binding\":%d,\"dump_skipped_capped\":%d,\"pdnn_budget_steps\":%d,"
                     "\"budget_hits_steps\":%d,\"budget_hits_time\":%d,\"samples\":[",
-                    s ? "," : "", r->scheme, r->ticks, json_num(num, r->min_distance), r->min_distance_t, r->max_err,
-                    r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
-                    isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
+                    s ? "," : "", r->scheme, r->ticks, json_num(num, r->min_distance), r->min_distance_t,
+                    r->max_err, r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault),
+                    r->fault_t, isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
                     isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0,
                     r->pdnn_steps_max, r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max,
                     r->binding_ticks, r->pdnn_capped, (long long)r->compute_p50, (long long)r->compute_p99,

@@ -126,7 +126,8 @@ typedef struct mca_simrun_result {
     double self_min_t;        /**< task time [s] */
     int self_min_arm, self_min_link, self_min_other;
     int self_ticks_below; /**< ticks with it below d1 */
-    /* every kind of pair and each fixed body over the run, as mcad's summary counts them (mca_daemon_summary) */
+    /* every kind of pair and each fixed body over the run, as mcad's summary counts them (mca_daemon_summary)
+     */
     double kind_min[MCA_DDS_PAIR_KINDS], kind_min_t[MCA_DDS_PAIR_KINDS]; /**< [m] (+INF: none), [s] */
     int n_fixed_bodies;
     double fixed_min[MCA_MAX_BODIES], fixed_min_t[MCA_MAX_BODIES]; /**< [m] (+INF: none), [s] */

@@ -325,8 +325,9 @@ const mca_arm_distances_t (*mca_controller_distances(const mca_controller_t *ctr
 typedef struct mca_pair_nearest {
     int n_bodies; /**< bodies now: [0, n_fixed) the cell's fixed bodies, [n_fixed, n_bodies) streamed ones */
     int n_fixed;
-    mca_body_nearest_t body[MCA_MAX_BODIES]; /**< per body its closest link it does not allow (valid 0: none) */
-    mca_self_nearest_t self[MCA_MAX_ARMS];   /**< per arm its self pair of least distance (valid 0: none) */
+    mca_body_nearest_t
+        body[MCA_MAX_BODIES];              /**< per body its closest link it does not allow (valid 0: none) */
+    mca_self_nearest_t self[MCA_MAX_ARMS]; /**< per arm its self pair of least distance (valid 0: none) */
 } mca_pair_nearest_t;
 
 /**

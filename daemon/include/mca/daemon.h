@@ -186,8 +186,8 @@ typedef struct mca_daemon_summary {
     char body_name[32]; /**< that body's name */
     /* self pairs: the pair of least distance (self_pair[0] -1: no self pairs) */
     double self_distance, self_t;
-    int self_pair[3];   /**< arm, link, the other link */
-    int body_kind;      /**< and kind (mca_body_kind_t: mca_body_kind_name) */
+    int self_pair[3]; /**< arm, link, the other link */
+    int body_kind;    /**< and kind (mca_body_kind_t: mca_body_kind_name) */
     /* every kind of pair (mca_dds_pair_kind_t): its least distance over the run and when (+INF: none) */
     double kind_min[MCA_DDS_PAIR_KINDS], kind_min_t[MCA_DDS_PAIR_KINDS];
     /* each fixed body of the cell: its least distance over the run, when, and the link (arm -1: none) */

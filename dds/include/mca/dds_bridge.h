@@ -40,7 +40,7 @@
 
 #include "mca/armdist.h"    /* mca_arm_distances_t */
 #include "mca/controller.h" /* mca_controller_config_t, mca_pair_nearest_t */
-#include "mca/dds_log.h" /* mca_dds_log_fn */
+#include "mca/dds_log.h"    /* mca_dds_log_fn */
 #include "mca/limits.h"
 #include "mca/ros2.h"
 
@@ -98,8 +98,8 @@ typedef struct mca_dds_pair_snapshot {
     double link_distance_b[MCA_MAX_LINKS]; /**< per link of b: closest distance to a */
 } mca_dds_pair_snapshot_t;
 
-/** Kinds of pair: the one numbering of the wire's mca::dds::PairKind (dds_pairs.c asserts at compile time that
- *  the IDL's enumerators have these values). */
+/** Kinds of pair: the one numbering of the wire's mca::dds::PairKind (dds_pairs.c asserts at compile time
+ * that the IDL's enumerators have these values). */
 typedef enum mca_dds_pair_kind {
     MCA_DDS_PAIR_ARM_ARM = 0,   /**< two arms */
     MCA_DDS_PAIR_ARM_BODY = 1,  /**< an arm and a fixed body of the cell */
@@ -120,14 +120,14 @@ const char *mca_dds_pair_kind_name(int kind);
 /** One named pair of one kind (mca::dds::PairDistance): P on arm `arm`'s link `link`, Q on the other side:
  *  arm other_arm's link other_link (arm and self pairs) or body `body` (-1 for the other two). */
 typedef struct mca_dds_named_pair {
-    int32_t kind;                       /**< mca_dds_pair_kind_t */
-    int16_t arm, link;                  /**< the link holding P */
-    int16_t other_arm, other_link;      /**< the other link (-1: a body) */
-    int16_t body;                       /**< the body (cfg.body[] index; -1: none) */
-    char name[MCA_DDS_NAME_MAX + 1];    /**< the body's name, NUL-terminated ("" for arm and self pairs) */
-    double distance;                    /**< surface distance [m] */
-    double clearance;                   /**< what the pair keeps [m]: d1, or the body's clearance */
-    double p[3], q[3];                  /**< witness points (world) */
+    int32_t kind;                    /**< mca_dds_pair_kind_t */
+    int16_t arm, link;               /**< the link holding P */
+    int16_t other_arm, other_link;   /**< the other link (-1: a body) */
+    int16_t body;                    /**< the body (cfg.body[] index; -1: none) */
+    char name[MCA_DDS_NAME_MAX + 1]; /**< the body's name, NUL-terminated ("" for arm and self pairs) */
+    double distance;                 /**< surface distance [m] */
+    double clearance;                /**< what the pair keeps [m]: d1, or the body's clearance */
+    double p[3], q[3];               /**< witness points (world) */
 } mca_dds_named_pair_t;
 
 /** Controller health (published on mca/controller_status). */
@@ -157,7 +157,8 @@ typedef struct mca_dds_snapshot {
     uint32_t n_named; /**< <= MCA_DDS_MAX_PAIR_ENTRIES */
     mca_dds_arm_snapshot_t arm[MCA_MAX_ARMS];
     mca_dds_pair_snapshot_t pair[MCA_MAX_PAIRS];
-    mca_dds_named_pair_t named[MCA_DDS_MAX_PAIR_ENTRIES]; /**< every pair of every kind (mca/pair_distances) */
+    mca_dds_named_pair_t
+        named[MCA_DDS_MAX_PAIR_ENTRIES]; /**< every pair of every kind (mca/pair_distances) */
     mca_dds_status_snapshot_t status;
 } mca_dds_snapshot_t;
 
