@@ -80,8 +80,7 @@ static void body_watch(mca_daemon_t *d, double t) {
         d->self_pair[1] = d->info.self_link;
         d->self_pair[2] = d->info.self_other;
     }
-    /* every kind and each fixed body (a body's closest link costs a distance per link at most: only cells
-     * with bodies or self pairs pay it) */
+    /* every kind and each fixed body (the controller measured each body's closest link with its distances) */
     const mca_controller_config_t *cc = mca_controller_get_config(d->ctrl);
     double least[MCA_DDS_PAIR_KINDS] = {d->info.min_distance, INFINITY, INFINITY, INFINITY};
     d->pn.n_bodies = 0;

@@ -331,10 +331,10 @@ typedef struct mca_pair_nearest {
 } mca_pair_nearest_t;
 
 /**
- * Each body's closest link and each arm's closest self pair at the last tick / observe / brake's
- * kinematics (mca_body_nearest_each, mca_self_nearest). Computed on the call (RT safe: no allocation,
- * bounded: one capsule-body distance per link and body at most, the sphere test skips most).
- * @retval MCA_OK, MCA_EINVAL (NULL, a distance failed: non-finite geometry)
+ * Each body's closest link and each arm's closest self pair as the last tick / observe / brake measured them
+ * (mca_body_nearest_each, mca_self_nearest: the report's body_* and self_* fields are the least of these).
+ * RT safe (a copy).
+ * @retval MCA_OK, MCA_EINVAL (NULL)
  */
 int mca_controller_pair_nearest(const mca_controller_t *ctrl, mca_pair_nearest_t *out);
 
