@@ -74,7 +74,11 @@ struct mca_controller {
      * none) */
     mca_path_rate_t rate[MCA_MAX_ARMS];
     /* streamed bodies: cfg.body[n_fixed ..] are the tracks of the last mca_controller_set_tracks */
-    int n_fixed;                                 /**< the cell's fixed bodies */
+    int n_fixed; /**< the cell's fixed bodies */
+    /* the last distances' pairs of every kind (mca_controller_pair_nearest): each body's closest link and
+     * each arm's least self pair; the report's least-margin body pair and least self pair are the least of
+     * these */
+    mca_pair_nearest_t near_kinds;
     double track_arm_speed, track_stop_time;     /**< v_r and T_s of S_p (set at init) */
     mca_ssm_terms_t track_terms[MCA_MAX_TRACKS]; /**< each track's S_p as last set */
 };

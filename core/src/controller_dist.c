@@ -218,33 +218,59 @@ void mca_ctrl__near_links(mca_controller_t *ctrl, const mca_qp_t *qp, const mca_
 }
 
 /* Per link of every arm: the closest link of any other arm, and the global minimum. */
-/* The fixed bodies: the arm-body pair of least margin (d - clearance) into the tick report. */
+/* The fixed bodies: each body's closest link and each arm's least self pair (kept for
+ * mca_controller_pair_nearest), and the least of them into the tick report: the arm-body pair of least margin
+ * (d - clearance; the first in the order body, arm, link on a tie, as mca_body_nearest) and the self pair of
+ * least distance. */
 static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     const mca_chain_t *chains[MCA_MAX_ARMS];
     for (int a = 0; a < ctrl->cfg.n_arms; a++) {
         chains[a] = &ctrl->cfg.chain[a];
     }
-    mca_body_nearest_t bn;
-    const int rc =
-        mca_body_nearest(ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body, ctrl->cfg.n_bodies, &bn);
-    info->body_distance = bn.d;
-    info->body_margin = bn.margin;
-    info->body_arm = bn.arm;
-    info->body_link = bn.link;
-    info->body_index = bn.body;
-    info->body_kind = bn.kind;
-    mca_v3_set(info->body_p, bn.valid ? bn.p : (const double[3]){0.0, 0.0, 0.0});
-    mca_v3_set(info->body_q, bn.valid ? bn.q : (const double[3]){0.0, 0.0, 0.0});
+    mca_pair_nearest_t *pn = &ctrl->near_kinds;
+    pn->n_bodies = ctrl->cfg.n_bodies;
+    pn->n_fixed = ctrl->n_fixed;
+    const int rc = mca_body_nearest_each(ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body,
+                                         ctrl->cfg.n_bodies, pn->body);
+    const mca_body_nearest_t *bn = NULL;
+    for (int k = 0; rc == MCA_OK && k < pn->n_bodies; k++) {
+        if (pn->body[k].valid && (bn == NULL || pn->body[k].margin < bn->margin)) {
+            bn = &pn->body[k];
+        }
+    }
+    info->body_distance = bn ? bn->d : INFINITY;
+    info->body_margin = bn ? bn->margin : INFINITY;
+    info->body_arm = bn ? bn->arm : -1;
+    info->body_link = bn ? bn->link : -1;
+    info->body_index = bn ? bn->body : -1;
+    info->body_kind = bn ? bn->kind : -1;
+    mca_v3_set(info->body_p, bn ? bn->p : (const double[3]){0.0, 0.0, 0.0});
+    mca_v3_set(info->body_q, bn ? bn->q : (const double[3]){0.0, 0.0, 0.0});
     if (rc != MCA_OK) {
+        pn->n_bodies = 0;
         return rc;
     }
-    mca_self_nearest_t sn;
-    const int rs = mca_self_nearest(ctrl->cfg.n_arms, chains, ctrl->kin,
-                                    mca_controller_has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL, &sn);
-    info->self_distance = sn.d;
-    info->self_arm = sn.arm;
-    info->self_link = sn.link;
-    info->self_other = sn.other;
+    /* one arm at a time: each arm's own least self pair, then the least of them (the first arm on a tie) */
+    const int has_self = mca_controller_has_self(&ctrl->cfg);
+    const mca_self_nearest_t *sn = NULL;
+    int rs = MCA_OK;
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        mca_self_nearest_t *s = &pn->self[a];
+        const int r = a < ctrl->cfg.n_arms && has_self
+                          ? mca_self_nearest(1, &chains[a], &ctrl->kin[a], &ctrl->cfg.self[a], s)
+                          : mca_self_nearest(0, NULL, NULL, NULL, s);
+        if (s->valid) {
+            s->arm = a;
+            if (sn == NULL || s->d < sn->d) {
+                sn = s;
+            }
+        }
+        rs = rs != MCA_OK ? rs : r;
+    }
+    info->self_distance = sn ? sn->d : INFINITY;
+    info->self_arm = sn ? sn->arm : -1;
+    info->self_link = sn ? sn->link : -1;
+    info->self_other = sn ? sn->other : -1;
     return rs;
 }
 
@@ -300,4 +326,12 @@ int mca_ctrl__distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
         }
     }
     return body_distances(ctrl, info);
+}
+
+int mca_controller_pair_nearest(const mca_controller_t *ctrl, mca_pair_nearest_t *out) {
+    if (!ctrl || !out) {
+        return MCA_EINVAL;
+    }
+    *out = ctrl->near_kinds;
+    return MCA_OK;
 }

@@ -125,6 +125,13 @@ int mcad_open(mca_daemon_t **out, const mca_cell_t *cell, const mca_daemon_opts_
     d->body_pair[0] = d->body_pair[1] = d->body_pair[2] = -1;
     d->self_d = INFINITY;
     d->self_pair[0] = d->self_pair[1] = d->self_pair[2] = -1;
+    for (int k = 0; k < MCA_DDS_PAIR_KINDS; k++) {
+        d->kind_min[k] = INFINITY;
+    }
+    for (int k = 0; k < MCA_MAX_BODIES; k++) {
+        d->fixed_min[k] = INFINITY;
+        d->fixed_min_link[k][0] = d->fixed_min_link[k][1] = -1;
+    }
     int rc = mca_cell_controller_config(cell, &d->ccfg, err, errlen);
     if (rc == MCA_OK && d->drive.controller_config) {
         d->drive.controller_config(&d->ccfg, d->drive.controller_config_arg);

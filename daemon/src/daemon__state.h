@@ -149,8 +149,15 @@ struct mca_daemon {
     double body_margin, body_d, body_t;
     int body_pair[3]; /* arm, link, body */
     double self_d, self_t;
-    int self_pair[3];     /* arm, link, other link */
-    int64_t pct_cache[6]; /* the summary's percentiles of the last second (the DDS status) */
+    int self_pair[3]; /* arm, link, other link */
+    /* every kind of pair: this tick's closest link of each body and each arm's self pair (the snapshot's
+     * named pairs), and over the run the least distance of each kind (mca_dds_pair_kind_t) and of each fixed
+     * body */
+    mca_pair_nearest_t pn;
+    double kind_min[MCA_DDS_PAIR_KINDS], kind_min_t[MCA_DDS_PAIR_KINDS];
+    double fixed_min[MCA_MAX_BODIES], fixed_min_t[MCA_MAX_BODIES];
+    int fixed_min_link[MCA_MAX_BODIES][2]; /* arm, link */
+    int64_t pct_cache[6];                  /* the summary's percentiles of the last second (the DDS status) */
 
     /* ---- streamed bodies (daemon_stream.c) */
     mca_ros2_tracks_t tracks; /* the last message read (kept while the bridge writes the next) */

@@ -35,6 +35,11 @@ static int ros2_config(const mca_daemon_t *d, mca_ros2_config_t *rc2, char *err,
     rc2->tracks = cell->tracks.enabled;
     snprintf(rc2->tracks_topic, sizeof rc2->tracks_topic, "%s", cell->tracks.topic);
     rc2->max_tracks = (uint32_t)cell->tracks.max_bodies;
+    /* the fixed bodies drawn among the markers (the controller's: the cell's after its own were merged) */
+    rc2->n_bodies = (uint32_t)d->ccfg.n_bodies;
+    for (int k = 0; k < d->ccfg.n_bodies && k < MCA_MAX_BODIES; k++) {
+        rc2->body[k] = d->ccfg.body[k].body;
+    }
     for (int a = 0; a < d->n_arms; a++) {
         rc2->stream[a] = cell->stream.enabled ? cell->arm[a].stream : MCA_ROS2_STREAM_NONE;
         const mca_chain_t *ch = &d->ccfg.chain[a];
@@ -187,6 +192,8 @@ void mcad_fill_snapshot(mca_daemon_t *d, int64_t stamp_ns, int state) {
         }
     }
     s->n_pairs = (uint32_t)np;
+    /* every pair of every kind, named (the bodies' closest links as this tick's body_watch found them) */
+    mca_dds_named_fill(s, mca_controller_get_config(d->ctrl), dist, &d->pn);
     mca_dds_status_snapshot_t *st = &s->status;
     st->state = (mca_dds_state_t)state;
     st->fault_code = d->fault ? d->fault_code : 0;

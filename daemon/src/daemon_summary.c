@@ -62,6 +62,16 @@ void mcad_compute_summary(const mca_daemon_t *d, mca_daemon_summary_t *s) {
         memcpy(s->body_name, fb ? fb->name : "", fb ? sizeof s->body_name : 1);
         s->body_kind = fb ? (int)fb->body.kind : -1;
     }
+    memcpy(s->kind_min, d->kind_min, sizeof s->kind_min);
+    memcpy(s->kind_min_t, d->kind_min_t, sizeof s->kind_min_t);
+    s->n_fixed_bodies = d->cell.scn.n_bodies;
+    for (int k = 0; k < s->n_fixed_bodies && k < MCA_MAX_BODIES; k++) {
+        s->fixed_min[k] = d->fixed_min[k];
+        s->fixed_min_t[k] = d->fixed_min_t[k];
+        s->fixed_min_link[k][0] = d->fixed_min_link[k][0];
+        s->fixed_min_link[k][1] = d->fixed_min_link[k][1];
+        memcpy(s->fixed_name[k], cc->body[k].name, sizeof s->fixed_name[k]);
+    }
     s->fault = d->fault;
     s->ctrl_fault = d->ctrl_fault;
     s->fault_arm = d->fault ? d->fault_arm : -1;
@@ -183,6 +193,31 @@ void mca_daemon_log_summary(const mca_daemon_summary_t *s, mca_log_fn fn, void *
     if (s->self_pair[0] >= 0) {
         mcad_logf(fn, arg, 6, "summary: self pairs: least distance %.4f m at t = %.3f s, arm %d links %d-%d",
                   s->self_distance, s->self_t, s->self_pair[0], s->self_pair[1], s->self_pair[2]);
+    }
+    {
+        /* every kind of pair, then each fixed body: where each came closest */
+        char kinds[256];
+        int len = 0;
+        for (int k = 0; k < MCA_DDS_PAIR_KINDS && len < (int)sizeof kinds; k++) {
+            len +=
+                isfinite(s->kind_min[k])
+                    ? snprintf(kinds + len, sizeof kinds - (size_t)len, "%s%s %.4f m at t = %.3f s",
+                               len ? ", " : "", mca_dds_pair_kind_name(k), s->kind_min[k], s->kind_min_t[k])
+                    : snprintf(kinds + len, sizeof kinds - (size_t)len, "%s%s n/a", len ? ", " : "",
+                               mca_dds_pair_kind_name(k));
+        }
+        mcad_logf(fn, arg, 6, "summary: least distance per kind: %s", kinds);
+    }
+    for (int k = 0; k < s->n_fixed_bodies && k < MCA_MAX_BODIES; k++) {
+        if (s->fixed_min_link[k][0] >= 0) {
+            mcad_logf(fn, arg, 6,
+                      "summary: body '%.32s': least distance %.4f m at t = %.3f s, arm %d link %d",
+                      s->fixed_name[k], s->fixed_min[k], s->fixed_min_t[k], s->fixed_min_link[k][0],
+                      s->fixed_min_link[k][1]);
+        } else {
+            mcad_logf(fn, arg, 6, "summary: body '%.32s': every link allowed, none measured",
+                      s->fixed_name[k]);
+        }
     }
     if (s->brake_t >= 0.0) {
         mcad_logf(fn, arg, s->brake_fallback_ticks ? 4 : 6,

@@ -80,6 +80,41 @@ static void body_watch(mca_daemon_t *d, double t) {
         d->self_pair[1] = d->info.self_link;
         d->self_pair[2] = d->info.self_other;
     }
+    /* every kind and each fixed body (the controller measured each body's closest link with its distances) */
+    const mca_controller_config_t *cc = mca_controller_get_config(d->ctrl);
+    double least[MCA_DDS_PAIR_KINDS] = {d->info.min_distance, INFINITY, INFINITY, INFINITY};
+    d->pn.n_bodies = 0;
+    for (int a = 0; a < MCA_MAX_ARMS; a++) {
+        d->pn.self[a].valid = 0;
+    }
+    if ((cc->n_bodies > 0 || mca_controller_has_self(cc)) &&
+        mca_controller_pair_nearest(d->ctrl, &d->pn) == MCA_OK) {
+        for (int k = 0; k < d->pn.n_bodies; k++) {
+            const mca_body_nearest_t *bn = &d->pn.body[k];
+            if (!bn->valid) {
+                continue;
+            }
+            const int kind = k < d->pn.n_fixed ? MCA_DDS_PAIR_ARM_BODY : MCA_DDS_PAIR_ARM_TRACK;
+            least[kind] = fmin(least[kind], bn->d);
+            if (k < d->pn.n_fixed && bn->d < d->fixed_min[k]) {
+                d->fixed_min[k] = bn->d;
+                d->fixed_min_t[k] = t;
+                d->fixed_min_link[k][0] = bn->arm;
+                d->fixed_min_link[k][1] = bn->link;
+            }
+        }
+        for (int a = 0; a < d->n_arms; a++) {
+            if (d->pn.self[a].valid) {
+                least[MCA_DDS_PAIR_SELF] = fmin(least[MCA_DDS_PAIR_SELF], d->pn.self[a].d);
+            }
+        }
+    }
+    for (int k = 0; k < MCA_DDS_PAIR_KINDS; k++) {
+        if (least[k] < d->kind_min[k]) {
+            d->kind_min[k] = least[k];
+            d->kind_min_t[k] = t;
+        }
+    }
 }
 
 int mcad_step(mca_daemon_t *d, double t, int64_t stamp_ns) {

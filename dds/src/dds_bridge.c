@@ -39,9 +39,10 @@
 
 extern char **environ;
 
-enum { W_STATE, W_COMMAND, W_DIST, W_STATUS, W_COUNT };
+enum { W_STATE, W_COMMAND, W_DIST, W_STATUS, W_PAIRS, W_COUNT };
 static const char *const topic_names[W_COUNT] = {MCA_DDS_TOPIC_JOINT_STATE, MCA_DDS_TOPIC_JOINT_COMMAND,
-                                                 MCA_DDS_TOPIC_DISTANCES, MCA_DDS_TOPIC_STATUS};
+                                                 MCA_DDS_TOPIC_DISTANCES, MCA_DDS_TOPIC_STATUS,
+                                                 MCA_DDS_TOPIC_PAIR_DISTANCES};
 
 /* The publisher: DDS entities and its working state, in the process that publishes. */
 typedef struct publisher {
@@ -127,7 +128,7 @@ void mca_dds_config_default(mca_dds_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->domain_id = 0;
     cfg->config_path = NULL;
-    cfg->ring_capacity = 1024; /* 1 s of publisher stall at 1 kHz, 3 MB */
+    cfg->ring_capacity = 1024; /* 1 s of publisher stall at 1 kHz, 7.5 MB */
     cfg->status_divisor = 100;
     cfg->controller_id = 0;
     cfg->frame_id = "world";
@@ -166,7 +167,7 @@ static dds_sequence_double seq_of(double *buf, uint32_t n) {
 }
 
 static int snapshot_valid(const mca_dds_snapshot_t *s) {
-    if (s->n_arms > MCA_MAX_ARMS || s->n_pairs > MCA_MAX_PAIRS) {
+    if (s->n_arms > MCA_MAX_ARMS || s->n_pairs > MCA_MAX_PAIRS || s->n_named > MCA_DDS_MAX_PAIR_ENTRIES) {
         return 0;
     }
     for (uint32_t i = 0; i < s->n_arms; ++i) {
@@ -303,6 +304,33 @@ static void publish(publisher_t *b, mca_dds_snapshot_t *s) {
         memcpy(d.p, p->p, sizeof d.p);
         memcpy(d.e, p->e, sizeof d.e);
         write_one(b, W_DIST, &d);
+    }
+    {
+        /* every pair of every kind, named: one sample per snapshot (the publisher's own copy, so no bound
+         * buffer outlives it) */
+        mca_dds_PairDistance e[MCA_DDS_MAX_PAIR_ENTRIES];
+        for (uint32_t k = 0; k < s->n_named; ++k) {
+            const mca_dds_named_pair_t *n = &s->named[k];
+            e[k] = (mca_dds_PairDistance){.kind = n->kind,
+                                          .arm = n->arm,
+                                          .link = n->link,
+                                          .other_arm = n->other_arm,
+                                          .other_link = n->other_link,
+                                          .body = n->body,
+                                          .distance = n->distance,
+                                          .clearance = n->clearance};
+            memcpy(e[k].name, n->name, sizeof e[k].name);
+            e[k].name[sizeof e[k].name - 1] = '\0';
+            memcpy(e[k].p, n->p, sizeof e[k].p);
+            memcpy(e[k].q, n->q, sizeof e[k].q);
+        }
+        const mca_dds_PairDistances pd = {
+            .controller_id = b->shm->cfg.controller_id,
+            .tick = s->tick,
+            .stamp_ns = s->stamp_ns,
+            .pairs = {._maximum = s->n_named, ._length = s->n_named, ._buffer = e, ._release = false},
+        };
+        write_one(b, W_PAIRS, &pd);
     }
     for (uint32_t i = 0; i < s->n_arms; ++i) {
         mca_dds_arm_snapshot_t *a = &s->arm[i];
@@ -480,9 +508,9 @@ static int publisher_open(publisher_t *b, char *err, size_t errlen) {
         return prc;
     }
     b->participant = p;
-    const dds_topic_descriptor_t *const descs[W_COUNT] = {&mca_dds_JointState_desc,
-                                                          &mca_dds_JointCommand_desc, &mca_dds_Distances_desc,
-                                                          &mca_dds_ControllerStatus_desc};
+    const dds_topic_descriptor_t *const descs[W_COUNT] = {
+        &mca_dds_JointState_desc, &mca_dds_JointCommand_desc, &mca_dds_Distances_desc,
+        &mca_dds_ControllerStatus_desc, &mca_dds_PairDistances_desc};
     dds_qos_t *qs = mca_dds_qos_stream();
     dds_qos_t *qst = mca_dds_qos_status();
     int rc = (qs != NULL && qst != NULL) ? MCA_OK : MCA_ENOMEM;
@@ -866,6 +894,7 @@ int mca_dds_bridge_create(mca_dds_bridge_t **out, const mca_dds_config_t *cfg, c
 /* mca_ring_part_t ranges are whole words */
 _Static_assert(offsetof(mca_dds_snapshot_t, arm) % 8 == 0 && sizeof(mca_dds_arm_snapshot_t) % 8 == 0 &&
                    offsetof(mca_dds_snapshot_t, pair) % 8 == 0 && sizeof(mca_dds_pair_snapshot_t) % 8 == 0 &&
+                   offsetof(mca_dds_snapshot_t, named) % 8 == 0 && sizeof(mca_dds_named_pair_t) % 8 == 0 &&
                    offsetof(mca_dds_snapshot_t, status) % 8 == 0,
                "the snapshot's arm, pair and status parts must start on whole words");
 
@@ -875,12 +904,15 @@ void mca_dds_bridge_push(mca_dds_bridge_t *bridge, const mca_dds_snapshot_t *sna
     /* only the arms and pairs in use (2 arms, 1 pair: 1.6 of 4 kB): the publisher reads no more */
     const size_t n_arms = snap->n_arms < MCA_MAX_ARMS ? snap->n_arms : MCA_MAX_ARMS;
     const size_t n_pairs = snap->n_pairs < MCA_MAX_PAIRS ? snap->n_pairs : MCA_MAX_PAIRS;
-    const mca_ring_part_t parts[3] = {
+    const size_t n_named =
+        snap->n_named < MCA_DDS_MAX_PAIR_ENTRIES ? snap->n_named : MCA_DDS_MAX_PAIR_ENTRIES;
+    const mca_ring_part_t parts[4] = {
         {0, offsetof(mca_dds_snapshot_t, arm) + n_arms * sizeof snap->arm[0]},
         {offsetof(mca_dds_snapshot_t, pair), n_pairs * sizeof snap->pair[0]},
+        {offsetof(mca_dds_snapshot_t, named), n_named * sizeof snap->named[0]},
         {offsetof(mca_dds_snapshot_t, status), sizeof snap->status},
     };
-    mca_ring_producer_push_parts(&bridge->producer, snap, parts, 3);
+    mca_ring_producer_push_parts(&bridge->producer, snap, parts, 4);
     /* pairs with the fence in park(): the publisher sees the record or we see it parked */
     atomic_thread_fence(memory_order_seq_cst);
     if (atomic_load_explicit(&shm->parked, memory_order_relaxed) &&
@@ -947,7 +979,7 @@ int mca_dds_bridge_wait_readers(mca_dds_bridge_t *bridge, const char *topic, uin
     if (bridge == NULL || bridge->process) {
         return MCA_EINVAL;
     }
-    int first = 0, last = W_COUNT - 1;
+    int first = 0, last = W_STATUS; /* NULL: the four topics every subscriber of old reads */
     if (topic != NULL) {
         first = -1;
         for (int w = 0; w < W_COUNT; ++w) {

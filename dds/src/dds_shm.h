@@ -22,7 +22,7 @@
 #include "mca/ros2.h"
 
 #define MCA_DDS_SHM_MAGIC 0x316d73736464616dULL /* "mddssm1" */
-#define MCA_DDS_SHM_VERSION 5u
+#define MCA_DDS_SHM_VERSION 6u
 #define MCA_DDS_CONFIG_PATH_MAX 1023
 
 /** One arm's latest accepted stream target: a seqlock (the publisher's DDS listener writes, the loop reads;

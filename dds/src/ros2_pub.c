@@ -19,10 +19,18 @@
 #include "ros2_msgs.h" /* idlc output of dds/ros2_msgs.idl */
 
 /* visualization_msgs/Marker types and actions, diagnostic_msgs/DiagnosticStatus levels */
-enum { MARKER_CYLINDER = 3, MARKER_SPHERE_LIST = 7, MARKER_LINE_LIST = 5, MARKER_TEXT = 9, MARKER_ADD = 0 };
+enum {
+    MARKER_CUBE = 1,
+    MARKER_SPHERE = 2,
+    MARKER_CYLINDER = 3,
+    MARKER_SPHERE_LIST = 7,
+    MARKER_LINE_LIST = 5,
+    MARKER_TEXT = 9,
+    MARKER_ADD = 0
+};
 enum { DIAG_OK = 0, DIAG_WARN = 1, DIAG_ERROR = 2 };
 
-#define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2)
+#define MAX_MARKERS (MCA_MAX_ARMS * MCA_MAX_LINKS * 2 + MCA_MAX_PAIRS * 2 + MCA_MAX_BODIES * 3)
 #define N_KV 32
 #define URDF_MAX (4 * 1024 * 1024)
 
@@ -744,19 +752,13 @@ static std_msgs_msg_dds__ColorRGBA_ zone_color(double d, double d1, double d2) {
     return (std_msgs_msg_dds__ColorRGBA_){1.0f, 0.0f, 0.0f, 0.9f};
 }
 
-/* cylinder along p0 -> p1: pose at the middle, z axis along the segment */
-static void cylinder_pose(Marker *m, const double p0[3], const double p1[3]) {
-    double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-    const double len = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-    m->pose.position =
-        (geometry_msgs_msg_dds__Point_){0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]), 0.5 * (p0[2] + p1[2])};
-    m->scale.z = len;
+/* the marker's z axis along u (any length > 0) */
+static void orient_z(Marker *m, const double u_in[3]) {
+    const double len = sqrt(u_in[0] * u_in[0] + u_in[1] * u_in[1] + u_in[2] * u_in[2]);
     if (len < 1e-12) {
         return; /* a point: any orientation */
     }
-    for (int i = 0; i < 3; i++) {
-        u[i] /= len;
-    }
+    const double u[3] = {u_in[0] / len, u_in[1] / len, u_in[2] / len};
     if (u[2] < -1.0 + 1e-12) {
         m->pose.orientation =
             (geometry_msgs_msg_dds__Quaternion_){1.0, 0.0, 0.0, 0.0}; /* half turn about x */
@@ -766,6 +768,118 @@ static void cylinder_pose(Marker *m, const double p0[3], const double p1[3]) {
     const double x = -u[1], y = u[0], w = 1.0 + u[2];
     const double n = sqrt(x * x + y * y + w * w);
     m->pose.orientation = (geometry_msgs_msg_dds__Quaternion_){x / n, y / n, 0.0, w / n};
+}
+
+/* cylinder along p0 -> p1: pose at the middle, z axis along the segment */
+static void cylinder_pose(Marker *m, const double p0[3], const double p1[3]) {
+    const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    m->pose.position =
+        (geometry_msgs_msg_dds__Point_){0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]), 0.5 * (p0[2] + p1[2])};
+    m->scale.z = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    orient_z(m, u);
+}
+
+/* the quaternion of a rotation matrix (R[i][j]: world component i of axis j) */
+static geometry_msgs_msg_dds__Quaternion_ quat_of(const double R[3][3]) {
+    const double tr = R[0][0] + R[1][1] + R[2][2];
+    double x, y, z, w;
+    if (tr > 0.0) {
+        const double k = 0.5 / sqrt(tr + 1.0);
+        w = 0.25 / k;
+        x = (R[2][1] - R[1][2]) * k;
+        y = (R[0][2] - R[2][0]) * k;
+        z = (R[1][0] - R[0][1]) * k;
+    } else if (R[0][0] > R[1][1] && R[0][0] > R[2][2]) {
+        const double k = 2.0 * sqrt(1.0 + R[0][0] - R[1][1] - R[2][2]);
+        w = (R[2][1] - R[1][2]) / k;
+        x = 0.25 * k;
+        y = (R[0][1] + R[1][0]) / k;
+        z = (R[0][2] + R[2][0]) / k;
+    } else if (R[1][1] > R[2][2]) {
+        const double k = 2.0 * sqrt(1.0 + R[1][1] - R[0][0] - R[2][2]);
+        w = (R[0][2] - R[2][0]) / k;
+        x = (R[0][1] + R[1][0]) / k;
+        y = 0.25 * k;
+        z = (R[1][2] + R[2][1]) / k;
+    } else {
+        const double k = 2.0 * sqrt(1.0 + R[2][2] - R[0][0] - R[1][1]);
+        w = (R[1][0] - R[0][1]) / k;
+        x = (R[0][2] + R[2][0]) / k;
+        y = (R[1][2] + R[2][1]) / k;
+        z = 0.25 * k;
+    }
+    return (geometry_msgs_msg_dds__Quaternion_){x, y, z, w};
+}
+
+/* The cell's fixed bodies as shapes (namespace "bodies", id = the body's index; a capsule's end caps id +
+ * 100): a plane as a 2 m x 2 m slab 2 mm thick under its boundary, grey, half transparent. Returns markers
+ * made. */
+static uint32_t body_markers(mca_ros2_pub_t *r, uint32_t nm) {
+    const mca_ros2_config_t *c = &r->cfg;
+    const std_msgs_msg_dds__ColorRGBA_ grey = {0.6f, 0.6f, 0.65f, 0.5f};
+    const uint32_t first = nm;
+    for (uint32_t k = 0; k < c->n_bodies && k < MCA_MAX_BODIES; k++) {
+        const mca_body_t *b = &c->body[k];
+        Marker *m = &r->marker[nm];
+        switch (b->kind) {
+        case MCA_BODY_PLANE: {
+            const double *n = b->u.plane.normal;
+            const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            init_marker(m, c->world_frame, "bodies", (int32_t)k, MARKER_CUBE);
+            orient_z(m, n);
+            m->pose.position = (geometry_msgs_msg_dds__Point_){b->u.plane.point[0] - 0.001 * n[0] / len,
+                                                               b->u.plane.point[1] - 0.001 * n[1] / len,
+                                                               b->u.plane.point[2] - 0.001 * n[2] / len};
+            m->scale.x = m->scale.y = 2.0;
+            m->scale.z = 0.002;
+            break;
+        }
+        case MCA_BODY_SPHERE:
+            init_marker(m, c->world_frame, "bodies", (int32_t)k, MARKER_SPHERE);
+            m->pose.position = (geometry_msgs_msg_dds__Point_){b->u.sphere.centre[0], b->u.sphere.centre[1],
+                                                               b->u.sphere.centre[2]};
+            m->scale.x = m->scale.y = m->scale.z = 2.0 * b->u.sphere.radius;
+            break;
+        case MCA_BODY_BOX:
+            init_marker(m, c->world_frame, "bodies", (int32_t)k, MARKER_CUBE);
+            m->pose.position =
+                (geometry_msgs_msg_dds__Point_){b->u.box.centre[0], b->u.box.centre[1], b->u.box.centre[2]};
+            m->pose.orientation = quat_of(b->u.box.R);
+            m->scale.x = 2.0 * b->u.box.half[0];
+            m->scale.y = 2.0 * b->u.box.half[1];
+            m->scale.z = 2.0 * b->u.box.half[2];
+            break;
+        case MCA_BODY_CYLINDER: {
+            const mca_body_cylinder_t *cy = &b->u.cylinder;
+            init_marker(m, c->world_frame, "bodies", (int32_t)k, MARKER_CYLINDER);
+            m->pose.position = (geometry_msgs_msg_dds__Point_){cy->centre[0], cy->centre[1], cy->centre[2]};
+            orient_z(m, cy->axis);
+            m->scale.x = m->scale.y = 2.0 * cy->radius;
+            m->scale.z = 2.0 * cy->half_len;
+            break;
+        }
+        case MCA_BODY_CAPSULE: {
+            const mca_capsule_t *cp = &b->u.capsule;
+            init_marker(m, c->world_frame, "bodies", (int32_t)k, MARKER_CYLINDER);
+            cylinder_pose(m, cp->a, cp->b);
+            m->scale.x = m->scale.y = 2.0 * cp->radius;
+            m->color = grey;
+            nm++;
+            m = &r->marker[nm];
+            init_marker(m, c->world_frame, "bodies", (int32_t)(k + 100), MARKER_SPHERE_LIST);
+            r->pts[nm][0] = (geometry_msgs_msg_dds__Point_){cp->a[0], cp->a[1], cp->a[2]};
+            r->pts[nm][1] = (geometry_msgs_msg_dds__Point_){cp->b[0], cp->b[1], cp->b[2]};
+            m->points = (dds_sequence_geometry_msgs_msg_dds__Point_){2, 2, r->pts[nm], false};
+            m->scale.x = m->scale.y = m->scale.z = 2.0 * cp->radius;
+            break;
+        }
+        default:
+            continue;
+        }
+        m->color = grey;
+        nm++;
+    }
+    return nm - first;
 }
 
 int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64_t *errors) {
@@ -855,6 +969,25 @@ int mca_ros2_pub_snapshot(mca_ros2_pub_t *r, const mca_dds_snapshot_t *s, uint64
                  c->arm[p->arm_b % MCA_MAX_ARMS].name, p->min_distance);
         memcpy(r->text[k], text, sizeof text);
         txt->text = r->text[k];
+    }
+    nm += body_markers(r, nm);
+    /* each body's closest link: a line from the body (Q) to the link's axis (P), in the body's margin colour
+     * (namespace "body_closest", id = the body's index) */
+    for (uint32_t i = 0; i < s->n_named && i < MCA_DDS_MAX_PAIR_ENTRIES; i++) {
+        const mca_dds_named_pair_t *e = &s->named[i];
+        if ((e->kind != MCA_DDS_PAIR_ARM_BODY && e->kind != MCA_DDS_PAIR_ARM_TRACK) || e->body < 0) {
+            continue;
+        }
+        Marker *line = &r->marker[nm];
+        init_marker(line, c->world_frame, "body_closest", (int32_t)e->body, MARKER_LINE_LIST);
+        r->pts[nm][0] = (geometry_msgs_msg_dds__Point_){e->q[0], e->q[1], e->q[2]};
+        r->pts[nm][1] = (geometry_msgs_msg_dds__Point_){e->p[0], e->p[1], e->p[2]};
+        line->points = (dds_sequence_geometry_msgs_msg_dds__Point_){2, 2, r->pts[nm], false};
+        line->scale.x = 0.004;
+        const std_msgs_msg_dds__ColorRGBA_ col =
+            zone_color(e->distance, e->clearance, e->clearance + (d2 > d1 ? d2 - d1 : 0.05));
+        line->color = (std_msgs_msg_dds__ColorRGBA_){col.r, col.g, col.b, 1.0f};
+        nm++;
     }
     for (uint32_t m = 0; m < nm; m++) {
         r->marker[m].header.stamp = stamp;

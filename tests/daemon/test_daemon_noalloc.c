@@ -298,7 +298,20 @@ int main(int argc, char **argv) {
     }
     mca_daemon_close(d);
 
-    /* 6. the arms' faults */
+    /* 6. a cell with fixed bodies (cup stacking's table and cups), DDS every tick: each body's closest link
+     * and the named pairs of every kind in each snapshot */
+    snprintf(path, sizeof path, "%s/config/cells/cup_stacking_bodies_sim.yaml", src);
+    d = open_cell(path, 1, csv);
+    t = 0.0;
+    before = allocs;
+    k = run(d, &t, 3000, -1);
+    mca_daemon_request_stop(d);
+    k += run(d, &t, 20000, MCA_DAEMON_STOPPED);
+    report("fixed bodies: running, each body's closest link, named pairs on DDS every tick, stop", d, k,
+           before);
+    mca_daemon_close(d);
+
+    /* 7. the arms' faults */
     injected("lost feedback (right arm's firmware silent)", inline_cell, 500, 1, MCA_SIM_INJ_SILENT);
     injected("an arm's own FAULT (left actuator)", inline_cell, 500, 0, MCA_SIM_INJ_ACTUATOR);
     injected("an arm that does not servo (commands lost from the start)", inline_cell, 0, 1,

@@ -21,6 +21,8 @@ TOPIC_JOINT_STATE = "mca/joint_state"
 TOPIC_JOINT_COMMAND = "mca/joint_command"
 TOPIC_DISTANCES = "mca/distances"
 TOPIC_STATUS = "mca/controller_status"
+TOPIC_PAIR_DISTANCES = "mca/pair_distances"
+MAX_PAIR_ENTRIES = 26
 
 
 @final
@@ -69,6 +71,37 @@ class Distances(IdlStruct, typename="mca::dds::Distances"):
     brake_factor: t.float64
     link_distance_a: t.sequence[t.float64, MAX_LINKS]
     link_distance_b: t.sequence[t.float64, MAX_LINKS]
+
+
+# Values of PairDistance.kind (sent as int32): the IDL's own numbering, read from dds/mca_dds.idl.
+PairKind = enum.IntEnum("PairKind", idl_enums.idl_enum("PairKind"))
+
+
+@final
+@dataclass
+class PairDistance(IdlStruct, typename="mca::dds::PairDistance"):
+    kind: t.int32
+    arm: t.int16
+    link: t.int16
+    other_arm: t.int16
+    other_link: t.int16
+    body: t.int16
+    name: t.bounded_str[32]
+    distance: t.float64
+    clearance: t.float64
+    p: t.array[t.float64, 3]
+    q: t.array[t.float64, 3]
+
+
+@final
+@dataclass
+class PairDistances(IdlStruct, typename="mca::dds::PairDistances"):
+    controller_id: t.byte
+    key("controller_id")
+    must_understand("controller_id")  # idlc 0.10 marks keys must-understand
+    tick: t.uint64
+    stamp_ns: t.int64
+    pairs: t.sequence[PairDistance, MAX_PAIR_ENTRIES]
 
 
 # Values of ControllerStatus.state (sent as int32): the IDL's own numbering, read from dds/mca_dds.idl.

@@ -39,11 +39,24 @@ def main():
     if got != want:
         fails.append(f"msgdefs.c ControllerStatus constants: {got}")
 
+    # the pair kinds: mca_dds_pair_kind_t and mca_dds_pair_kind_name (dds/src/dds_pairs.c) against PairKind
+    kinds = idl_enums.idl_enum("PairKind", os.path.join(src, "dds", "mca_dds.idl"))
+    print("IDL PairKind:", ", ".join(f"{n}={v}" for n, v in kinds))
+    got = [(f"PAIR_{n}", int(v)) for n, v in re.findall(r"\bMCA_DDS_PAIR_(\w+)\s*=\s*(-?\d+)", hdr)]
+    if got != kinds:
+        fails.append(f"dds_bridge.h mca_dds_pair_kind_t: {got}")
+    c = open(os.path.join(src, "dds", "src", "dds_pairs.c")).read()
+    m = re.search(r"mca_dds_pair_kind_name\(int kind\)\s*\{.*?names\[\]\s*=\s*\{(.*?)\}", c, re.S)
+    got_names = re.findall(r'\[MCA_DDS_(PAIR_\w+)\]\s*=\s*"([\w-]+)"', m.group(1)) if m else None
+    want_names = [(n, n.removeprefix("PAIR_").lower().replace("_", "-")) for n, _ in sorted(kinds, key=lambda e: e[1])]
+    if got_names != want_names:
+        fails.append(f"dds_pairs.c mca_dds_pair_kind_name: {got_names} (want {want_names})")
+
     for f in fails:
         print("DIFFERENT:", f)
     if fails:
-        raise SystemExit(f"FAIL: {len(fails)} place(s) disagree with dds/mca_dds.idl's ControllerState")
-    print("PASS: dds_bridge.h, dds_bridge.c and msgdefs.c agree with the IDL")
+        raise SystemExit(f"FAIL: {len(fails)} place(s) disagree with dds/mca_dds.idl's ControllerState or PairKind")
+    print("PASS: dds_bridge.h, dds_bridge.c, dds_pairs.c and msgdefs.c agree with the IDL")
 
 
 if __name__ == "__main__":

@@ -22,7 +22,8 @@ def c_bytes(src, macro):
 def main():
     src = open(sys.argv[1]).read()
     failures = 0
-    for name in ("JointState", "JointCommand", "Distances", "ControllerStatus"):
+    for name in ("JointState", "JointCommand", "Distances", "ControllerStatus", "PairDistance",
+                 "PairDistances"):
         cls = getattr(m, name)
         c_map = c_bytes(src, f"TYPE_MAP_CDR_mca_dds_{name}")
         c_info = c_bytes(src, f"TYPE_INFO_CDR_mca_dds_{name}")

@@ -39,6 +39,18 @@ def run(sim, scn, work, scheme, tag, extra=()):
     s = json.load(open(summ))
     r = s["runs"][0]
     r["d1"] = s["d1"]
+    if r.get("bodies"):
+        # each body's least distance (mcad's summary, per body): the arm-body kind's least is the least of
+        # them, the arm pair's is min_distance, and the body of least margin came no closer than its own least
+        k, per = r["pair_kinds"], [e for e in r["body_min"] if e["min"] is not None]
+        name = r["body_min_name"]
+        own = next((e["min"] for e in r["body_min"] if e["name"] == name), None)
+        check(len(r["body_min"]) == r["bodies"] and per and k["arm-body"]["min"] == min(e["min"] for e in per)
+              and k["arm-arm"]["min"] == r["min_distance"] and own is not None
+              and own <= r["body_min_distance"] + 1e-12,
+              "%s: per body %s; arm-body least %s = least of them; '%s' least %s <= its least-margin pair's %s" %
+              (tag, [(e["name"], e["min"] and round(e["min"], 4)) for e in r["body_min"]], k["arm-body"]["min"],
+               name, own, r["body_min_distance"]))
     print("%-28s completed %d, min d %.5f m (d1 %.3f), path error max %.3e m, bodies: least margin %s m "
           "(%s '%s', arm %s link %s, %s s), %s ticks inside, binding ticks %d, tick cpu p50/p99 %.1f/%.1f us,"
           " state %s" % (tag, r["completed"], r["min_distance"], s["d1"], r["path_error_max"],

@@ -12,7 +12,6 @@ usage: test_self.py MCA_SIM SCENARIO_DIR WORK_DIR
 import csv
 import json
 import os
-import re
 import subprocess
 import sys
 
@@ -35,12 +34,19 @@ def run(sim, scn, work, scheme, tag, extra=()):
         print(p.stdout, p.stderr)
         FAILS.append("mca-sim failed: %s" % " ".join(cmd))
         return None
-    # one arm: no arm pair, its distance is written as inf
-    s = json.loads(re.sub(r"([:,\[])(-?)inf\b", r"\1\2Infinity", open(summ).read()))
+    s = json.load(open(summ))  # plain JSON: one arm has no arm pair, its distance is null
     r = s["runs"][0]
     r["d1"] = s["d1"]
     with open(out_csv) as f:
         r["csv_self_d"] = [float(row["self_d"]) for row in csv.DictReader(f)]
+    # the summary's pairs per kind: no arm pair (null, as min_distance), no body, the self pairs' least the
+    # least of the CSV's self_d column (every tick)
+    k = r["pair_kinds"]
+    check(r["min_distance"] is None and k["arm-arm"]["min"] is None and k["arm-body"]["min"] is None and
+          k["arm-track"]["min"] is None and r["body_min"] == [] and
+          abs(k["self"]["min"] - min(r["csv_self_d"])) < 1e-6,
+          "%s: pairs per kind: arm-arm null, no bodies, self %s = least of the CSV's self_d %.6f" %
+          (tag, k["self"]["min"], min(r["csv_self_d"] or [0])))
     print("%-22s completed %d, fault %s, self: least %.5f m (pair %s, %.3f s), %d ticks below d1, path error "
           "max %.3e m, tick cpu p50/p99 %.1f/%.1f us" %
           (tag, r["completed"], r["fault_name"], r["self_min_distance"], r["self_min_pair"], r["self_min_t"],

@@ -64,6 +64,7 @@ enum { PENDING_MAX = 32 };
 typedef struct child {
     pthread_mutex_t lock;
     dds_entity_t rd, rs; /* Distances, ControllerStatus readers */
+    dds_entity_t rp;     /* PairDistances reader (every kind of pair, named) */
     int fd;              /* the pipe to the parent */
     int broken;          /* the parent is gone */
     unsigned long long domain;
@@ -72,7 +73,19 @@ typedef struct child {
 } child_t;
 
 /* The frames the child sends. */
-enum { FRAME_STATUS = 1, FRAME_DISTANCES = 2 };
+enum { FRAME_STATUS = 1, FRAME_DISTANCES = 2, FRAME_PAIRS = 3 };
+
+/* One PairDistances sample, flattened (no pointers cross the pipe). */
+typedef struct pairs_frame {
+    uint64_t tick;
+    uint32_t n;
+    struct {
+        int32_t kind;
+        int16_t arm, link, other_arm, other_link, body;
+        char name[MCA_DDS_NAME_MAX + 1];
+        double distance, clearance;
+    } e[MCA_DDS_MAX_PAIR_ENTRIES];
+} pairs_frame_t;
 
 typedef struct dist_frame {
     int64_t rx;          /* when the child took it (CLOCK_MONOTONIC, one clock for both processes) */
@@ -87,6 +100,8 @@ typedef struct monitor {
     int color, tty;
     int lines_drawn;
     pair_view_t pair[256];
+    int have_pairs;
+    pairs_frame_t pairs; /* the newest PairDistances */
     int have_status;
     int32_t state;
     int32_t fault_code;
@@ -186,6 +201,44 @@ static void draw(monitor_t *m) {
         printf("\n");
         lines++;
     }
+    if (m->have_pairs) {
+        /* per kind its least distance and pair, then each body with its closest link */
+        const pairs_frame_t *pf = &m->pairs;
+        printf("%sleast per kind:", m->tty ? "\r\033[K" : "");
+        for (int kind = 0; kind < MCA_DDS_PAIR_KINDS; ++kind) {
+            int best = -1;
+            for (uint32_t i = 0; i < pf->n; ++i) {
+                if (pf->e[i].kind == kind && (best < 0 || pf->e[i].distance < pf->e[best].distance)) {
+                    best = (int)i;
+                }
+            }
+            if (best < 0) {
+                printf("  %s -", mca_dds_pair_kind_name(kind));
+                continue;
+            }
+            const double d = pf->e[best].distance;
+            if (kind == MCA_DDS_PAIR_ARM_ARM || kind == MCA_DDS_PAIR_SELF) {
+                printf("  %s %.1f mm (arm %d link %d - arm %d link %d)", mca_dds_pair_kind_name(kind),
+                       d * 1e3, pf->e[best].arm, pf->e[best].link, pf->e[best].other_arm,
+                       pf->e[best].other_link);
+            } else {
+                printf("  %s %.1f mm ('%s')", mca_dds_pair_kind_name(kind), d * 1e3, pf->e[best].name);
+            }
+        }
+        printf("\n");
+        lines++;
+        for (uint32_t i = 0; i < pf->n; ++i) {
+            if (pf->e[i].kind != MCA_DDS_PAIR_ARM_BODY && pf->e[i].kind != MCA_DDS_PAIR_ARM_TRACK) {
+                continue;
+            }
+            const double margin = pf->e[i].distance - pf->e[i].clearance;
+            printf("%sbody %-16s %-9s d=%8.1f mm  d-clearance=%8.1f mm  closest: arm %d link %d%s\n",
+                   m->tty ? "\r\033[K" : "", pf->e[i].name, mca_dds_pair_kind_name(pf->e[i].kind),
+                   pf->e[i].distance * 1e3, margin * 1e3, pf->e[i].arm, pf->e[i].link,
+                   margin < 0.0 ? "  INSIDE" : "");
+            lines++;
+        }
+    }
     if (lines == 0) {
         printf("%swaiting for distances...\n", m->tty ? "\r\033[K" : "");
         lines = 1;
@@ -252,6 +305,34 @@ static void take_all(child_t *ch, int64_t rx) {
     if (n > 0) {
         dds_return_loan(ch->rd, buf, n);
     }
+    memset(buf, 0, sizeof buf);
+    n = dds_take(ch->rp, buf, info, BATCH, BATCH);
+    for (int i = 0; i < n && !ch->broken; ++i) {
+        if (!info[i].valid_data) {
+            continue;
+        }
+        const mca_dds_PairDistances *pd = buf[i];
+        pairs_frame_t f;
+        memset(&f, 0, sizeof f);
+        f.tick = pd->tick;
+        f.n = pd->pairs._length < MCA_DDS_MAX_PAIR_ENTRIES ? pd->pairs._length : MCA_DDS_MAX_PAIR_ENTRIES;
+        for (uint32_t k = 0; k < f.n; ++k) {
+            const mca_dds_PairDistance *e = &pd->pairs._buffer[k];
+            f.e[k].kind = e->kind;
+            f.e[k].arm = e->arm;
+            f.e[k].link = e->link;
+            f.e[k].other_arm = e->other_arm;
+            f.e[k].other_link = e->other_link;
+            f.e[k].body = e->body;
+            snprintf(f.e[k].name, sizeof f.e[k].name, "%s", e->name);
+            f.e[k].distance = e->distance;
+            f.e[k].clearance = e->clearance;
+        }
+        ch->broken = mca_dds_child_send(ch->fd, FRAME_PAIRS, &f, sizeof f, NULL, 0) != 0;
+    }
+    if (n > 0) {
+        dds_return_loan(ch->rp, buf, n);
+    }
 }
 
 static void on_data_available(dds_entity_t reader, void *arg) {
@@ -259,7 +340,8 @@ static void on_data_available(dds_entity_t reader, void *arg) {
     child_t *ch = arg;
     const int64_t rx = now_ns(); /* before the lock: the receipt, not the wait for the other sender */
     pthread_mutex_lock(&ch->lock);
-    if (ch->rd > 0 && ch->rs > 0) { /* both readers exist (the first may deliver before the second is made) */
+    if (ch->rd > 0 && ch->rs > 0 && ch->rp > 0) { /* every reader exists (the first may deliver before the
+                                                    others are made) */
         take_all(ch, rx);
     }
     pthread_mutex_unlock(&ch->lock);
@@ -288,6 +370,11 @@ static int child_main(int fd, void *arg) {
     const dds_entity_t td = dds_create_topic(pp, &mca_dds_Distances_desc, MCA_DDS_TOPIC_DISTANCES, qs, NULL);
     const dds_entity_t ts =
         dds_create_topic(pp, &mca_dds_ControllerStatus_desc, MCA_DDS_TOPIC_STATUS, qst, NULL);
+    /* the named pairs for the view only (the newest matters): keep-last, never kept whole for --csv */
+    dds_qos_t *qp = mca_dds_qos_stream();
+    dds_qset_history(qp, DDS_HISTORY_KEEP_LAST, 64);
+    const dds_entity_t tp =
+        dds_create_topic(pp, &mca_dds_PairDistances_desc, MCA_DDS_TOPIC_PAIR_DISTANCES, qp, NULL);
     dds_entity_t sub = DDS_RETCODE_ERROR; /* a DDS code: the reader creation below passes it on */
     if (mca_dds_create_subscriber(pp, ch->partition, &sub, err, sizeof err) != MCA_OK) {
         fprintf(stderr, "mca-monitor: %s\n", err);
@@ -297,15 +384,21 @@ static int child_main(int fd, void *arg) {
     pthread_mutex_lock(&ch->lock);
     const dds_entity_t rd = td > 0 && sub > 0 ? dds_create_reader(sub, td, qs, lst) : (td > 0 ? sub : td);
     const dds_entity_t rs = ts > 0 && sub > 0 ? dds_create_reader(sub, ts, qst, lst) : (ts > 0 ? sub : ts);
+    const dds_entity_t rp = tp > 0 && sub > 0 ? dds_create_reader(sub, tp, qp, lst) : (tp > 0 ? sub : tp);
     ch->rd = rd;
     ch->rs = rs;
+    ch->rp = rp;
     pthread_mutex_unlock(&ch->lock);
     dds_delete_listener(lst);
     dds_delete_qos(qs);
     dds_delete_qos(qst);
+    dds_delete_qos(qp);
     int rc = 0;
-    if (rd < 0 || rs < 0) {
-        fprintf(stderr, "mca-monitor: cannot create readers: %s\n", dds_strretcode(rd < 0 ? rd : rs));
+    if (rd < 0 || rs < 0 || rp < 0) {
+        fprintf(stderr, "mca-monitor: cannot create readers: %s\n",
+                dds_strretcode(rd < 0   ? rd
+                               : rs < 0 ? rs
+                                        : rp));
         rc = 1;
     } else {
         pthread_mutex_lock(&ch->lock);
@@ -321,6 +414,7 @@ static int child_main(int fd, void *arg) {
         /* no listener runs after this (dds_set_listener waits for one that runs): then the rest is sent */
         dds_set_listener(rd, NULL);
         dds_set_listener(rs, NULL);
+        dds_set_listener(rp, NULL);
         pthread_mutex_lock(&ch->lock);
         take_all(ch, now_ns());
         pthread_mutex_unlock(&ch->lock);
@@ -339,6 +433,9 @@ static int on_frame(void *ctx, uint32_t kind, const void *data, size_t len) {
         status_view_t v;
         memcpy(&v, data, sizeof v);
         push_status(m, &v);
+    } else if (kind == FRAME_PAIRS && len == sizeof(pairs_frame_t)) {
+        memcpy(&m->pairs, data, sizeof m->pairs);
+        m->have_pairs = 1;
     } else if (kind == FRAME_DISTANCES && len == sizeof(dist_frame_t) && !m->done) {
         dist_frame_t f;
         memcpy(&f, data, sizeof f);

@@ -78,6 +78,15 @@ static void csv_name(char *out, size_t len, const char *base, const char *scheme
     }
 }
 
+/* x as a JSON number (%.9g), or null when it is not finite (one arm has no arm pair: +INF is no JSON). */
+static const char *json_num(char out[32], double x) {
+    if (!isfinite(x)) {
+        return "null";
+    }
+    snprintf(out, 32, "%.9g", x);
+    return out;
+}
+
 /* s as the inside of a JSON string (quotes and backslashes escaped, control characters dropped). */
 static const char *json_text(char *out, size_t len, const char *s) {
     size_t k = 0;
@@ -401,9 +410,9 @@ int main(int argc, char **argv) {
         fprintf(f, "{\"scenario\":\"%s\",\"d1\":%.9g,\"d2\":%.9g,\"runs\":[", scn.name, d1, d2);
         for (int s = 0; s < n_list; s++) {
             const mca_simrun_result_t *r = &res[s];
-            char jt[400];
+            char jt[400], num[32];
             fprintf(f,
-                    "%s{\"scheme\":\"%s\",\"ticks\":%d,\"min_distance\":%.9g,\"min_distance_t\":%.6g,"
+                    "%s{\"scheme\":\"%s\",\"ticks\":%d,\"min_distance\":%s,\"min_distance_t\":%.6g,"
                     "\"max_err\":%.6g,\"max_err_free\":%.6g,\"max_err_nobrake\":%.6g,\"fault\":%d,"
                     "\"fault_name\":\"%s\",\"fault_t\":%.6g,\"fault_distance\":%.9g,\"stopped\":%d,"
                     "\"stop_t\":%.6g,\"min_distance_after_fault\":%.9g,\"pdnn_steps_max\":%d,"
@@ -412,9 +421,9 @@ int main(int argc, char **argv) {
                     "\"compute_max_ns\":%lld,\"cpu_p50_ns\":%lld,\"cpu_p99_ns\":%lld,\"cpu_max_ns\":%lld,"
                     "\"dumped\":%d,\"dumped_binding\":%d,\"dump_skipped_capped\":%d,\"pdnn_budget_steps\":%d,"
                     "\"budget_hits_steps\":%d,\"budget_hits_time\":%d,\"samples\":[",
-                    s ? "," : "", r->scheme, r->ticks, r->min_distance, r->min_distance_t, r->max_err,
-                    r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault), r->fault_t,
-                    isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
+                    s ? "," : "", r->scheme, r->ticks, json_num(num, r->min_distance), r->min_distance_t,
+                    r->max_err, r->max_err_free, r->max_err_nobrake, r->fault, mca_ctrl_fault_name(r->fault),
+                    r->fault_t, isfinite(r->fault_distance) ? r->fault_distance : -1.0, r->stopped, r->stop_t,
                     isfinite(r->min_distance_after_fault) ? r->min_distance_after_fault : -1.0,
                     r->pdnn_steps_max, r->pdnn_steps_mean, r->pdnn_residual_max, r->eq_residual_max,
                     r->binding_ticks, r->pdnn_capped, (long long)r->compute_p50, (long long)r->compute_p99,
@@ -422,8 +431,8 @@ int main(int argc, char **argv) {
                     (long long)r->cpu_max, r->dumped, r->dumped_binding, r->dump_skipped_capped,
                     r->budget_steps, r->budget_hits_steps, r->budget_hits_time);
             for (int i = 0; i < r->n_samples; i++) {
-                fprintf(f, "%s[%.6g,%.9g]", i ? "," : "", r->sample_t[i],
-                        isnan(r->sample_d[i]) ? -1.0 : r->sample_d[i]);
+                fprintf(f, "%s[%.6g,%s]", i ? "," : "", r->sample_t[i],
+                        isnan(r->sample_d[i]) ? "-1" : json_num(num, r->sample_d[i]));
             }
             fprintf(f, "],\"completed\":%d,\"path_time_lost_s\":%.6g,\"deadlocks\":%d,\"max_slack\":%.3g",
                     r->completed, r->path_time_lost_s, r->deadlocks, r->max_slack);
@@ -479,6 +488,20 @@ int main(int argc, char **argv) {
                     r->track_ticks_moving, r->track_ticks_braking,
                     isfinite(r->sphere_true_min_d) ? r->sphere_true_min_d : 1e9);
             }
+            /* every kind of pair and each fixed body: the least distance over the run (null: no such pair) */
+            fprintf(f, ",\"pair_kinds\":{");
+            for (int k = 0; k < MCA_DDS_PAIR_KINDS; k++) {
+                fprintf(f, "%s\"%s\":{\"min\":%s,\"t\":%.6g}", k ? "," : "", mca_dds_pair_kind_name(k),
+                        json_num(num, r->kind_min[k]), isfinite(r->kind_min[k]) ? r->kind_min_t[k] : 0.0);
+            }
+            fprintf(f, "},\"body_min\":[");
+            for (int k = 0; k < r->n_fixed_bodies && k < MCA_MAX_BODIES; k++) {
+                fprintf(f, "%s{\"name\":\"%s\",\"min\":%s,\"t\":%.6g,\"arm\":%d,\"link\":%d}", k ? "," : "",
+                        json_text(jt, sizeof jt, scn.body[k].fb.name), json_num(num, r->fixed_min[k]),
+                        isfinite(r->fixed_min[k]) ? r->fixed_min_t[k] : 0.0, r->fixed_min_link[k][0],
+                        r->fixed_min_link[k][1]);
+            }
+            fprintf(f, "]");
             fprintf(f,
                     ",\"solves\":%d,\"solves_unconverged\":%d,\"solve_steps\":[%d,%d,%d],"
                     "\"exact_solves\":[%d,%d,%d]",

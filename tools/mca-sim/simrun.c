@@ -328,6 +328,9 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
     r->body_min_arm = r->body_min_link = r->body_min_body = r->body_min_kind = -1;
     r->has_self = mca_controller_has_self(cfg);
     r->self_min_distance = INFINITY;
+    for (int k = 0; k < MCA_DDS_PAIR_KINDS; k++) {
+        r->kind_min[k] = INFINITY;
+    }
     r->self_min_arm = r->self_min_link = r->self_min_other = -1;
     r->brake_t = -1.0;
     r->stop_duration_s = -1.0;
@@ -583,6 +586,12 @@ int mca_simrun(const mca_scenario_t *scn, const mca_simrun_opts_t *o, mca_simrun
         r->brake_forced_ticks = (int)s.brake_forced_ticks;
         r->max_dv_over_dt_dec = s.max_dv_over_dt_dec;
         r->daemon_state = s.state;
+        memcpy(r->kind_min, s.kind_min, sizeof r->kind_min);
+        memcpy(r->kind_min_t, s.kind_min_t, sizeof r->kind_min_t);
+        r->n_fixed_bodies = s.n_fixed_bodies;
+        memcpy(r->fixed_min, s.fixed_min, sizeof r->fixed_min);
+        memcpy(r->fixed_min_t, s.fixed_min_t, sizeof r->fixed_min_t);
+        memcpy(r->fixed_min_link, s.fixed_min_link, sizeof r->fixed_min_link);
     }
     qsort(cns, (size_t)k, sizeof *cns, cmp_i64);
     if (k > 0) {

@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "mca/controller.h"
+#include "mca/dds_bridge.h" /* MCA_DDS_PAIR_KINDS, mca_dds_pair_kind_name */
 #include "mca/qp_dump.h"
 #include "mca/scenario.h"
 
@@ -141,6 +142,12 @@ typedef struct mca_simrun_result {
     int track_ticks_braking;  /**< of those, while the daemon brakes (a stop or a fault: the arm stopping) */
     double sphere_true_min_d; /**< least surface distance of any link to the true sphere (where it is, not
                                    where the controller last heard of it) [m] */
+    /* every kind of pair and each fixed body over the run, as mcad's summary counts them (mca_daemon_summary)
+     */
+    double kind_min[MCA_DDS_PAIR_KINDS], kind_min_t[MCA_DDS_PAIR_KINDS]; /**< [m] (+INF: none), [s] */
+    int n_fixed_bodies;
+    double fixed_min[MCA_MAX_BODIES], fixed_min_t[MCA_MAX_BODIES]; /**< [m] (+INF: none), [s] */
+    int fixed_min_link[MCA_MAX_BODIES][2];                         /**< arm, link (-1: every link allowed) */
 } mca_simrun_result_t;
 
 /** An arm is at rest when every joint's velocity is at most this [rad/s] (the sim arm's true velocity). */

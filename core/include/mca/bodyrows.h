@@ -105,6 +105,15 @@ int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
                      const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t *out);
 
 /**
+ * Per body its link of least margin (what a monitor shows: each body's closest link): out[k] for body k,
+ * out[k].valid 0 when every link is allowed (body and kind are set either way).
+ * @param out  n_bodies entries
+ * @retval MCA_OK, MCA_EINVAL (NULL, n_bodies outside 0..MCA_MAX_BODIES, a distance failed)
+ */
+int mca_body_nearest_each(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
+                          const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t out[]);
+
+/**
  * The self pair of least surface distance over every arm's self pairs (self[a], NULL: none).
  * @retval MCA_OK, MCA_EINVAL (NULL, a distance failed: non-finite geometry)
  */

@@ -320,6 +320,24 @@ const mca_kin_t *mca_controller_kin(const mca_controller_t *ctrl, int arm);
 /** The arm-to-arm distances of the last tick / observe / brake: [a][b] for a < b (mca/armdist.h). */
 const mca_arm_distances_t (*mca_controller_distances(const mca_controller_t *ctrl))[MCA_MAX_ARMS];
 
+/** Every kind of pair but the arm pairs (mca_controller_distances) at the last tick's kinematics: what a
+ *  monitor shows and a summary counts. */
+typedef struct mca_pair_nearest {
+    int n_bodies; /**< bodies now: [0, n_fixed) the cell's fixed bodies, [n_fixed, n_bodies) streamed ones */
+    int n_fixed;
+    mca_body_nearest_t
+        body[MCA_MAX_BODIES];              /**< per body its closest link it does not allow (valid 0: none) */
+    mca_self_nearest_t self[MCA_MAX_ARMS]; /**< per arm its self pair of least distance (valid 0: none) */
+} mca_pair_nearest_t;
+
+/**
+ * Each body's closest link and each arm's closest self pair as the last tick / observe / brake measured them
+ * (mca_body_nearest_each, mca_self_nearest: the report's body_* and self_* fields are the least of these).
+ * RT safe (a copy).
+ * @retval MCA_OK, MCA_EINVAL (NULL)
+ */
+int mca_controller_pair_nearest(const mca_controller_t *ctrl, mca_pair_nearest_t *out);
+
 /** mca-ts: arm @p arm's path-rate limit from mca_controller_plan (n = 0: none; NULL: arm out of range). */
 const mca_path_rate_t *mca_controller_path_rate(const mca_controller_t *ctrl, int arm);
 

@@ -186,8 +186,15 @@ typedef struct mca_daemon_summary {
     char body_name[32]; /**< that body's name */
     /* self pairs: the pair of least distance (self_pair[0] -1: no self pairs) */
     double self_distance, self_t;
-    int self_pair[3];   /**< arm, link, the other link */
-    int body_kind;      /**< and kind (mca_body_kind_t: mca_body_kind_name) */
+    int self_pair[3]; /**< arm, link, the other link */
+    int body_kind;    /**< and kind (mca_body_kind_t: mca_body_kind_name) */
+    /* every kind of pair (mca_dds_pair_kind_t): its least distance over the run and when (+INF: none) */
+    double kind_min[MCA_DDS_PAIR_KINDS], kind_min_t[MCA_DDS_PAIR_KINDS];
+    /* each fixed body of the cell: its least distance over the run, when, and the link (arm -1: none) */
+    int n_fixed_bodies;
+    double fixed_min[MCA_MAX_BODIES], fixed_min_t[MCA_MAX_BODIES];
+    int fixed_min_link[MCA_MAX_BODIES][2]; /**< arm, link */
+    char fixed_name[MCA_MAX_BODIES][32];
     int fault;          /**< mca_daemon_fault_t */
     int ctrl_fault;     /**< mca_ctrl_fault_t when fault == CONTROLLER */
     int fault_arm;      /**< the arm the fault is about (ARM, LOST_FEEDBACK, BUS, FEEDBACK), else -1 */

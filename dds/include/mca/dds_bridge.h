@@ -24,6 +24,7 @@
  *   mca/joint_state      mca::dds::JointState       one per arm   (key arm_id = index in arm[])
  *   mca/joint_command    mca::dds::JointCommand     one per arm   (key arm_id = index in arm[])
  *   mca/distances        mca::dds::Distances        one per pair  (key pair_id = index in pair[])
+ *   mca/pair_distances   mca::dds::PairDistances    one per snapshot: every pair of every kind, named
  *   mca/controller_status mca::dds::ControllerStatus every status_divisor-th published snapshot,
  *                        on any change of state or fault code, and once more at destroy.
  *
@@ -37,8 +38,9 @@
 #include <stdint.h>
 #include <stdio.h> /* FILE */
 
-#include "mca/armdist.h" /* mca_arm_distances_t */
-#include "mca/dds_log.h" /* mca_dds_log_fn */
+#include "mca/armdist.h"    /* mca_arm_distances_t */
+#include "mca/controller.h" /* mca_controller_config_t, mca_pair_nearest_t */
+#include "mca/dds_log.h"    /* mca_dds_log_fn */
 #include "mca/limits.h"
 #include "mca/ros2.h"
 
@@ -96,6 +98,38 @@ typedef struct mca_dds_pair_snapshot {
     double link_distance_b[MCA_MAX_LINKS]; /**< per link of b: closest distance to a */
 } mca_dds_pair_snapshot_t;
 
+/** Kinds of pair: the one numbering of the wire's mca::dds::PairKind (dds_pairs.c asserts at compile time
+ * that the IDL's enumerators have these values). */
+typedef enum mca_dds_pair_kind {
+    MCA_DDS_PAIR_ARM_ARM = 0,   /**< two arms */
+    MCA_DDS_PAIR_ARM_BODY = 1,  /**< an arm and a fixed body of the cell */
+    MCA_DDS_PAIR_SELF = 2,      /**< two links of one arm (its self pairs) */
+    MCA_DDS_PAIR_ARM_TRACK = 3, /**< an arm and a streamed body (mca/track.h) */
+} mca_dds_pair_kind_t;
+#define MCA_DDS_PAIR_KINDS 4
+
+/** The kinds' one set of names: "arm-arm", "arm-body", "self", "arm-track"; NULL for a value no kind has. */
+const char *mca_dds_pair_kind_name(int kind);
+
+/** Entries of a snapshot's named pairs: each arm pair, each body, each arm's self pairs
+ *  (= MAX_PAIR_ENTRIES in the IDL). */
+#define MCA_DDS_MAX_PAIR_ENTRIES (MCA_MAX_PAIRS + MCA_MAX_BODIES + MCA_MAX_ARMS)
+/** Longest body name (bytes, without NUL), = string<32> in the IDL. */
+#define MCA_DDS_NAME_MAX 32
+
+/** One named pair of one kind (mca::dds::PairDistance): P on arm `arm`'s link `link`, Q on the other side:
+ *  arm other_arm's link other_link (arm and self pairs) or body `body` (-1 for the other two). */
+typedef struct mca_dds_named_pair {
+    int32_t kind;                    /**< mca_dds_pair_kind_t */
+    int16_t arm, link;               /**< the link holding P */
+    int16_t other_arm, other_link;   /**< the other link (-1: a body) */
+    int16_t body;                    /**< the body (cfg.body[] index; -1: none) */
+    char name[MCA_DDS_NAME_MAX + 1]; /**< the body's name, NUL-terminated ("" for arm and self pairs) */
+    double distance;                 /**< surface distance [m] */
+    double clearance;                /**< what the pair keeps [m]: d1, or the body's clearance */
+    double p[3], q[3];               /**< witness points (world) */
+} mca_dds_named_pair_t;
+
 /** Controller health (published on mca/controller_status). */
 typedef struct mca_dds_status_snapshot {
     mca_dds_state_t state;
@@ -120,8 +154,11 @@ typedef struct mca_dds_snapshot {
                        *   the publisher's wake-up anchor (wake_period_ns), free of the tick's own jitter */
     uint32_t n_arms;  /**< <= MCA_MAX_ARMS */
     uint32_t n_pairs; /**< <= MCA_MAX_PAIRS */
+    uint32_t n_named; /**< <= MCA_DDS_MAX_PAIR_ENTRIES */
     mca_dds_arm_snapshot_t arm[MCA_MAX_ARMS];
     mca_dds_pair_snapshot_t pair[MCA_MAX_PAIRS];
+    mca_dds_named_pair_t
+        named[MCA_DDS_MAX_PAIR_ENTRIES]; /**< every pair of every kind (mca/pair_distances) */
     mca_dds_status_snapshot_t status;
 } mca_dds_snapshot_t;
 
@@ -301,6 +338,19 @@ int mca_dds_pair_fill(mca_dds_pair_snapshot_t *out, const mca_arm_distances_t *d
                       uint8_t arm_b, double d1, double d2);
 
 /**
+ * Fill a snapshot's named pairs (n_named, named[]) from the controller's distances: each arm pair's least
+ * (arm-arm), each body's closest link (arm-body for the cell's fixed bodies, arm-track for the streamed ones;
+ * none for a body that allows every link), each arm's least self pair (self). Context: rt (no allocation,
+ * bounded time).
+ * @param cfg   the configuration the controller runs (mca_controller_get_config: n_arms, d1, the bodies)
+ * @param dist  mca_controller_distances
+ * @param pn    mca_controller_pair_nearest (NULL: arm pairs only)
+ * @retval MCA_OK @retval MCA_EINVAL NULL snap, cfg or dist
+ */
+int mca_dds_named_fill(mca_dds_snapshot_t *snap, const mca_controller_config_t *cfg,
+                       const mca_arm_distances_t (*dist)[MCA_MAX_ARMS], const mca_pair_nearest_t *pn);
+
+/**
  * The latest accepted target of arm's ROS 2 stream (mca/ros2.h): a seqlock read, never waits, no system
  * call. Context: rt.
  * @retval MCA_OK @retval MCA_EINVAL (no bridge, no ROS 2 topics or no stream for that arm)
@@ -321,6 +371,7 @@ int mca_dds_bridge_tracks(mca_dds_bridge_t *bridge, mca_ros2_tracks_t *out);
 #define MCA_DDS_TOPIC_JOINT_COMMAND "mca/joint_command"
 #define MCA_DDS_TOPIC_DISTANCES "mca/distances"
 #define MCA_DDS_TOPIC_STATUS "mca/controller_status"
+#define MCA_DDS_TOPIC_PAIR_DISTANCES "mca/pair_distances"
 
 #ifdef __cplusplus
 }

@@ -33,6 +33,7 @@
 #include <stdint.h>
 
 #include "mca/chain.h" /* mca_pose_t */
+#include "mca/body.h"  /* mca_body_t: the fixed bodies drawn */
 #include "mca/limits.h"
 #include "mca/track.h" /* mca_track_t, MCA_MAX_TRACKS */
 
@@ -93,6 +94,9 @@ typedef struct mca_ros2_config {
     int tracks;                               /**< 1: read streamed bodies (mca_msgs/TrackedBodies) */
     char tracks_topic[MCA_ROS2_NAME_MAX + 1]; /**< on /<cell>/<tracks_topic> */
     uint32_t max_tracks; /**< a message with more bodies is rejected (<= MCA_MAX_TRACKS) */
+    uint32_t n_bodies;   /**< the cell's fixed bodies, drawn among the markers (their shapes, namespace
+                              "bodies", and a line to each one's closest link, "body_closest") */
+    mca_body_t body[MCA_MAX_BODIES];
 } mca_ros2_config_t;
 
 /** 1 when s is a ROS 2 name token: a letter, then letters, digits and single '_', not ending in '_'.
