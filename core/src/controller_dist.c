@@ -224,9 +224,18 @@ static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     for (int a = 0; a < ctrl->cfg.n_arms; a++) {
         chains[a] = &ctrl->cfg.chain[a];
     }
+    const mca_self_pairs_t *self = mca_controller_has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL;
+    mca_body_cache_t *cache = NULL;
+    if (ctrl->cfg.n_bodies > 0 || self) {
+        cache = &ctrl->body_cache;
+        if (mca_body_cache_update(cache, ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body,
+                                  ctrl->cfg.n_bodies, self) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
     mca_body_nearest_t bn;
     const int rc =
-        mca_body_nearest(ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body, ctrl->cfg.n_bodies, &bn);
+        mca_body_nearest(ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body, ctrl->cfg.n_bodies, cache, &bn);
     info->body_distance = bn.d;
     info->body_margin = bn.margin;
     info->body_arm = bn.arm;
@@ -239,8 +248,7 @@ static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
         return rc;
     }
     mca_self_nearest_t sn;
-    const int rs = mca_self_nearest(ctrl->cfg.n_arms, chains, ctrl->kin,
-                                    mca_controller_has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL, &sn);
+    const int rs = mca_self_nearest(ctrl->cfg.n_arms, chains, ctrl->kin, self, cache, &sn);
     info->self_distance = sn.d;
     info->self_arm = sn.arm;
     info->self_link = sn.link;
