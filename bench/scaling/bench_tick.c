@@ -272,9 +272,12 @@ static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats
             const struct timespec nap = {0, 2000000};
             nanosleep(&nap, NULL);
         }
-        /* the state the tick starts from, for the out-of-tick re-runs */
-        memcpy(&shadow, &ctrl->pdnn, sizeof shadow);
-        memcpy(&sstate_copy, &ctrl->sstate, sizeof sstate_copy);
+        /* the state the tick starts from, for the out-of-tick re-runs (the solver's state is large: not
+         * copied without them, which under callgrind took most of the run) */
+        if (split) {
+            memcpy(&shadow, &ctrl->pdnn, sizeof shadow);
+            memcpy(&sstate_copy, &ctrl->sstate, sizeof sstate_copy);
+        }
         const int has_prev = ctrl->has_prev;
         memcpy(phi_prev, ctrl->phi_prev, sizeof phi_prev);
 
