@@ -107,6 +107,35 @@ def tick_rows(raw):
     return out
 
 
+# ---- 1d. the whole cell ----------------------------------------------------------------------------------------
+def callgrind_ir(path):
+    """Instructions collected in a callgrind run (valgrind's own summary line on stderr)."""
+    return num(r"Collected\s*:\s*(\d+)", read(path), cast=int)
+
+
+def cell_row(raw):
+    """Task 1 plain against the whole cell: instructions per tick, p99 of paired runs, PDNN steps, rows."""
+    d = load_json(os.path.join(raw, "tick_cell_pairs.json"))
+    if not d or "runs" not in d:
+        return {"error": "raw/tick_cell_pairs.json missing or malformed"}
+    a = [r["run"] for r in d["runs"] if r["which"] == "a"]
+    b = [r["run"] for r in d["runs"] if r["which"] == "b"]
+    if not a or len(a) != len(b):
+        return {"error": "raw/tick_cell_pairs.json: runs do not pair"}
+    ratios = sorted((y["tick_ns"]["p99"] / x["tick_ns"]["p99"], i) for i, (x, y) in enumerate(zip(a, b)))
+    med = ratios[len(ratios) // 2][1]
+    out = {"pairs": len(a), "p99_ratios": [round(x, 3) for x, _ in ratios], "median_pair": med,
+           "plain": a[med], "cell": b[med], "sched_fifo": d.get("sched_fifo", 0)}
+    ir = {}
+    for k in ("cross_circles", "cross_circles_cell"):
+        n = callgrind_ir(os.path.join(raw, f"callgrind_{k}.err"))
+        t = load_json(os.path.join(raw, f"tick_callgrind_{k}.json"))
+        calls = t["run"]["ticks"] + t["run"]["resets"] if t and "run" in t else None
+        ir[k] = n / calls if n and calls else None
+    out["ir_per_tick"] = ir
+    return out
+
+
 def mcad_summary(text):
     if not text:
         return None
@@ -308,6 +337,28 @@ def main():
             f"FK {fmt(sp['fk'])}, distances {fmt(sp['distances'])}, Jacobians+QP {fmt(sp['assembly'])}, "
             f"PDNN {fmt(sp['pdnn'])} us; PDNN steps/tick p50 {t['steps']['p50']} p99 {t['steps']['p99']} "
             f"max {t['steps']['max']}; capped {t['capped']}; faults {t['faults']}"))
+    cell = cell_row(raw)
+    R["cell"] = cell
+    if "error" in cell:
+        rows.append(("1d. whole cell, dual PA10+ task 1 with 8 bodies and self pairs", "not measured", "task 1 alone",
+                     "-", cell["error"]))
+    else:
+        p, c, ir = cell["plain"], cell["cell"], cell["ir_per_tick"]
+        ir_p, ir_c = ir["cross_circles"], ir["cross_circles_cell"]
+        rows.append((
+            "1d. whole cell, dual PA10+ task 1 with 8 bodies and self pairs",
+            f"{fmt(ir_c / 1e3 if ir_c else None)} k instructions/tick; p99 {fmt(us(c['tick_ns']['p99']))} us",
+            f"task 1 alone: {fmt(ir_p / 1e3 if ir_p else None)} k/tick; p99 {fmt(us(p['tick_ns']['p99']))} us",
+            f"{ratio(ir_c, ir_p)} (instructions; target <= 1.5) / {ratio(c['tick_ns']['p99'], p['tick_ns']['p99'])} "
+            "(p99)",
+            f"callgrind over the whole task, mca_controller_tick alone; p99: the median of {cell['pairs']} pairs of "
+            f"whole runs alternating plain / cell (p99 ratios {', '.join(str(x) for x in cell['p99_ratios'])}), "
+            f"{'SCHED_FIFO' if cell['sched_fifo'] else 'SCHED_OTHER'}; PDNN steps/tick p50 {c['steps']['p50']} "
+            f"p99 {c['steps']['p99']} max {c['steps']['max']} (plain {p['steps']['p50']} / {p['steps']['p99']} / "
+            f"{p['steps']['max']}), exact solves p50 {c['exact_solves']['p50']} max {c['exact_solves']['max']}; "
+            f"rows to the PDNN per tick: bodies mean {c['body_rows']['mean']:.3f} max {c['body_rows']['max']} "
+            f"({c['body_rows']['ticks_any']} ticks), self mean {c['self_rows']['mean']:.3f} max "
+            f"{c['self_rows']['max']} ({c['self_rows']['ticks_any']} ticks); faults {c['faults']}"))
     jit_m = mcad_summary(read(os.path.join(raw, "mcad_jitter.log")))
     if jit_m and jit_m.get("ctrl_p50_us") is not None:
         rows.append(("1b. tick compute inside mcad (real 1 kHz loop, PA10+ task 1)",

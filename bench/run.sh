@@ -24,9 +24,10 @@ VCAN=${MCA_BENCH_VCAN:-cached}
 if [ $QUICK = 1 ]; then
     # QP_EVERY_CS below the 8000 ticks of the short cup-stacking run, so that it dumps QP blocks too
     JIT=${MCA_BENCH_JITTER_S:-3} DDS_TICKS=1000 LAT_N=1000 QP_EVERY=2000 QP_EVERY_CS=2000 SCALE="--quick"
-    TICKS_CS="--ticks 8000"
+    TICKS_CS="--ticks 8000" TICKS_CELL="--ticks 2000"
 else
     JIT=${MCA_BENCH_JITTER_S:-20} DDS_TICKS=3000 LAT_N=3000 QP_EVERY=1000 QP_EVERY_CS=4000 SCALE="" TICKS_CS=""
+    TICKS_CELL=""
 fi
 # a DDS domain of our own so that other runs on this host do not mix in
 DOMAIN=${MCA_BENCH_DOMAIN:-97}
@@ -63,6 +64,24 @@ if have "$TICK"; then
     # shellcheck disable=SC2086
     "$TICK" task --scenario "$RAW/cup_stacking_dual_jaco2.yaml" --fifo $FIFO $TICKS_CS \
         --out "$RAW/tick_cup_stacking_dual_jaco2.json" 2>"$RAW/tick_cup_stacking_dual_jaco2.err"
+    # 1d. the whole cell: task 1 with 8 fixed bodies and both arms' self pairs against task 1 alone, five pairs
+    #     of whole runs alternating plain / cell, then instructions per tick (callgrind, the tick alone)
+    step "tick: task 1 plain vs whole cell (8 bodies, self pairs), 5 alternating pairs, SCHED_FIFO $FIFO"
+    # shellcheck disable=SC2086
+    "$TICK" pair --scenario "$ROOT/config/scenarios/cross_circles.yaml" \
+        --scenario-b "$ROOT/config/scenarios/cross_circles_cell.yaml" --pairs 5 --fifo $FIFO $TICKS_CELL \
+        --out "$RAW/tick_cell_pairs.json" 2>"$RAW/tick_cell_pairs.err"
+    if command -v valgrind >/dev/null; then
+        for k in cross_circles cross_circles_cell; do
+            step "tick: callgrind, instructions in mca_controller_tick over $k"
+            # shellcheck disable=SC2086
+            valgrind --tool=callgrind --toggle-collect=mca_controller_tick --callgrind-out-file="$RAW/callgrind_$k.out" \
+                "$TICK" task --no-split --scenario "$ROOT/config/scenarios/$k.yaml" $TICKS_CELL \
+                --out "$RAW/tick_callgrind_$k.json" 2>"$RAW/callgrind_$k.err"
+        done
+    else
+        echo "valgrind missing (apt-get install valgrind): no instruction counts" >"$RAW/callgrind_cross_circles.err"
+    fi
     step "scaling: 2-4 arms x 4-8 joints, d2 sweep"
     # shellcheck disable=SC2086
     "$TICK" scaling --urdf-dir "$ROOT/config/robots" --fifo $FIFO $SCALE --out "$RAW/scaling.json" \

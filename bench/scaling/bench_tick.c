@@ -6,6 +6,8 @@
  *   bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--gap M]
  *   bench_tick steps --scenario FILE [--scheme mca|mca-ts] [--form normal|componentwise] [--every E]
  *                    [--steps S]
+ *   bench_tick pair --scenario FILE --scenario-b FILE [--pairs P] [--ticks N] [--out JSON]
+ *   task and pair: [--no-split] (the tick alone: for callgrind, --toggle-collect=mca_controller_tick)
  *   common: [--fifo PRIO] (SCHED_FIFO + mlockall for the measuring thread; fewer preemptions on a busy host)
  *
  * Per tick it records the tick's own compute_ns (CLOCK_MONOTONIC inside mca_controller_tick), then, OUTSIDE
@@ -19,7 +21,10 @@
  * step budget, MCA_PDNN_STEP_NS): every E-th tick's QP as the solver got it (mca-ts: the active rows only) is
  * solved again from cold with a tolerance nothing meets, so it runs S steps (or stops for lack of progress),
  * 3 times; the least time, set-up included, is divided by its steps. One line of text.
- * Output: one JSON document (--out, default stdout). Not a test: the figures depend on the machine. */
+ * pair: the whole-cell row (docs/benchmarks.md): the task of --scenario and of --scenario-b (the same task
+ * with bodies and self pairs), each run whole, alternating A B A B ..., P pairs (default 5); one run object
+ * per task run. Every run counts the body and self rows that reached the PDNN per tick. Output: one JSON
+ * document (--out, default stdout). Not a test: the figures depend on the machine. */
 #include <errno.h>
 #include <math.h>
 #include <sched.h>
@@ -50,6 +55,7 @@ static const char *const st_name[ST_N] = {"tick", "fk", "distances", "assembly",
 typedef struct run_stats {
     int64_t *v[ST_N];
     int *steps, *active, *exact; /* exact: the polish's exact solves */
+    int *body_rows, *self_rows;  /* rows of bodies, of self pairs that went to the PDNN */
     int n, cap;
     int faults, resets, step_mismatch, capped;
 } run_stats_t;
@@ -82,7 +88,9 @@ static int stats_alloc(run_stats_t *s, int cap) {
     s->steps = calloc((size_t)cap, sizeof(int));
     s->active = calloc((size_t)cap, sizeof(int));
     s->exact = calloc((size_t)cap, sizeof(int));
-    return s->steps && s->active && s->exact ? MCA_OK : MCA_ENOMEM;
+    s->body_rows = calloc((size_t)cap, sizeof(int));
+    s->self_rows = calloc((size_t)cap, sizeof(int));
+    return s->steps && s->active && s->exact && s->body_rows && s->self_rows ? MCA_OK : MCA_ENOMEM;
 }
 
 static void stats_free(run_stats_t *s) {
@@ -92,6 +100,8 @@ static void stats_free(run_stats_t *s) {
     free(s->steps);
     free(s->active);
     free(s->exact);
+    free(s->body_rows);
+    free(s->self_rows);
 }
 
 /* percentile p in [0, 1] of a sorted array: nearest rank */
@@ -109,6 +119,19 @@ static int pct_int(const int *v, int n, double p) {
     }
     int i = (int)ceil(p * n) - 1;
     return v[i < 0 ? 0 : (i >= n ? n - 1 : i)];
+}
+
+/* "name": {p50, p99, max, mean, ticks with any} of one per-tick count (sorts it) */
+static void count_json(FILE *f, const char *name, int *v, int n) {
+    double mean = 0.0;
+    int any = 0;
+    for (int i = 0; i < n; i++) {
+        mean += v[i];
+        any += v[i] > 0;
+    }
+    qsort(v, (size_t)n, sizeof(int), cmp_int);
+    fprintf(f, ", \"%s\": {\"p50\": %d, \"p99\": %d, \"max\": %d, \"mean\": %.3f, \"ticks_any\": %d}", name,
+            pct_int(v, n, 0.5), pct_int(v, n, 0.99), n ? v[n - 1] : 0, n ? mean / n : 0.0, any);
 }
 
 /* Print the stats of one run as a JSON object (sorts the arrays). */
@@ -148,6 +171,8 @@ static void stats_json(FILE *f, run_stats_t *s, const char *name, const mca_cont
     qsort(s->exact, (size_t)s->n, sizeof(int), cmp_int);
     fprintf(f, ", \"exact_solves\": {\"p50\": %d, \"p99\": %d, \"max\": %d}", pct_int(s->exact, s->n, 0.5),
             pct_int(s->exact, s->n, 0.99), s->n ? s->exact[s->n - 1] : 0);
+    count_json(f, "body_rows", s->body_rows, s->n);
+    count_json(f, "self_rows", s->self_rows, s->n);
     fprintf(f,
             ", \"steps\": {\"p50\": %d, \"p99\": %d, \"max\": %d, \"mean\": %.2f}, \"active_rows\": "
             "{\"p50\": %d, "
@@ -188,8 +213,38 @@ static void drive_start(drive_state_t *ds, const double q0[MCA_MAX_ARMS][MCA_MAX
     memcpy(ds->q, q0, sizeof ds->q);
 }
 
+/* The body and self rows of this tick's QP as the PDNN got it: the active rows kept by the compaction (both
+ * schemes compact when the cell has body slots), each named by its slot of the full layout (row_key) and
+ * the slot's witness (a self pair's has its other link). */
+static void count_body_rows(const mca_controller_t *ctrl, int *body, int *self) {
+    const mca_controller_config_t *cfg = &ctrl->cfg;
+    const int bp = cfg->sp.body_pairs;
+    *body = *self = 0;
+    if (bp <= 0 || cfg->scheme == MCA_SCHEME_MVN || cfg->scheme == MCA_SCHEME_APF) {
+        return;
+    }
+    const int rpl = cfg->scheme == MCA_SCHEME_MCA_TS ? MCA_NEAR_PAIRS : mca_scheme_rows_per_link(&cfg->sp);
+    int b0[MCA_MAX_ARMS], off = 0;
+    for (int a = 0; a < cfg->n_arms; a++) {
+        b0[a] = off + rpl * (cfg->chain[a].dof + 1);
+        off += (rpl + bp) * (cfg->chain[a].dof + 1);
+    }
+    for (int i = 0; i < ctrl->n_row_key && i < ctrl->qp.n_ineq; i++) {
+        const int slot = ctrl->row_key[i];
+        for (int a = 0; a < cfg->n_arms; a++) {
+            const int r = slot - b0[a];
+            if (r >= 0 && r < bp * (cfg->chain[a].dof + 1)) {
+                const mca_body_witness_t *w = &ctrl->body_near[a][r / bp][r % bp];
+                *self += w->link >= 0;
+                *body += w->link < 0;
+            }
+        }
+    }
+}
+
 /* Run `ticks` more ticks of ctrl (integrating qdot by Euler steps); on a fault the task restarts from q0. */
-static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats_t *s, qp_dump_t *dump) {
+static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats_t *s, qp_dump_t *dump,
+                 int split) {
     const mca_controller_config_t *cfg = mca_controller_get_config(ctrl);
     const int na = cfg->n_arms;
     const double dt = cfg->dt;
@@ -217,9 +272,12 @@ static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats
             const struct timespec nap = {0, 2000000};
             nanosleep(&nap, NULL);
         }
-        /* the state the tick starts from, for the out-of-tick re-runs */
-        memcpy(&shadow, &ctrl->pdnn, sizeof shadow);
-        memcpy(&sstate_copy, &ctrl->sstate, sizeof sstate_copy);
+        /* the state the tick starts from, for the out-of-tick re-runs (the solver's state is large: not
+         * copied without them, which under callgrind took most of the run) */
+        if (split) {
+            memcpy(&shadow, &ctrl->pdnn, sizeof shadow);
+            memcpy(&sstate_copy, &ctrl->sstate, sizeof sstate_copy);
+        }
         const int has_prev = ctrl->has_prev;
         memcpy(phi_prev, ctrl->phi_prev, sizeof phi_prev);
 
@@ -253,68 +311,73 @@ static int drive(mca_controller_t *ctrl, drive_state_t *ds, int ticks, run_stats
             s->exact[i] = info.pdnn_exact_solves;
             s->active[i] = info.active_rows;
             s->capped += !info.pdnn_converged;
+            count_body_rows(ctrl, &s->body_rows[i], &s->self_rows[i]);
+            if (!split) {
+                s->n++;
+            } else {
 
-            int64_t t0 = now_ns();
-            for (int a = 0; a < na; a++) {
-                mca_fk(&cfg->chain[a], q[a], &kin_scratch[a]);
-            }
-            int64_t t1 = now_ns();
-            for (int a = 0; a < na; a++) {
-                for (int b = a + 1; b < na; b++) {
-                    mca_arm_distances(&cfg->chain[a], mca_controller_kin(ctrl, a), &cfg->chain[b],
-                                      mca_controller_kin(ctrl, b), cfg->dist_method, &dist_scratch);
+                int64_t t0 = now_ns();
+                for (int a = 0; a < na; a++) {
+                    mca_fk(&cfg->chain[a], q[a], &kin_scratch[a]);
                 }
-            }
-            int64_t t2 = now_ns();
-            double rdot0[MCA_MAX_ARMS][3] = {{0}};
-            mca_scheme_assemble(&cfg->sp, na, chains, ctrl->kin, qp_, (const double(*)[3])info.ee_desired,
-                                (const double(*)[3])rdot0,
-                                (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
-                                has_prev ? phi_prev : NULL, &sstate_copy, &qp_scratch, NULL);
-            int64_t t3 = now_ns();
-            mca_pdnn_result_t pr;
-            mca_pdnn_solve(&shadow, &ctrl->qp, &cfg->pdnn, phi, &pr);
-            int64_t t4 = now_ns();
-            s->v[ST_FK][i] = t1 - t0;
-            s->v[ST_DIST][i] = t2 - t1;
-            s->v[ST_ASM][i] = t3 - t2;
-            s->v[ST_PDNN][i] = t4 - t3;
-            s->step_mismatch += pr.steps != info.pdnn_steps;
-            s->n++;
+                int64_t t1 = now_ns();
+                for (int a = 0; a < na; a++) {
+                    for (int b = a + 1; b < na; b++) {
+                        mca_arm_distances(&cfg->chain[a], mca_controller_kin(ctrl, a), &cfg->chain[b],
+                                          mca_controller_kin(ctrl, b), cfg->dist_method, &dist_scratch);
+                    }
+                }
+                int64_t t2 = now_ns();
+                double rdot0[MCA_MAX_ARMS][3] = {{0}};
+                mca_scheme_assemble(&cfg->sp, na, chains, ctrl->kin, qp_, (const double(*)[3])info.ee_desired,
+                                    (const double(*)[3])rdot0,
+                                    (const mca_link_critical_t(*)[MCA_MAX_LINKS])ctrl->crit,
+                                    has_prev ? phi_prev : NULL, &sstate_copy, &qp_scratch, NULL);
+                int64_t t3 = now_ns();
+                mca_pdnn_result_t pr;
+                mca_pdnn_solve(&shadow, &ctrl->qp, &cfg->pdnn, phi, &pr);
+                int64_t t4 = now_ns();
+                s->v[ST_FK][i] = t1 - t0;
+                s->v[ST_DIST][i] = t2 - t1;
+                s->v[ST_ASM][i] = t3 - t2;
+                s->v[ST_PDNN][i] = t4 - t3;
+                s->step_mismatch += pr.steps != info.pdnn_steps;
+                s->n++;
 
-            if (dump && dump->dir) {
-                if (dump->idx < 0 && since_reset > 1 && k % dump->every == 0) {
-                    dump->idx = 0;
-                    dump->block++;
-                }
-                if (dump->idx >= 0 && !info.pdnn_converged) {
-                    dump->idx = -1; /* only converged answers are compared */
-                }
-                if (dump->idx >= 0) {
-                    char path[1024], file[64], tag[96];
-                    snprintf(file, sizeof file, "qp_%04d_%02d.json", dump->block, dump->idx);
-                    snprintf(path, sizeof path, "%s/%s", dump->dir, file);
-                    snprintf(tag, sizeof tag, "tick %d active %d", k, info.active_rows);
-                    const double *cphi;
-                    const mca_qp_t *cqp = mca_controller_last_qp(ctrl, &cphi);
-                    long long cold_ns = -1;
-                    int cold_steps = -1;
-                    if (dump->idx == 0) {
-                        mca_pdnn_init(&cold);
-                        const int64_t c0 = now_ns();
-                        mca_pdnn_solve(&cold, cqp, &cfg->pdnn, phi, &pr);
-                        cold_ns = now_ns() - c0;
-                        cold_steps = pr.steps;
+                if (dump && dump->dir) {
+                    if (dump->idx < 0 && since_reset > 1 && k % dump->every == 0) {
+                        dump->idx = 0;
+                        dump->block++;
                     }
-                    if (mca_qp_dump_json(cqp, cphi, info.pdnn_steps, info.pdnn_residual, tag, path) ==
-                        MCA_OK) {
-                        fprintf(dump->csv, "%s,%d,%d,%lld,%d,%lld,%d,%d\n", file, dump->block, dump->idx,
-                                (long long)s->v[ST_PDNN][i], info.pdnn_steps, cold_ns, cold_steps,
-                                info.active_rows);
-                        dump->written++;
+                    if (dump->idx >= 0 && !info.pdnn_converged) {
+                        dump->idx = -1; /* only converged answers are compared */
                     }
-                    if (++dump->idx >= dump->block_len) {
-                        dump->idx = -1;
+                    if (dump->idx >= 0) {
+                        char path[1024], file[64], tag[96];
+                        snprintf(file, sizeof file, "qp_%04d_%02d.json", dump->block, dump->idx);
+                        snprintf(path, sizeof path, "%s/%s", dump->dir, file);
+                        snprintf(tag, sizeof tag, "tick %d active %d", k, info.active_rows);
+                        const double *cphi;
+                        const mca_qp_t *cqp = mca_controller_last_qp(ctrl, &cphi);
+                        long long cold_ns = -1;
+                        int cold_steps = -1;
+                        if (dump->idx == 0) {
+                            mca_pdnn_init(&cold);
+                            const int64_t c0 = now_ns();
+                            mca_pdnn_solve(&cold, cqp, &cfg->pdnn, phi, &pr);
+                            cold_ns = now_ns() - c0;
+                            cold_steps = pr.steps;
+                        }
+                        if (mca_qp_dump_json(cqp, cphi, info.pdnn_steps, info.pdnn_residual, tag, path) ==
+                            MCA_OK) {
+                            fprintf(dump->csv, "%s,%d,%d,%lld,%d,%lld,%d,%d\n", file, dump->block, dump->idx,
+                                    (long long)s->v[ST_PDNN][i], info.pdnn_steps, cold_ns, cold_steps,
+                                    info.active_rows);
+                            dump->written++;
+                        }
+                        if (++dump->idx >= dump->block_len) {
+                            dump->idx = -1;
+                        }
                     }
                 }
             }
@@ -485,6 +548,51 @@ static int run_step_cost(mca_controller_t *ctrl, const double q0[MCA_MAX_ARMS][M
     return MCA_OK;
 }
 
+/* One whole task of a scenario (the paper's scheme) from a fresh controller, its stats as JSON: the run
+ * object (rt < 0), or task mode's document around it. */
+static int task_run(const char *scenario, int ticks, mca_controller_config_t *cfg, mca_controller_t *ctrl,
+                    int split, qp_dump_t *dump, FILE *of, int rt) {
+    static mca_scenario_t scn;
+    static double q0[MCA_MAX_ARMS][MCA_MAX_DOF];
+    char err[1024] = "";
+    int rc;
+    if ((rc = mca_scenario_load(scenario, &scn, err, sizeof err)) != MCA_OK ||
+        (rc = mca_controller_config_from_scenario(cfg, &scn, MCA_SCHEME_MCA, err, sizeof err)) != MCA_OK) {
+        fprintf(stderr, "bench_tick: %s\n", err);
+        return rc;
+    }
+    memset(q0, 0, sizeof q0);
+    for (int a = 0; a < scn.n_arms; a++) {
+        memcpy(q0[a], scn.arm[a].q0, sizeof q0[a]);
+    }
+    if (ticks <= 0) {
+        ticks = (int)llround(scn.duration / cfg->dt);
+    }
+    if ((rc = mca_controller_init(ctrl, cfg)) != MCA_OK) {
+        fprintf(stderr, "bench_tick: controller init: %s\n", mca_strerror(rc));
+        return rc;
+    }
+    run_stats_t s;
+    if ((rc = stats_alloc(&s, ticks)) != MCA_OK) {
+        stats_free(&s);
+        return rc;
+    }
+    static drive_state_t ds;
+    drive_start(&ds, (const double(*)[MCA_MAX_DOF])q0);
+    rc = drive(ctrl, &ds, ticks, &s, dump, split);
+    if (rt >= 0) {
+        fprintf(of,
+                "{\"mode\": \"task\", \"scenario\": \"%s\", \"sched_fifo\": %d, \"qp_dumped\": %d, \"run\": ",
+                scn.name, rt, dump ? dump->written : 0);
+    }
+    stats_json(of, &s, scn.name, mca_controller_get_config(ctrl), mca_controller_last_qp(ctrl, NULL));
+    if (rt >= 0) {
+        fprintf(of, "}\n");
+    }
+    stats_free(&s);
+    return rc;
+}
+
 static int set_fifo(int prio) {
     if (prio <= 0) {
         return 0;
@@ -508,7 +616,10 @@ static void usage(FILE *f) {
             "       bench_tick scaling --urdf-dir DIR [--ticks N] [--out JSON] [--quick] [--gap M]\n"
             "                          [--fifo PRIO]\n"
             "       bench_tick steps --scenario FILE [--scheme mca|mca-ts] [--form normal|componentwise]\n"
-            "                        [--every E] [--steps S] [--ticks N] [--fifo PRIO]\n");
+            "                        [--every E] [--steps S] [--ticks N] [--fifo PRIO]\n"
+            "       bench_tick pair --scenario FILE --scenario-b FILE [--pairs P] [--ticks N] [--out JSON]\n"
+            "                       [--fifo PRIO]\n"
+            "       task, pair: [--no-split] (the tick alone, for callgrind)\n");
 }
 
 static int parse_pos(const char *opt, const char *v, int *out) {
@@ -529,13 +640,13 @@ int main(int argc, char **argv) {
         return argc < 2 ? 2 : 0;
     }
     const char *mode = argv[1];
-    if (strcmp(mode, "task") && strcmp(mode, "scaling") && strcmp(mode, "steps")) {
+    if (strcmp(mode, "task") && strcmp(mode, "scaling") && strcmp(mode, "steps") && strcmp(mode, "pair")) {
         fprintf(stderr, "bench_tick: unknown mode '%s'\n", mode);
         usage(stderr);
         return 2;
     }
-    const char *scenario = NULL, *out = NULL, *urdf_dir = NULL;
-    int ticks = 0, fifo = 0, quick = 0;
+    const char *scenario = NULL, *scenario_b = NULL, *out = NULL, *urdf_dir = NULL;
+    int ticks = 0, fifo = 0, quick = 0, split = 1, pairs = 5;
     double gap = 0.22;
     int every = 20, steps = 1000, form = -1;
     mca_scheme_kind_t scheme = MCA_SCHEME_MCA;
@@ -546,9 +657,19 @@ int main(int argc, char **argv) {
             quick = 1;
             continue;
         }
+        if (!strcmp(a, "--no-split")) {
+            split = 0;
+            continue;
+        }
         i++;
         if (!strcmp(a, "--scenario") && v) {
             scenario = v;
+        } else if (!strcmp(a, "--scenario-b") && v) {
+            scenario_b = v;
+        } else if (!strcmp(a, "--pairs")) {
+            if (parse_pos(a, v, &pairs)) {
+                return 2;
+            }
         } else if (!strcmp(a, "--out") && v) {
             out = v;
         } else if (!strcmp(a, "--urdf-dir") && v) {
@@ -645,27 +766,12 @@ int main(int argc, char **argv) {
             fprintf(stderr, "bench_tick: %s\n", mca_strerror(rc));
             return 1;
         }
-    } else if (!strcmp(mode, "task")) {
-        static mca_scenario_t scn;
-        if (!scenario) {
-            fprintf(stderr, "bench_tick: task needs --scenario FILE\n");
+    } else if (!strcmp(mode, "task") || !strcmp(mode, "pair")) {
+        const int pair = !strcmp(mode, "pair");
+        if (!scenario || (pair && !scenario_b)) {
+            fprintf(stderr, "bench_tick: %s needs --scenario FILE%s\n", mode,
+                    pair ? " --scenario-b FILE" : "");
             return 2;
-        }
-        if ((rc = mca_scenario_load(scenario, &scn, err, sizeof err)) != MCA_OK ||
-            (rc = mca_controller_config_from_scenario(cfg, &scn, MCA_SCHEME_MCA, err, sizeof err)) !=
-                MCA_OK) {
-            fprintf(stderr, "bench_tick: %s\n", err);
-            return 1;
-        }
-        for (int a = 0; a < scn.n_arms; a++) {
-            memcpy(q0[a], scn.arm[a].q0, sizeof q0[a]);
-        }
-        if (ticks <= 0) {
-            ticks = (int)llround(scn.duration / cfg->dt);
-        }
-        if ((rc = mca_controller_init(ctrl, cfg)) != MCA_OK) {
-            fprintf(stderr, "bench_tick: controller init: %s\n", mca_strerror(rc));
-            return 1;
         }
         if (dump.dir) {
             char p[1024];
@@ -680,21 +786,29 @@ int main(int argc, char **argv) {
             }
             fprintf(dump.csv, "file,block,idx,warm_ns,steps,cold_ns,cold_steps,active_rows\n");
         }
-        run_stats_t s;
-        if (stats_alloc(&s, ticks) != MCA_OK) {
-            return 1;
+        if (pair) {
+            fprintf(of, "{\"mode\": \"pair\", \"sched_fifo\": %d, \"runs\": [\n", rt);
         }
-        static drive_state_t ds;
-        drive_start(&ds, (const double(*)[MCA_MAX_DOF])q0);
-        rc = drive(ctrl, &ds, ticks, &s, dump.dir ? &dump : NULL);
-        fprintf(of,
-                "{\"mode\": \"task\", \"scenario\": \"%s\", \"sched_fifo\": %d, \"qp_dumped\": %d, \"run\": ",
-                scn.name, rt, dump.written);
-        stats_json(of, &s, scn.name, mca_controller_get_config(ctrl), mca_controller_last_qp(ctrl, NULL));
-        fprintf(of, "}\n");
-        stats_free(&s);
+        /* pair: A B A B ..., each run the whole task from a fresh controller */
+        for (int r = 0; r < (pair ? 2 * pairs : 1) && rc == MCA_OK; r++) {
+            if (pair) {
+                fprintf(of, "%s{\"pair\": %d, \"which\": \"%s\", \"run\": ", r ? ",\n" : "", r / 2,
+                        r % 2 ? "b" : "a");
+            }
+            rc = task_run(r % 2 ? scenario_b : scenario, ticks, cfg, ctrl, split, dump.dir ? &dump : NULL, of,
+                          pair ? -1 : rt);
+            if (pair) {
+                fprintf(of, "}");
+            }
+        }
+        if (pair) {
+            fprintf(of, "]}\n");
+        }
         if (dump.csv) {
             fclose(dump.csv);
+        }
+        if (rc != MCA_OK) {
+            return 1;
         }
     } else {
         if (!urdf_dir) {
@@ -759,7 +873,7 @@ int main(int argc, char **argv) {
         for (int r = 0; r < rounds; r++) {
             for (int c = 0; c < nd; c++) {
                 const int n = ticks * (r + 1) / rounds - ticks * r / rounds;
-                if ((rc = drive(cc[c], &dss[c], n, &ss[c], NULL)) != MCA_OK) {
+                if ((rc = drive(cc[c], &dss[c], n, &ss[c], NULL, 1)) != MCA_OK) {
                     return 1;
                 }
             }

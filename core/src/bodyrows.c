@@ -139,21 +139,224 @@ static int body_least(int n_arms, const mca_chain_t *const chain[], const mca_ki
     return MCA_OK;
 }
 
+static mca_capsule_t link_capsule(const mca_chain_t *ch, const mca_kin_t *kn, int l);
+
+/* How far link l's axis moved from its cached reference: the larger of its two ends' moves (every point of
+ * the segment moved by at most that); INFINITY without a usable reference (none, another radius, NaN). */
+static double cache_move(const mca_body_cache_t *c, const mca_chain_t *ch, const mca_kin_t *kn, int a,
+                         int l) {
+    if (!c || !c->valid[a][l] || c->radius[a][l] != ch->link_radius[l]) {
+        return INFINITY;
+    }
+    const double s0 = mca_v3_dist(kn->point[l], c->a[a][l]), s1 = mca_v3_dist(kn->point[l + 1], c->b[a][l]);
+    return s0 >= 0.0 && s1 >= 0.0 ? (s0 > s1 ? s0 : s1) : INFINITY;
+}
+
+/* Every link's move (cache_move) of arm a: the update's own when the poses are the ones it saw. */
+static void cache_moves(const mca_body_cache_t *c, const mca_chain_t *ch, const mca_kin_t *kn, int a,
+                        double move[MCA_MAX_LINKS]) {
+    const int same = c && memcmp(c->seen[a], kn->point, sizeof(double) * 3 * (size_t)(ch->dof + 2)) == 0;
+    for (int l = 0; l <= ch->dof; l++) {
+        move[l] = same ? c->move[a][l] : cache_move(c, ch, kn, a, l);
+    }
+}
+
+/* ok[k]: the cache's distances are to body k as it is now. */
+static void cache_bodies(const mca_body_cache_t *c, const mca_fixed_body_t *bodies, int n_bodies,
+                         int ok[MCA_MAX_BODIES]) {
+    for (int k = 0; k < n_bodies && k < MCA_MAX_BODIES; k++) {
+        ok[k] = c && k < c->n_bodies && !c->stale[k] &&
+                memcmp(&c->body[k], &bodies[k].body, sizeof(mca_body_t)) == 0;
+    }
+}
+
+/* A lower bound on the surface distance of link l (moved by `move` from its reference) to body k;
+ * -INFINITY when the cache knows none (1e-12 below: rounding never makes it exceed the distance). */
+static double cache_bound(const mca_body_cache_t *c, int ok, int a, int l, int k, double move) {
+    return ok ? c->d[a][l][k] - move - 1e-12 : -INFINITY;
+}
+
+/* The same for the self pair (l, q) of arm a. */
+static double cache_self_bound(const mca_body_cache_t *c, int a, int l, int q, double move_l, double move_q) {
+    return c ? c->ds[a][l][q] - move_l - move_q - 1e-12 : -INFINITY;
+}
+
+/* (x0, y0, z0) comes before (x1, y1, z1) in the loops' order: of pairs at the same least distance the
+ * first in that order is the answer, as without a seed. */
+static int precedes(int x0, int y0, int z0, int x1, int y1, int z1) {
+    return x0 != x1 ? x0 < x1 : y0 != y1 ? y0 < y1 : z0 < z1;
+}
+
+/* A pair whose lower bound lb cannot beat the least so far (early: it comes before that pair, so it wins a
+ * tie). NaN: not skipped. */
+static int cannot_beat(double lb, double least, int early) {
+    return early ? lb > least : lb >= least;
+}
+
+static double cache_distance(const mca_capsule_t *cap, const mca_body_t *body) {
+    mca_body_dist_t r;
+    return mca_capsule_body_distance(cap, body, &r) == MCA_OK && r.d == r.d ? r.d : -INFINITY;
+}
+
+int mca_body_cache_update(mca_body_cache_t *c, int n_arms, const mca_chain_t *const chain[],
+                          const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
+                          const mca_self_pairs_t *self) {
+    if (!c || n_arms < 0 || n_arms > MCA_MAX_ARMS || n_bodies < 0 || n_bodies > MCA_MAX_BODIES ||
+        (n_arms > 0 && (!chain || !kin)) || (n_bodies > 0 && !bodies)) {
+        return MCA_EINVAL;
+    }
+    int remeasure[MCA_MAX_BODIES], any_remeasure = 0;
+    for (int k = 0; k < n_bodies; k++) {
+        const int same = k < c->n_bodies && memcmp(&c->body[k], &bodies[k].body, sizeof(mca_body_t)) == 0;
+        remeasure[k] = same && c->stale[k]; /* held still since it changed: measure it from every reference */
+        any_remeasure |= remeasure[k];
+        c->stale[k] = !same;
+        if (!same) {
+            memcpy(&c->body[k], &bodies[k].body, sizeof(mca_body_t));
+        }
+    }
+    c->n_bodies = n_bodies;
+    for (int a = 0; a < n_arms; a++) {
+        const mca_chain_t *ch = chain[a];
+        if (!ch || ch->dof < 1 || ch->dof > MCA_MAX_DOF) {
+            return MCA_EINVAL;
+        }
+        int fresh[MCA_MAX_LINKS];
+        memcpy(c->seen[a], kin[a].point, sizeof(double) * 3 * (size_t)(ch->dof + 2));
+        for (int l = 0; l <= ch->dof; l++) {
+            c->move[a][l] = cache_move(c, ch, &kin[a], a, l);
+            fresh[l] = !(c->move[a][l] <= MCA_BODY_CACHE_REFRESH);
+            if (fresh[l]) {
+                mca_v3_set(c->a[a][l], kin[a].point[l]);
+                mca_v3_set(c->b[a][l], kin[a].point[l + 1]);
+                c->radius[a][l] = ch->link_radius[l];
+                c->valid[a][l] = 1;
+                c->move[a][l] = 0.0;
+            }
+            const mca_capsule_t ref = {{c->a[a][l][0], c->a[a][l][1], c->a[a][l][2]},
+                                       {c->b[a][l][0], c->b[a][l][1], c->b[a][l][2]},
+                                       c->radius[a][l]};
+            for (int k = 0; k < n_bodies && (fresh[l] || any_remeasure); k++) {
+                if (fresh[l] || remeasure[k]) {
+                    c->d[a][l][k] = c->stale[k] ? -INFINITY : cache_distance(&ref, &bodies[k].body);
+                }
+            }
+        }
+        for (int l = 1; l <= ch->dof; l++) {
+            for (int q = 0; q < l; q++) {
+                if (!fresh[l] && !fresh[q]) {
+                    continue;
+                }
+                c->ds[a][l][q] = -INFINITY;
+                if (self && (self[a][l] & (1u << q))) {
+                    const mca_capsule_t rl = {{c->a[a][l][0], c->a[a][l][1], c->a[a][l][2]},
+                                              {c->b[a][l][0], c->b[a][l][1], c->b[a][l][2]},
+                                              c->radius[a][l]};
+                    const mca_body_t rq = {.kind = MCA_BODY_CAPSULE,
+                                           .u.capsule = {{c->a[a][q][0], c->a[a][q][1], c->a[a][q][2]},
+                                                         {c->b[a][q][0], c->b[a][q][1], c->b[a][q][2]},
+                                                         c->radius[a][q]}};
+                    c->ds[a][l][q] = cache_distance(&rl, &rq);
+                }
+            }
+        }
+    }
+    return MCA_OK;
+}
+
 static void nearest_none(mca_body_nearest_t *out) {
     out->valid = 0;
     out->margin = out->d = INFINITY;
     out->arm = out->link = out->body = out->kind = -1;
 }
 
+/* Body k against link l of arm a into the least so far. */
+static int nearest_try(const mca_fixed_body_t *fb, int k, int a, int l, const mca_capsule_t *cap, int early,
+                       mca_body_nearest_t *out) {
+    mca_body_dist_t r;
+    if (mca_capsule_body_distance(cap, &fb->body, &r) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    const double m = r.d - fb->clearance;
+    if (m < out->margin || (early && m == out->margin)) {
+        out->valid = 1;
+        out->margin = m;
+        out->d = r.d;
+        out->arm = a;
+        out->link = l;
+        out->body = k;
+        out->kind = (int)fb->body.kind;
+        mca_v3_set(out->p, r.p_axis);
+        mca_v3_set(out->q, r.q);
+    }
+    return MCA_OK;
+}
+
 int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
-                     const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t *out) {
+                     const mca_fixed_body_t *bodies, int n_bodies, const mca_body_cache_t *cache,
+                     mca_body_nearest_t *out) {
     if (!out || (n_bodies > 0 && (!chain || !kin || !bodies)) || n_arms < 0 || n_arms > MCA_MAX_ARMS) {
         return MCA_EINVAL;
     }
-    nearest_none(out);
-    for (int k = 0; k < n_bodies && k < MCA_MAX_BODIES; k++) {
-        if (body_least(n_arms, chain, kin, bodies, k, out) != MCA_OK) {
-            return MCA_EINVAL;
+    n_bodies = n_bodies < MCA_MAX_BODIES ? n_bodies : MCA_MAX_BODIES;
+    out->valid = 0;
+    out->margin = out->d = INFINITY;
+    out->arm = out->link = out->body = out->kind = -1;
+    double lbs[MCA_MAX_BODIES][MCA_MAX_ARMS][MCA_MAX_LINKS]; /* the cache's bounds on the margins */
+    int seed_k = -1, seed_a = -1, seed_l = -1;
+    if (cache && n_bodies > 0) {
+        /* the pair of least bound first: its margin then skips most others before their distance */
+        int ok[MCA_MAX_BODIES];
+        cache_bodies(cache, bodies, n_bodies, ok);
+        double best = INFINITY;
+        for (int a = 0; a < n_arms; a++) {
+            double move[MCA_MAX_LINKS];
+            cache_moves(cache, chain[a], &kin[a], a, move);
+            for (int l = 0; l <= chain[a]->dof; l++) {
+                for (int k = 0; k < n_bodies; k++) {
+                    const double lb = cache_bound(cache, ok[k], a, l, k, move[l]) - bodies[k].clearance;
+                    lbs[k][a][l] = lb;
+                    if (!(bodies[k].allow[a] & (1u << l)) && lb < best) {
+                        best = lb;
+                        seed_k = k;
+                        seed_a = a;
+                        seed_l = l;
+                    }
+                }
+            }
+        }
+        if (seed_k >= 0) {
+            const mca_capsule_t cap = link_capsule(chain[seed_a], &kin[seed_a], seed_l);
+            if (nearest_try(&bodies[seed_k], seed_k, seed_a, seed_l, &cap, 0, out) != MCA_OK) {
+                return MCA_EINVAL;
+            }
+        }
+    }
+    for (int k = 0; k < n_bodies; k++) {
+        const mca_fixed_body_t *fb = &bodies[k];
+        double c[3];
+        const double R = body_sphere(&fb->body, c);
+        for (int a = 0; a < n_arms; a++) {
+            for (int l = 0; l <= chain[a]->dof; l++) {
+                if ((fb->allow[a] & (1u << l)) || (cache && lbs[k][a][l] > out->margin)) {
+                    continue; /* allowed, or the cache's bound: cannot be the least */
+                }
+                if (k == seed_k && a == seed_a && l == seed_l) {
+                    continue;
+                }
+                const int early = out->valid && precedes(k, a, l, out->body, out->arm, out->link);
+                if (cache && cannot_beat(lbs[k][a][l], out->margin, early)) {
+                    continue;
+                }
+                const mca_capsule_t cap = link_capsule(chain[a], &kin[a], l);
+                const double lb = lower_bound(&cap, c, R) - fb->clearance;
+                if (!(early ? lb <= out->margin : lb < out->margin)) {
+                    continue; /* cannot be the least (NaN: measured, and the distance rejects it) */
+                }
+                if (nearest_try(fb, k, a, l, &cap, early, out) != MCA_OK) {
+                    return MCA_EINVAL;
+                }
+            }
         }
     }
     return MCA_OK;
@@ -289,14 +492,16 @@ static double cut_distance(const mca_scheme_params_t *bp, double t_stop, double 
 
 /* Arm a's witness lists: per link, the pairs whose row can bind with the joint speeds inside the QP's box
  * (the link's fastest point moves at most `speed`: sum_j max|qdot_j| |p - o_j|, largest at an end; a self
- * pair approaches at most at the sum of its two links'). self: the arm's self pairs (NULL: none), in band ps.
+ * pair (l, q) approaches at most at that sum over joints q .. l - 1 alone). self: the arm's self pairs (NULL:
+ * none), in band ps.
  */
 static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mca_kin_t *kn, int a,
                      const mca_fixed_body_t *bodies, int n_bodies, const unsigned *self,
                      const mca_scheme_params_t *pb, const mca_scheme_params_t *ps, const double (*sc)[3],
-                     const double *sr, double t_stop, mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
+                     const double *sr, double t_stop, const mca_body_cache_t *cache, const int *ok,
+                     mca_body_witness_t lists[][MCA_BODY_PAIRS]) {
     const int dof = ch->dof;
-    double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF], speed[MCA_MAX_LINKS];
+    double qmax[MCA_MAX_DOF], lever[MCA_MAX_POINTS][MCA_MAX_DOF], speed[MCA_MAX_LINKS], move[MCA_MAX_LINKS];
     for (int j = 0; j < dof; j++) {
         qmax[j] = max_or_nan(fabs(qp->lb[vo + j]), fabs(qp->ub[vo + j]));
         for (int m = j + 1; m <= dof + 1; m++) {
@@ -309,6 +514,7 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             speed[l] += qmax[j] * max_or_nan(lever[l][j], lever[l + 1][j]);
         }
     }
+    cache_moves(cache, ch, kn, a, move);
     for (int l = 0; l <= dof; l++) {
         mca_body_witness_t *list = lists[l];
         for (int k = 0; k < MCA_BODY_PAIRS; k++) {
@@ -321,8 +527,9 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
                 continue;
             }
             /* a streamed body's own approach lowers its rows' bounds by at most this (mca/track.h) */
-            const double vs = speed[l] + body_speed(fb);
-            if (!(lower_bound(&cap, sc[k], sr[k]) <= cut_distance(&pb[k], t_stop, vs))) {
+            const double vs = speed[l] + body_speed(fb), cut = cut_distance(&pb[k], t_stop, vs);
+            if (cache_bound(cache, ok[k], a, l, k, move[l]) > cut ||
+                !(lower_bound(&cap, sc[k], sr[k]) <= cut)) {
                 continue;
             }
             const int rc = pair_witnesses(&cap, &fb->body, k, -1, &pb[k], fb->clearance, t_stop, vs, list);
@@ -334,10 +541,19 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
             if (!(self[l] & (1u << q))) {
                 continue;
             }
-            const double v = speed[l] + speed[q];
+            /* the joints before link q move both links as one body (their rows' columns are 0: P - Q lies
+             * along n); only joints q .. l - 1 close the pair */
+            double v = 0.0;
+            for (int j = q; j < l; j++) {
+                v += qmax[j] * max_or_nan(lever[l][j], lever[l + 1][j]);
+            }
+            const double cut = cut_distance(ps, t_stop, v);
+            if (cache_self_bound(cache, a, l, q, move[l], move[q]) > cut) {
+                continue;
+            }
             const mca_capsule_t cq = link_capsule(ch, kn, q);
             double c[3];
-            if (!(lower_bound(&cap, c, capsule_sphere(&cq, c)) <= cut_distance(ps, t_stop, v))) {
+            if (!(lower_bound(&cap, c, capsule_sphere(&cq, c)) <= cut)) {
                 continue;
             }
             const mca_body_t other = {.kind = MCA_BODY_CAPSULE, .u.capsule = cq};
@@ -350,39 +566,82 @@ static int arm_lists(const mca_qp_t *qp, int vo, const mca_chain_t *ch, const mc
     return MCA_OK;
 }
 
+/* Link q of arm a against its link l into the least self distance so far. */
+static int self_try(const mca_chain_t *ch, const mca_kin_t *kn, int a, int l, int q, int early,
+                    mca_self_nearest_t *out) {
+    const mca_capsule_t cap = link_capsule(ch, kn, l);
+    const mca_body_t other = {.kind = MCA_BODY_CAPSULE, .u.capsule = link_capsule(ch, kn, q)};
+    double c[3];
+    if (cannot_beat(lower_bound(&cap, c, capsule_sphere(&other.u.capsule, c)), out->d, early)) {
+        return MCA_OK; /* cannot be the least (NaN: measured, and the distance rejects it) */
+    }
+    mca_body_dist_t r;
+    if (mca_capsule_body_distance(&cap, &other, &r) != MCA_OK) {
+        return MCA_EINVAL;
+    }
+    if (r.d < out->d || (early && r.d == out->d)) {
+        out->valid = 1;
+        out->d = r.d;
+        out->arm = a;
+        out->link = l;
+        out->other = q;
+        mca_v3_set(out->p, r.p_axis);
+        mca_v3_set(out->q, r.q);
+    }
+    return MCA_OK;
+}
+
 int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
-                     const mca_self_pairs_t *self, mca_self_nearest_t *out) {
+                     const mca_self_pairs_t *self, const mca_body_cache_t *cache, mca_self_nearest_t *out) {
     if (!out || (self && (!chain || !kin)) || n_arms < 0 || n_arms > MCA_MAX_ARMS) {
         return MCA_EINVAL;
     }
     out->valid = 0;
     out->d = INFINITY;
     out->arm = out->link = out->other = -1;
+    double move[MCA_MAX_ARMS][MCA_MAX_LINKS];
+    int seed_a = -1, seed_l = -1, seed_q = -1;
+    if (self && cache) {
+        /* the pair of least bound first: its distance then skips most others */
+        double best = INFINITY;
+        for (int a = 0; a < n_arms; a++) {
+            cache_moves(cache, chain[a], &kin[a], a, move[a]);
+            for (int l = 0; l <= chain[a]->dof; l++) {
+                for (int q = 0; q < l; q++) {
+                    if (!(self[a][l] & (1u << q))) {
+                        continue;
+                    }
+                    const double lb = cache_self_bound(cache, a, l, q, move[a][l], move[a][q]);
+                    if (lb < best) {
+                        best = lb;
+                        seed_a = a;
+                        seed_l = l;
+                        seed_q = q;
+                    }
+                }
+            }
+        }
+        if (seed_a >= 0 && self_try(chain[seed_a], &kin[seed_a], seed_a, seed_l, seed_q, 0, out) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
     for (int a = 0; self && a < n_arms; a++) {
         for (int l = 0; l <= chain[a]->dof; l++) {
-            const mca_capsule_t cap = link_capsule(chain[a], &kin[a], l);
             for (int q = 0; q < l; q++) {
-                if (!(self[a][l] & (1u << q))) {
+                if (!(self[a][l] & (1u << q)) || (a == seed_a && l == seed_l && q == seed_q)) {
                     continue;
                 }
-                const mca_body_t other = {.kind = MCA_BODY_CAPSULE,
-                                          .u.capsule = link_capsule(chain[a], &kin[a], q)};
-                double c[3];
-                if (lower_bound(&cap, c, capsule_sphere(&other.u.capsule, c)) >= out->d) {
-                    continue; /* cannot be the least (NaN: measured, and the distance rejects it) */
+                const double lb =
+                    cache ? cache_self_bound(cache, a, l, q, move[a][l], move[a][q]) : -INFINITY;
+                if (lb > out->d) {
+                    continue; /* the cache's bound: cannot be the least */
                 }
-                mca_body_dist_t r;
-                if (mca_capsule_body_distance(&cap, &other, &r) != MCA_OK) {
+                const int early = out->valid && precedes(a, l, q, out->arm, out->link, out->other);
+                if (cannot_beat(lb, out->d, early)) {
+                    continue;
+                }
+                if (self_try(chain[a], &kin[a], a, l, q, early, out) != MCA_OK) {
                     return MCA_EINVAL;
-                }
-                if (r.d < out->d) {
-                    out->valid = 1;
-                    out->d = r.d;
-                    out->arm = a;
-                    out->link = l;
-                    out->other = q;
-                    mca_v3_set(out->p, r.p_axis);
-                    mca_v3_set(out->q, r.q);
                 }
             }
         }
@@ -393,7 +652,7 @@ int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
 int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                   const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
                   const mca_self_pairs_t *self, const mca_scheme_params_t *p, const double *dec,
-                  mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]) {
+                  const mca_body_cache_t *cache, mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]) {
     if (!qp || !si || !p || n_arms < 1 || n_arms > MCA_MAX_ARMS || n_bodies < 0 ||
         n_bodies > MCA_MAX_BODIES) {
         return MCA_EINVAL;
@@ -411,6 +670,8 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
         mca_body_band(p, bodies[k].clearance, &pb[k]);
         sr[k] = body_sphere(&bodies[k].body, sc[k]);
     }
+    int ok[MCA_MAX_BODIES] = {0};
+    cache_bodies(cache, bodies, n_bodies, ok);
     const size_t row_bytes = sizeof(double) * (size_t)qp->n;
     for (int a = 0; a < n_arms; a++) {
         const mca_chain_t *ch = chain[a];
@@ -422,7 +683,7 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
         mca_body_witness_t own[MCA_MAX_LINKS][MCA_BODY_PAIRS];
         mca_body_witness_t(*ls)[MCA_BODY_PAIRS] = lists ? lists[a] : own;
         int rc = arm_lists(qp, vo, ch, &kin[a], a, bodies, n_bodies, self ? self[a] : NULL, pb, &ps,
-                           (const double(*)[3])sc, sr, t_stop, ls);
+                           (const double(*)[3])sc, sr, t_stop, cache, ok, ls);
         if (rc != MCA_OK) {
             return rc;
         }

@@ -26,8 +26,9 @@ struct mca_controller {
     mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS]
                             [MCA_NEAR_PAIRS]; /**< nearest links (mca-ts, braking) */
     mca_body_witness_t body_near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS]; /**< fixed bodies' rows */
-    double body_margin_prev;   /**< last tick's least body margin (the prediction of the distance fault) */
-    double self_distance_prev; /**< last tick's least self distance (the same prediction) */
+    mca_body_cache_t body_cache; /**< bounds that skip far body and self pairs (this tick's poses) */
+    double body_margin_prev;     /**< last tick's least body margin (the prediction of the distance fault) */
+    double self_distance_prev;   /**< last tick's least self distance (the same prediction) */
     mca_scheme_state_t sstate;
     mca_qp_t qp;
     mca_pdnn_t pdnn;

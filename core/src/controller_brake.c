@@ -79,7 +79,7 @@ static int brake_qp(mca_controller_t *ctrl, const double *const q[MCA_MAX_ARMS],
     if (rc == MCA_OK) {
         /* and the fixed bodies' (the stop bound is mca-ts's, as the arms') */
         rc = mca_body_rows(qp, &si, na, chains, ctrl->kin, cfg->body, mca_ctrl__row_bodies(cfg),
-                           mca_ctrl__row_self(cfg), &sp, row_dec, ctrl->body_near);
+                           mca_ctrl__row_self(cfg), &sp, row_dec, &ctrl->body_cache, ctrl->body_near);
     }
     if (rc != MCA_OK) {
         return rc;

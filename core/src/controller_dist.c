@@ -227,6 +227,15 @@ static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     for (int a = 0; a < ctrl->cfg.n_arms; a++) {
         chains[a] = &ctrl->cfg.chain[a];
     }
+    const mca_self_pairs_t *self = mca_controller_has_self(&ctrl->cfg) ? ctrl->cfg.self : NULL;
+    mca_body_cache_t *cache = NULL;
+    if (ctrl->cfg.n_bodies > 0 || self) {
+        cache = &ctrl->body_cache;
+        if (mca_body_cache_update(cache, ctrl->cfg.n_arms, chains, ctrl->kin, ctrl->cfg.body,
+                                  ctrl->cfg.n_bodies, self) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+    }
     mca_pair_nearest_t *pn = &ctrl->near_kinds;
     pn->n_bodies = ctrl->cfg.n_bodies;
     pn->n_fixed = ctrl->n_fixed;
@@ -257,8 +266,8 @@ static int body_distances(mca_controller_t *ctrl, mca_tick_info_t *info) {
     for (int a = 0; a < MCA_MAX_ARMS; a++) {
         mca_self_nearest_t *s = &pn->self[a];
         const int r = a < ctrl->cfg.n_arms && has_self
-                          ? mca_self_nearest(1, &chains[a], &ctrl->kin[a], &ctrl->cfg.self[a], s)
-                          : mca_self_nearest(0, NULL, NULL, NULL, s);
+                          ? mca_self_nearest(1, &chains[a], &ctrl->kin[a], &ctrl->cfg.self[a], NULL, s)
+                          : mca_self_nearest(0, NULL, NULL, NULL, NULL, s);
         if (s->valid) {
             s->arm = a;
             if (sn == NULL || s->d < sn->d) {

@@ -211,11 +211,17 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
         if (sp.collision) {
             /* the paper's scheme: the fixed bodies' rows in their slots, no stop bound */
             rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, mca_ctrl__row_bodies(cfg),
-                               mca_ctrl__row_self(cfg), &sp, NULL, ctrl->body_near);
+                               mca_ctrl__row_self(cfg), &sp, NULL, &ctrl->body_cache, ctrl->body_near);
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,
                             (mca_ctrl_fault_why_t){.why = MCA_WHY_ASSEMBLY, .i = {rc}});
                 goto fault;
+            }
+            if (sp.body_pairs > 0) {
+                /* a cell's body slots are mostly empty: only the active rows go to the PDNN, as under mca-ts
+                 * (the same QP; the paper's tasks have no slots, so their QP stays the paper's, row for row)
+                 */
+                mca_ctrl__compact_rows(&ctrl->qp, sp.big, &si, &ctrl->pdnn, ctrl->row_key, &ctrl->n_row_key);
             }
         }
         info->brake = si.brake;
@@ -265,9 +271,9 @@ int mca_controller_tick(mca_controller_t *ctrl, double t, const double *const q[
                                       (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])ctrl->near,
                                       &cfg->sp, cfg->ts.dec_limit, cfg->ts.priority);
             if (rc == MCA_OK) {
-                rc =
-                    mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body, mca_ctrl__row_bodies(cfg),
-                                  mca_ctrl__row_self(cfg), &cfg->sp, cfg->ts.dec_limit, ctrl->body_near);
+                rc = mca_body_rows(&ctrl->qp, &si, na, chains, ctrl->kin, cfg->body,
+                                   mca_ctrl__row_bodies(cfg), mca_ctrl__row_self(cfg), &cfg->sp,
+                                   cfg->ts.dec_limit, &ctrl->body_cache, ctrl->body_near);
             }
             if (rc != MCA_OK) {
                 raise_fault(ctrl, MCA_CTRL_FAULT_INPUT,

@@ -59,6 +59,35 @@ def main():
     firsts = [x for x in rows[1:] if x.split(",")[2] == "0"]
     check(all(int(x.split(",")[5]) > 0 for x in firsts), "every block's first QP has a cold PDNN time")
 
+    # 1b. pair mode: task 1 alone and in its whole cell, alternating; the cell's body and self rows counted
+    pj = os.path.join(raw, "tick_cell_pairs.json")
+    r = subprocess.run([a.bench_tick, "pair", "--scenario", os.path.join(a.source, "config/scenarios/cross_circles.yaml"),
+                        "--scenario-b", os.path.join(a.source, "config/scenarios/cross_circles_cell.yaml"),
+                        "--pairs", "2", "--out", pj], capture_output=True, text=True, timeout=120)
+    check(r.returncode == 0, f"bench_tick pair exits 0 ({r.stderr.strip()[:200]})")
+    pr = json.load(open(pj))["runs"]
+    check([x["which"] for x in pr] == ["a", "b", "a", "b"] and [x["pair"] for x in pr] == [0, 0, 1, 1],
+          "pair: runs alternate a b a b")
+    pa, pb = pr[0]["run"], pr[1]["run"]
+    check(pa["name"] == "cross_circles" and pb["name"] == "cross_circles_cell" and pa["ticks"] == pb["ticks"] == 10000
+          and pa["faults"] == pb["faults"] == 0, "pair: both tasks whole, no fault")
+    check(pa["body_rows"]["max"] == 0 and pa["self_rows"]["max"] == 0, "pair: task 1 alone has no body or self rows")
+    check(pb["body_rows"]["ticks_any"] > 0 and pb["self_rows"]["ticks_any"] > 0 and
+          pb["body_rows"]["max"] + pb["self_rows"]["max"] <= pb["active_rows"]["max"],
+          f"pair: the cell's body rows ({pb['body_rows']}) and self rows ({pb['self_rows']}) reach the PDNN, "
+          "among its active rows")
+    # callgrind's summary line, as valgrind prints it, into instructions per tick
+    for k, n in (("cross_circles", 3000000), ("cross_circles_cell", 4500000)):
+        with open(os.path.join(raw, f"callgrind_{k}.err"), "w") as f:
+            f.write(f"==1== Events    : Ir\n==1== Collected : {n}\n==1==\n==1== I   refs:      {n}\n")
+        shutil.copy(tj if k == "cross_circles" else pj, os.path.join(raw, f"tick_callgrind_{k}.json"))
+    with open(os.path.join(raw, "tick_callgrind_cross_circles_cell.json"), "w") as f:
+        json.dump({"run": pb}, f)
+    cr = report.cell_row(raw)
+    check(cr.get("ir_per_tick") == {"cross_circles": 3000000 / 400, "cross_circles_cell": 4500000 / 10000},
+          f"instructions per tick from callgrind's count and the run's ticks: {cr.get('ir_per_tick')}")
+    check(cr.get("pairs") == 2 and len(cr.get("p99_ratios", [])) == 2, "pair: one p99 ratio per pair")
+
     # 2. OSQP on those QPs: same answers (an independent solver)
     o = report.osqp_compare(qd, 1e-9)
     check("warm" in o and o["warm"]["max_dphi"] < 1e-6,
@@ -128,6 +157,8 @@ def main():
     check("| 1. tick compute, dual PA10+" in tab and "| 1. tick compute, JACO2" in tab and "not measured" in tab,
           "table: task 1 row measured, missing rows say 'not measured'")
     check("| 4. wake-up jitter | not measured" in tab, "no jitter figure invented")
+    check("| 1d. whole cell, dual PA10+ task 1 with 8 bodies and self pairs | 0.5 k instructions/tick" in tab,
+          "table: the whole-cell row with its instructions per tick")
     check(os.path.exists(os.path.join(out, "scaling.png")), "scaling.png written")
     shutil.rmtree(out, ignore_errors=True)
     print(f"{len(FAILS)} failing")

@@ -13,32 +13,16 @@ usage: test_bodies.py MCA_SIM SCENARIO_DIR WORK_DIR
  4. stops (as SIGTERM to mcad) while the MICO2's hand passes the JACO2's stack, at dec 2 and 10 rad/s^2:
     the braking keeps the bodies' clearances and d1.
 """
-import json
 import os
-import subprocess
 import sys
 
-FAILS = []
-
-
-def check(cond, msg):
-    print(("ok   " if cond else "FAIL ") + msg)
-    if not cond:
-        FAILS.append(msg)
+from simcheck import FAILS, check, sim_run
 
 
 def run(sim, scn, work, scheme, tag, extra=()):
-    os.makedirs(work, exist_ok=True)
-    summ = os.path.join(work, "%s.json" % tag)
-    cmd = [sim, "--scenario", scn, "--scheme", scheme, "--summary", summ] + list(extra)
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    if p.returncode != 0:
-        print(p.stdout, p.stderr)
-        FAILS.append("mca-sim failed: %s" % " ".join(cmd))
+    r = sim_run(sim, scn, work, scheme, tag, extra)
+    if r is None:
         return None
-    s = json.load(open(summ))
-    r = s["runs"][0]
-    r["d1"] = s["d1"]
     if r.get("bodies"):
         # each body's least distance (mcad's summary, per body): the arm-body kind's least is the least of
         # them, the arm pair's is min_distance, and the body of least margin came no closer than its own least
@@ -53,7 +37,7 @@ def run(sim, scn, work, scheme, tag, extra=()):
                name, own, r["body_min_distance"]))
     print("%-28s completed %d, min d %.5f m (d1 %.3f), path error max %.3e m, bodies: least margin %s m "
           "(%s '%s', arm %s link %s, %s s), %s ticks inside, binding ticks %d, tick cpu p50/p99 %.1f/%.1f us,"
-          " state %s" % (tag, r["completed"], r["min_distance"], s["d1"], r["path_error_max"],
+          " state %s" % (tag, r["completed"], r["min_distance"], r["d1"], r["path_error_max"],
                          r.get("body_min_margin"), r.get("body_min_kind"), r.get("body_min_name"),
                          (r.get("body_min_pair") or ["-"])[0], (r.get("body_min_pair") or ["-", "-"])[1],
                          r.get("body_min_t"), r.get("body_ticks_below"), r["binding_ticks"],

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "mca/apf.h"
+#include "mca/bodyrows.h"
 #include "mca/chain.h"
 #include "mca/controller.h"
 #include "mca/err.h"
@@ -1459,7 +1460,7 @@ static void test_body_rows(void **state) {
     assert_int_equal(si.body_off[0], MCA_NEAR_PAIRS * (ch.dof + 1));
     assert_int_equal(si.active_rows, 0);
     static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, dec, NULL, lists), MCA_OK);
     const mca_body_witness_t *w = &lists[0][L][0];
     assert_true(w->valid && w->body == 0);
     assert_true(fabs(w->d - d_want) < 1e-12);
@@ -1498,9 +1499,9 @@ static void test_body_rows(void **state) {
                                           (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
                                           &p, dec, NULL),
                      MCA_OK);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, NULL, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 1, NULL, &p, dec, NULL, lists), MCA_OK);
     assert_int_equal(si2.active_rows, 0);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, NULL, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, &table, 0, NULL, &p, dec, NULL, lists), MCA_OK);
     assert_int_equal(si2.active_rows, 0);
     (void)before;
     /* the paper's layout: slots after each arm's own rows, with collision rows only */
@@ -1518,7 +1519,7 @@ static void test_body_rows(void **state) {
     assert_int_equal(qp.n_ineq, (1 + MCA_BODY_PAIRS) * (ch.dof + 1));
     assert_int_equal(si.body_off[0], ch.dof + 1);
     table.allow[0] = ~(1u << L);
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, NULL, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &table, 1, NULL, &p, NULL, NULL, lists), MCA_OK);
     /* no stop bound: 2 S_b v_normal */
     assert_true(fabs(qp.beta[si.body_off[0] + MCA_BODY_PAIRS * L] -
                      2.0 * mca_brake_s(d_want, d1m, pb.d2) * p.v_normal) < 1e-15);
@@ -1557,7 +1558,7 @@ static void test_self_rows(void **state) {
     memset(self, 0, sizeof self);
     self[0][4] = 1u << 2;
     mca_self_nearest_t sn;
-    assert_int_equal(mca_self_nearest(1, chains, kin, self, &sn), MCA_OK);
+    assert_int_equal(mca_self_nearest(1, chains, kin, self, NULL, &sn), MCA_OK);
     assert_true(sn.valid && sn.arm == 0 && sn.link == 4 && sn.other == 2);
     assert_true(fabs(sn.d - d_want) < 1e-12);
 
@@ -1580,7 +1581,7 @@ static void test_self_rows(void **state) {
                                           &p, dec, NULL),
                      MCA_OK);
     static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
-    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, NULL, 0, self, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, NULL, 0, self, &p, dec, NULL, lists), MCA_OK);
     const mca_body_witness_t *w = &lists[0][4][0];
     assert_true(w->valid && w->body == -1 && w->link == 2);
     assert_true(fabs(w->d - d_want) < 1e-12);
@@ -1615,10 +1616,10 @@ static void test_self_rows(void **state) {
                                           (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
                                           &p, dec, NULL),
                      MCA_OK);
-    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, NULL, 0, self, &p, dec, lists), MCA_OK);
+    assert_int_equal(mca_body_rows(&qp, &si2, 1, chains, kin, NULL, 0, self, &p, dec, NULL, lists), MCA_OK);
     assert_false(lists[0][4][0].valid);
     assert_int_equal(si2.active_rows, 0);
-    assert_int_equal(mca_self_nearest(1, chains, kin, self, &sn), MCA_OK);
+    assert_int_equal(mca_self_nearest(1, chains, kin, self, NULL, &sn), MCA_OK);
     assert_false(sn.valid);
 }
 
@@ -1758,6 +1759,121 @@ static void test_path_distance_tolerance(void **state) {
     assert_float_equal(mca_path_distance(&c, above), 0.3, 1e-15);
 }
 
+/* The body cache (mca_body_cache_update) only skips pairs it can prove far: along a random walk of a PA10+
+ * (small steps and jumps beyond the refresh distance) among five bodies of every kind, one of which moves now
+ * and then (as a streamed body), the least body margin, the least self distance and the body and self rows
+ * with the cache are those without it, bit for bit. */
+static void test_body_cache(void **state) {
+    (void)state;
+    mca_chain_t ch;
+    char err[256];
+    assert_int_equal(mca_chain_load_urdf(&ch, PA10, "tool_tip", err, sizeof err), MCA_OK);
+    const mca_chain_t *chains[1] = {&ch};
+    static mca_fixed_body_t bodies[5];
+    memset(bodies, 0, sizeof bodies);
+    bodies[0].body.kind = MCA_BODY_PLANE;
+    bodies[0].body.u.plane.normal[2] = 1.0;
+    bodies[0].allow[0] = 0x3u; /* the base and its column stand on it */
+    bodies[1].body.kind = MCA_BODY_SPHERE;
+    bodies[1].body.u.sphere = (mca_body_sphere_t){{0.3, 0.2, 0.9}, 0.05};
+    bodies[2].body.kind = MCA_BODY_BOX;
+    bodies[2].body.u.box.centre[0] = -0.3;
+    bodies[2].body.u.box.centre[2] = 0.8;
+    bodies[2].body.u.box.half[0] = bodies[2].body.u.box.half[1] = bodies[2].body.u.box.half[2] = 0.1;
+    for (int i = 0; i < 3; i++) {
+        bodies[2].body.u.box.R[i][i] = 1.0;
+    }
+    bodies[3].body.kind = MCA_BODY_CYLINDER;
+    bodies[3].body.u.cylinder = (mca_body_cylinder_t){
+        .centre = {0.45, -0.1, 0.4}, .axis = {0, 0, 1}, .half_len = 0.4, .radius = 0.04};
+    bodies[4].body.kind = MCA_BODY_CAPSULE;
+    bodies[4].body.u.capsule = (mca_capsule_t){{0.0, 0.5, 1.3}, {0.4, -0.4, 1.3}, 0.04};
+    for (int k = 0; k < 5; k++) {
+        bodies[k].clearance = 0.02 + 0.01 * k;
+        assert_int_equal(mca_body_check(&bodies[k]), MCA_OK);
+    }
+    static mca_self_pairs_t self[MCA_MAX_ARMS];
+    memset(self, 0, sizeof self);
+    for (int l = 2; l <= ch.dof; l++) {
+        self[0][l] = (1u << (l - 1)) - 1u; /* every pair that is not adjacent */
+    }
+    mca_scheme_params_t p;
+    mca_scheme_default_params(&p);
+    p.body_pairs = MCA_BODY_PAIRS;
+    p.d2 = 0.2; /* a wide band: many rows */
+    static mca_body_cache_t cache;
+    memset(&cache, 0, sizeof cache);
+    static mca_qp_t qa, qb;
+    static mca_body_witness_t la[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
+    static mca_body_witness_t lb[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
+    static mca_link_critical_t near[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_NEAR_PAIRS];
+    memset(near, 0, sizeof near);
+    double q[MCA_MAX_DOF] = {0.0, 0.7853981633974483, 0.0, -1.5707963267948966,
+                             0.0, 0.7853981633974483, 0.0, 0.5};
+    const double *dec = NULL; /* the paper's rows: the band is the cut, which pairs cross on the walk */
+    srand(7);
+    int rows = 0, skipped_far = 0;
+    for (int step = 0; step < 600; step++) {
+        const double h = step % 50 == 49 ? 0.3 : 0.015; /* now and then a jump beyond the refresh distance */
+        for (int j = 0; j < ch.dof; j++) {
+            q[j] += h * (2.0 * rand() / (double)RAND_MAX - 1.0);
+        }
+        if (step % 97 == 40) {
+            bodies[1].body.u.sphere.centre[0] += 0.05; /* a body that moved (a streamed one) */
+        }
+        mca_kin_t kin[1];
+        assert_int_equal(mca_fk(&ch, q, &kin[0]), MCA_OK);
+        assert_int_equal(mca_body_cache_update(&cache, 1, chains, kin, bodies, 5, self), MCA_OK);
+        mca_body_nearest_t b0, b1;
+        assert_int_equal(mca_body_nearest(1, chains, kin, bodies, 5, NULL, &b0), MCA_OK);
+        assert_int_equal(mca_body_nearest(1, chains, kin, bodies, 5, &cache, &b1), MCA_OK);
+        assert_true(b1.valid && b0.link == b1.link && b0.body == b1.body);
+        assert_true(b0.margin == b1.margin && b0.d == b1.d);
+        mca_self_nearest_t s0, s1;
+        assert_int_equal(mca_self_nearest(1, chains, kin, self, NULL, &s0), MCA_OK);
+        assert_int_equal(mca_self_nearest(1, chains, kin, self, &cache, &s1), MCA_OK);
+        assert_true(s1.valid && s0.link == s1.link && s0.other == s1.other && s0.d == s1.d);
+        for (int nb = 0; nb <= 5; nb += 5) { /* the self pairs alone, then with the bodies */
+            mca_scheme_info_t sa = {0}, sb = {0};
+            for (int k = 0; k < 2; k++) {
+                mca_qp_t *qp = k ? &qb : &qa;
+                assert_int_equal(mca_qp_reset(qp, ch.dof, 3, 0), MCA_OK);
+                for (int j = 0; j < ch.dof; j++) {
+                    qp->lb[j] = -ch.joint[j].vel_limit;
+                    qp->ub[j] = ch.joint[j].vel_limit;
+                }
+                assert_int_equal(
+                    mca_scheme_near_rows(qp, k ? &sb : &sa, 1, chains, kin,
+                                         (const mca_link_critical_t(*)[MCA_MAX_LINKS][MCA_NEAR_PAIRS])near,
+                                         &p, dec, NULL),
+                    MCA_OK);
+            }
+            assert_int_equal(mca_body_rows(&qa, &sa, 1, chains, kin, bodies, nb, self, &p, dec, NULL, la),
+                             MCA_OK);
+            assert_int_equal(mca_body_rows(&qb, &sb, 1, chains, kin, bodies, nb, self, &p, dec, &cache, lb),
+                             MCA_OK);
+            assert_int_equal(sa.active_rows, sb.active_rows);
+            assert_true(sa.brake == sb.brake);
+            assert_int_equal(qa.n_ineq, qb.n_ineq);
+            for (int i = 0; i < qa.n_ineq; i++) {
+                assert_true(qa.beta[i] == qb.beta[i]);
+                if (qa.beta[i] < p.big) {
+                    assert_memory_equal(qa.U[i], qb.U[i], sizeof(double) * (size_t)ch.dof);
+                }
+            }
+            assert_memory_equal(la[0], lb[0], sizeof la[0]);
+            rows += sa.active_rows;
+        }
+        for (int l = 0; l <= ch.dof; l++) {
+            for (int k = 0; k < 5; k++) {
+                skipped_far += cache.d[0][l][k] - cache.move[0][l] > 0.5; /* pairs the cache can skip */
+            }
+        }
+    }
+    assert_true(rows > 100);         /* the rows were there to compare */
+    assert_true(skipped_far > 1000); /* and so were pairs to skip */
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_brake_values),
@@ -1780,6 +1896,7 @@ int main(void) {
         cmocka_unit_test(test_controller_brake),
         cmocka_unit_test(test_body_rows),
         cmocka_unit_test(test_self_rows),
+        cmocka_unit_test(test_body_cache),
         cmocka_unit_test(test_tube_bounds),
         cmocka_unit_test(test_path_distance_tolerance),
         cmocka_unit_test(test_path_rate_limit),

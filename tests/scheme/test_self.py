@@ -10,34 +10,17 @@ usage: test_self.py MCA_SIM SCENARIO_DIR WORK_DIR
  3. a stop (as SIGTERM to mcad) while the elbow is at its closest: the braking keeps d1 too.
 """
 import csv
-import json
 import os
-import subprocess
 import sys
 
-FAILS = []
-
-
-def check(cond, msg):
-    print(("ok   " if cond else "FAIL ") + msg)
-    if not cond:
-        FAILS.append(msg)
+from simcheck import FAILS, check, sim_run
 
 
 def run(sim, scn, work, scheme, tag, extra=()):
-    os.makedirs(work, exist_ok=True)
-    summ = os.path.join(work, "%s.json" % tag)
-    out_csv = os.path.join(work, "%s.csv" % tag)
-    cmd = [sim, "--scenario", scn, "--scheme", scheme, "--summary", summ, "--csv", out_csv] + list(extra)
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    if p.returncode != 0:
-        print(p.stdout, p.stderr)
-        FAILS.append("mca-sim failed: %s" % " ".join(cmd))
+    r = sim_run(sim, scn, work, scheme, tag, extra, with_csv=True)
+    if r is None:
         return None
-    s = json.load(open(summ))  # plain JSON: one arm has no arm pair, its distance is null
-    r = s["runs"][0]
-    r["d1"] = s["d1"]
-    with open(out_csv) as f:
+    with open(r["csv"]) as f:
         r["csv_self_d"] = [float(row["self_d"]) for row in csv.DictReader(f)]
     # the summary's pairs per kind: no arm pair (null, as min_distance), no body, the self pairs' least the
     # least of the CSV's self_d column (every tick)

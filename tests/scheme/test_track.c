@@ -136,7 +136,7 @@ static void test_moving_body_row(void **state) {
         s.v[0] = run == 1 ? -0.3 : 0.0; /* toward the tool tip (-x) */
         s.grow = run == 2 ? 2.0 : 0.0;
         static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
-        assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &s, 1, NULL, &p, dec, lists), MCA_OK);
+        assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &s, 1, NULL, &p, dec, NULL, lists), MCA_OK);
         const mca_body_witness_t *w = &lists[0][L][0];
         assert_true(w->valid);
         beta[run] = qp.beta[si.body_off[0] + MCA_BODY_PAIRS * L];
@@ -199,7 +199,7 @@ static void test_body_at_fixed_link(void **state) {
             MCA_OK);
         static mca_body_witness_t lists[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_BODY_PAIRS];
         const int before = si.active_rows;
-        assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &s, 1, NULL, &p, dec, lists), MCA_OK);
+        assert_int_equal(mca_body_rows(&qp, &si, 1, chains, kin, &s, 1, NULL, &p, dec, NULL, lists), MCA_OK);
         assert_true(lists[0][link][0].valid);
         const int r = si.body_off[0] + MCA_BODY_PAIRS * link;
         double unorm = 0.0;

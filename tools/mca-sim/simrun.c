@@ -164,7 +164,8 @@ static void sphere_measure(mca_daemon_t *d, const mca_sim_sphere_t *s, const sph
         }
     }
     mca_body_nearest_t bn;
-    if (n_fixed > 0 && mca_body_nearest(na, chain, kin, cfg->body, n_fixed, &bn) == MCA_OK && bn.valid) {
+    if (n_fixed > 0 && mca_body_nearest(na, chain, kin, cfg->body, n_fixed, NULL, &bn) == MCA_OK &&
+        bn.valid) {
         if (bn.margin < r->body_min_margin) {
             r->body_min_margin = bn.margin;
             r->body_min_distance = bn.d;
@@ -197,7 +198,8 @@ static void sphere_measure(mca_daemon_t *d, const mca_sim_sphere_t *s, const sph
             vmax = fmax(vmax, fabs(fw ? fw->v[j] : cmd->velocity[j]));
         }
         const int rest = vmax <= MCA_SIMRUN_REST;
-        if (has_track && mca_body_nearest(1, &chain[a], &kin[a], &track, 1, &bn) == MCA_OK && bn.valid) {
+        if (has_track && mca_body_nearest(1, &chain[a], &kin[a], &track, 1, NULL, &bn) == MCA_OK &&
+            bn.valid) {
             if (bn.margin < r->track_min_margin) {
                 r->track_min_margin = bn.margin;
                 r->track_min_t = task_t;
@@ -212,7 +214,7 @@ static void sphere_measure(mca_daemon_t *d, const mca_sim_sphere_t *s, const sph
                 }
             }
         }
-        if (mca_body_nearest(1, &chain[a], &kin[a], &truth, 1, &bn) == MCA_OK && bn.valid) {
+        if (mca_body_nearest(1, &chain[a], &kin[a], &truth, 1, NULL, &bn) == MCA_OK && bn.valid) {
             r->sphere_true_min_d = fmin(r->sphere_true_min_d, bn.d);
         }
         rest_prev[a] = rest;

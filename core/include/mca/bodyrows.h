@@ -83,6 +83,44 @@ typedef struct mca_body_nearest {
     double p[3], q[3];
 } mca_body_nearest_t;
 
+/** How far a link's axis may move from its reference before mca_body_cache_update measures it again [m]. */
+#define MCA_BODY_CACHE_REFRESH 0.01
+
+/**
+ * What the tick keeps between ticks to skip the pairs that are far (mca_body_cache_update): each link's axis
+ * at a reference pose and the exact surface distances of that reference to every body and to the link's
+ * self-pair partners (their references). A link whose two ends have each moved by at most s from their
+ * reference is at least d_ref - s from a body (every point of a segment moves by at most the larger of its
+ * ends' moves; a self pair: d_ref - s_l - s_q), so a pair whose bound already puts it beyond every use is
+ * skipped without its distance. Only bounds come from it: the answers are those without a cache. A body
+ * whose geometry changed (a streamed one) is measured as without it until it holds still for a tick. Zero
+ * it to start (or after the bodies or arms changed).
+ */
+typedef struct mca_body_cache {
+    int valid[MCA_MAX_ARMS][MCA_MAX_LINKS];   /**< the link's reference is set */
+    double a[MCA_MAX_ARMS][MCA_MAX_LINKS][3]; /**< the reference: the axis's ends */
+    double b[MCA_MAX_ARMS][MCA_MAX_LINKS][3];
+    double radius[MCA_MAX_ARMS][MCA_MAX_LINKS];            /**< the link radius it was measured with */
+    double d[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_BODIES]; /**< reference to body [m]; -INF: unknown */
+    double ds[MCA_MAX_ARMS][MCA_MAX_LINKS][MCA_MAX_LINKS]; /**< [l][q], q < l: the two references [m] */
+    mca_body_t body[MCA_MAX_BODIES];                       /**< the bodies the distances are to */
+    int stale[MCA_MAX_BODIES];                             /**< changed last update: no distances yet */
+    double seen[MCA_MAX_ARMS][MCA_MAX_POINTS][3];          /**< the poses of the last update */
+    double move[MCA_MAX_ARMS][MCA_MAX_LINKS];              /**< their moves from the references [m] */
+    int n_bodies;
+} mca_body_cache_t;
+
+/**
+ * Bring the cache up to this tick's poses and bodies: a link that moved more than MCA_BODY_CACHE_REFRESH from
+ * its reference (or has none) gets the pose as its new one, measured against every body and its self-pair
+ * partners (self, NULL: none); a body whose geometry changed is marked unknown, and measured from every
+ * reference at the first update it has not changed again. Context: rt (bounded: at most every pair once).
+ * @retval MCA_OK, MCA_EINVAL (NULL, sizes out of range)
+ */
+int mca_body_cache_update(mca_body_cache_t *c, int n_arms, const mca_chain_t *const chain[],
+                          const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
+                          const mca_self_pairs_t *self);
+
 /** "plane", "sphere", "capsule", "box", "cylinder"; "unknown" otherwise. */
 const char *mca_body_kind_name(int kind);
 
@@ -98,11 +136,13 @@ int mca_body_check(const mca_fixed_body_t *b);
 void mca_body_band(const mca_scheme_params_t *p, double clearance, mca_scheme_params_t *pb);
 
 /**
- * The arm-body pair of least margin over every link and every body that does not allow it.
+ * The arm-body pair of least margin over every link and every body that does not allow it. cache: bounds
+ * that skip far pairs (mca_body_cache_update on these poses, or older ones; NULL: none), the same answer.
  * @retval MCA_OK, MCA_EINVAL (NULL, a distance failed: non-finite geometry)
  */
 int mca_body_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
-                     const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t *out);
+                     const mca_fixed_body_t *bodies, int n_bodies, const mca_body_cache_t *cache,
+                     mca_body_nearest_t *out);
 
 /**
  * Per body its link of least margin (what a monitor shows: each body's closest link): out[k] for body k,
@@ -114,11 +154,12 @@ int mca_body_nearest_each(int n_arms, const mca_chain_t *const chain[], const mc
                           const mca_fixed_body_t *bodies, int n_bodies, mca_body_nearest_t out[]);
 
 /**
- * The self pair of least surface distance over every arm's self pairs (self[a], NULL: none).
+ * The self pair of least surface distance over every arm's self pairs (self[a], NULL: none); cache as for
+ * mca_body_nearest.
  * @retval MCA_OK, MCA_EINVAL (NULL, a distance failed: non-finite geometry)
  */
 int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
-                     const mca_self_pairs_t *self, mca_self_nearest_t *out);
+                     const mca_self_pairs_t *self, const mca_body_cache_t *cache, mca_self_nearest_t *out);
 
 /**
  * Fill the fixed bodies' rows of a QP whose layout keeps them (p->body_pairs rows per link from
@@ -127,14 +168,14 @@ int mca_self_nearest(int n_arms, const mca_chain_t *const chain[], const mca_kin
  * QP's full width (after mca_scheme_add_timescale their extra columns are 0). Rows that cannot bind, or that
  * are parallel to one kept before (1e-3) stay inactive (beta = big). Adds to si->active_rows, lowers
  * si->brake. dec NULL or dec[a] <= 0: no stop bound for arm a (the paper's scheme). self: each arm's self
- * pairs (NULL: none), in the same lists and slots.
+ * pairs (NULL: none), in the same lists and slots. cache as for mca_body_nearest (NULL: none; the same rows).
  * @param[out] lists  lists[a][l]: the witness pairs of each link (rows in this order), may be NULL
  * @retval MCA_OK (also with no bodies or body_pairs 0: nothing done), MCA_EINVAL
  */
 int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_chain_t *const chain[],
                   const mca_kin_t kin[], const mca_fixed_body_t *bodies, int n_bodies,
                   const mca_self_pairs_t *self, const mca_scheme_params_t *p, const double *dec,
-                  mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]);
+                  const mca_body_cache_t *cache, mca_body_witness_t lists[][MCA_MAX_LINKS][MCA_BODY_PAIRS]);
 
 #ifdef __cplusplus
 }

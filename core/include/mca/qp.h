@@ -26,7 +26,8 @@ typedef struct mca_qp {
     double ub[MCA_QP_MAX_VARS]; /**< may be +INFINITY */
 } mca_qp_t;
 
-/** Set the QP's sizes and zero what they use (rows past n_eq / n_ineq are left as they are).
+/** Set the QP's sizes and zero what they use: the equality rows at full width, the first n columns of the
+ *  inequality rows (rows past n_eq / n_ineq and those rows' columns past n are left as they are).
  *  @retval MCA_OK, MCA_ERANGE (size above the maximums) */
 int mca_qp_reset(mca_qp_t *qp, int n, int n_eq, int n_ineq);
 
