@@ -730,11 +730,8 @@ int mca_body_rows(mca_qp_t *qp, mca_scheme_info_t *si, int n_arms, const mca_cha
                     qp->U[r][vo + j] = u;
                     reach += fabs(u) * ch->joint[j].vel_limit;
                 }
-                if (bound >= reach || !(reach > 0.0)) {
-                    /* inactive rows stay zero (the paper's layout); so do rows no joint can act on (a fixed
-                     * link, a witness on the axes): with a streamed body's approach their bound goes below 0,
-                     * a row 0 <= beta < 0 that no command meets and that only stalls the solver */
-                    memset(qp->U[r], 0, row_bytes);
+                if (bound >= reach) {
+                    memset(qp->U[r], 0, row_bytes); /* inactive rows stay zero (the paper's layout) */
                     continue;
                 }
                 qp->beta[r] = bound;
