@@ -3,7 +3,8 @@
 """tools/mca-sweep/coord_diagram.py and `mca-geom armgrid`, the constructive proof that a two-arm task can be
 done on its paths.
 
-  - connected() on hand-built diagrams: a way that only exists by backing off is found; a wall is a wall; a
+  - connected() on hand-built diagrams: a way that only exists by backing off is found (monotone() says there is
+    no forward-only one, and finds one without the second obstacle); a wall is a wall; a
     move between two safe samples is refused when the arm's travel between them could reach below d1;
   - armgrid's distances against `mca-geom armdist` (mca_arm_distances, the per-pair table) at sampled pairs of
     two recorded trajectories, and its travel bound against the link points `mca-geom fk` gives at every tick
@@ -53,6 +54,10 @@ def main():
     d[0:5, 2] = 0.0  # b's first obstacle: passable only with a beyond sample 4
     d[2:7, 4] = 0.0  # b's second: only with a before sample 2 -> a must go forward, then back
     check(cd.connected(d, z, z, d1), "a diagram whose only way backs off is connected")
+    check(not cd.monotone(d, z, z, d1), "... and has no schedule that never backs off")
+    d2 = d.copy()
+    d2[2:7, 4] = 1.0
+    check(cd.monotone(d2, z, z, d1), "without b's second obstacle a schedule that never backs off exists")
     d[:, 3] = 0.0
     check(not cd.connected(d, z, z, d1), "a full wall across b's clock: not connected")
     d = np.full((3, 3), 0.06)

@@ -58,6 +58,24 @@ def connected(d, ta, tb, d1):
     return bool(lab[0, 0] == lab[-1, -1])
 
 
+def monotone(d, ta, tb, d1):
+    """Is there a schedule that never backs off (each step moves one arm forwards, the other waits)? The same
+    samples and moves as connected(), searched forwards only (mca-ts's start-up plan looks for such ones)."""
+    n = d.shape[0]
+    ok = d >= d1 + EPS
+    ma = np.maximum(d[:-1, :], d[1:, :]) - ta[:-1, None] >= d1 + EPS
+    mb = np.maximum(d[:, :-1], d[:, 1:]) - tb[None, :-1] >= d1 + EPS
+    reach = np.zeros(n, bool)
+    for i in range(n):
+        row = (reach & ma[i - 1] & ok[i]) if i > 0 else np.zeros(n, bool)
+        if i == 0:
+            row[0] = ok[0, 0]
+        for j in range(1, n):  # b moves forwards along the row
+            row[j] = row[j] or (row[j - 1] and mb[i, j - 1] and ok[i, j])
+        reach = row
+    return bool(reach[-1])
+
+
 def witness(sim, geom, scn_path, wd, every=20):
     """{'feasible': True/False, 'samples': n, 'start_d', 'min_d_alone'} for a two-arm scenario; None when it has
     another number of arms or a run failed (with 'error')."""
@@ -87,8 +105,9 @@ def witness(sim, geom, scn_path, wd, every=20):
     if p.returncode != 0:
         return dict(feasible=None, error="mca-geom armgrid exit %d: %s" % (p.returncode, p.stderr.strip()[-300:]))
     d, ta, tb = read_grid(grid)
-    res = dict(feasible=connected(d, ta, tb, d1), samples=int(d.shape[0]), every=every,
-               travel_max=round(float(max(ta.max(), tb.max())), 5))
+    feasible = connected(d, ta, tb, d1)
+    res = dict(feasible=feasible, monotone=monotone(d, ta, tb, d1) if feasible else False,
+               samples=int(d.shape[0]), every=every, travel_max=round(float(max(ta.max(), tb.max())), 5))
     for f in (out_csv, grid):
         os.remove(f)
     return res

@@ -985,14 +985,19 @@ def table(tasks, schemes, sim, a):
         for s in schemes:
             dw, dn = [sum(1 for t in ts if t["runs"].get(s, {}).get("task", {}).get("cls") in ("completed", "late"))
                       for ts in (wit, nowit)]
+            mono = sum(1 for t in wit if t["witness"].get("monotone"))
             lines.append("tasks with a schedule on their paths (coord_diagram.py: a proof they can be done): %d of %d "
-                         "reachable; %s done on them %d (%.1f %%), on the %d without one (undecided or infeasible) %d"
-                         % (len(wit), nr, s, dw, 100.0 * dw / max(1, len(wit)), len(nowit), dn))
+                         "reachable (%d without backing off); %s done on them %d (%.1f %%), on the %d without one "
+                         "(undecided or infeasible) %d"
+                         % (len(wit), nr, mono, s, dw, 100.0 * dw / max(1, len(wit)), len(nowit), dn))
             summary["witness/%s" % s] = dict(witnessed=len(wit), done=dw, others=len(nowit), others_done=dn)
             for t in wit:
                 r = t["runs"].get(s, {}).get("task", {})
                 if r.get("cls") not in ("completed", "late", None):
-                    lines.append("  witnessed, not done: %s %s %s" % (s, t["id"], r.get("reason", "")))
+                    lines.append("  witnessed, not done: %s %s %s (%s)" % (
+                        s, t["id"], r.get("reason", ""),
+                        "a schedule without backing off exists" if t["witness"].get("monotone") else
+                        "only by backing off"))
     # random cells (--cells): every link keeps each fixed body's clearance (the table, the obstacles)
     if any(t.get("bodies") for t in reach):
         mb = [t for t in reach if t.get("mvn_body_ticks_below")]
