@@ -78,68 +78,6 @@ static double lower_bound(const mca_capsule_t *cap, const double c[3], double R)
     return mca_v3_norm(w) - cap->radius - R;
 }
 
-/* Body k's link of least margin below out->margin (out unchanged when none is; on a tie the first link in the
- * order arm, link, and never one of this body over an earlier body's). The links are measured in the order of
- * their bounding-sphere lower bound, so the least usually comes first and the sphere test skips the rest. */
-static int body_least(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
-                      const mca_fixed_body_t *bodies, int k, mca_body_nearest_t *out) {
-    const mca_fixed_body_t *fb = &bodies[k];
-    double c[3];
-    const double R = body_sphere(&fb->body, c);
-    double lb[MCA_MAX_ARMS * MCA_MAX_LINKS];
-    int idx[MCA_MAX_ARMS * MCA_MAX_LINKS], n = 0;
-    for (int a = 0; a < n_arms; a++) {
-        const mca_kin_t *kn = &kin[a];
-        for (int l = 0; l <= chain[a]->dof && l < MCA_MAX_LINKS; l++) {
-            if (fb->allow[a] & (1u << l)) {
-                continue;
-            }
-            const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
-                                       {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
-                                       chain[a]->link_radius[l]};
-            double b = lower_bound(&cap, c, R) - fb->clearance;
-            b = isnan(b) ? -INFINITY : b; /* NaN: measured first, and the distance rejects it */
-            int i = n++;
-            for (; i > 0 && lb[i - 1] > b; i--) { /* insertion: ascending bound, stable */
-                lb[i] = lb[i - 1];
-                idx[i] = idx[i - 1];
-            }
-            lb[i] = b;
-            idx[i] = a * MCA_MAX_LINKS + l;
-        }
-    }
-    int best = -1; /* this body's link in out (a * MCA_MAX_LINKS + l), -1: none yet */
-    for (int i = 0; i < n; i++) {
-        const int a = idx[i] / MCA_MAX_LINKS, l = idx[i] % MCA_MAX_LINKS;
-        const int tie_wins = best >= 0 && idx[i] < best;
-        if (!(lb[i] < out->margin || (lb[i] == out->margin && tie_wins))) {
-            continue; /* cannot be the least */
-        }
-        const mca_kin_t *kn = &kin[a];
-        const mca_capsule_t cap = {{kn->point[l][0], kn->point[l][1], kn->point[l][2]},
-                                   {kn->point[l + 1][0], kn->point[l + 1][1], kn->point[l + 1][2]},
-                                   chain[a]->link_radius[l]};
-        mca_body_dist_t r;
-        if (mca_capsule_body_distance(&cap, &fb->body, &r) != MCA_OK) {
-            return MCA_EINVAL;
-        }
-        const double m = r.d - fb->clearance;
-        if (m < out->margin || (m == out->margin && tie_wins)) {
-            best = idx[i];
-            out->valid = 1;
-            out->margin = m;
-            out->d = r.d;
-            out->arm = a;
-            out->link = l;
-            out->body = k;
-            out->kind = (int)fb->body.kind;
-            mca_v3_set(out->p, r.p_axis);
-            mca_v3_set(out->q, r.q);
-        }
-    }
-    return MCA_OK;
-}
-
 static mca_capsule_t link_capsule(const mca_chain_t *ch, const mca_kin_t *kn, int l);
 
 /* (x0, y0, z0) comes before (x1, y1, z1) in the loops' order: of pairs at the same least distance the
@@ -178,6 +116,51 @@ static int nearest_try(const mca_fixed_body_t *fb, int k, int a, int l, const mc
         out->kind = (int)fb->body.kind;
         mca_v3_set(out->p, r.p_axis);
         mca_v3_set(out->q, r.q);
+    }
+    return MCA_OK;
+}
+
+/* Body k's link of least margin below out->margin (out unchanged when none is; on a tie the first link in the
+ * order arm, link). The links are measured in the order of their bounding-sphere lower bound, so the least
+ * usually comes first and the sphere test skips the rest. */
+static int body_least(int n_arms, const mca_chain_t *const chain[], const mca_kin_t kin[],
+                      const mca_fixed_body_t *bodies, int k, mca_body_nearest_t *out) {
+    const mca_fixed_body_t *fb = &bodies[k];
+    double c[3];
+    const double R = body_sphere(&fb->body, c);
+    double lb[MCA_MAX_ARMS * MCA_MAX_LINKS];
+    int idx[MCA_MAX_ARMS * MCA_MAX_LINKS], n = 0;
+    for (int a = 0; a < n_arms; a++) {
+        for (int l = 0; l <= chain[a]->dof && l < MCA_MAX_LINKS; l++) {
+            if (fb->allow[a] & (1u << l)) {
+                continue;
+            }
+            const mca_capsule_t cap = link_capsule(chain[a], &kin[a], l);
+            double b = lower_bound(&cap, c, R) - fb->clearance;
+            b = isnan(b) ? -INFINITY : b; /* NaN: measured first, and the distance rejects it */
+            int i = n++;
+            for (; i > 0 && lb[i - 1] > b; i--) { /* insertion: ascending bound, stable */
+                lb[i] = lb[i - 1];
+                idx[i] = idx[i - 1];
+            }
+            lb[i] = b;
+            idx[i] = a * MCA_MAX_LINKS + l;
+        }
+    }
+    int best = -1; /* this body's link in out (a * MCA_MAX_LINKS + l), -1: none yet */
+    for (int i = 0; i < n; i++) {
+        const int a = idx[i] / MCA_MAX_LINKS, l = idx[i] % MCA_MAX_LINKS;
+        const int tie_wins = best >= 0 && idx[i] < best;
+        if (!(lb[i] < out->margin || (lb[i] == out->margin && tie_wins))) {
+            continue; /* cannot be the least */
+        }
+        const mca_capsule_t cap = link_capsule(chain[a], &kin[a], l);
+        if (nearest_try(fb, k, a, l, &cap, tie_wins, out) != MCA_OK) {
+            return MCA_EINVAL;
+        }
+        if (out->valid && out->body == k && out->arm == a && out->link == l) {
+            best = idx[i]; /* each link is tried once: out names it only if this try set it */
+        }
     }
     return MCA_OK;
 }
